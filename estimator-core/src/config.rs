@@ -1,0 +1,154 @@
+//! Estimator configuration: a plain struct whose [`Default`] reproduces the paper's setting.
+
+use crate::units::{arcsec_to_rad, RAD_PER_DEG};
+use crate::Real;
+
+/// Which identification method runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Method {
+    /// Ours (default): the four correlation channels averaged over a moving window of one rotation
+    /// period, fed together into one 4-state filter whose measurement rows carry the x1, x2 leakage of
+    /// eq (12) exactly (see [`crate::methods::windowed`]).
+    #[default]
+    Windowed,
+    /// The paper's eqs (8), (11), (13)-(18) literally: a cumulative correlation per channel, its
+    /// 480 s average, and one 3-state filter (x, b1, b2) per error (see [`crate::methods::paper`]).
+    Paper,
+    /// The paper's Fig. 2 baseline: a 4-state filter straight on raw roll and pitch with eq (2) as
+    /// the measurement model, no correlation, no averaging (see [`crate::methods::traditional`]).
+    Traditional,
+}
+
+impl Method {
+    /// Name used on command lines and in files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Windowed => "windowed",
+            Method::Paper => "paper",
+            Method::Traditional => "traditional",
+        }
+    }
+
+    /// Code used on the firmware link.
+    pub fn code(&self) -> u8 {
+        match self {
+            Method::Windowed => 0,
+            Method::Paper => 1,
+            Method::Traditional => 2,
+        }
+    }
+
+    /// Inverse of [`Method::code`].
+    pub fn from_code(code: u8) -> Option<Method> {
+        match code {
+            0 => Some(Method::Windowed),
+            1 => Some(Method::Paper),
+            2 => Some(Method::Traditional),
+            _ => None,
+        }
+    }
+}
+
+/// Estimator settings. All angles in radians.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Identification method. Default: [`Method::Windowed`].
+    pub method: Method,
+    /// Rotation period in samples: the length of the moving average of eq (11). Default 480
+    /// (480 s at 1 Hz, the paper's). Must not exceed the estimator's ring capacity.
+    pub rotation_period_samples: usize,
+    /// Nominal sample interval, s. Default 1.
+    pub sample_interval_s: f64,
+    /// Prior 1-sigma of each installation error. Default 1000 arcsec ("a few hundred" in the paper).
+    pub prior_sigma_rad: Real,
+    /// 1-sigma of one correlation measurement (windowed and paper methods). Default 10/sqrt(2)
+    /// arcsec: the noise of one correlation product for a white attitude noise of 10 arcsec. For a
+    /// moving window read once a second this per-product value, not the (480 times smaller) variance
+    /// of the window mean, is the right measurement noise; see [`crate::methods::windowed`].
+    pub measurement_sigma_rad: Real,
+    /// Random walk of the installation errors, rad/sqrt(s) (process noise). Default 0: constant
+    /// errors as in the paper's eq (18).
+    pub drift_rad_per_sqrt_s: Real,
+    /// 1-sigma of raw roll or pitch about eq (2) for the traditional baseline: the sway. Default
+    /// 3 deg / sqrt(2), the RMS of the paper's 3 deg roll sway.
+    pub traditional_sigma_rad: Real,
+    /// Process noise of the traditional baseline, rad/sqrt(s). Default 0.
+    pub traditional_drift_rad_per_sqrt_s: Real,
+    /// Start gate: estimation starts once the roll sway amplitude exceeds this (the paper's sea test
+    /// used 3 deg). Default 0: off.
+    pub sway_gate_rad: Real,
+    /// Gaps of up to this many missing samples are bridged by linear interpolation of every input;
+    /// longer gaps restart the moving average. Default 2.
+    pub max_bridged_gap_samples: u32,
+    /// An error counts as converged once its 1-sigma is below this. Default 1 arcsec.
+    pub converged_sigma_rad: Real,
+    /// Largest relative deviation of one step's rotation increment from nominal. Default 0.25.
+    pub rotation_step_tolerance: Real,
+    /// Largest relative deviation of the mean rotation rate (over about one period) from the
+    /// configured period. Default 0.01 (1 %): a window then spans 360 +- 3.6 deg.
+    pub rotation_period_tolerance: Real,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            method: Method::Windowed,
+            rotation_period_samples: 480,
+            sample_interval_s: 1.0,
+            prior_sigma_rad: arcsec_to_rad(1000.0) as Real,
+            measurement_sigma_rad: arcsec_to_rad(10.0 / core::f64::consts::SQRT_2) as Real,
+            drift_rad_per_sqrt_s: 0.0,
+            traditional_sigma_rad: (3.0 * RAD_PER_DEG / core::f64::consts::SQRT_2) as Real,
+            traditional_drift_rad_per_sqrt_s: 0.0,
+            sway_gate_rad: 0.0,
+            max_bridged_gap_samples: 2,
+            converged_sigma_rad: arcsec_to_rad(1.0) as Real,
+            rotation_step_tolerance: 0.25,
+            rotation_period_tolerance: 0.01,
+        }
+    }
+}
+
+/// A configuration the estimator cannot run with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConfigError {
+    /// `rotation_period_samples` is 0 or above the ring capacity.
+    RotationPeriod,
+    /// `sample_interval_s` is not positive and finite.
+    SampleInterval,
+    /// A noise, tolerance or gate is negative or not finite, or a sigma is zero.
+    Parameter,
+}
+
+impl Config {
+    /// The default configuration with another method.
+    pub fn with_method(method: Method) -> Config {
+        Config { method, ..Config::default() }
+    }
+
+    /// Checks the configuration against a ring capacity.
+    pub fn check(&self, capacity: usize) -> Result<(), ConfigError> {
+        if self.rotation_period_samples < 2 || self.rotation_period_samples > capacity {
+            return Err(ConfigError::RotationPeriod);
+        }
+        if !(self.sample_interval_s > 0.0 && self.sample_interval_s.is_finite()) {
+            return Err(ConfigError::SampleInterval);
+        }
+        let positive = [
+            self.prior_sigma_rad,
+            self.measurement_sigma_rad,
+            self.traditional_sigma_rad,
+            self.converged_sigma_rad,
+            self.rotation_step_tolerance,
+            self.rotation_period_tolerance,
+        ];
+        let non_negative =
+            [self.drift_rad_per_sqrt_s, self.traditional_drift_rad_per_sqrt_s, self.sway_gate_rad];
+        if positive.iter().any(|v| !(*v > 0.0 && v.is_finite()))
+            || non_negative.iter().any(|v| !(*v >= 0.0 && v.is_finite()))
+        {
+            return Err(ConfigError::Parameter);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,405 @@
+//! The estimator: checks each sample, handles gaps, watches the rotation and the sway gate, drives
+//! the selected method and corrects the attitude.
+//!
+//! # Input checks (every one before any state changes)
+//! A sample is rejected with a [`SampleError`], counted by reason, and leaves the estimator exactly
+//! as it was, when: a field is NaN or infinite; |latitude| >= 90 deg; |roll| or |pitch| > 90 deg or a
+//! wrapped angle exceeds 360 deg; its time is not after the previous accepted sample's; or the time
+//! step is not a whole number of sample intervals within a quarter interval.
+//!
+//! # Gaps
+//! A step of n intervals means n-1 missing samples. Up to `max_bridged_gap_samples` (default 2) are
+//! bridged: the missing samples are linearly interpolated from their neighbours (angles along the
+//! short way round) and processed as if received, so the 480-sample window still spans one rotation
+//! exactly. The interpolation error of a 6 s sway over 1-2 s enters a few products and is divided by
+//! the ~N windows the filter has averaged. A longer gap restarts the moving average: the filter keeps
+//! everything it has learnt and holds its estimates until the window has refilled.
+//!
+//! # Rotation health
+//! The moving average blocks the rotation harmonics only if the window spans one rotation. Each
+//! step's rotation increment must be within `rotation_step_tolerance` of `2 pi / W` (else the
+//! rotation has stopped or runs at another rate) and in the same direction as before (else it has
+//! reversed), and the mean rate over about one period must be within `rotation_period_tolerance` of
+//! nominal. A sample that fails is a [`Status::RotationFault`]: the window restarts, the estimates
+//! freeze; estimation resumes one full window after the rotation is healthy again.
+//!
+//! # Sway gate
+//! With `sway_gate_rad > 0`, estimation starts only once the roll sway amplitude (sqrt(2) times the
+//! RMS of roll about its mean, exponentially averaged over 64 s) exceeds the gate, as in the paper's
+//! sea test; once started it goes on.
+
+use crate::config::{Config, ConfigError};
+use crate::installation::Angles;
+use crate::methods::MethodState;
+use crate::sample::{Attitude, Sample, SampleError};
+use crate::trig::{sin_cos, wrap_pi};
+use crate::Real;
+
+/// Why the rotation is not healthy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RotationFault {
+    /// The rotation increment is below half the nominal one.
+    Stopped,
+    /// The rotation turned the other way.
+    Reversed,
+    /// The rotation rate is off nominal by more than the tolerances.
+    RateMismatch,
+}
+
+/// What the estimator is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    /// The sway gate has not opened yet.
+    WaitingForSway,
+    /// This sample's rotation is not healthy; estimates are frozen.
+    RotationFault(RotationFault),
+    /// The first window is filling; no estimate yet.
+    WarmingUp,
+    /// The window is refilling after a long gap or a rotation fault; estimates are frozen.
+    Holding,
+    /// The filter is updating; not every error is below `converged_sigma_rad` yet.
+    Estimating,
+    /// The filter is updating and every error's 1-sigma is below `converged_sigma_rad`.
+    Converged,
+}
+
+impl Status {
+    /// Short name used in files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Status::WaitingForSway => "waiting_for_sway",
+            Status::RotationFault(RotationFault::Stopped) => "rotation_stopped",
+            Status::RotationFault(RotationFault::Reversed) => "rotation_reversed",
+            Status::RotationFault(RotationFault::RateMismatch) => "rotation_rate_mismatch",
+            Status::WarmingUp => "warming_up",
+            Status::Holding => "holding",
+            Status::Estimating => "estimating",
+            Status::Converged => "converged",
+        }
+    }
+
+    /// Code used on the firmware link.
+    pub fn code(&self) -> u8 {
+        match self {
+            Status::WaitingForSway => 0,
+            Status::RotationFault(RotationFault::Stopped) => 1,
+            Status::RotationFault(RotationFault::Reversed) => 2,
+            Status::RotationFault(RotationFault::RateMismatch) => 3,
+            Status::WarmingUp => 4,
+            Status::Holding => 5,
+            Status::Estimating => 6,
+            Status::Converged => 7,
+        }
+    }
+
+    /// Inverse of [`Status::code`].
+    pub fn from_code(code: u8) -> Option<Status> {
+        Some(match code {
+            0 => Status::WaitingForSway,
+            1 => Status::RotationFault(RotationFault::Stopped),
+            2 => Status::RotationFault(RotationFault::Reversed),
+            3 => Status::RotationFault(RotationFault::RateMismatch),
+            4 => Status::WarmingUp,
+            5 => Status::Holding,
+            6 => Status::Estimating,
+            7 => Status::Converged,
+            _ => return None,
+        })
+    }
+}
+
+/// The four installation errors with their 1-sigma, rad.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    pub x_rad: [Real; 4],
+    pub sigma_rad: [Real; 4],
+}
+
+/// What one step returns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Output {
+    /// The sample's time, s.
+    pub time_s: f64,
+    pub status: Status,
+    /// `None` until the filter has had its first measurement.
+    pub estimate: Option<Estimate>,
+    /// The sample's attitude minus eq (2)'s oscillation for the current estimate (unchanged while
+    /// there is none). Heading wrapped to [-pi, pi].
+    pub corrected: Attitude,
+}
+
+/// Rejected samples by reason (index: [`SampleError::reason_index`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RejectCounts(pub [u32; SampleError::COUNT]);
+
+impl RejectCounts {
+    /// Total rejected.
+    pub fn total(&self) -> u32 {
+        self.0.iter().fold(0u32, |a, b| a.saturating_add(*b))
+    }
+}
+
+/// Watches the rotation increments.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RotationMonitor {
+    /// +1 or -1 once known, 0 before.
+    pub direction: i8,
+    /// Exponential mean (over one period) of |increment| / nominal; 0 before the first increment.
+    pub mean_rate_ratio: Real,
+}
+
+impl RotationMonitor {
+    fn observe(&mut self, increment_rad: Real, config: &Config) -> Result<(), RotationFault> {
+        let nominal = (2.0 * core::f64::consts::PI / config.rotation_period_samples as f64) as Real;
+        let ratio = increment_rad / nominal;
+        let magnitude = ratio.abs();
+        let sign: i8 = if ratio >= 0.0 { 1 } else { -1 };
+        if magnitude < 0.5 {
+            return Err(RotationFault::Stopped);
+        }
+        if self.direction != 0 && sign != self.direction {
+            self.direction = sign;
+            return Err(RotationFault::Reversed);
+        }
+        self.direction = sign;
+        if self.mean_rate_ratio == 0.0 {
+            self.mean_rate_ratio = magnitude;
+        } else {
+            self.mean_rate_ratio += (magnitude - self.mean_rate_ratio) / config.rotation_period_samples as Real;
+        }
+        if (magnitude - 1.0).abs() > config.rotation_step_tolerance
+            || (self.mean_rate_ratio - 1.0).abs() > config.rotation_period_tolerance
+        {
+            return Err(RotationFault::RateMismatch);
+        }
+        Ok(())
+    }
+}
+
+/// Roll sway amplitude for the start gate.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SwayMonitor {
+    pub mean_rad: Real,
+    pub mean_square_rad2: Real,
+    pub samples: u32,
+}
+
+impl SwayMonitor {
+    const SAMPLES: u32 = 64;
+
+    fn observe(&mut self, roll_rad: Real) {
+        self.samples = self.samples.saturating_add(1);
+        let alpha = 1.0 / (self.samples.min(Self::SAMPLES) as Real);
+        self.mean_rad += alpha * (roll_rad - self.mean_rad);
+        self.mean_square_rad2 += alpha * (roll_rad * roll_rad - self.mean_square_rad2);
+    }
+
+    /// Amplitude of a sinusoid with the same RMS about the mean.
+    pub fn amplitude_rad(&self) -> Real {
+        let var = (self.mean_square_rad2 - self.mean_rad * self.mean_rad).max(0.0);
+        let two_var = 2.0 * var;
+        #[cfg(not(feature = "f64"))]
+        return libm::sqrtf(two_var);
+        #[cfg(feature = "f64")]
+        return libm::sqrt(two_var);
+    }
+}
+
+/// The installation-error estimator, with a ring capacity of `CAP` samples (at least the rotation
+/// period in samples; 480 by default).
+#[derive(Clone, Debug)]
+pub struct Estimator<const CAP: usize = 480> {
+    pub(crate) config: Config,
+    pub(crate) method: MethodState<CAP>,
+    /// Last accepted sample (for time order, gap bridging and the rotation increment).
+    pub(crate) previous: Option<Sample>,
+    /// Whether the next rotation increment can be checked (false after a restart).
+    pub(crate) rotation_continuous: bool,
+    /// Cached `(L, sin L, cos L)`.
+    pub(crate) latitude_trig: (Real, Real, Real),
+    pub(crate) rotation: RotationMonitor,
+    pub(crate) sway: SwayMonitor,
+    pub(crate) gate_open: bool,
+    pub(crate) rejected: RejectCounts,
+    pub(crate) accepted: u32,
+    pub(crate) bridged: u32,
+    pub(crate) window_restarts: u32,
+}
+
+impl<const CAP: usize> Estimator<CAP> {
+    /// A fresh estimator, or why the configuration cannot run.
+    pub fn new(config: Config) -> Result<Self, ConfigError> {
+        config.check(CAP)?;
+        let (s, c) = sin_cos(0.0);
+        Ok(Estimator {
+            config,
+            method: MethodState::new(&config),
+            previous: None,
+            rotation_continuous: false,
+            latitude_trig: (0.0, s, c),
+            rotation: RotationMonitor::default(),
+            sway: SwayMonitor::default(),
+            gate_open: config.sway_gate_rad == 0.0,
+            rejected: RejectCounts::default(),
+            accepted: 0,
+            bridged: 0,
+            window_restarts: 0,
+        })
+    }
+
+    /// Forgets everything learnt (keeps the configuration).
+    pub fn reset(&mut self) {
+        let rejected = self.rejected;
+        if let Ok(fresh) = Self::new(self.config) {
+            *self = fresh;
+            self.rejected = rejected;
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Rejected samples by reason.
+    pub fn rejected(&self) -> RejectCounts {
+        self.rejected
+    }
+
+    /// Samples accepted, samples bridged by interpolation, and restarts of the moving average.
+    pub fn counters(&self) -> (u32, u32, u32) {
+        (self.accepted, self.bridged, self.window_restarts)
+    }
+
+    /// The current estimate, if any.
+    pub fn estimate(&self) -> Option<Estimate> {
+        self.method.estimate().map(|(x_rad, sigma_rad)| Estimate { x_rad, sigma_rad })
+    }
+
+    /// Processes one sample. On error nothing changes but the rejection counter.
+    pub fn step(&mut self, sample: &Sample) -> Result<Output, SampleError> {
+        let intervals = match self.check(sample) {
+            Ok(n) => n,
+            Err(e) => {
+                let slot = &mut self.rejected.0[e.reason_index()];
+                *slot = slot.saturating_add(1);
+                return Err(e);
+            }
+        };
+        if let Some(prev) = self.previous {
+            let missing = intervals.saturating_sub(1);
+            if missing > self.config.max_bridged_gap_samples {
+                self.restart_window();
+            } else {
+                for m in 1..=missing {
+                    let filler = interpolate(&prev, sample, m as Real / intervals as Real);
+                    self.process(&filler);
+                    self.bridged = self.bridged.saturating_add(1);
+                }
+            }
+        }
+        let status = self.process(sample);
+        self.accepted = self.accepted.saturating_add(1);
+        let estimate = self.estimate();
+        let status = match (status, estimate) {
+            (Status::Estimating, Some(e)) if e.sigma_rad.iter().all(|s| *s < self.config.converged_sigma_rad) => {
+                Status::Converged
+            }
+            (Status::WarmingUp, Some(_)) => Status::Holding,
+            (s, _) => s,
+        };
+        let corrected = match estimate {
+            Some(e) => {
+                let angles = self.angles(sample);
+                let d = angles.oscillation(&e.x_rad);
+                Attitude {
+                    heading_rad: wrap_pi(sample.attitude.heading_rad - d.heading_rad),
+                    roll_rad: sample.attitude.roll_rad - d.roll_rad,
+                    pitch_rad: sample.attitude.pitch_rad - d.pitch_rad,
+                }
+            }
+            None => sample.attitude,
+        };
+        Ok(Output { time_s: sample.time_s, status, estimate, corrected })
+    }
+
+    /// Checks a sample against its fields and the previous sample; returns the number of sample
+    /// intervals since the previous one (1 for the first sample).
+    fn check(&self, sample: &Sample) -> Result<u32, SampleError> {
+        sample.check()?;
+        let Some(prev) = self.previous else {
+            return Ok(1);
+        };
+        let dt = sample.time_s - prev.time_s;
+        if !(dt > 0.0) {
+            return Err(SampleError::TimeNotIncreasing);
+        }
+        let interval = self.config.sample_interval_s;
+        let n = libm::round(dt / interval);
+        if n < 1.0 || (dt - n * interval).abs() > 0.25 * interval {
+            return Err(SampleError::IrregularTimeStep);
+        }
+        Ok(if n > u32::MAX as f64 { u32::MAX } else { n as u32 })
+    }
+
+    fn restart_window(&mut self) {
+        self.method.restart_window();
+        self.rotation_continuous = false;
+        self.window_restarts = self.window_restarts.saturating_add(1);
+    }
+
+    fn angles(&mut self, sample: &Sample) -> Angles {
+        if sample.latitude_rad != self.latitude_trig.0 {
+            let (s, c) = sin_cos(sample.latitude_rad);
+            self.latitude_trig = (sample.latitude_rad, s, c);
+        }
+        Angles::new(sample.rotation_rad, sample.platform_rad, (self.latitude_trig.1, self.latitude_trig.2))
+    }
+
+    /// Runs one checked (or interpolated) sample through gate, rotation check and method.
+    fn process(&mut self, sample: &Sample) -> Status {
+        let angles = self.angles(sample);
+        let increment = self.previous.map(|p| wrap_pi(sample.rotation_rad - p.rotation_rad));
+        let continuous = self.rotation_continuous;
+        self.previous = Some(*sample);
+        self.rotation_continuous = true;
+        self.sway.observe(sample.attitude.roll_rad);
+        if !self.gate_open {
+            if self.sway.samples >= SwayMonitor::SAMPLES && self.sway.amplitude_rad() >= self.config.sway_gate_rad {
+                self.gate_open = true;
+            } else {
+                return Status::WaitingForSway;
+            }
+        }
+        if let (Some(inc), true) = (increment, continuous) {
+            if let Err(fault) = self.rotation.observe(inc, &self.config) {
+                self.restart_window();
+                // The sample after a fault is compared with this one again.
+                self.rotation_continuous = true;
+                return Status::RotationFault(fault);
+            }
+        }
+        if self.method.step(&self.config, sample, &angles) {
+            Status::Estimating
+        } else {
+            Status::WarmingUp
+        }
+    }
+}
+
+/// The sample a fraction `f` of the way from `a` to `b` (angles along the short way round).
+fn interpolate(a: &Sample, b: &Sample, f: Real) -> Sample {
+    let lin = |x: Real, y: Real| x + (y - x) * f;
+    let ang = |x: Real, y: Real| wrap_pi(x + wrap_pi(y - x) * f);
+    Sample {
+        time_s: a.time_s + (b.time_s - a.time_s) * f as f64,
+        rotation_rad: ang(a.rotation_rad, b.rotation_rad),
+        platform_rad: ang(a.platform_rad, b.platform_rad),
+        latitude_rad: lin(a.latitude_rad, b.latitude_rad),
+        attitude: Attitude {
+            heading_rad: ang(a.attitude.heading_rad, b.attitude.heading_rad),
+            roll_rad: lin(a.attitude.roll_rad, b.attitude.roll_rad),
+            pitch_rad: lin(a.attitude.pitch_rad, b.attitude.pitch_rad),
+        },
+    }
+}

@@ -1,0 +1,159 @@
+//! Eqs (13)-(18): a Kalman filter for constant states.
+//!
+//! The paper neglects the state equation because installation errors are constant (eq 18): the
+//! prediction step is the identity, optionally plus a small random walk `Q` so that slowly drifting
+//! errors can be followed. Measurements are scalar and processed one at a time (sequentially), each
+//! with the Joseph-form covariance update
+//!
+//! ```text
+//! K  = P h / (h' P h + r)
+//! P+ = (I - K h') P (I - K h')' + r K K'
+//! ```
+//!
+//! which stays symmetric positive definite under rounding, unlike `P - K h' P`. The result is
+//! symmetrised explicitly as well. A measurement whose innovation variance is not positive and
+//! finite, or whose value is not finite, is refused and leaves the filter untouched.
+
+use crate::Real;
+use nalgebra::{SMatrix, SVector};
+
+/// Why a measurement was not applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KalmanError {
+    /// The measurement, its row or its noise was not finite, or the noise was negative.
+    NonFinite,
+    /// `h' P h + r` was not positive.
+    Degenerate,
+}
+
+/// State estimate and covariance of `N` constant states.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConstantStateKalman<const N: usize> {
+    /// State estimate.
+    pub x: SVector<Real, N>,
+    /// State covariance.
+    pub p: SMatrix<Real, N, N>,
+}
+
+impl<const N: usize> ConstantStateKalman<N> {
+    /// Zero state with a diagonal prior covariance `sigma^2`.
+    pub fn new(prior_sigma: [Real; N]) -> Self {
+        let mut p = SMatrix::<Real, N, N>::zeros();
+        for i in 0..N {
+            p[(i, i)] = prior_sigma[i] * prior_sigma[i];
+        }
+        ConstantStateKalman { x: SVector::zeros(), p }
+    }
+
+    /// Prediction: states constant, covariance grows by `q` on the diagonal (a random walk).
+    pub fn predict(&mut self, q_diag: &[Real; N]) {
+        for i in 0..N {
+            self.p[(i, i)] += q_diag[i];
+        }
+    }
+
+    /// Applies one scalar measurement `z = h . x + w`, `var(w) = r`. Returns the innovation.
+    pub fn update(&mut self, h: &[Real; N], z: Real, r: Real) -> Result<Real, KalmanError> {
+        let h = SVector::<Real, N>::from_column_slice(h);
+        if !z.is_finite() || !r.is_finite() || r < 0.0 || h.iter().any(|v| !v.is_finite()) {
+            return Err(KalmanError::NonFinite);
+        }
+        let ph = self.p * h;
+        let s = h.dot(&ph) + r;
+        if !(s > 0.0) || !s.is_finite() {
+            return Err(KalmanError::Degenerate);
+        }
+        let k = ph / s;
+        let innovation = z - h.dot(&self.x);
+        let a = SMatrix::<Real, N, N>::identity() - k * h.transpose();
+        let p = a * self.p * a.transpose() + k * k.transpose() * r;
+        let x = self.x + k * innovation;
+        if !innovation.is_finite() || x.iter().any(|v| !v.is_finite()) || p.iter().any(|v| !v.is_finite()) {
+            return Err(KalmanError::NonFinite);
+        }
+        self.x = x;
+        self.p = (p + p.transpose()) * 0.5;
+        Ok(innovation)
+    }
+
+    /// 1-sigma of state `i`.
+    pub fn sigma(&self, i: usize) -> Real {
+        sqrt(self.p[(i, i)].max(0.0))
+    }
+
+    /// True when the covariance is symmetric and every leading minor positive (Cholesky succeeds).
+    pub fn covariance_is_spd(&self) -> bool {
+        let p = &self.p;
+        for i in 0..N {
+            for j in 0..i {
+                if p[(i, j)] != p[(j, i)] {
+                    return false;
+                }
+            }
+        }
+        nalgebra::linalg::Cholesky::new(*p).is_some()
+    }
+}
+
+#[cfg(not(feature = "f64"))]
+fn sqrt(x: f32) -> f32 {
+    libm::sqrtf(x)
+}
+#[cfg(feature = "f64")]
+fn sqrt(x: f64) -> f64 {
+    libm::sqrt(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A known linear system: two constants observed through rotating rows with white noise. The
+    /// filter must match batch least squares (what a constant-state Kalman filter with a flat prior is).
+    #[test]
+    fn matches_batch_least_squares_on_a_known_linear_system() {
+        let truth = [0.3 as Real, -0.7];
+        let mut kf = ConstantStateKalman::<2>::new([1e3, 1e3]);
+        let mut ata = [[0.0f64; 2]; 2];
+        let mut atb = [0.0f64; 2];
+        let mut state: u64 = 7;
+        for k in 0..2000 {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let noise = ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 0.02;
+            let h = [libm::cos(k as f64 * 0.1), libm::sin(k as f64 * 0.1) + 0.2];
+            let z = h[0] * truth[0] as f64 + h[1] * truth[1] as f64 + noise;
+            kf.update(&[h[0] as Real, h[1] as Real], z as Real, 1e-4).unwrap();
+            for i in 0..2 {
+                atb[i] += h[i] * z;
+                for j in 0..2 {
+                    ata[i][j] += h[i] * h[j];
+                }
+            }
+        }
+        let det = ata[0][0] * ata[1][1] - ata[0][1] * ata[1][0];
+        let ls = [
+            (ata[1][1] * atb[0] - ata[0][1] * atb[1]) / det,
+            (ata[0][0] * atb[1] - ata[1][0] * atb[0]) / det,
+        ];
+        for i in 0..2 {
+            assert!((kf.x[i] as f64 - ls[i]).abs() < 2e-5, "state {i}: {} vs {}", kf.x[i], ls[i]);
+            assert!((kf.x[i] as f64 - truth[i] as f64).abs() < 2e-3);
+        }
+        // Posterior covariance of least squares: r (A'A)^-1.
+        let p00 = 1e-4 * ata[1][1] / det;
+        assert!(((kf.p[(0, 0)] as f64) / p00 - 1.0).abs() < 1e-2);
+        assert!(kf.covariance_is_spd());
+    }
+
+    #[test]
+    fn refuses_bad_measurements_and_leaves_state_untouched() {
+        let mut kf = ConstantStateKalman::<2>::new([1.0, 1.0]);
+        kf.update(&[1.0, 0.0], 0.5, 0.1).unwrap();
+        let before = kf.clone();
+        assert_eq!(kf.update(&[1.0, 0.0], Real::NAN, 0.1), Err(KalmanError::NonFinite));
+        assert_eq!(kf.update(&[Real::INFINITY, 0.0], 0.0, 0.1), Err(KalmanError::NonFinite));
+        assert_eq!(kf.update(&[1.0, 0.0], 0.0, -1.0), Err(KalmanError::NonFinite));
+        assert_eq!(kf.update(&[0.0, 0.0], 0.0, 0.0), Err(KalmanError::Degenerate));
+        assert_eq!(kf, before);
+    }
+}

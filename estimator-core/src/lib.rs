@@ -1,0 +1,47 @@
+//! # estimator-core
+//!
+//! Real-time identification of the four rotation-axis installation errors `x1..x4` of a rotational
+//! inertial navigation system (RINS) from its own attitude output, after Hu, Chen, Zhang and Wu,
+//! "Correlation-Averaging Methods and Kalman Filter-based Parameter Identification for Rotational
+//! Inertial Navigation System" (the paper; equation numbers below are the paper's).
+//!
+//! One sample a second goes in ([`Sample`]); an [`Output`] comes out: the four errors with their
+//! 1-sigma, a [`Status`], and the attitude with eq (2)'s oscillation removed.
+//!
+//! Where each step of the method lives:
+//! - eq (2), the oscillation model: [`installation`];
+//! - eq (8), the correlation products: [`correlation`];
+//! - eq (11), the 480 s moving average: [`moving_average`];
+//! - eqs (13)-(18), the Kalman filter: [`kalman`], used by the three methods in [`methods`];
+//! - input checks, gaps, rotation health and the sway gate: [`estimator`].
+//!
+//! `#![no_std]`, no allocator: every buffer has a const-generic capacity, and
+//! `size_of::<Estimator>()` is checked by a test.
+#![no_std]
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+#[cfg(test)]
+extern crate std;
+
+/// The floating-point type of the step: `f32` by default (the Cortex-M4F has a single-precision
+/// FPU), `f64` with the `f64` feature. Time is always `f64`.
+#[cfg(not(feature = "f64"))]
+pub type Real = f32;
+/// The floating-point type of the step: `f32` by default, `f64` with the `f64` feature.
+#[cfg(feature = "f64")]
+pub type Real = f64;
+
+pub mod config;
+pub mod correlation;
+pub mod estimator;
+pub mod installation;
+pub mod kalman;
+pub mod methods;
+pub mod moving_average;
+pub mod sample;
+pub mod trig;
+pub mod units;
+
+pub use config::{Config, ConfigError, Method};
+pub use estimator::{Estimate, Estimator, Output, RejectCounts, RotationFault, Status};
+pub use sample::{Attitude, Field, Sample, SampleError};

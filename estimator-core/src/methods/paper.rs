@@ -1,0 +1,109 @@
+//! The paper's method, literally: eqs (8), (11), (13)-(18), kept for comparison.
+//!
+//! For each error j, with its correlation channel p_j of [`crate::correlation`]:
+//! - eq (8): `R_j(t) = (sum of p_j from the start to t) / n`, n samples since the start
+//!   (the integral is kept exactly, in fixed point);
+//! - eq (11): `Rbar_j` = mean of `R_j` over the last W samples, belonging to the window's middle
+//!   `t_c = t - (W-1)/2` samples;
+//! - eqs (13)-(18): a 3-state filter `(x_j, b1, b2)` with `H = (c_j, cos w_e t_c, sin w_e t_c)`, where
+//!   `c_j` is the channel's gain from the derivation in [`crate::correlation`]:
+//!   `1/2` (x1), `-1/2` (x2), `cosL/2` (x3, the paper's eq 17), `-cosL/2` (x4).
+//!
+//! What this cannot do: the leakage of x1, x2 into `Rbar_3`, `Rbar_4` is
+//! `-x1 sinL (1 - cos w_e t)/(2 w_e t) - x2 sinL sin(w_e t)/(2 w_e t)` (our derivation; the paper's
+//! eq 12 has x1 and x2 exchanged), and the constant `b1, b2` of eq (13) fit a `1/t` curve only
+//! approximately; the `a0 (1 - cos rho)/(w_r t)` transient of a constant attitude error is not
+//! modelled at all. `host-sim` reports what it achieves.
+
+use crate::config::Config;
+use crate::correlation::products;
+use crate::installation::Angles;
+use crate::kalman::ConstantStateKalman;
+use crate::moving_average::{WindowAverage, COUNTS_PER_UNIT};
+use crate::sample::Sample;
+use crate::trig::sin_cos;
+use crate::units::EARTH_RATE_RAD_PER_S;
+use crate::Real;
+
+/// State of the paper's method.
+#[derive(Clone, Debug)]
+pub struct Paper<const CAP: usize> {
+    /// Exact fixed-point integrals of the four products since the start (eq 8 numerator).
+    pub integrals: [i64; 4],
+    /// Samples integrated.
+    pub samples: u32,
+    /// Time of the first integrated sample, s.
+    pub start_time_s: f64,
+    /// Moving average of `R_j(t)` (eq 11).
+    pub window: WindowAverage<4, CAP>,
+    /// One `(x_j, b1, b2)` filter per error (eqs 15-18).
+    pub kf: [ConstantStateKalman<3>; 4],
+    /// Measurement steps applied so far.
+    pub updates: u32,
+}
+
+impl<const CAP: usize> Paper<CAP> {
+    /// Fresh state.
+    pub fn new(config: &Config) -> Self {
+        let s = config.prior_sigma_rad;
+        Paper {
+            integrals: [0; 4],
+            samples: 0,
+            start_time_s: 0.0,
+            window: WindowAverage::new(config.rotation_period_samples),
+            kf: core::array::from_fn(|_| ConstantStateKalman::new([s, s, s])),
+            updates: 0,
+        }
+    }
+
+    /// Integrates one sample, averages, and updates the four filters once the window is full.
+    pub fn step(&mut self, config: &Config, sample: &Sample, angles: &Angles) -> bool {
+        if self.samples == 0 {
+            self.start_time_s = sample.time_s;
+        }
+        let p = products(&sample.attitude, angles);
+        let mut r_t = [0.0; 4];
+        self.samples = self.samples.saturating_add(1);
+        for ch in 0..4 {
+            self.integrals[ch] += i64::from(WindowAverage::<4, CAP>::quantize(p[ch]));
+            r_t[ch] = self.integrals[ch] as Real / (COUNTS_PER_UNIT * self.samples as Real);
+        }
+        self.window.push(&r_t);
+        let Some(r_bar) = self.window.means() else {
+            return false;
+        };
+        let half_window_s = (self.window.len() - 1) as f64 * 0.5 * config.sample_interval_s;
+        let t_c = sample.time_s - self.start_time_s - half_window_s;
+        let phase = (EARTH_RATE_RAD_PER_S * t_c) % (2.0 * core::f64::consts::PI);
+        let (sin_e, cos_e) = sin_cos(phase as Real);
+        let half_cos_lat = 0.5 * angles.cos_lat;
+        let gains = [0.5, -0.5, half_cos_lat, -half_cos_lat];
+        let r = config.measurement_sigma_rad * config.measurement_sigma_rad;
+        let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * config.sample_interval_s as Real;
+        let mut applied = false;
+        for j in 0..4 {
+            self.kf[j].predict(&[q, 0.0, 0.0]);
+            applied |= self.kf[j].update(&[gains[j], cos_e, sin_e], r_bar[j], r).is_ok();
+        }
+        if applied {
+            self.updates = self.updates.saturating_add(1);
+        }
+        applied
+    }
+
+    /// Restarts the moving average (the integrals go on, as eq 8 runs from the start).
+    pub fn restart_window(&mut self) {
+        self.window.clear();
+    }
+
+    /// Current estimate and 1-sigma, once updated.
+    pub fn estimate(&self) -> Option<([Real; 4], [Real; 4])> {
+        if self.updates == 0 {
+            return None;
+        }
+        Some((
+            core::array::from_fn(|j| self.kf[j].x[0]),
+            core::array::from_fn(|j| self.kf[j].sigma(0)),
+        ))
+    }
+}

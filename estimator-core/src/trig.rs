@@ -1,0 +1,83 @@
+//! Sine and cosine for the step.
+//!
+//! The `libm` crate's `sinf`/`cosf` compute in `f64`, which the Cortex-M4F runs in software
+//! (about 2,350 instructions a pair, `shared/notes/target-costs.md`). The `f32` build therefore uses
+//! its own [`sin_cos`]: Cody-Waite reduction by pi/2 with a two-part constant, then the Cephes
+//! single-precision minimax polynomials on [-pi/4, pi/4]. It uses only `+`, `-`, `*` and a
+//! round-to-nearest, so it gives bit-identical results on the host and on the target. Its error is
+//! below 2e-7 for |x| <= 4 pi (tested against `f64` sine and cosine), i.e. below 0.05 arcsec on a
+//! unit signal; every angle the core passes it is within 4 pi.
+
+use crate::Real;
+
+/// Wraps an angle to [-pi, pi]. Input must be finite and within a few turns.
+pub fn wrap_pi(angle_rad: Real) -> Real {
+    let two_pi = 2.0 * core::f64::consts::PI as Real;
+    let pi = core::f64::consts::PI as Real;
+    let mut a = angle_rad;
+    while a > pi {
+        a -= two_pi;
+    }
+    while a < -pi {
+        a += two_pi;
+    }
+    a
+}
+
+/// `(sin x, cos x)`.
+#[cfg(not(feature = "f64"))]
+pub fn sin_cos(x: f32) -> (f32, f32) {
+    const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;
+    // pi/2 split so that k * PIO2_HI is exact for |k| < 2^8.
+    const PIO2_HI: f32 = 1.570_312_5;
+    const PIO2_MID: f32 = 4.837_513e-4;
+    const PIO2_LO: f32 = 7.549_79e-8;
+    let k = libm::rintf(x * FRAC_2_PI);
+    let r = ((x - k * PIO2_HI) - k * PIO2_MID) - k * PIO2_LO;
+    let z = r * r;
+    let s = r + r * z * (-1.666_665_5e-1 + z * (8.332_161e-3 + z * -1.951_529_6e-4));
+    let c = 1.0 - 0.5 * z + z * z * (4.166_664_6e-2 + z * (-1.388_731_6e-3 + z * 2.443_315_7e-5));
+    // k mod 4 selects the quadrant; `as i32` saturates and |k| is small for every caller.
+    match (k as i32) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
+/// `(sin x, cos x)`.
+#[cfg(feature = "f64")]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    (libm::sin(x), libm::cos(x))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sin_cos_matches_f64_within_2e7_over_four_turns() {
+        let mut worst: f64 = 0.0;
+        let n = 200_000;
+        for i in 0..=n {
+            let x = -4.0 * core::f64::consts::PI + 8.0 * core::f64::consts::PI * (i as f64) / n as f64;
+            let xr = x as Real;
+            let (s, c) = sin_cos(xr);
+            let xe = xr as f64;
+            worst = worst.max((s as f64 - libm::sin(xe)).abs()).max((c as f64 - libm::cos(xe)).abs());
+        }
+        assert!(worst < 2e-7, "worst error {worst}");
+    }
+
+    #[test]
+    fn wrap_pi_brings_angles_into_range() {
+        for &a in &[-12.0 as Real, -3.5, 0.0, 3.5, 12.0] {
+            let w = wrap_pi(a);
+            assert!(w.abs() <= core::f64::consts::PI as Real + 1e-6);
+            let (s1, c1) = sin_cos(a);
+            let (s2, c2) = sin_cos(w);
+            assert!((s1 - s2).abs() < 1e-5 && (c1 - c2).abs() < 1e-5);
+        }
+    }
+}

@@ -1,0 +1,332 @@
+//! Scenario generator: ship sway, gimbal angles and a RINS attitude with known installation errors.
+//!
+//! The attitude follows eq (3): `true attitude + eq (2) oscillation + low-frequency error (eq 5) + noise`.
+//! Eq (2) is written out again here, in `f64`, on purpose: it is the truth the core's `f32`
+//! implementation is tested against, so a sign slip in one would show against the other.
+//!
+//! Three scenarios (every parameter documented on [`ScenarioParams`] and overridable):
+//! - `paper`: Section II: roll 3 deg at 6 s, pitch 1 deg at 8-10 s, low-frequency errors of 0.05 deg
+//!   at Earth-rate periods, white noise, rotation 480 s, latitude 40 deg, 2 days;
+//! - `turntable`: Section IV-A: roll 3 deg, pitch 1 deg, periods near 10 s, static base;
+//! - `sea`: Section IV-B and rougher: irregular sway from a wave spectrum (roll about 6 deg, pitch
+//!   about 1.5 deg, periods 6-14 s), heading changes up to 0.5 deg/s, 5 m/s forward speed so the
+//!   latitude drifts, low latitude, 47340 s.
+//!
+//! Effects eq (2) does not contain ([`Mismatch`]) can be switched on for robustness studies.
+
+use estimator_core::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// Earth radius for the latitude drift of a moving ship, m.
+const EARTH_RADIUS_M: f64 = 6_371_000.0;
+
+/// Which scenario.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ScenarioKind {
+    Paper,
+    Turntable,
+    Sea,
+}
+
+impl ScenarioKind {
+    pub fn name(&self) -> &'static str {
+        match self {
+            ScenarioKind::Paper => "paper",
+            ScenarioKind::Turntable => "turntable",
+            ScenarioKind::Sea => "sea",
+        }
+    }
+    pub fn parse(s: &str) -> Option<ScenarioKind> {
+        match s {
+            "paper" => Some(ScenarioKind::Paper),
+            "turntable" => Some(ScenarioKind::Turntable),
+            "sea" => Some(ScenarioKind::Sea),
+            _ => None,
+        }
+    }
+}
+
+/// One sinusoidal sway component: `amplitude sin(2 pi t / period + phase)`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SwayComponent {
+    pub amplitude_deg: f64,
+    pub period_s: f64,
+    pub phase_rad: f64,
+}
+
+/// Effects outside eq (2), all off by default.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Mismatch {
+    /// Relative error of the true rotation period against the nominal 480 s (0.005 = 0.5 % slower).
+    pub rotation_period_error: f64,
+    /// 1-sigma of white jitter on the rotation angle, deg.
+    pub rotation_jitter_deg: f64,
+    /// Linear drift of every installation error, arcsec per day.
+    pub error_drift_arcsec_per_day: f64,
+    /// Frequency of the low-frequency errors relative to the Earth rate (0 = exactly Earth rate;
+    /// 0.2 = 20 % faster).
+    pub low_frequency_rate_error: f64,
+    /// 1-sigma of a first-order Gauss-Markov (coloured) attitude noise, arcsec, time constant 60 s.
+    pub coloured_noise_arcsec: f64,
+}
+
+/// Everything that defines a generated log. Written into the truth file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScenarioParams {
+    pub scenario: ScenarioKind,
+    pub seed: u64,
+    /// Length of the log, s (one sample per `sample_interval_s`).
+    pub duration_s: f64,
+    pub sample_interval_s: f64,
+    /// Installation errors x1..x4 of eqs (1)-(2), arcsec.
+    pub errors_arcsec: [f64; 4],
+    /// Latitude at the start, deg.
+    pub latitude_deg: f64,
+    /// Forward speed, m/s (northward component moves the latitude).
+    pub speed_m_s: f64,
+    /// Course over ground, deg from north (sets how the speed moves the latitude).
+    pub course_deg: f64,
+    /// Rotation period of the RINS, s (nominal).
+    pub rotation_period_s: f64,
+    /// Rotation angle at t = 0, deg.
+    pub rotation_phase_deg: f64,
+    /// Platform angle s at t = 0, deg; it then turns at the Earth rate.
+    pub platform_phase_deg: f64,
+    /// Roll and pitch sway components (eq 4).
+    pub roll_sway: Vec<SwayComponent>,
+    pub pitch_sway: Vec<SwayComponent>,
+    /// Heading: mean, and yaw sway components; plus a slow weave of this rate amplitude.
+    pub heading_deg: f64,
+    pub heading_sway: Vec<SwayComponent>,
+    /// Peak heading rate of the ship's slow course changes, deg/s (0 = none); period 600 s.
+    pub heading_weave_rate_deg_s: f64,
+    /// Amplitude of the low-frequency attitude errors of eq (5), deg (per axis: a0..a4 drawn so
+    /// that |a| = this).
+    pub low_frequency_deg: f64,
+    /// 1-sigma of white attitude noise, arcsec.
+    pub noise_arcsec: f64,
+    pub mismatch: Mismatch,
+}
+
+/// One generated row, degrees (the log format's units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    pub time_s: f64,
+    pub rotation_deg: f64,
+    pub platform_deg: f64,
+    pub latitude_deg: f64,
+    pub heading_deg: f64,
+    pub roll_deg: f64,
+    pub pitch_deg: f64,
+}
+
+/// The truth of one row, for evaluating corrections: the true attitude (sway only) and the
+/// installation-error oscillation actually put into the row, deg.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RowTruth {
+    pub true_attitude_deg: [f64; 3],
+    pub oscillation_deg: [f64; 3],
+    /// Installation errors in force at this row (they drift only under [`Mismatch`]), arcsec.
+    pub errors_arcsec: [f64; 4],
+}
+
+fn sway_set(rng: &mut ChaCha8Rng, items: &[(f64, f64)]) -> Vec<SwayComponent> {
+    items
+        .iter()
+        .map(|&(amplitude_deg, period_s)| SwayComponent {
+            amplitude_deg,
+            period_s,
+            phase_rad: rng.gen_range(0.0..2.0 * PI),
+        })
+        .collect()
+}
+
+/// Irregular sway from a Pierson-Moskowitz-shaped spectrum between `min_period_s` and
+/// `max_period_s` peaking at `peak_period_s`: 40 components with random phases, scaled so the
+/// significant amplitude (2 x RMS) is `significant_deg`.
+fn wave_spectrum(
+    rng: &mut ChaCha8Rng,
+    significant_deg: f64,
+    peak_period_s: f64,
+    min_period_s: f64,
+    max_period_s: f64,
+) -> Vec<SwayComponent> {
+    let n = 40;
+    let w_min = 2.0 * PI / max_period_s;
+    let w_max = 2.0 * PI / min_period_s;
+    let wp = 2.0 * PI / peak_period_s;
+    let dw = (w_max - w_min) / n as f64;
+    let mut comps: Vec<SwayComponent> = (0..n)
+        .map(|i| {
+            // A random frequency inside each bin, so the sum does not repeat.
+            let w = w_min + (i as f64 + rng.gen_range(0.0..1.0)) * dw;
+            let s = (wp / w).powi(5) * (-1.25 * (wp / w).powi(4)).exp();
+            SwayComponent { amplitude_deg: (2.0 * s * dw).sqrt(), period_s: 2.0 * PI / w, phase_rad: rng.gen_range(0.0..2.0 * PI) }
+        })
+        .collect();
+    let rms = (comps.iter().map(|c| c.amplitude_deg * c.amplitude_deg / 2.0).sum::<f64>()).sqrt();
+    let scale = significant_deg / (2.0 * rms);
+    for c in &mut comps {
+        c.amplitude_deg *= scale;
+    }
+    comps
+}
+
+impl ScenarioParams {
+    /// The scenario's defaults for `seed`. Phases (and for `sea` the spectrum components) are drawn
+    /// from the seed; everything else is fixed.
+    pub fn new(kind: ScenarioKind, seed: u64) -> ScenarioParams {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0f_5ea);
+        let rotation_phase_deg = rng.gen_range(0.0..360.0);
+        let platform_phase_deg = rng.gen_range(0.0..360.0);
+        let base = ScenarioParams {
+            scenario: kind,
+            seed,
+            duration_s: 172_800.0,
+            sample_interval_s: 1.0,
+            errors_arcsec: [200.0, -150.0, 300.0, -250.0],
+            latitude_deg: 40.0,
+            speed_m_s: 0.0,
+            course_deg: 0.0,
+            rotation_period_s: 480.0,
+            rotation_phase_deg,
+            platform_phase_deg,
+            roll_sway: Vec::new(),
+            pitch_sway: Vec::new(),
+            heading_deg: 30.0,
+            heading_sway: Vec::new(),
+            heading_weave_rate_deg_s: 0.0,
+            low_frequency_deg: 0.05,
+            noise_arcsec: 5.0,
+            mismatch: Mismatch::default(),
+        };
+        match kind {
+            ScenarioKind::Paper => ScenarioParams {
+                roll_sway: sway_set(&mut rng, &[(3.0, 6.0)]),
+                pitch_sway: sway_set(&mut rng, &[(0.8, 8.0), (0.6, 10.0)]),
+                ..base
+            },
+            ScenarioKind::Turntable => ScenarioParams {
+                duration_s: 50_000.0,
+                roll_sway: sway_set(&mut rng, &[(3.0, 10.0)]),
+                pitch_sway: sway_set(&mut rng, &[(1.0, 9.5)]),
+                low_frequency_deg: 0.02,
+                ..base
+            },
+            ScenarioKind::Sea => ScenarioParams {
+                duration_s: 47_340.0,
+                latitude_deg: 18.0,
+                speed_m_s: 5.0,
+                course_deg: 40.0,
+                roll_sway: wave_spectrum(&mut rng, 6.0 * 2.0 / std::f64::consts::SQRT_2, 10.0, 6.0, 14.0),
+                pitch_sway: wave_spectrum(&mut rng, 1.5 * 2.0 / std::f64::consts::SQRT_2, 9.0, 6.0, 14.0),
+                heading_sway: wave_spectrum(&mut rng, 0.5, 10.0, 6.0, 14.0),
+                heading_weave_rate_deg_s: 0.5,
+                ..base
+            },
+        }
+    }
+}
+
+/// Eq (2) in f64: (heading, roll, pitch) errors in rad for errors `x` in rad.
+pub fn oscillation_rad(x: &[f64; 4], rho: f64, s: f64, lat: f64) -> [f64; 3] {
+    let (sl, cl) = lat.sin_cos();
+    let (sr, cr) = rho.sin_cos();
+    let (srs, crs) = (rho - s).sin_cos();
+    [
+        -x[0] * cl * crs - x[1] * cl * srs - x[2] * sl * sr + x[3] * sl * cr,
+        -x[0] * sl * crs - x[1] * sl * srs + x[2] * cl * sr - x[3] * cl * cr,
+        x[0] * srs - x[1] * crs,
+    ]
+}
+
+fn sway(comps: &[SwayComponent], t: f64) -> f64 {
+    comps.iter().map(|c| c.amplitude_deg * (2.0 * PI * t / c.period_s + c.phase_rad).sin()).sum()
+}
+
+/// A generated log: rows and their truth.
+pub struct Generated {
+    pub rows: Vec<Row>,
+    pub truth: Vec<RowTruth>,
+}
+
+/// Generates the log of `p`. Deterministic for a given `p`.
+pub fn generate(p: &ScenarioParams) -> Generated {
+    let mut rng = ChaCha8Rng::seed_from_u64(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xA77_17D3);
+    let white = Normal::new(0.0, arcsec_to_rad(p.noise_arcsec).max(0.0)).unwrap_or(Normal::new(0.0, 0.0).unwrap());
+    let jitter = Normal::new(0.0, (p.mismatch.rotation_jitter_deg * RAD_PER_DEG).max(0.0)).unwrap();
+    // Eq (5) coefficients per axis (heading, roll, pitch): random directions with norm = amplitude.
+    let lf_amp = p.low_frequency_deg * RAD_PER_DEG;
+    let lf: Vec<[f64; 5]> = (0..3)
+        .map(|_| {
+            let v: [f64; 5] = core::array::from_fn(|_| rng.gen_range(-1.0..1.0));
+            let norm = v.iter().map(|a| a * a).sum::<f64>().sqrt().max(1e-9);
+            core::array::from_fn(|i| v[i] / norm * lf_amp)
+        })
+        .collect();
+    let w_lf = EARTH_RATE_RAD_PER_S * (1.0 + p.mismatch.low_frequency_rate_error);
+    let gm_tau = 60.0;
+    let gm_sigma = arcsec_to_rad(p.mismatch.coloured_noise_arcsec);
+    let gm_a = (-p.sample_interval_s / gm_tau).exp();
+    let gm_drive = Normal::new(0.0, (gm_sigma * (1.0 - gm_a * gm_a).sqrt()).max(0.0)).unwrap();
+    let mut gm = [0.0f64; 3];
+    if gm_sigma > 0.0 {
+        let init = Normal::new(0.0, gm_sigma).unwrap();
+        for g in &mut gm {
+            *g = init.sample(&mut rng);
+        }
+    }
+    let n = (p.duration_s / p.sample_interval_s).floor() as usize;
+    let mut rows = Vec::with_capacity(n);
+    let mut truth = Vec::with_capacity(n);
+    let rot_rate = 2.0 * PI / (p.rotation_period_s * (1.0 + p.mismatch.rotation_period_error));
+    let north_rate_rad_s = p.speed_m_s * (p.course_deg * RAD_PER_DEG).cos() / EARTH_RADIUS_M;
+    let weave_period_s = 600.0;
+    for k in 0..n {
+        let t = k as f64 * p.sample_interval_s;
+        let drift = p.mismatch.error_drift_arcsec_per_day * t / 86_400.0;
+        let x_arcsec: [f64; 4] = core::array::from_fn(|i| p.errors_arcsec[i] + drift);
+        let x: [f64; 4] = core::array::from_fn(|i| arcsec_to_rad(x_arcsec[i]));
+        let rho = p.rotation_phase_deg * RAD_PER_DEG + rot_rate * t + jitter.sample(&mut rng);
+        let s = p.platform_phase_deg * RAD_PER_DEG + EARTH_RATE_RAD_PER_S * t;
+        let lat = p.latitude_deg * RAD_PER_DEG + north_rate_rad_s * t;
+        let weave = if p.heading_weave_rate_deg_s > 0.0 {
+            p.heading_weave_rate_deg_s * weave_period_s / (2.0 * PI) * (2.0 * PI * t / weave_period_s).sin()
+        } else {
+            0.0
+        };
+        let true_att = [p.heading_deg + weave + sway(&p.heading_sway, t), sway(&p.roll_sway, t), sway(&p.pitch_sway, t)];
+        let osc = oscillation_rad(&x, rho, s, lat);
+        let we = w_lf * t;
+        let mut out = [0.0; 3];
+        for axis in 0..3 {
+            let a = &lf[axis];
+            let low = a[0] + a[1] * we.sin() + a[2] * we.cos() + a[3] * (2.0 * we).sin() + a[4] * (2.0 * we).cos();
+            if gm_sigma > 0.0 {
+                gm[axis] = gm_a * gm[axis] + gm_drive.sample(&mut rng);
+            }
+            let err_rad = osc[axis] + low + white.sample(&mut rng) + gm[axis];
+            out[axis] = true_att[axis] + err_rad / RAD_PER_DEG;
+        }
+        rows.push(Row {
+            time_s: t,
+            rotation_deg: (rho / RAD_PER_DEG).rem_euclid(360.0),
+            platform_deg: (s / RAD_PER_DEG).rem_euclid(360.0),
+            latitude_deg: lat / RAD_PER_DEG,
+            heading_deg: out[0].rem_euclid(360.0),
+            roll_deg: out[1],
+            pitch_deg: out[2],
+        });
+        truth.push(RowTruth {
+            true_attitude_deg: true_att,
+            oscillation_deg: [osc[0] / RAD_PER_DEG, osc[1] / RAD_PER_DEG, osc[2] / RAD_PER_DEG],
+            errors_arcsec: x_arcsec,
+        });
+    }
+    Generated { rows, truth }
+}
