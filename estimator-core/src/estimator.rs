@@ -207,7 +207,7 @@ impl SwayMonitor {
 
 /// The installation-error estimator, with a ring capacity of `CAP` samples (at least the rotation
 /// period in samples; 480 by default).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Estimator<const CAP: usize = 480> {
     pub(crate) config: Config,
     pub(crate) method: MethodState<CAP>,

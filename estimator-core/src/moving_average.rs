@@ -20,7 +20,7 @@ pub const COUNTS_PER_UNIT: Real = (1u64 << 30) as Real;
 pub const MAX_MAGNITUDE: Real = 1.999_999;
 
 /// `CH` channels averaged over the same window of up to `CAP` samples.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct WindowAverage<const CH: usize, const CAP: usize> {
     ring: [[i32; CH]; CAP],
     sums: [i64; CH],

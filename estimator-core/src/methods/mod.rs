@@ -18,7 +18,7 @@ pub use traditional::Traditional;
 pub use windowed::Windowed;
 
 /// The running state of whichever method the configuration selects.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum MethodState<const CAP: usize> {
     Windowed(Windowed<CAP>),
     Paper(Paper<CAP>),

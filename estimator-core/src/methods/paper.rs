@@ -5,7 +5,7 @@
 //!   (the integral is kept exactly, in fixed point);
 //! - eq (11): `Rbar_j` = mean of `R_j` over the last W samples, belonging to the window's middle
 //!   `t_c = t - (W-1)/2` samples;
-//! - eqs (13)-(18): a 3-state filter `(x_j, b1, b2)` with `H = (c_j, cos w_e t_c, sin w_e t_c)`, where
+//! - eqs (13)-(18): a 3-state filter (in `f64`, see [`crate::kalman`]) `(x_j, b1, b2)` with `H = (c_j, cos w_e t_c, sin w_e t_c)`, where
 //!   `c_j` is the channel's gain from the derivation in [`crate::correlation`]:
 //!   `1/2` (x1), `-1/2` (x2), `cosL/2` (x3, the paper's eq 17), `-cosL/2` (x4).
 //!
@@ -21,12 +21,11 @@ use crate::installation::Angles;
 use crate::kalman::ConstantStateKalman;
 use crate::moving_average::{WindowAverage, COUNTS_PER_UNIT};
 use crate::sample::Sample;
-use crate::trig::sin_cos;
 use crate::units::EARTH_RATE_RAD_PER_S;
 use crate::Real;
 
 /// State of the paper's method.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Paper<const CAP: usize> {
     /// Exact fixed-point integrals of the four products since the start (eq 8 numerator).
     pub integrals: [i64; 4],
@@ -37,7 +36,7 @@ pub struct Paper<const CAP: usize> {
     /// Moving average of `R_j(t)` (eq 11).
     pub window: WindowAverage<4, CAP>,
     /// One `(x_j, b1, b2)` filter per error (eqs 15-18).
-    pub kf: [ConstantStateKalman<3>; 4],
+    pub kf: [ConstantStateKalman<f64, 3>; 4],
     /// Measurement steps applied so far.
     pub updates: u32,
 }
@@ -45,7 +44,7 @@ pub struct Paper<const CAP: usize> {
 impl<const CAP: usize> Paper<CAP> {
     /// Fresh state.
     pub fn new(config: &Config) -> Self {
-        let s = config.prior_sigma_rad;
+        let s = config.prior_sigma_rad as f64;
         Paper {
             integrals: [0; 4],
             samples: 0,
@@ -74,16 +73,17 @@ impl<const CAP: usize> Paper<CAP> {
         };
         let half_window_s = (self.window.len() - 1) as f64 * 0.5 * config.sample_interval_s;
         let t_c = sample.time_s - self.start_time_s - half_window_s;
-        let phase = (EARTH_RATE_RAD_PER_S * t_c) % (2.0 * core::f64::consts::PI);
-        let (sin_e, cos_e) = sin_cos(phase as Real);
-        let half_cos_lat = 0.5 * angles.cos_lat;
+        let phase = EARTH_RATE_RAD_PER_S * t_c;
+        let (sin_e, cos_e) = (libm::sin(phase), libm::cos(phase));
+        let half_cos_lat = 0.5 * angles.cos_lat as f64;
         let gains = [0.5, -0.5, half_cos_lat, -half_cos_lat];
-        let r = config.measurement_sigma_rad * config.measurement_sigma_rad;
-        let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * config.sample_interval_s as Real;
+        let sigma = config.measurement_sigma_rad as f64;
+        let drift = config.drift_rad_per_sqrt_s as f64;
+        let q = drift * drift * config.sample_interval_s;
         let mut applied = false;
         for j in 0..4 {
             self.kf[j].predict(&[q, 0.0, 0.0]);
-            applied |= self.kf[j].update(&[gains[j], cos_e, sin_e], r_bar[j], r).is_ok();
+            applied |= self.kf[j].update(&[gains[j], cos_e, sin_e], r_bar[j] as f64, sigma * sigma).is_ok();
         }
         if applied {
             self.updates = self.updates.saturating_add(1);
@@ -102,8 +102,8 @@ impl<const CAP: usize> Paper<CAP> {
             return None;
         }
         Some((
-            core::array::from_fn(|j| self.kf[j].x[0]),
-            core::array::from_fn(|j| self.kf[j].sigma(0)),
+            core::array::from_fn(|j| self.kf[j].x[0] as Real),
+            core::array::from_fn(|j| self.kf[j].sigma(0) as Real),
         ))
     }
 }

@@ -14,10 +14,10 @@ use crate::sample::Sample;
 use crate::Real;
 
 /// State of the traditional baseline.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Traditional {
     /// The 4-state filter of x1..x4.
-    pub kf: ConstantStateKalman<4>,
+    pub kf: ConstantStateKalman<Real, 4>,
     /// Measurement steps applied so far.
     pub updates: u32,
 }

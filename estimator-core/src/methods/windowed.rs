@@ -42,12 +42,12 @@ use crate::Real;
 pub const CHANNELS: usize = 7;
 
 /// State of the windowed method.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Windowed<const CAP: usize> {
     /// Moving averages of the products and leakage coefficients.
     pub window: WindowAverage<CHANNELS, CAP>,
     /// The 4-state filter of x1..x4.
-    pub kf: ConstantStateKalman<4>,
+    pub kf: ConstantStateKalman<Real, 4>,
     /// Measurement steps applied so far.
     pub updates: u32,
 }
