@@ -1,0 +1,231 @@
+//! The estimates CSV (output), one row per input row; format in `shared/log-format.md`.
+//!
+//! Header [`HEADER`]. Fixed, deterministic formatting so that the replay path and the firmware
+//! stream path write byte-identical files from the same [`Output`]s:
+//! - `time_s`: 6 decimals;
+//! - `x*_arcsec`, `sigma*_arcsec`: 4 decimals, empty while there is no estimate;
+//! - `status`: [`estimator_core::Status::name`], or `rejected_<reason>` with
+//!   [`SampleError::reason_name`] for an input row the core rejected;
+//! - `*_corrected_deg`: 9 decimals (heading in [-180, 180]); empty on a rejected row.
+//!
+//! A rejected row carries the estimate held on board at that moment: a rejected sample leaves the
+//! estimator untouched, so that is the estimate of the last [`Output`], which the writer remembers.
+
+use crate::log_csv::{check_header, is_comment, LogError};
+use estimator_core::units::{rad_to_arcsec, RAD_PER_DEG};
+use estimator_core::{Estimate, Output, SampleError};
+use std::fs::File;
+use std::io::{BufRead, BufReader, Write};
+use std::path::Path;
+
+/// The estimates CSV header.
+pub const HEADER: &str = "time_s,x1_arcsec,x2_arcsec,x3_arcsec,x4_arcsec,sigma1_arcsec,sigma2_arcsec,sigma3_arcsec,sigma4_arcsec,status,heading_corrected_deg,roll_corrected_deg,pitch_corrected_deg";
+const COLUMNS: usize = 13;
+/// Prefix of the status of a rejected row.
+pub const REJECTED_PREFIX: &str = "rejected_";
+
+/// Writes the estimates CSV.
+pub struct EstimatesWriter<W: Write> {
+    out: W,
+    held: Option<Estimate>,
+}
+
+fn push_estimate(line: &mut String, estimate: Option<&Estimate>) {
+    use std::fmt::Write as _;
+    match estimate {
+        Some(e) => {
+            for v in e.x_rad.iter().chain(e.sigma_rad.iter()) {
+                let _ = write!(line, ",{:.4}", rad_to_arcsec(*v as f64));
+            }
+        }
+        None => line.push_str(",,,,,,,,"),
+    }
+}
+
+/// One row for a step's output (no newline).
+pub fn format_output(out: &Output) -> String {
+    use std::fmt::Write as _;
+    let mut line = format!("{:.6}", out.time_s);
+    push_estimate(&mut line, out.estimate.as_ref());
+    let c = &out.corrected;
+    let deg = |rad: estimator_core::Real| rad as f64 / RAD_PER_DEG;
+    let _ = write!(
+        line,
+        ",{},{:.9},{:.9},{:.9}",
+        out.status.name(),
+        deg(c.heading_rad),
+        deg(c.roll_rad),
+        deg(c.pitch_rad)
+    );
+    line
+}
+
+/// One row for a rejected input row (no newline): its time, the held estimate, the reason.
+pub fn format_rejected(time_s: f64, reason: &SampleError, held: Option<&Estimate>) -> String {
+    let mut line = format!("{time_s:.6}");
+    push_estimate(&mut line, held);
+    line.push(',');
+    line.push_str(REJECTED_PREFIX);
+    line.push_str(SampleError::reason_name(reason.reason_index()));
+    line.push_str(",,,");
+    line
+}
+
+impl<W: Write> EstimatesWriter<W> {
+    /// Writes the header.
+    pub fn new(mut out: W) -> std::io::Result<Self> {
+        writeln!(out, "{HEADER}")?;
+        Ok(EstimatesWriter { out, held: None })
+    }
+
+    /// Writes the row of one step: pass `step`'s result as it is, with the input row's time.
+    pub fn write_step(&mut self, time_s: f64, result: &Result<Output, SampleError>) -> std::io::Result<()> {
+        match result {
+            Ok(out) => self.write_output(out),
+            Err(reason) => self.write_rejected(time_s, reason),
+        }
+    }
+
+    /// Writes the row of an accepted sample.
+    pub fn write_output(&mut self, out: &Output) -> std::io::Result<()> {
+        self.held = out.estimate;
+        writeln!(self.out, "{}", format_output(out))
+    }
+
+    /// Writes the row of a rejected sample.
+    pub fn write_rejected(&mut self, time_s: f64, reason: &SampleError) -> std::io::Result<()> {
+        writeln!(self.out, "{}", format_rejected(time_s, reason, self.held.as_ref()))
+    }
+
+    /// Flushes and returns the inner writer.
+    pub fn finish(mut self) -> std::io::Result<W> {
+        self.out.flush()?;
+        Ok(self.out)
+    }
+}
+
+/// One parsed row of the estimates CSV.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EstimateRow {
+    pub time_s: f64,
+    pub x_arcsec: Option<[f64; 4]>,
+    pub sigma_arcsec: Option<[f64; 4]>,
+    pub status: String,
+    /// Heading, roll, pitch corrected, deg; `None` on a rejected row.
+    pub corrected_deg: Option<[f64; 3]>,
+}
+
+impl EstimateRow {
+    pub fn is_rejected(&self) -> bool {
+        self.status.starts_with(REJECTED_PREFIX)
+    }
+}
+
+fn parse_group<const N: usize>(fields: &[&str], names: &[&str]) -> Result<Option<[f64; N]>, String> {
+    if fields.iter().all(|f| f.trim().is_empty()) {
+        return Ok(None);
+    }
+    let mut out = [0.0; N];
+    for i in 0..N {
+        let f = fields[i].trim();
+        out[i] = f.parse().map_err(|_| format!("{}: not a number: {f:?}", names[i]))?;
+    }
+    Ok(Some(out))
+}
+
+fn parse_row(line: &str) -> Result<EstimateRow, String> {
+    let fields: Vec<&str> = line.split(',').collect();
+    if fields.len() != COLUMNS {
+        let kind = if fields.len() < COLUMNS { "short" } else { "long" };
+        return Err(format!("{kind} row: {} fields, expected {COLUMNS}", fields.len()));
+    }
+    let names: Vec<&str> = HEADER.split(',').collect();
+    let time_s = fields[0].trim().parse().map_err(|_| format!("time_s: not a number: {:?}", fields[0]))?;
+    Ok(EstimateRow {
+        time_s,
+        x_arcsec: parse_group(&fields[1..5], &names[1..5])?,
+        sigma_arcsec: parse_group(&fields[5..9], &names[5..9])?,
+        status: fields[9].trim().to_string(),
+        corrected_deg: parse_group(&fields[10..13], &names[10..13])?,
+    })
+}
+
+/// Reads an estimates CSV from a buffered reader; `path` names it in errors.
+pub fn read_estimates_from<R: BufRead>(path: &Path, reader: R) -> Result<Vec<EstimateRow>, LogError> {
+    let mut rows = Vec::new();
+    let mut header_seen = false;
+    let mut line_no = 0;
+    for line in reader.lines() {
+        line_no += 1;
+        let line = line.map_err(|e| LogError::new(path, line_no, format!("cannot read: {e}")))?;
+        if is_comment(&line) {
+            continue;
+        }
+        if !header_seen {
+            check_header(path, line_no, &line, HEADER)?;
+            header_seen = true;
+            continue;
+        }
+        rows.push(parse_row(line.trim_end()).map_err(|m| LogError::new(path, line_no, m))?);
+    }
+    if !header_seen {
+        return Err(LogError::new(path, line_no + 1, format!("no header, expected {HEADER:?}")));
+    }
+    Ok(rows)
+}
+
+/// Reads an estimates CSV file.
+pub fn read_estimates(path: &Path) -> Result<Vec<EstimateRow>, LogError> {
+    let file = File::open(path).map_err(|e| LogError::new(path, 0, format!("cannot open: {e}")))?;
+    read_estimates_from(path, BufReader::new(file))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use estimator_core::units::arcsec_to_rad;
+    use estimator_core::{Attitude, Field, Real, Status};
+
+    fn output(time_s: f64, estimate: Option<Estimate>) -> Output {
+        Output {
+            time_s,
+            status: if estimate.is_some() { Status::Estimating } else { Status::WarmingUp },
+            estimate,
+            corrected: Attitude { heading_rad: 0.5, roll_rad: -0.01, pitch_rad: 0.02 },
+        }
+    }
+
+    #[test]
+    fn writes_and_reads_back() {
+        let e = Estimate {
+            x_rad: [200.0, -150.0, 300.0, -250.0].map(|a| arcsec_to_rad(a) as Real),
+            sigma_rad: [1.0, 2.0, 3.0, 4.0].map(|a| arcsec_to_rad(a) as Real),
+        };
+        let mut w = EstimatesWriter::new(Vec::new()).unwrap();
+        w.write_step(0.0, &Ok(output(0.0, None))).unwrap();
+        w.write_step(1.0, &Ok(output(1.0, Some(e)))).unwrap();
+        w.write_step(2.0, &Err(SampleError::NonFinite(Field::Roll))).unwrap();
+        let bytes = w.finish().unwrap();
+        let text = String::from_utf8(bytes.clone()).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], HEADER);
+        assert_eq!(lines[1], "0.000000,,,,,,,,,warming_up,28.647889757,-0.572957782,1.145915565");
+        assert!(lines[2].starts_with("1.000000,200.0000,-150.0000,300.0000,-250.0000,1.0000,2.0000,3.0000,4.0000,estimating,"), "{}", lines[2]);
+        assert!(lines[3].starts_with("2.000000,200.0000,") && lines[3].ends_with(",rejected_non_finite,,,"), "{}", lines[3]);
+        let rows = read_estimates_from(Path::new("e.csv"), bytes.as_slice()).unwrap();
+        assert_eq!(rows.len(), 3);
+        assert_eq!(rows[0].x_arcsec, None);
+        assert_eq!(rows[1].x_arcsec, Some([200.0, -150.0, 300.0, -250.0]));
+        assert_eq!(rows[1].sigma_arcsec, Some([1.0, 2.0, 3.0, 4.0]));
+        assert!(rows[2].is_rejected());
+        assert_eq!(rows[2].corrected_deg, None);
+        assert_eq!(rows[2].x_arcsec, rows[1].x_arcsec);
+    }
+
+    #[test]
+    fn reader_errors_name_the_line() {
+        let text = format!("{HEADER}\n0.0,,,,,,,,,warming_up,1,2\n");
+        let err = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap_err();
+        assert!(err.to_string().starts_with("e.csv:2: short row"), "{err}");
+    }
+}
