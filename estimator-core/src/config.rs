@@ -78,7 +78,8 @@ pub struct Config {
     /// used 3 deg). Default 0: off.
     pub sway_gate_rad: Real,
     /// Gaps of up to this many missing samples are bridged by linear interpolation of every input;
-    /// longer gaps restart the moving average. Default 2.
+    /// longer gaps restart the moving average. Default 0: every gap restarts it, which costs one
+    /// rotation period of updates but no accuracy (see [`crate::estimator`] for the measured trade-off).
     pub max_bridged_gap_samples: u32,
     /// An error counts as converged once its 1-sigma is below this. Default 1 arcsec.
     pub converged_sigma_rad: Real,
@@ -101,7 +102,7 @@ impl Default for Config {
             traditional_sigma_rad: (3.0 * RAD_PER_DEG / core::f64::consts::SQRT_2) as Real,
             traditional_drift_rad_per_sqrt_s: 0.0,
             sway_gate_rad: 0.0,
-            max_bridged_gap_samples: 2,
+            max_bridged_gap_samples: 0,
             converged_sigma_rad: arcsec_to_rad(1.0) as Real,
             rotation_step_tolerance: 0.25,
             rotation_period_tolerance: 0.01,

@@ -22,11 +22,11 @@ pub const MAX_MAGNITUDE: Real = 1.999_999;
 /// `CH` channels averaged over the same window of up to `CAP` samples.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WindowAverage<const CH: usize, const CAP: usize> {
-    ring: [[i32; CH]; CAP],
-    sums: [i64; CH],
-    len: usize,
-    head: usize,
-    filled: usize,
+    pub(crate) ring: [[i32; CH]; CAP],
+    pub(crate) sums: [i64; CH],
+    pub(crate) len: usize,
+    pub(crate) head: usize,
+    pub(crate) filled: usize,
 }
 
 impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
