@@ -1,2 +1,49 @@
+//! # link-protocol
+//!
+//! The frames between the host (`host-sim stream`, or a navigation computer's driver) and the
+//! estimator firmware. Shared, `no_std`, no allocator: the firmware and the host use this very
+//! crate, so both ends encode and decode every byte the same way.
+//!
+//! One frame on the wire, in both directions (byte-for-byte description in
+//! `firmware/PROTOCOL.md`):
+//!
+//! ```text
+//! 0x00 | COBS( postcard(message) | CRC-16/IBM-3740(postcard(message)) little-endian ) | 0x00
+//! ```
+//!
+//! - [`message`]: the request and response types (postcard-serialised with serde);
+//! - [`crc`]: the CRC-16 over the message bytes;
+//! - [`cobs`]: strict COBS encoding and decoding (a truncated group is an error);
+//! - [`frame`]: one message to one frame and back, with every way a frame can be bad;
+//! - [`accumulator`]: the bounded streaming receiver: splits the byte stream at 0x00, detects
+//!   oversized frames, resynchronises on the next 0x00.
 #![no_std]
-//! Frames between the host and the firmware (filled in by the firmware work).
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod accumulator;
+pub mod cobs;
+pub mod crc;
+pub mod frame;
+pub mod message;
+
+pub use accumulator::FrameAccumulator;
+pub use frame::{decode_frame, encode_frame, EncodeError, FrameError};
+pub use message::{
+    Counters, EstimateMsg, RejectedReply, Request, Response, SampleMsg, StatusReply, StepReply,
+};
+
+/// Version of this protocol, reported in [`StatusReply::protocol_version`].
+pub const PROTOCOL_VERSION: u8 = 1;
+
+/// Largest COBS-encoded request the firmware accepts (without the two 0x00 delimiters). The largest
+/// request, a sample, encodes to 36 bytes; anything longer than this is counted as oversized.
+pub const MAX_REQUEST_ENCODED: usize = 64;
+
+/// Largest COBS-encoded response (without the delimiters); the largest response encodes to far less.
+pub const MAX_RESPONSE_ENCODED: usize = 192;
+
+/// Largest message (postcard bytes, before the CRC) this crate encodes.
+pub const MAX_MESSAGE: usize = 160;

@@ -1,0 +1,273 @@
+//! One message to one frame and back.
+//!
+//! Frame = `0x00, COBS(message bytes, CRC-16 little-endian), 0x00`. The leading 0x00 closes any line
+//! noise received before the frame as a (counted) bad frame of its own, so noise can never corrupt
+//! the frame that follows it; the receiver ignores the empty frame between two delimiters.
+
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+
+use crate::cobs;
+use crate::crc::crc16;
+use crate::MAX_MESSAGE;
+
+/// Why a received frame was dropped. Counted on the firmware by [`FrameError::index`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameError {
+    /// (0) More bytes than the receive buffer holds arrived before the next 0x00.
+    Oversize,
+    /// (1) Not valid COBS: a group runs past the end of the frame (truncated frame).
+    Cobs,
+    /// (2) Decodes to fewer than 3 bytes: no room for a message and its CRC.
+    TooShort,
+    /// (3) The CRC does not match the message bytes.
+    Crc,
+    /// (4) The CRC matches but the bytes are not exactly one known message.
+    Message,
+}
+
+impl FrameError {
+    /// Number of kinds (for counters).
+    pub const COUNT: usize = 5;
+
+    /// Index of this kind in [`crate::Counters::bad_frames`].
+    pub fn index(&self) -> usize {
+        match self {
+            FrameError::Oversize => 0,
+            FrameError::Cobs => 1,
+            FrameError::TooShort => 2,
+            FrameError::Crc => 3,
+            FrameError::Message => 4,
+        }
+    }
+
+    /// Short machine-readable name of the kind at `index`.
+    pub fn name(index: usize) -> &'static str {
+        match index {
+            0 => "oversize",
+            1 => "cobs",
+            2 => "too_short",
+            3 => "crc",
+            _ => "message",
+        }
+    }
+}
+
+/// Why a message could not be encoded (a bug on the sending side, never caused by received data).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EncodeError {
+    /// The message does not fit in [`MAX_MESSAGE`] bytes.
+    MessageTooLarge,
+    /// The output buffer is too small for the frame.
+    BufferTooSmall,
+}
+
+/// Largest frame, delimiters included, that [`encode_frame`] writes.
+pub const MAX_FRAME: usize = cobs::max_encoded_len(MAX_MESSAGE + 2) + 2;
+
+/// Writes `0x00, COBS(postcard(message), CRC-16 LE), 0x00` to `out`; returns the frame's length.
+pub fn encode_frame<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, EncodeError> {
+    let mut raw = [0u8; MAX_MESSAGE + 2];
+    let n = {
+        let body = raw.get_mut(..MAX_MESSAGE).ok_or(EncodeError::MessageTooLarge)?;
+        postcard::to_slice(message, body).map_err(|_| EncodeError::MessageTooLarge)?.len()
+    };
+    let crc = crc16(raw.get(..n).ok_or(EncodeError::MessageTooLarge)?).to_le_bytes();
+    raw.get_mut(n..n + 2).ok_or(EncodeError::MessageTooLarge)?.copy_from_slice(&crc);
+    let data = raw.get(..n + 2).ok_or(EncodeError::MessageTooLarge)?;
+    *out.first_mut().ok_or(EncodeError::BufferTooSmall)? = 0;
+    let body = out.get_mut(1..).ok_or(EncodeError::BufferTooSmall)?;
+    let m = cobs::encode(data, body).map_err(|_| EncodeError::BufferTooSmall)?;
+    *out.get_mut(m + 1).ok_or(EncodeError::BufferTooSmall)? = 0;
+    Ok(m + 2)
+}
+
+/// Decodes one received frame (the bytes between two 0x00, COBS-encoded; decoded in place).
+pub fn decode_frame<T: DeserializeOwned>(encoded: &mut [u8]) -> Result<T, FrameError> {
+    let n = cobs::decode_in_place(encoded).map_err(|_| FrameError::Cobs)?;
+    if n < 3 {
+        return Err(FrameError::TooShort);
+    }
+    let data = encoded.get(..n).ok_or(FrameError::Cobs)?;
+    let (body, crc) = data.split_at(n - 2);
+    let received = u16::from_le_bytes([
+        *crc.first().ok_or(FrameError::TooShort)?,
+        *crc.get(1).ok_or(FrameError::TooShort)?,
+    ]);
+    if crc16(body) != received {
+        return Err(FrameError::Crc);
+    }
+    match postcard::take_from_bytes::<T>(body) {
+        Ok((message, [])) => Ok(message),
+        _ => Err(FrameError::Message),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::message::*;
+    use crate::{MAX_REQUEST_ENCODED, MAX_RESPONSE_ENCODED};
+    use estimator_core::{Output, Sample, Status};
+    use std::vec::Vec;
+
+    pub(crate) fn frame_of<T: Serialize>(m: &T) -> Vec<u8> {
+        let mut out = [0u8; MAX_FRAME];
+        let n = encode_frame(m, &mut out).unwrap();
+        out[..n].to_vec()
+    }
+
+    fn body(frame: &[u8]) -> Vec<u8> {
+        assert_eq!(frame[0], 0);
+        assert_eq!(*frame.last().unwrap(), 0);
+        let inner = frame[1..frame.len() - 1].to_vec();
+        assert!(!inner.contains(&0));
+        inner
+    }
+
+    fn sample() -> SampleMsg {
+        SampleMsg::from(&Sample::from_degrees(49_999.0, 123.4, -56.7, 30.0, 10.0, 2.9, -0.4))
+    }
+
+    fn step_reply() -> StepReply {
+        let output = Output {
+            time_s: 49_999.0,
+            status: Status::Converged,
+            estimate: Some(estimator_core::Estimate { x_rad: [1e-4, -2e-4, 3e-4, 4e-4], sigma_rad: [1e-6; 4] }),
+            corrected: estimator_core::Attitude { heading_rad: 0.1, roll_rad: -0.01, pitch_rad: 0.02 },
+        };
+        let counters = Counters { bad_frames: [u32::MAX; 5], rejected_samples: [u32::MAX; 5] };
+        StepReply::new(&output, 123, counters)
+    }
+
+    #[test]
+    fn requests_and_responses_round_trip() {
+        let requests = [Request::Sample(sample()), Request::Reset, Request::ReadStatus];
+        for r in requests {
+            let mut inner = body(&frame_of(&r));
+            assert!(inner.len() <= MAX_REQUEST_ENCODED);
+            assert_eq!(decode_frame::<Request>(&mut inner), Ok(r));
+        }
+        let status = StatusReply {
+            protocol_version: crate::PROTOCOL_VERSION,
+            method: 0,
+            counters: Counters::default(),
+            accepted: u32::MAX,
+            bridged: 1,
+            window_restarts: 2,
+            estimate: step_reply().estimate,
+            cost_counter_hz: 25_000_000,
+            stack_peak_bytes: 1000,
+            stack_size_bytes: 4_000_000,
+        };
+        let rejected = RejectedReply::new(
+            3.0,
+            &estimator_core::SampleError::NonFinite(estimator_core::Field::Roll),
+            u32::MAX,
+            Counters::default(),
+        );
+        for r in [Response::Step(step_reply()), Response::Rejected(rejected), Response::Status(status)] {
+            let mut inner = body(&frame_of(&r));
+            assert!(inner.len() <= MAX_RESPONSE_ENCODED, "{} bytes", inner.len());
+            assert_eq!(decode_frame::<Response>(&mut inner), Ok(r));
+        }
+    }
+
+    #[test]
+    fn step_reply_rebuilds_the_same_output() {
+        let r = step_reply();
+        let o = r.output().unwrap();
+        assert_eq!(StepReply::new(&o, r.step_cost_ticks, r.counters), r);
+    }
+
+    #[test]
+    fn nan_payloads_travel_unchanged() {
+        let mut s = sample();
+        s.roll_rad = f32::from_bits(0x7fc0_1234);
+        let mut inner = body(&frame_of(&Request::Sample(s)));
+        match decode_frame::<Request>(&mut inner) {
+            Ok(Request::Sample(m)) => assert_eq!(m.roll_rad.to_bits(), 0x7fc0_1234),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// Pins the wire layout documented in firmware/PROTOCOL.md.
+    #[test]
+    fn request_layout_is_as_documented() {
+        let m = SampleMsg {
+            time_s: 1.0,
+            rotation_rad: 2.0,
+            platform_rad: 0.0,
+            latitude_rad: 0.5,
+            heading_rad: -1.0,
+            roll_rad: 0.25,
+            pitch_rad: 0.125,
+        };
+        let mut raw = [0u8; 64];
+        let bytes = postcard::to_slice(&Request::Sample(m), &mut raw).unwrap().to_vec();
+        let mut expect = std::vec![0u8];
+        expect.extend_from_slice(&1.0f64.to_le_bytes());
+        for v in [2.0f32, 0.0, 0.5, -1.0, 0.25, 0.125] {
+            expect.extend_from_slice(&v.to_le_bytes());
+        }
+        assert_eq!(bytes, expect);
+        assert_eq!(bytes.len(), 33);
+        // Whole frame: leading 0x00, 33 + 2 bytes COBS-encoded into at most 36, trailing 0x00.
+        let frame = frame_of(&Request::Sample(m));
+        assert!(frame.len() <= 38);
+        assert_eq!(frame_of(&Request::Reset), reset_frame());
+    }
+
+    fn reset_frame() -> Vec<u8> {
+        let crc = crate::crc::crc16(&[0x01]).to_le_bytes();
+        let mut raw = std::vec![0x01, crc[0], crc[1]];
+        let mut enc = std::vec![0u8; 8];
+        let n = cobs::encode(&raw, &mut enc).unwrap();
+        raw.clear();
+        raw.push(0);
+        raw.extend_from_slice(&enc[..n]);
+        raw.push(0);
+        raw
+    }
+
+    #[test]
+    fn corrupted_crc_is_detected_for_every_single_bit_flip() {
+        let frame = frame_of(&Request::Sample(sample()));
+        let mut raw = [0u8; 64];
+        let msg = postcard::to_slice(&Request::Sample(sample()), &mut raw).unwrap().to_vec();
+        let crc = crate::crc::crc16(&msg).to_le_bytes();
+        let mut data = msg.clone();
+        data.extend_from_slice(&crc);
+        for bit in 0..data.len() * 8 {
+            let mut bad = data.clone();
+            bad[bit / 8] ^= 1 << (bit % 8);
+            let mut enc = std::vec![0u8; 64];
+            let n = cobs::encode(&bad, &mut enc).unwrap();
+            assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::Crc), "bit {bit}");
+        }
+        assert!(frame.len() > 3);
+    }
+
+    #[test]
+    fn short_frames_and_unknown_messages() {
+        for data in [&[0x01u8][..], &[0x01, 0x02]] {
+            let mut enc = std::vec![0u8; 8];
+            let n = cobs::encode(data, &mut enc).unwrap();
+            assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::TooShort));
+        }
+        // Unknown variant 7, and a valid Reset followed by a stray byte: CRC fine, message wrong.
+        for msg in [&[0x07u8][..], &[0x01, 0x55]] {
+            let mut data = msg.to_vec();
+            data.extend_from_slice(&crate::crc::crc16(msg).to_le_bytes());
+            let mut enc = std::vec![0u8; 8];
+            let n = cobs::encode(&data, &mut enc).unwrap();
+            assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::Message));
+        }
+    }
+
+    #[test]
+    fn encoding_into_a_small_buffer_is_an_error() {
+        let mut out = [0u8; 10];
+        assert_eq!(encode_frame(&Request::Sample(sample()), &mut out), Err(EncodeError::BufferTooSmall));
+    }
+}
