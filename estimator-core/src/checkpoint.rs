@@ -3,7 +3,7 @@
 //!
 //! [`Estimator::checkpoint`] writes the image into a caller-provided buffer of at least
 //! [`Estimator::CHECKPOINT_LEN`] bytes ([`CHECKPOINT_LEN`] for the default capacity of 480:
-//! **13 828 bytes** with `f32`, 14 012 with the `f64` feature; four 4 KiB flash pages).
+//! **13 788 bytes** with `f32`, 13 976 with the `f64` feature; four 4 KiB flash pages).
 //! [`Estimator::restore`] reads one back. Restoring an image into a fresh estimator and
 //! continuing gives outputs bit-identical to the uninterrupted run (tested in
 //! `tests/checkpoint_roundtrip.rs` for many random cut points and all three methods).
@@ -48,7 +48,8 @@
 //! monitor (mean `R`, mean square `R`, samples u32); rejected counts 5 x u32; accepted, bridged,
 //! window restarts u32.
 //!
-//! Method part: **windowed**: updates u32, Kalman `x` 4 `R`, `P` 16 `R` (row-major), window.
+//! Method part: **windowed**: updates u32, Kalman `x` 4 `R`, `P` 16 `R` (row-major), residual
+//! means 4 `R`, residual count u32, channel gains 4 `R`, window.
 //! **paper**: updates u32, samples u32, start time f64, integrals 4 x i64, four Kalman filters
 //! (`x` 3 f64, `P` 9 f64 each), window. **traditional**: updates u32, Kalman `x` 4 `R`, `P` 16 `R`.
 //! A window is: length u32, head u32, filled u32, running sums `CH` x i64, the ring `CAP` x `CH`
@@ -97,7 +98,7 @@ const fn max(a: usize, b: usize) -> usize {
 }
 /// Bytes of the method part for ring capacity `cap`: the longest of the three methods.
 pub const fn method_len(cap: usize) -> usize {
-    let windowed = 4 + kalman_len(R, 4) + window_len(CHANNELS, cap);
+    let windowed = 4 + kalman_len(R, 4) + 4 * R + 4 + 4 * R + window_len(CHANNELS, cap);
     let paper = 4 + 4 + 8 + 4 * 8 + 4 * kalman_len(8, 3) + window_len(4, cap);
     let traditional = 4 + kalman_len(R, 4);
     max(windowed, max(paper, traditional))
@@ -106,7 +107,7 @@ pub const fn method_len(cap: usize) -> usize {
 pub const fn checkpoint_len(cap: usize) -> usize {
     METHOD_OFFSET + method_len(cap) + CRC_LEN
 }
-/// Image length for the default capacity (480): 13 828 bytes with `f32`.
+/// Image length for the default capacity (480): 13 788 bytes with `f32`.
 pub const CHECKPOINT_LEN: usize = checkpoint_len(480);
 
 /// A part of the image, named in errors.
@@ -125,6 +126,7 @@ pub enum Part {
     WindowSums,
     PaperIntegrals,
     PaperStartTime,
+    Residuals,
     Padding,
 }
 
@@ -216,14 +218,12 @@ pub fn crc32(bytes: &[u8]) -> u32 {
 
 /// Floats as they go into the image.
 trait Wire: Copy {
-    const BYTES: usize;
     fn put(self, w: &mut Writer<'_>);
     fn get(r: &mut Reader<'_>) -> Self;
     fn finite(self) -> bool;
 }
 
 impl Wire for f32 {
-    const BYTES: usize = 4;
     fn put(self, w: &mut Writer<'_>) {
         w.bytes(&self.to_le_bytes());
     }
@@ -236,7 +236,6 @@ impl Wire for f32 {
 }
 
 impl Wire for f64 {
-    const BYTES: usize = 8;
     fn put(self, w: &mut Writer<'_>) {
         w.bytes(&self.to_le_bytes());
     }
@@ -421,7 +420,7 @@ impl Reader<'_> {
 }
 
 impl<const CAP: usize> Estimator<CAP> {
-    /// Bytes of a checkpoint image of this estimator (13 828 for `CAP` = 480 with `f32`).
+    /// Bytes of a checkpoint image of this estimator (13 788 for `CAP` = 480 with `f32`).
     pub const CHECKPOINT_LEN: usize = checkpoint_len(CAP);
 
     /// Writes the whole state into `buf[..CHECKPOINT_LEN]`; returns the bytes written.
@@ -497,6 +496,13 @@ impl<const CAP: usize> Estimator<CAP> {
             MethodState::Windowed(m) => {
                 w.u32(m.updates);
                 w.kalman(&m.kf);
+                for v in m.residual_mean {
+                    w.real(v);
+                }
+                w.u32(m.residual_count);
+                for v in m.gains {
+                    w.real(v);
+                }
                 w.window(&m.window);
             }
             MethodState::Paper(m) => {
@@ -664,6 +670,16 @@ fn read_windowed<const CAP: usize>(
 ) -> Result<(), CheckpointError> {
     m.updates = r.u32();
     r.kalman(&mut m.kf)?;
+    for v in m.residual_mean.iter_mut() {
+        *v = r.finite(Part::Residuals)?;
+    }
+    m.residual_count = r.u32();
+    for v in m.gains.iter_mut() {
+        *v = r.finite(Part::Residuals)?;
+        if *v < 0.0 {
+            return Err(CheckpointError::InvalidValue(Part::Residuals));
+        }
+    }
     r.window(&mut m.window, period)
 }
 
@@ -711,11 +727,11 @@ mod tests {
     }
 
     #[test]
-    fn default_image_is_13828_bytes_with_f32() {
+    fn default_image_is_13788_bytes_with_f32() {
         #[cfg(not(feature = "f64"))]
-        assert_eq!(CHECKPOINT_LEN, 13_828);
+        assert_eq!(CHECKPOINT_LEN, 13_788);
         #[cfg(feature = "f64")]
-        assert_eq!(CHECKPOINT_LEN, 14_012);
+        assert_eq!(CHECKPOINT_LEN, 13_976);
         assert_eq!(Estimator::<480>::CHECKPOINT_LEN, CHECKPOINT_LEN);
     }
 
@@ -779,7 +795,7 @@ mod tests {
             assert_eq!(crc32(&buf[..buf.len() - 4]), u32::from_le_bytes(buf[buf.len() - 4..].try_into().unwrap()));
         }
         // The windowed method is the longest: it ends exactly at the CRC.
-        assert_eq!(METHOD_OFFSET + 4 + kalman_len(R, 4) + window_len(CHANNELS, 64), checkpoint_len(64) - 4);
+        assert_eq!(METHOD_OFFSET + 4 + kalman_len(R, 4) + 8 * R + 4 + window_len(CHANNELS, 64), checkpoint_len(64) - 4);
     }
 
     #[test]

@@ -66,8 +66,11 @@ pub struct Config {
     /// moving window read once a second this per-product value, not the (480 times smaller) variance
     /// of the window mean, is the right measurement noise; see [`crate::methods::windowed`].
     pub measurement_sigma_rad: Real,
-    /// Random walk of the installation errors, rad/sqrt(s) (process noise). Default 0: constant
-    /// errors as in the paper's eq (18).
+    /// Random walk of the installation errors, rad/sqrt(s) (process noise). Default 0.003
+    /// arcsec/sqrt(s), about 0.9 arcsec/sqrt(day): the errors "may gradually evolve" (the paper's
+    /// reason for estimating in real time), and with no process noise at all the filter stops
+    /// following them. Chosen by measurement (README, "Choosing the defaults"): it costs about
+    /// 0.1 arcsec of steady-state noise and cuts the lag behind a 20 arcsec/day drift from 8 to 2 arcsec.
     pub drift_rad_per_sqrt_s: Real,
     /// 1-sigma of raw roll or pitch about eq (2) for the traditional baseline: the sway. Default
     /// 3 deg / sqrt(2), the RMS of the paper's 3 deg roll sway.
@@ -83,7 +86,9 @@ pub struct Config {
     pub max_bridged_gap_samples: u32,
     /// An error counts as converged once its 1-sigma is below this. Default 1 arcsec.
     pub converged_sigma_rad: Real,
-    /// Largest relative deviation of one step's rotation increment from nominal. Default 0.25.
+    /// Largest relative deviation of one step's rotation increment from nominal. Default 0.5: wide,
+    /// because encoder and rate jitter make single steps noisy (0.05 deg of jitter is 9 % of a 0.75 deg
+    /// step); the period itself is held to `rotation_period_tolerance` through the mean rate.
     pub rotation_step_tolerance: Real,
     /// Largest relative deviation of the mean rotation rate (over about one period) from the
     /// configured period. Default 0.01 (1 %): a window then spans 360 +- 3.6 deg.
@@ -98,13 +103,13 @@ impl Default for Config {
             sample_interval_s: 1.0,
             prior_sigma_rad: arcsec_to_rad(1000.0) as Real,
             measurement_sigma_rad: arcsec_to_rad(10.0 / core::f64::consts::SQRT_2) as Real,
-            drift_rad_per_sqrt_s: 0.0,
+            drift_rad_per_sqrt_s: arcsec_to_rad(0.003) as Real,
             traditional_sigma_rad: (3.0 * RAD_PER_DEG / core::f64::consts::SQRT_2) as Real,
             traditional_drift_rad_per_sqrt_s: 0.0,
             sway_gate_rad: 0.0,
             max_bridged_gap_samples: 0,
             converged_sigma_rad: arcsec_to_rad(1.0) as Real,
-            rotation_step_tolerance: 0.25,
+            rotation_step_tolerance: 0.5,
             rotation_period_tolerance: 0.01,
         }
     }

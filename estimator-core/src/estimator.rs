@@ -70,6 +70,9 @@ pub enum Status {
     Estimating,
     /// The filter is updating and every error's 1-sigma is below `converged_sigma_rad`.
     Converged,
+    /// The filter is updating but its residuals show a bias the model does not explain (drifting
+    /// errors, coloured noise, a wrong rotation period): the 1-sigma has been widened to match.
+    ModelMismatch,
 }
 
 impl Status {
@@ -84,6 +87,7 @@ impl Status {
             Status::Holding => "holding",
             Status::Estimating => "estimating",
             Status::Converged => "converged",
+            Status::ModelMismatch => "model_mismatch",
         }
     }
 
@@ -98,6 +102,7 @@ impl Status {
             Status::Holding => 5,
             Status::Estimating => 6,
             Status::Converged => 7,
+            Status::ModelMismatch => 8,
         }
     }
 
@@ -112,6 +117,7 @@ impl Status {
             5 => Status::Holding,
             6 => Status::Estimating,
             7 => Status::Converged,
+            8 => Status::ModelMismatch,
             _ => return None,
         })
     }
@@ -282,7 +288,7 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// The current estimate, if any.
     pub fn estimate(&self) -> Option<Estimate> {
-        self.method.estimate().map(|(x_rad, sigma_rad)| Estimate { x_rad, sigma_rad })
+        self.method.estimate(&self.config).map(|(x_rad, sigma_rad)| Estimate { x_rad, sigma_rad })
     }
 
     /// Processes one sample. On error nothing changes but the rejection counter.
@@ -311,6 +317,7 @@ impl<const CAP: usize> Estimator<CAP> {
         self.accepted = self.accepted.saturating_add(1);
         let estimate = self.estimate();
         let status = match (status, estimate) {
+            (Status::Estimating, Some(_)) if self.method.model_mismatch(&self.config) => Status::ModelMismatch,
             (Status::Estimating, Some(e)) if e.sigma_rad.iter().all(|s| *s < self.config.converged_sigma_rad) => {
                 Status::Converged
             }

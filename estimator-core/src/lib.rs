@@ -31,6 +31,7 @@ pub type Real = f32;
 #[cfg(feature = "f64")]
 pub type Real = f64;
 
+pub mod checkpoint;
 pub mod config;
 pub mod correlation;
 pub mod estimator;

@@ -44,6 +44,14 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
+    /// True when the method's residual check finds the model inconsistent (windowed method only).
+    pub fn model_mismatch(&self, config: &Config) -> bool {
+        match self {
+            MethodState::Windowed(m) => m.updates > 0 && m.consistency(config).mismatch,
+            _ => false,
+        }
+    }
+
     /// Forgets the moving-average window (the filter keeps what it learnt).
     pub fn restart_window(&mut self) {
         match self {
@@ -54,9 +62,9 @@ impl<const CAP: usize> MethodState<CAP> {
     }
 
     /// `(x, sigma)` of x1..x4 in rad, once the filter has had a measurement.
-    pub fn estimate(&self) -> Option<([Real; 4], [Real; 4])> {
+    pub fn estimate(&self, config: &Config) -> Option<([Real; 4], [Real; 4])> {
         match self {
-            MethodState::Windowed(m) => m.estimate(),
+            MethodState::Windowed(m) => m.estimate(config),
             MethodState::Paper(m) => m.estimate(),
             MethodState::Traditional(m) => m.estimate(),
         }

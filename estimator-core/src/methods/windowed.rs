@@ -29,6 +29,18 @@
 //! frequency, and the sum of the sliding windows weights the raw products by a trapezoid whose
 //! ramps are W samples long, so the sway residual falls like `A / (w_y^2 W N)` (about 20/N arcsec
 //! for 3 deg at 6 s): negligible after the first few hundred windows.
+//!
+//! # Consistency: saying so when the model does not hold
+//! The covariance only knows the noise it was told about. Effects eq (2) does not contain (errors
+//! that drift, coloured attitude noise) bias the measurements without touching `P`, and the 1-sigma
+//! would then understate the error many times over. So each channel's post-fit residual
+//! `z - H x` is averaged exponentially over `RESIDUAL_PERIODS` rotation periods. Under the model
+//! the average is zero-mean noise of 1-sigma `s_e = sigma_m / sqrt(n)` (n the samples averaged, at
+//! least one window, at most the averaging time). The part of |mean| above `2 s_e`, divided by the
+//! channel's gain (1/2 for x1, x2; cos L / 2 for x3, x4), is added in quadrature to the reported
+//! 1-sigma, and a mean beyond `4 s_e` is reported as [`crate::Status::ModelMismatch`]. With a
+//! consistent model this changes nothing (tested on the paper scenario); with errors drifting at
+//! 20 arcsec/day it raises the 1-sigma to the size of the lag (tested in `host-sim`).
 
 use crate::config::Config;
 use crate::correlation::{leakage_coefficients, measurement_rows, products};
@@ -41,6 +53,9 @@ use crate::Real;
 /// Channels averaged: the four correlation products, then the three leakage coefficients.
 pub const CHANNELS: usize = 7;
 
+/// Time constant of the residual average, in rotation periods.
+pub const RESIDUAL_PERIODS: usize = 4;
+
 /// State of the windowed method.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Windowed<const CAP: usize> {
@@ -50,6 +65,19 @@ pub struct Windowed<const CAP: usize> {
     pub kf: ConstantStateKalman<Real, 4>,
     /// Measurement steps applied so far.
     pub updates: u32,
+    /// Exponential mean of each channel's post-fit residual, rad (see the module doc).
+    pub residual_mean: [Real; 4],
+    /// Residuals averaged so far (saturates at the averaging time).
+    pub residual_count: u32,
+    /// Channel gains `(1/2, 1/2, cosL/2, cosL/2)` of the last update, for mapping residuals to x.
+    pub gains: [Real; 4],
+}
+
+/// The residual check of one step: extra 1-sigma per error and whether the model is inconsistent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Consistency {
+    pub model_sigma_rad: [Real; 4],
+    pub mismatch: bool,
 }
 
 impl<const CAP: usize> Windowed<CAP> {
@@ -59,6 +87,9 @@ impl<const CAP: usize> Windowed<CAP> {
             window: WindowAverage::new(config.rotation_period_samples),
             kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
             updates: 0,
+            residual_mean: [0.0; 4],
+            residual_count: 0,
+            gains: [0.5; 4],
         }
     }
 
@@ -80,8 +111,35 @@ impl<const CAP: usize> Windowed<CAP> {
         }
         if applied {
             self.updates = self.updates.saturating_add(1);
+            self.average_residuals(&rows, &m);
         }
         applied
+    }
+
+    fn average_residuals(&mut self, rows: &[[Real; 4]; 4], m: &[Real; CHANNELS]) {
+        let horizon = (RESIDUAL_PERIODS * self.window.len()) as u32;
+        self.residual_count = self.residual_count.saturating_add(1).min(horizon);
+        let alpha = 1.0 / self.residual_count as Real;
+        for ch in 0..4 {
+            let fit: Real = (0..4).map(|i| rows[ch][i] * self.kf.x[i]).sum();
+            let residual = m[ch] - fit;
+            self.residual_mean[ch] += alpha * (residual - self.residual_mean[ch]);
+            self.gains[ch] = rows[ch][ch].abs();
+        }
+    }
+
+    /// The residual check (see the module doc).
+    pub fn consistency(&self, config: &Config) -> Consistency {
+        let n = (self.residual_count as usize).max(self.window.len()) as Real;
+        let s_e = config.measurement_sigma_rad / sqrt(n);
+        let mut out = Consistency { model_sigma_rad: [0.0; 4], mismatch: false };
+        for ch in 0..4 {
+            let excess = (self.residual_mean[ch].abs() - 2.0 * s_e).max(0.0);
+            // A gain of zero (latitude 90 deg is rejected, so only in theory) maps to an infinite sigma.
+            out.model_sigma_rad[ch] = if self.gains[ch] > 0.0 { excess / self.gains[ch] } else { Real::INFINITY };
+            out.mismatch |= self.residual_mean[ch].abs() > 4.0 * s_e;
+        }
+        out
     }
 
     /// Restarts the moving average.
@@ -89,13 +147,26 @@ impl<const CAP: usize> Windowed<CAP> {
         self.window.clear();
     }
 
-    /// Current estimate and 1-sigma, once updated.
-    pub fn estimate(&self) -> Option<([Real; 4], [Real; 4])> {
+    /// Current estimate and 1-sigma (the filter's, widened by the residual check), once updated.
+    pub fn estimate(&self, config: &Config) -> Option<([Real; 4], [Real; 4])> {
         if self.updates == 0 {
             return None;
         }
+        let model = self.consistency(config).model_sigma_rad;
         let x = [self.kf.x[0], self.kf.x[1], self.kf.x[2], self.kf.x[3]];
-        let s = [self.kf.sigma(0), self.kf.sigma(1), self.kf.sigma(2), self.kf.sigma(3)];
+        let s = core::array::from_fn(|i| {
+            let k = self.kf.sigma(i);
+            sqrt(k * k + model[i] * model[i])
+        });
         Some((x, s))
     }
+}
+
+#[cfg(not(feature = "f64"))]
+fn sqrt(x: f32) -> f32 {
+    libm::sqrtf(x)
+}
+#[cfg(feature = "f64")]
+fn sqrt(x: f64) -> f64 {
+    libm::sqrt(x)
 }
