@@ -2,7 +2,11 @@
 //! `estimator-core` the firmware runs, and reports.
 pub mod cli_args;
 pub mod estimates_csv;
+pub mod figures;
 pub mod log_csv;
+pub mod pipeline;
+pub mod plots;
 pub mod replay;
+pub mod report;
 pub mod scenario;
 pub mod stream;

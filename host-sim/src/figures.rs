@@ -1,0 +1,150 @@
+//! The data of the paper's figures from a replay and the generator's truth, drawn by [`crate::plots`].
+
+use crate::plots;
+use crate::replay::Step;
+use crate::report::{errors_arcsec, percent_error, residual_arcsec, truth_index};
+use crate::scenario::{Row, RowTruth};
+use estimator_core::correlation::{products, ROLL_SIN};
+use estimator_core::installation::Angles;
+use estimator_core::units::{rad_to_arcsec, RAD_PER_DEG};
+use estimator_core::{Attitude, Estimate, Real};
+use std::path::{Path, PathBuf};
+
+/// `(time_s, percent)` of each error, for every row with an estimate (Figs. 2 and 4).
+pub fn percent_curves(steps: &[Step], truth: &[RowTruth], interval_s: f64) -> [Vec<(f64, f64)>; 4] {
+    let mut curves: [Vec<(f64, f64)>; 4] = Default::default();
+    let mut held: Option<Estimate> = None;
+    for step in steps {
+        if let Ok(o) = &step.result {
+            held = o.estimate;
+        }
+        let Some(k) = truth_index(step.time_s, interval_s, truth.len()) else { continue };
+        let x = &truth[k].errors_arcsec;
+        if let Some(e) = errors_arcsec(held.as_ref(), x) {
+            for i in 0..4 {
+                curves[i].push((step.time_s, percent_error(e[i], x[i])));
+            }
+        }
+    }
+    curves
+}
+
+/// Attitude error of eq (2) before (the oscillation put in) and after compensation, arcsec
+/// (Figs. 7 and 8).
+pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interval_s: f64) -> ([Vec<(f64, f64)>; 3], [Vec<(f64, f64)>; 3]) {
+    let mut before: [Vec<(f64, f64)>; 3] = Default::default();
+    let mut after: [Vec<(f64, f64)>; 3] = Default::default();
+    for (row, step) in rows.iter().zip(steps) {
+        let (Ok(out), Some(k)) = (&step.result, truth_index(step.time_s, interval_s, truth.len())) else { continue };
+        let res = residual_arcsec(row, &out.corrected, &truth[k]);
+        for a in 0..3 {
+            before[a].push((step.time_s, truth[k].oscillation_deg[a] * 3600.0));
+            after[a].push((step.time_s, res[a]));
+        }
+    }
+    (before, after)
+}
+
+/// Fig. 3: for the true roll, the oscillatory roll and the rest (low-frequency errors + noise), the
+/// cumulative correlation with sin(rho) of eq (8) and its moving average over one rotation period
+/// (`window` samples) of eq (11), arcsec. Uses the core's correlation products.
+pub fn correlation_panels(rows: &[Row], truth: &[RowTruth], window: usize) -> Vec<(String, Vec<(f64, f64)>, Vec<(f64, f64)>)> {
+    let names = ["true roll", "oscillatory roll (installation errors)", "low-frequency errors + noise"];
+    let mut sums = [0.0f64; 3];
+    let mut corr: [Vec<(f64, f64)>; 3] = Default::default();
+    for (n, (row, tr)) in rows.iter().zip(truth).enumerate() {
+        let rad = |deg: f64| (deg * RAD_PER_DEG) as Real;
+        let lat = row.latitude_deg * RAD_PER_DEG;
+        let angles = Angles::new(
+            rad(estimator_core::units::wrap_deg(row.rotation_deg)),
+            rad(estimator_core::units::wrap_deg(row.platform_deg)),
+            (lat.sin() as Real, lat.cos() as Real),
+        );
+        let true_roll = tr.true_attitude_deg[1];
+        let osc_roll = tr.oscillation_deg[1];
+        let rest_roll = row.roll_deg - true_roll - osc_roll;
+        for (c, roll_deg) in [true_roll, osc_roll, rest_roll].into_iter().enumerate() {
+            let p = products(&Attitude { heading_rad: 0.0, roll_rad: rad(roll_deg), pitch_rad: 0.0 }, &angles)[ROLL_SIN];
+            sums[c] += p as f64;
+            corr[c].push((row.time_s, rad_to_arcsec(sums[c] / (n + 1) as f64)));
+        }
+    }
+    names
+        .iter()
+        .zip(corr)
+        .map(|(name, c)| {
+            let avg = moving_average(&c, window);
+            (name.to_string(), c, avg)
+        })
+        .collect()
+}
+
+/// Moving average of the values over `window` points, from the first full window on.
+pub fn moving_average(points: &[(f64, f64)], window: usize) -> Vec<(f64, f64)> {
+    let window = window.max(1);
+    let mut out = Vec::with_capacity(points.len());
+    let mut sum = 0.0;
+    for (i, &(t, v)) in points.iter().enumerate() {
+        sum += v;
+        if i >= window {
+            sum -= points[i - window].1;
+        }
+        if i + 1 >= window {
+            out.push((t, sum / window as f64));
+        }
+    }
+    out
+}
+
+/// Writes every figure of one scenario into `dir`; `replays` are (method name, steps), the
+/// first is the method whose corrected attitude goes into Figs. 7-8. Returns the files written.
+pub fn write_figures(
+    dir: &Path,
+    rows: &[Row],
+    truth: &[RowTruth],
+    x_arcsec: &[f64; 4],
+    interval_s: f64,
+    window: usize,
+    replays: &[(&str, &[Step])],
+) -> anyhow::Result<Vec<PathBuf>> {
+    let mut written = Vec::new();
+    for (name, steps) in replays {
+        let fig = if *name == "traditional" { "fig2" } else { "fig4" };
+        let path = dir.join(format!("{fig}_percent_error_{name}.png"));
+        plots::percent_error_figure(&path, &format!("Absolute percentage error, {name} method"), &percent_curves(steps, truth, interval_s))?;
+        written.push(path);
+    }
+    let lat = rows.first().map_or(0.0, |r| r.latitude_deg) * RAD_PER_DEG;
+    let path = dir.join("fig3_correlation.png");
+    plots::correlation_figure(&path, &correlation_panels(rows, truth, window), x_arcsec[2] * lat.cos() / 2.0)?;
+    written.push(path);
+    if let Some((name, steps)) = replays.first() {
+        let (before, after) = attitude_curves(rows, steps, truth, interval_s);
+        let span = before.iter().flatten().map(|p| p.1.abs()).fold(10.0, f64::max) * 1.1;
+        let path = dir.join("fig7_attitude_error_before.png");
+        plots::attitude_error_figure(&path, "Attitude error of eq (2) before compensation", &before, span)?;
+        written.push(path);
+        let path = dir.join(format!("fig8_attitude_error_after_{name}.png"));
+        plots::attitude_error_figure(&path, &format!("Attitude error after compensation ({name}; running estimate)"), &after, span)?;
+        written.push(path);
+        // The same after the first 10 % of the run, at a scale that shows the residual.
+        let t_end = rows.last().map_or(0.0, |r| r.time_s);
+        let late: [Vec<(f64, f64)>; 3] = after.map(|c| c.into_iter().filter(|p| p.0 >= 0.1 * t_end).collect());
+        let late_span = late.iter().flatten().map(|p| p.1.abs()).fold(1.0, f64::max) * 1.1;
+        let path = dir.join(format!("fig8_attitude_error_after_{name}_zoom.png"));
+        plots::attitude_error_figure(&path, &format!("Attitude error after compensation ({name}), from {:.0} s", 0.1 * t_end), &late, late_span)?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moving_average_of_ramp() {
+        let pts: Vec<(f64, f64)> = (0..5).map(|i| (i as f64, i as f64)).collect();
+        assert_eq!(moving_average(&pts, 3), vec![(2.0, 1.0), (3.0, 2.0), (4.0, 3.0)]);
+    }
+}

@@ -1,0 +1,47 @@
+//! The `estimate` and `run` pipelines: log file in, estimates CSV out, report against the truth.
+
+use crate::estimates_csv::EstimatesWriter;
+use crate::log_csv::{self, LogError, LogLine, Truth};
+use crate::replay::{replay, Replay};
+use crate::report::{evaluate, Report};
+use crate::scenario::{generate, Generated, Row};
+use anyhow::Context;
+use estimator_core::Config;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+/// A replayed log file.
+pub struct Estimated {
+    pub rows: Vec<Row>,
+    pub replay: Replay,
+}
+
+/// `<dir>/<stem>.estimates.csv` beside the log.
+pub fn default_estimates_path(log: &Path) -> PathBuf {
+    let stem = log.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    log.with_file_name(format!("{stem}.estimates.csv"))
+}
+
+/// Reads the log (any malformed line stops it with `FILE:LINE: message`), replays it and writes
+/// the estimates CSV to `out`.
+pub fn estimate_file(log: &Path, out: &Path, config: Config) -> anyhow::Result<Estimated> {
+    let lines: Vec<LogLine> = log_csv::read_log(log)?;
+    let file = File::create(out).map_err(|e| LogError::new(out, 0, format!("cannot create: {e}")))?;
+    let mut writer = EstimatesWriter::new(BufWriter::new(file)).with_context(|| format!("{}:0: cannot write", out.display()))?;
+    let replay = replay(lines.iter().map(|l| Ok(*l)), config, Some(&mut writer))?;
+    writer.finish().with_context(|| format!("{}:0: cannot write", out.display()))?;
+    Ok(Estimated { rows: lines.into_iter().map(|l| l.row).collect(), replay })
+}
+
+/// The truth beside a log, regenerated: `None` when there is no truth file.
+pub fn load_truth(log: &Path) -> anyhow::Result<Option<(Truth, Generated)>> {
+    let Some(truth) = log_csv::read_truth(&log_csv::truth_path(log))? else { return Ok(None) };
+    let generated = generate(&truth.params);
+    Ok(Some((truth, generated)))
+}
+
+/// The report of a replay against a regenerated truth.
+pub fn report(est: &Estimated, truth: &Truth, generated: &Generated) -> Report {
+    evaluate(&est.rows, &est.replay.steps, &generated.truth, truth.params.sample_interval_s)
+}
