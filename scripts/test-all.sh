@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Runs every test of the project on a fresh machine, installing what is missing first:
+#   1. the thumbv7em-none-eabihf Rust target and qemu-system-arm (apt), if absent;
+#   2. host tests in release mode: estimator-core, link-protocol, host-sim (including the QEMU
+#      end-to-end tests, which build the firmware themselves);
+#   3. estimator-core again with the `f64` feature (the precision comparison's other side);
+#   4. the firmware build for the target, with its size budgets checked.
+# Usage: bash scripts/test-all.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+log() { printf '\n== %s\n' "$*"; }
+
+log "toolchain"
+if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
+    rustup target add thumbv7em-none-eabihf
+fi
+if ! command -v qemu-system-arm >/dev/null 2>&1; then
+    SUDO=""
+    if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
+    $SUDO apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q qemu-system-arm
+fi
+qemu-system-arm --version | head -n 1
+cargo --version
+
+log "host tests (release): estimator-core, link-protocol, host-sim (with QEMU end-to-end)"
+cargo test --release
+
+log "estimator-core with f64"
+cargo test --release -p estimator-core --features f64
+
+log "firmware build for thumbv7em-none-eabihf"
+cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
