@@ -10,6 +10,9 @@ use estimator_core::units::{rad_to_arcsec, RAD_PER_DEG};
 use estimator_core::{Attitude, Estimate, Real};
 use std::path::{Path, PathBuf};
 
+/// Time span of the Fig. 3 analogue, s.
+pub const FIG3_SPAN_S: f64 = 20_000.0;
+
 /// `(time_s, percent)` of each error, for every row with an estimate (Figs. 2 and 4).
 pub fn percent_curves(steps: &[Step], truth: &[RowTruth], interval_s: f64) -> [Vec<(f64, f64)>; 4] {
     let mut curves: [Vec<(f64, f64)>; 4] = Default::default();
@@ -115,8 +118,10 @@ pub fn write_figures(
         written.push(path);
     }
     let lat = rows.first().map_or(0.0, |r| r.latitude_deg) * RAD_PER_DEG;
+    // The first 20000 s: the stage where eq (11)'s averaging matters.
+    let n3 = rows.iter().take_while(|r| r.time_s <= FIG3_SPAN_S).count();
     let path = dir.join("fig3_correlation.png");
-    plots::correlation_figure(&path, &correlation_panels(rows, truth, window), x_arcsec[2] * lat.cos() / 2.0)?;
+    plots::correlation_figure(&path, &correlation_panels(&rows[..n3], &truth[..n3.min(truth.len())], window), x_arcsec[2] * lat.cos() / 2.0)?;
     written.push(path);
     if let Some((name, steps)) = replays.first() {
         let (before, after) = attitude_curves(rows, steps, truth, interval_s);

@@ -9,7 +9,8 @@ use host_sim::log_csv::{self, Truth};
 use host_sim::pipeline::{default_estimates_path, estimate_file, load_truth, report, Estimated};
 use host_sim::replay::Replay;
 use host_sim::report::{format_accuracy, format_rms, Report};
-use host_sim::scenario::generate;
+use host_sim::monte_carlo::{format_summary, run_all, summarize, Draw, MC_TIMES_S};
+use host_sim::scenario::{generate, Mismatch, ScenarioKind};
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -28,6 +29,10 @@ enum Command {
     Estimate(EstimateArgs),
     /// Generate + estimate with every method + report + plots, in one go.
     Run(RunArgs),
+    /// Many independent runs in parallel: error statistics at 2000 ... 86400 s.
+    MonteCarlo(MonteCarloArgs),
+    /// Every method on every scenario over several seeds: a markdown table for the README.
+    Compare(CompareArgs),
     /// Stream a log through the firmware over its link.
     Stream(host_sim::stream::StreamArgs),
 }
@@ -81,12 +86,119 @@ struct RunArgs {
     no_plots: bool,
 }
 
+#[derive(clap::Args, Debug)]
+struct MonteCarloArgs {
+    /// Which scenario.
+    #[arg(long, value_enum)]
+    scenario: ScenarioArg,
+    /// Number of runs.
+    #[arg(long)]
+    runs: usize,
+    /// Master seed (run i uses a seed derived from it).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Identification method.
+    #[arg(long, value_enum, default_value_t = MethodArg::Windowed)]
+    method: MethodArg,
+    #[command(flatten)]
+    traditional: TraditionalArgs,
+    #[command(flatten)]
+    spread: SpreadArgs,
+    /// Write the summary as JSON.
+    #[arg(long, value_name = "summary.json")]
+    out: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+/// How Monte Carlo and compare runs are drawn beyond the scenario's defaults.
+#[derive(clap::Args, Debug, Clone)]
+struct SpreadArgs {
+    /// Log length, s (default: the scenario's).
+    #[arg(long, value_name = "S")]
+    duration: Option<f64>,
+    /// Latitudes spread uniformly in MIN,MAX deg (default: the scenario's).
+    #[arg(long, value_name = "MIN,MAX", value_delimiter = ',', num_args = 2, allow_negative_numbers = true)]
+    lat_range: Option<Vec<f64>>,
+    /// Roll sway amplitude uniform between the scenario's and this, deg (rougher sea).
+    #[arg(long, value_name = "DEG")]
+    max_roll_deg: Option<f64>,
+    /// Model mismatch: relative error of the true rotation period (0.005 = 0.5 % slower).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.0, allow_negative_numbers = true)]
+    period_error: f64,
+    /// Model mismatch: white jitter on the rotation angle, 1-sigma deg.
+    #[arg(long, value_name = "DEG", default_value_t = 0.0)]
+    rotation_jitter_deg: f64,
+    /// Model mismatch: linear drift of every installation error, arcsec per day.
+    #[arg(long, value_name = "ARCSEC", default_value_t = 0.0, allow_negative_numbers = true)]
+    error_drift_arcsec_per_day: f64,
+    /// Model mismatch: frequency error of the low-frequency errors relative to the Earth rate (0.2 = 20 % faster).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.0, allow_negative_numbers = true)]
+    lowfreq_rate_error: f64,
+    /// Model mismatch: coloured (Gauss-Markov, 60 s) attitude noise, 1-sigma arcsec.
+    #[arg(long, value_name = "ARCSEC", default_value_t = 0.0)]
+    coloured_noise_arcsec: f64,
+}
+
+impl SpreadArgs {
+    fn draw(&self, kind: ScenarioKind, seed: u64) -> anyhow::Result<Draw> {
+        let mut d = Draw::new(kind, seed);
+        if let Some(v) = &self.lat_range {
+            anyhow::ensure!(v.len() == 2 && v[0] <= v[1] && v[0] > -90.0 && v[1] < 90.0, "--lat-range needs MIN,MAX inside (-90, 90) with MIN <= MAX");
+            d.lat_range_deg = Some((v[0], v[1]));
+        }
+        if let Some(m) = self.max_roll_deg {
+            anyhow::ensure!(m.is_finite() && m > 0.0 && m < 90.0, "--max-roll-deg must be inside (0, 90)");
+            d.max_roll_deg = Some(m);
+        }
+        if let Some(t) = self.duration {
+            anyhow::ensure!(t.is_finite() && t >= 1.0, "--duration must be at least 1 s");
+            d.duration_s = Some(t);
+        }
+        let finite = [self.period_error, self.rotation_jitter_deg, self.error_drift_arcsec_per_day, self.lowfreq_rate_error, self.coloured_noise_arcsec];
+        anyhow::ensure!(finite.iter().all(|v| v.is_finite()), "mismatch switches must be finite");
+        anyhow::ensure!(self.period_error > -1.0, "--period-error must be above -1");
+        anyhow::ensure!(self.rotation_jitter_deg >= 0.0 && self.coloured_noise_arcsec >= 0.0, "noise levels must be >= 0");
+        d.mismatch = Mismatch {
+            rotation_period_error: self.period_error,
+            rotation_jitter_deg: self.rotation_jitter_deg,
+            error_drift_arcsec_per_day: self.error_drift_arcsec_per_day,
+            low_frequency_rate_error: self.lowfreq_rate_error,
+            coloured_noise_arcsec: self.coloured_noise_arcsec,
+        };
+        Ok(d)
+    }
+}
+
+#[derive(clap::Args, Debug)]
+struct CompareArgs {
+    /// Seeds (runs) per scenario and method.
+    #[arg(long, default_value_t = 5)]
+    seeds: usize,
+    /// Master seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Scenarios (default: all).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    scenarios: Vec<ScenarioArg>,
+    /// Methods (default: all).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    methods: Vec<MethodArg>,
+    #[command(flatten)]
+    traditional: TraditionalArgs,
+    #[command(flatten)]
+    spread: SpreadArgs,
+}
+
 fn main() {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Generate(a) => cmd_generate(a),
         Command::Estimate(a) => cmd_estimate(a),
         Command::Run(a) => cmd_run(a),
+        Command::MonteCarlo(a) => cmd_monte_carlo(a),
+        Command::Compare(a) => cmd_compare(a),
         Command::Stream(a) => host_sim::stream::run(a),
     };
     if let Err(e) = result {
@@ -174,5 +286,79 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
             println!("  {}", f.display());
         }
     }
+    Ok(())
+}
+
+fn thread_pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        anyhow::ensure!(n >= 1, "--threads must be at least 1");
+        b = b.num_threads(n);
+    }
+    Ok(b.build()?)
+}
+
+fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(a.runs >= 1, "--runs must be at least 1");
+    let draw = a.spread.draw(a.scenario.into(), a.seed)?;
+    let method: Method = a.method.into();
+    let config = a.traditional.config(method);
+    let bar = indicatif::ProgressBar::new(a.runs as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, eta {eta}").map_err(|e| anyhow::anyhow!("{e}"))?,
+    );
+    let start = std::time::Instant::now();
+    let pool = thread_pool(a.threads)?;
+    let results = pool.install(|| run_all(&draw, config, a.runs, &MC_TIMES_S, &|| bar.inc(1)))?;
+    bar.finish_and_clear();
+    let elapsed = start.elapsed().as_secs_f64();
+    let summary = summarize(&results);
+    println!(
+        "monte carlo: scenario {}, method {}, {} runs of {:.0} s in {:.1} s ({} threads)",
+        draw.kind.name(),
+        method.name(),
+        a.runs,
+        draw.params(0).duration_s,
+        elapsed,
+        pool.current_num_threads()
+    );
+    println!("absolute error |x_hat - x| over runs, arcsec:");
+    print!("{}", format_summary(&summary));
+    if let Some(out) = &a.out {
+        let text = serde_json::to_string_pretty(&summary)?;
+        std::fs::write(out, text + "\n").with_context(|| format!("{}:0: cannot write", out.display()))?;
+        println!("summary in {}", out.display());
+    }
+    Ok(())
+}
+
+fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(a.seeds >= 1, "--seeds must be at least 1");
+    let scenarios: Vec<ScenarioKind> = if a.scenarios.is_empty() {
+        vec![ScenarioKind::Paper, ScenarioKind::Turntable, ScenarioKind::Sea]
+    } else {
+        a.scenarios.iter().map(|s| (*s).into()).collect()
+    };
+    let methods: Vec<Method> = if a.methods.is_empty() {
+        vec![Method::Paper, Method::Windowed, Method::Traditional]
+    } else {
+        a.methods.iter().map(|m| (*m).into()).collect()
+    };
+    let start = std::time::Instant::now();
+    let mut rows = Vec::new();
+    for kind in scenarios {
+        let draw = a.spread.draw(kind, a.seed)?;
+        for &method in &methods {
+            rows.push(host_sim::compare::compare_one(&draw, a.traditional.config(method), a.seeds)?);
+        }
+    }
+    print!("{}", host_sim::compare::format_table(&rows));
+    println!(
+        "\n{} seeds per line; errors of a few hundred arcsec drawn per seed; `host-sim compare --seeds {} --seed {}` ({:.0} s)",
+        a.seeds,
+        a.seeds,
+        a.seed,
+        start.elapsed().as_secs_f64()
+    );
     Ok(())
 }

@@ -1,0 +1,102 @@
+//! `compare`: every method on every scenario over several seeds, as a markdown table for the README.
+
+use crate::cli_args::method_label;
+use crate::monte_carlo::{quantile, run_all, sorted, Draw};
+use crate::report::Accuracy;
+use crate::scenario::ScenarioKind;
+use estimator_core::{Config, Method};
+
+/// Times of the error columns, s.
+pub const COMPARE_TIMES_S: [f64; 2] = [20_000.0, 45_000.0];
+
+/// One line of the table: a method on a scenario over seeds.
+#[derive(Clone, Debug)]
+pub struct CompareRow {
+    pub scenario: ScenarioKind,
+    pub method: Method,
+    pub runs: usize,
+    /// Time after which all four errors stay within 0.5 % (infinite: not within at the end),
+    /// median and 95th percentile over seeds, s.
+    pub to_percent_s: (f64, f64),
+    pub to_arcsec_s: (f64, f64),
+    /// Largest |error| of the four at each of [`COMPARE_TIMES_S`] inside the run (NaN outside),
+    /// median and 95th percentile, arcsec.
+    pub error_at_arcsec: Vec<(f64, f64)>,
+    pub duration_s: f64,
+}
+
+fn stats(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    let v = sorted(values);
+    (quantile(&v, 0.5), quantile(&v, 0.95))
+}
+
+/// Runs `seeds` draws of a scenario with a method.
+pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<CompareRow> {
+    let results: Vec<Accuracy> = run_all(draw, config, seeds, &COMPARE_TIMES_S, &|| {})?;
+    let inf = f64::INFINITY;
+    let duration_s = draw.params(0).duration_s;
+    let error_at_arcsec = COMPARE_TIMES_S
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            if *t > duration_s {
+                return (f64::NAN, f64::NAN);
+            }
+            stats(results.iter().map(|r| {
+                r.points.get(k).and_then(|p| p.error_arcsec).map_or(inf, |e| e.iter().fold(0.0, |m, x| f64::max(m, x.abs())))
+            }))
+        })
+        .collect();
+    Ok(CompareRow {
+        scenario: draw.kind,
+        method: config.method,
+        runs: seeds,
+        to_percent_s: stats(results.iter().map(|r| r.all_within_percent_from_s().unwrap_or(inf))),
+        to_arcsec_s: stats(results.iter().map(|r| r.all_within_arcsec_from_s().unwrap_or(inf))),
+        error_at_arcsec,
+        duration_s,
+    })
+}
+
+fn fmt_time(t: f64, duration_s: f64) -> String {
+    if t.is_finite() {
+        format!("{t:.0}")
+    } else {
+        format!("> {duration_s:.0}")
+    }
+}
+
+fn fmt_err(e: f64) -> String {
+    if e.is_nan() {
+        "-".into()
+    } else if e.is_infinite() {
+        "no estimate".into()
+    } else {
+        format!("{e:.2}")
+    }
+}
+
+/// The markdown table.
+pub fn format_table(rows: &[CompareRow]) -> String {
+    let mut s = String::from(
+        "| scenario | method | runs | time to 0.5 % s (median / p95) | time to 10 arcsec s (median / p95) | max abs error at 20000 s arcsec (median / p95) | max abs error at 45000 s arcsec (median / p95) |\n|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let d = r.duration_s;
+        s.push_str(&format!(
+            "| {} | {} | {} | {} / {} | {} / {} | {} / {} | {} / {} |\n",
+            r.scenario.name(),
+            method_label(r.method),
+            r.runs,
+            fmt_time(r.to_percent_s.0, d),
+            fmt_time(r.to_percent_s.1, d),
+            fmt_time(r.to_arcsec_s.0, d),
+            fmt_time(r.to_arcsec_s.1, d),
+            fmt_err(r.error_at_arcsec[0].0),
+            fmt_err(r.error_at_arcsec[0].1),
+            fmt_err(r.error_at_arcsec[1].0),
+            fmt_err(r.error_at_arcsec[1].1),
+        ));
+    }
+    s
+}

@@ -1,0 +1,233 @@
+//! Monte Carlo runs: many independent scenarios (random errors, phases, sea states, optional
+//! latitude spread, rougher sway and model mismatch), each generated and replayed in memory, in
+//! parallel (rayon), with the error statistics per report time.
+
+use crate::replay::{sample_of, HostEstimator};
+use crate::report::{Accuracy, Tracker};
+use crate::scenario::{generate, Mismatch, ScenarioKind, ScenarioParams, SwayComponent};
+use estimator_core::Config;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Report times of the Monte Carlo summary, s (those inside the run are used).
+pub const MC_TIMES_S: [f64; 6] = [2_000.0, 5_000.0, 10_000.0, 20_000.0, 45_000.0, 86_400.0];
+
+/// How the runs are drawn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Draw {
+    pub kind: ScenarioKind,
+    pub seed: u64,
+    /// Installation errors: magnitude uniform in this range (arcsec), random sign.
+    pub error_magnitude_arcsec: (f64, f64),
+    /// Latitude uniform in this range, deg (default: the scenario's).
+    pub lat_range_deg: Option<(f64, f64)>,
+    /// Roll sway amplitude (sqrt(2) x RMS) uniform between the scenario's and this, deg.
+    pub max_roll_deg: Option<f64>,
+    pub mismatch: Mismatch,
+    /// Log length override, s.
+    pub duration_s: Option<f64>,
+}
+
+impl Draw {
+    pub fn new(kind: ScenarioKind, seed: u64) -> Draw {
+        Draw {
+            kind,
+            seed,
+            error_magnitude_arcsec: (100.0, 500.0),
+            lat_range_deg: None,
+            max_roll_deg: None,
+            mismatch: Mismatch::default(),
+            duration_s: None,
+        }
+    }
+
+    /// Seed of run `i` (distinct runs, reproducible).
+    pub fn run_seed(&self, i: usize) -> u64 {
+        // SplitMix64 of (seed, i).
+        let mut z = self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(i as u64).wrapping_add(0x632B_E59B_D9B4_E019);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// The scenario of run `i`: the scenario's own phases and sea state for the run's seed, plus
+    /// random errors and the spreads asked for.
+    pub fn params(&self, i: usize) -> ScenarioParams {
+        let seed = self.run_seed(i);
+        let mut p = ScenarioParams::new(self.kind, seed);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xD1CE_5EED);
+        let (lo, hi) = self.error_magnitude_arcsec;
+        p.errors_arcsec = core::array::from_fn(|_| {
+            let m = if hi > lo { rng.gen_range(lo..hi) } else { lo };
+            if rng.gen_bool(0.5) {
+                m
+            } else {
+                -m
+            }
+        });
+        if let Some((a, b)) = self.lat_range_deg {
+            p.latitude_deg = if b > a { rng.gen_range(a..b) } else { a };
+        }
+        if let Some(max) = self.max_roll_deg {
+            let nominal = sway_amplitude_deg(&p.roll_sway);
+            if nominal > 0.0 {
+                let target = if max > nominal { rng.gen_range(nominal..max) } else { max };
+                let k = target / nominal;
+                for c in &mut p.roll_sway {
+                    c.amplitude_deg *= k;
+                }
+            }
+        }
+        p.mismatch = self.mismatch;
+        if let Some(d) = self.duration_s {
+            p.duration_s = d;
+        }
+        p
+    }
+}
+
+/// Sinusoid-equivalent amplitude of a sway (sqrt(2) x RMS), deg.
+pub fn sway_amplitude_deg(comps: &[SwayComponent]) -> f64 {
+    comps.iter().map(|c| c.amplitude_deg * c.amplitude_deg).sum::<f64>().sqrt()
+}
+
+/// Generates and replays one scenario, tracking accuracy at `times_s`.
+pub fn track_run(params: &ScenarioParams, config: Config, times_s: &[f64]) -> anyhow::Result<Accuracy> {
+    let g = generate(params);
+    let mut est = HostEstimator::new(config).map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
+    let mut tracker = Tracker::new(times_s);
+    let mut held = None;
+    for (row, truth) in g.rows.iter().zip(&g.truth) {
+        if let Ok(out) = est.step(&sample_of(row)) {
+            held = out.estimate;
+        }
+        tracker.observe(row.time_s, held.as_ref(), &truth.errors_arcsec);
+    }
+    Ok(tracker.finish(params.sample_interval_s))
+}
+
+/// Runs `runs` draws in parallel; `on_done` is called after each run (progress).
+pub fn run_all(draw: &Draw, config: Config, runs: usize, times_s: &[f64], on_done: &(dyn Fn() + Sync)) -> anyhow::Result<Vec<Accuracy>> {
+    (0..runs)
+        .into_par_iter()
+        .map(|i| {
+            let r = track_run(&draw.params(i), config, times_s);
+            on_done();
+            r
+        })
+        .collect()
+}
+
+/// Linear-interpolated quantile of sorted values (`q` in [0, 1]).
+pub fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let pos = q * (sorted.len() - 1) as f64;
+    let (i, f) = (pos.floor() as usize, pos - pos.floor());
+    if i + 1 < sorted.len() {
+        if f == 0.0 {
+            sorted[i]
+        } else {
+            sorted[i] + (sorted[i + 1] - sorted[i]) * f
+        }
+    } else {
+        sorted[i]
+    }
+}
+
+/// Sorted copy (non-finite values last).
+pub fn sorted(values: impl IntoIterator<Item = f64>) -> Vec<f64> {
+    let mut v: Vec<f64> = values.into_iter().collect();
+    v.sort_by(|a, b| a.total_cmp(b));
+    v
+}
+
+/// The summary written by `monte-carlo --out`. A run without an estimate at a time counts as an
+/// infinite error (written as `null`).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Summary {
+    pub runs: usize,
+    pub times_s: Vec<f64>,
+    pub median_abs_error_arcsec: Vec<[f64; 4]>,
+    pub p95_abs_error_arcsec: Vec<[f64; 4]>,
+    pub max_abs_error_arcsec: Vec<[f64; 4]>,
+    /// Share of runs with all four errors within 10 arcsec, per time.
+    pub share_within_10_arcsec: Vec<f64>,
+}
+
+/// Statistics over runs at each report time inside the runs.
+pub fn summarize(results: &[Accuracy]) -> Summary {
+    let times_s: Vec<f64> = results.first().map(|r| r.points.iter().map(|p| p.time_s).collect()).unwrap_or_default();
+    let mut s = Summary {
+        runs: results.len(),
+        times_s: times_s.clone(),
+        median_abs_error_arcsec: vec![],
+        p95_abs_error_arcsec: vec![],
+        max_abs_error_arcsec: vec![],
+        share_within_10_arcsec: vec![],
+    };
+    for k in 0..times_s.len() {
+        let abs = |r: &Accuracy, i: usize| r.points.get(k).and_then(|p| p.error_arcsec).map_or(f64::INFINITY, |e| e[i].abs());
+        let mut med = [0.0; 4];
+        let mut p95 = [0.0; 4];
+        let mut max = [0.0; 4];
+        for i in 0..4 {
+            let v = sorted(results.iter().map(|r| abs(r, i)));
+            med[i] = quantile(&v, 0.5);
+            p95[i] = quantile(&v, 0.95);
+            max[i] = v.last().copied().unwrap_or(f64::NAN);
+        }
+        s.median_abs_error_arcsec.push(med);
+        s.p95_abs_error_arcsec.push(p95);
+        s.max_abs_error_arcsec.push(max);
+        let within = results.iter().filter(|r| (0..4).all(|i| abs(r, i) <= crate::report::ARCSEC_THRESHOLD)).count();
+        s.share_within_10_arcsec.push(within as f64 / results.len().max(1) as f64);
+    }
+    s
+}
+
+/// The summary as a markdown table.
+pub fn format_summary(s: &Summary) -> String {
+    let mut out = String::from("| time s | stat | x1 arcsec | x2 arcsec | x3 arcsec | x4 arcsec | runs within 10 arcsec |\n|---|---|---|---|---|---|---|\n");
+    for (k, t) in s.times_s.iter().enumerate() {
+        let row = |v: &[f64; 4]| v.iter().map(|x| format!("{x:.2}")).collect::<Vec<_>>().join(" | ");
+        out.push_str(&format!("| {t:.0} | median | {} | {:.1} % |\n", row(&s.median_abs_error_arcsec[k]), 100.0 * s.share_within_10_arcsec[k]));
+        out.push_str(&format!("| | p95 | {} | |\n", row(&s.p95_abs_error_arcsec[k])));
+        out.push_str(&format!("| | max | {} | |\n", row(&s.max_abs_error_arcsec[k])));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantiles() {
+        let v = sorted([5.0, 1.0, 3.0, 2.0, 4.0]);
+        assert_eq!(quantile(&v, 0.5), 3.0);
+        assert_eq!(quantile(&v, 1.0), 5.0);
+        assert!((quantile(&v, 0.95) - 4.8).abs() < 1e-12);
+    }
+
+    #[test]
+    fn draws_are_distinct_and_within_ranges() {
+        let mut d = Draw::new(ScenarioKind::Sea, 7);
+        d.lat_range_deg = Some((-60.0, 60.0));
+        d.max_roll_deg = Some(10.0);
+        let a = d.params(0);
+        let b = d.params(1);
+        assert_ne!(a.errors_arcsec, b.errors_arcsec);
+        assert_eq!(a, d.params(0));
+        for (i, p) in [&a, &b].into_iter().enumerate() {
+            assert!(p.errors_arcsec.iter().all(|x| (100.0..=500.0).contains(&x.abs())));
+            assert!((-60.0..60.0).contains(&p.latitude_deg));
+            let amp = sway_amplitude_deg(&p.roll_sway);
+            let nominal = sway_amplitude_deg(&ScenarioParams::new(ScenarioKind::Sea, d.run_seed(i)).roll_sway);
+            assert!(nominal < 10.0 && amp <= 10.0 + 1e-9 && amp >= nominal - 1e-9, "{amp} {nominal}");
+        }
+    }
+}

@@ -1,0 +1,134 @@
+//! Boots a firmware ELF on QEMU's mps2-an386 with UART0 on a unix socket, and stops it when dropped.
+//!
+//! The command line (also in firmware/NOTES.md):
+//!
+//! ```text
+//! qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -icount shift=0 -display none -monitor none
+//!     -semihosting-config enable=on,target=native
+//!     -chardev socket,id=uart0,path=DIR/uart0.sock,server=on,wait=on -serial chardev:uart0
+//!     -kernel FIRMWARE.elf
+//! ```
+//!
+//! `-icount shift=0` makes every guest instruction take exactly 1 ns of virtual time, so the
+//! firmware's SysTick cost counter (25 MHz) counts one tick per 40 instructions. QEMU's stdout is the
+//! firmware's defmt log (semihosting); its stderr goes to a file, quoted when QEMU fails.
+
+use anyhow::{bail, Context};
+use std::fs::File;
+use std::os::unix::net::UnixStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+/// `-icount shift` used; instructions per nanosecond of virtual time = 1 / 2^shift.
+pub const ICOUNT_SHIFT: u32 = 0;
+
+/// A running QEMU.
+pub struct Qemu {
+    child: Child,
+    dir: PathBuf,
+    stderr_path: PathBuf,
+}
+
+static RUNS: AtomicUsize = AtomicUsize::new(0);
+
+/// The QEMU binary: `$QEMU_SYSTEM_ARM`, else `qemu-system-arm` on the PATH.
+pub fn qemu_binary() -> String {
+    std::env::var("QEMU_SYSTEM_ARM").unwrap_or_else(|_| "qemu-system-arm".to_string())
+}
+
+impl Qemu {
+    /// Boots `elf`; the firmware's defmt log goes to `defmt_log` (or is discarded). Returns once the
+    /// UART socket is connected.
+    pub fn boot(elf: &Path, defmt_log: Option<&Path>) -> anyhow::Result<(Qemu, UnixStream)> {
+        if !elf.is_file() {
+            bail!("{}: no such firmware ELF", elf.display());
+        }
+        let dir = std::env::temp_dir().join(format!("host-sim-qemu-{}-{}", std::process::id(), RUNS.fetch_add(1, Ordering::Relaxed)));
+        std::fs::create_dir_all(&dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+        let socket = dir.join("uart0.sock");
+        let stderr_path = dir.join("qemu.stderr");
+        let stdout = match defmt_log {
+            Some(p) => Stdio::from(File::create(p).with_context(|| format!("{}: cannot create", p.display()))?),
+            None => Stdio::null(),
+        };
+        let binary = qemu_binary();
+        let mut command = Command::new(&binary);
+        command
+            .args(["-machine", "mps2-an386", "-cpu", "cortex-m4"])
+            .args(["-icount", &format!("shift={ICOUNT_SHIFT}")])
+            .args(["-display", "none", "-monitor", "none"])
+            .args(["-semihosting-config", "enable=on,target=native"])
+            .arg("-chardev")
+            .arg(format!("socket,id=uart0,path={},server=on,wait=on", socket.display()))
+            .args(["-serial", "chardev:uart0", "-kernel"])
+            .arg(elf)
+            .stdin(Stdio::null())
+            .stdout(stdout)
+            .stderr(Stdio::from(File::create(&stderr_path)?));
+        kill_with_parent(&mut command);
+        let child = match command.spawn() {
+            Ok(c) => c,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                let _ = std::fs::remove_dir_all(&dir);
+                bail!("{binary} not found: install QEMU (Debian: apt-get install -y qemu-system-arm) or set QEMU_SYSTEM_ARM")
+            }
+            Err(e) => return Err(e).with_context(|| format!("cannot start {binary}")),
+        };
+        let mut qemu = Qemu { child, dir, stderr_path };
+        let deadline = Instant::now() + Duration::from_secs(20);
+        loop {
+            if let Some(status) = qemu.child.try_wait()? {
+                bail!("QEMU exited ({status}) before the UART connected: {}", qemu.stderr_tail());
+            }
+            if let Ok(stream) = UnixStream::connect(&socket) {
+                return Ok((qemu, stream));
+            }
+            if Instant::now() > deadline {
+                bail!("QEMU's UART socket {} did not open within 20 s: {}", socket.display(), qemu.stderr_tail());
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// QEMU's exit status, if it has exited.
+    pub fn exited(&mut self) -> Option<ExitStatus> {
+        self.child.try_wait().ok().flatten()
+    }
+
+    /// The end of QEMU's stderr, for error messages.
+    pub fn stderr_tail(&self) -> String {
+        let text = std::fs::read_to_string(&self.stderr_path).unwrap_or_default();
+        let tail: String = text.chars().rev().take(800).collect::<Vec<_>>().into_iter().rev().collect();
+        if tail.trim().is_empty() {
+            "(QEMU printed nothing on stderr)".to_string()
+        } else {
+            format!("QEMU stderr: {}", tail.trim())
+        }
+    }
+}
+
+impl Drop for Qemu {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+/// QEMU must not outlive this process, even if it is killed.
+#[cfg(target_os = "linux")]
+fn kill_with_parent(command: &mut Command) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: prctl is async-signal-safe; nothing else runs between fork and exec.
+    unsafe {
+        command.pre_exec(|| {
+            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+            Ok(())
+        });
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn kill_with_parent(_: &mut Command) {}
