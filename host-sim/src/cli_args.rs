@@ -54,9 +54,9 @@ pub fn method_label(m: Method) -> &'static str {
     }
 }
 
-/// Tuning of the traditional baseline.
+/// Estimator tuning from the command line: the traditional baseline's noise and gap bridging.
 #[derive(Clone, Copy, Debug, Default, clap::Args)]
-pub struct TraditionalArgs {
+pub struct TuningArgs {
     /// Traditional baseline: 1-sigma of raw roll/pitch about eq (2), deg (default: the core's,
     /// 3/sqrt(2) deg, the RMS of a 3 deg sway).
     #[arg(long, value_name = "DEG")]
@@ -64,9 +64,13 @@ pub struct TraditionalArgs {
     /// Traditional baseline: random-walk process noise of the errors, arcsec/sqrt(s) (default 0).
     #[arg(long, value_name = "ARCSEC")]
     pub traditional_drift_arcsec_per_sqrt_s: Option<f64>,
+    /// Gaps of up to this many missing samples are bridged by interpolation instead of restarting
+    /// the moving average (default: the core's, 0 = never bridge).
+    #[arg(long, value_name = "N")]
+    pub max_bridged_gap_samples: Option<u32>,
 }
 
-impl TraditionalArgs {
+impl TuningArgs {
     /// The configuration for `method` with this tuning.
     pub fn config(&self, method: Method) -> Config {
         let mut c = Config::with_method(method);
@@ -76,8 +80,27 @@ impl TraditionalArgs {
         if let Some(d) = self.traditional_drift_arcsec_per_sqrt_s {
             c.traditional_drift_rad_per_sqrt_s = arcsec_to_rad(d) as Real;
         }
+        if let Some(n) = self.max_bridged_gap_samples {
+            c.max_bridged_gap_samples = n;
+        }
         c
     }
+}
+
+/// Parses `N` comma-separated finite numbers (negative numbers allowed).
+pub fn parse_list<const N: usize>(text: &str) -> Result<[f64; N], String> {
+    let parts: Vec<&str> = text.split(',').collect();
+    if parts.len() != N {
+        return Err(format!("expected {N} comma-separated numbers, got {}", parts.len()));
+    }
+    let mut out = [0.0; N];
+    for (o, p) in out.iter_mut().zip(&parts) {
+        *o = p.trim().parse::<f64>().map_err(|_| format!("not a number: {:?}", p.trim()))?;
+        if !o.is_finite() {
+            return Err(format!("not finite: {:?}", p.trim()));
+        }
+    }
+    Ok(out)
 }
 
 /// Overrides of the scenario's fields (physics unchanged).
@@ -90,8 +113,8 @@ pub struct ScenarioOverrides {
     #[arg(long, value_name = "DEG")]
     pub latitude: Option<f64>,
     /// Installation errors x1..x4, arcsec.
-    #[arg(long, value_name = "X1,X2,X3,X4", value_delimiter = ',', num_args = 4, allow_negative_numbers = true)]
-    pub errors_arcsec: Option<Vec<f64>>,
+    #[arg(long, value_name = "X1,X2,X3,X4", allow_hyphen_values = true, value_parser = parse_list::<4>)]
+    pub errors_arcsec: Option<[f64; 4]>,
     /// White attitude noise, 1-sigma arcsec.
     #[arg(long, value_name = "ARCSEC")]
     pub noise_arcsec: Option<f64>,
@@ -112,9 +135,8 @@ impl ScenarioOverrides {
             anyhow::ensure!(l.is_finite() && l.abs() < 90.0, "--latitude must be inside (-90, 90), got {l}");
             p.latitude_deg = l;
         }
-        if let Some(e) = &self.errors_arcsec {
-            anyhow::ensure!(e.len() == 4 && e.iter().all(|v| v.is_finite()), "--errors-arcsec needs four finite numbers");
-            p.errors_arcsec = [e[0], e[1], e[2], e[3]];
+        if let Some(e) = self.errors_arcsec {
+            p.errors_arcsec = e;
         }
         if let Some(n) = self.noise_arcsec {
             anyhow::ensure!(n.is_finite() && n >= 0.0, "--noise-arcsec must be >= 0");

@@ -4,7 +4,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Method, SampleError};
-use host_sim::cli_args::{method_label, MethodArg, ScenarioArg, ScenarioOverrides, TraditionalArgs};
+use host_sim::cli_args::{method_label, MethodArg, ScenarioArg, ScenarioOverrides, TuningArgs};
 use host_sim::log_csv::{self, Truth};
 use host_sim::pipeline::{default_estimates_path, estimate_file, load_truth, report, Estimated};
 use host_sim::replay::Replay;
@@ -63,7 +63,7 @@ struct EstimateArgs {
     #[arg(long, value_enum, default_value_t = MethodArg::Windowed)]
     method: MethodArg,
     #[command(flatten)]
-    traditional: TraditionalArgs,
+    tuning: TuningArgs,
 }
 
 #[derive(clap::Args, Debug)]
@@ -77,7 +77,7 @@ struct RunArgs {
     #[command(flatten)]
     overrides: ScenarioOverrides,
     #[command(flatten)]
-    traditional: TraditionalArgs,
+    tuning: TuningArgs,
     /// Output directory (default: out/SCENARIO-SEED).
     #[arg(long, value_name = "DIR")]
     out_dir: Option<PathBuf>,
@@ -101,7 +101,7 @@ struct MonteCarloArgs {
     #[arg(long, value_enum, default_value_t = MethodArg::Windowed)]
     method: MethodArg,
     #[command(flatten)]
-    traditional: TraditionalArgs,
+    tuning: TuningArgs,
     #[command(flatten)]
     spread: SpreadArgs,
     /// Write the summary as JSON.
@@ -119,8 +119,8 @@ struct SpreadArgs {
     #[arg(long, value_name = "S")]
     duration: Option<f64>,
     /// Latitudes spread uniformly in MIN,MAX deg (default: the scenario's).
-    #[arg(long, value_name = "MIN,MAX", value_delimiter = ',', num_args = 2, allow_negative_numbers = true)]
-    lat_range: Option<Vec<f64>>,
+    #[arg(long, value_name = "MIN,MAX", allow_hyphen_values = true, value_parser = host_sim::cli_args::parse_list::<2>)]
+    lat_range: Option<[f64; 2]>,
     /// Roll sway amplitude uniform between the scenario's and this, deg (rougher sea).
     #[arg(long, value_name = "DEG")]
     max_roll_deg: Option<f64>,
@@ -144,8 +144,8 @@ struct SpreadArgs {
 impl SpreadArgs {
     fn draw(&self, kind: ScenarioKind, seed: u64) -> anyhow::Result<Draw> {
         let mut d = Draw::new(kind, seed);
-        if let Some(v) = &self.lat_range {
-            anyhow::ensure!(v.len() == 2 && v[0] <= v[1] && v[0] > -90.0 && v[1] < 90.0, "--lat-range needs MIN,MAX inside (-90, 90) with MIN <= MAX");
+        if let Some(v) = self.lat_range {
+            anyhow::ensure!(v[0] <= v[1] && v[0] > -90.0 && v[1] < 90.0, "--lat-range needs MIN,MAX inside (-90, 90) with MIN <= MAX");
             d.lat_range_deg = Some((v[0], v[1]));
         }
         if let Some(m) = self.max_roll_deg {
@@ -186,7 +186,7 @@ struct CompareArgs {
     #[arg(long, value_enum, value_delimiter = ',')]
     methods: Vec<MethodArg>,
     #[command(flatten)]
-    traditional: TraditionalArgs,
+    tuning: TuningArgs,
     #[command(flatten)]
     spread: SpreadArgs,
 }
@@ -220,7 +220,7 @@ fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
 fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     let out = a.out.clone().unwrap_or_else(|| default_estimates_path(&a.log));
     let method: Method = a.method.into();
-    let est = estimate_file(&a.log, &out, a.traditional.config(method))?;
+    let est = estimate_file(&a.log, &out, a.tuning.config(method))?;
     print_summary(&a.log.display().to_string(), method, &est.replay, &out.display().to_string());
     if let Some((truth, generated)) = load_truth(&a.log)? {
         print_report(method, &report(&est, &truth, &generated));
@@ -271,7 +271,7 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     let mut runs: Vec<(Method, Estimated)> = Vec::new();
     for method in [Method::Windowed, Method::Paper, Method::Traditional] {
         let out = dir.join(format!("{}.estimates.{}.csv", params.scenario.name(), method.name()));
-        let est = estimate_file(&log, &out, a.traditional.config(method))?;
+        let est = estimate_file(&log, &out, a.tuning.config(method))?;
         print_summary(&log.display().to_string(), method, &est.replay, &out.display().to_string());
         print_report(method, &report(&est, &truth, &generated));
         println!();
@@ -302,7 +302,7 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.runs >= 1, "--runs must be at least 1");
     let draw = a.spread.draw(a.scenario.into(), a.seed)?;
     let method: Method = a.method.into();
-    let config = a.traditional.config(method);
+    let config = a.tuning.config(method);
     let bar = indicatif::ProgressBar::new(a.runs as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, eta {eta}").map_err(|e| anyhow::anyhow!("{e}"))?,
@@ -349,7 +349,7 @@ fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
     for kind in scenarios {
         let draw = a.spread.draw(kind, a.seed)?;
         for &method in &methods {
-            rows.push(host_sim::compare::compare_one(&draw, a.traditional.config(method), a.seeds)?);
+            rows.push(host_sim::compare::compare_one(&draw, a.tuning.config(method), a.seeds)?);
         }
     }
     print!("{}", host_sim::compare::format_table(&rows));

@@ -1,0 +1,98 @@
+//! Malformed logs, NaN rows and gaps, through the binary.
+
+mod common;
+
+use common::{host_sim, host_sim_ok, path_str, temp_dir};
+use host_sim::estimates_csv::read_estimates;
+use host_sim::log_csv::HEADER;
+
+/// Runs `estimate` on a log with `text`; expects failure and a one-line `FILE:LINE: message`.
+fn expect_error(name: &str, text: &str, line: usize, needle: &str) {
+    let dir = temp_dir(&format!("cli-err-{name}"));
+    let log = dir.join("bad.csv");
+    std::fs::write(&log, text).unwrap();
+    let out = host_sim(&["estimate", path_str(&log), "--out", path_str(&dir.join("e.csv"))]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{name}: should fail");
+    assert_eq!(out.status.code(), Some(1), "{name}: exit code (a panic gives 101)");
+    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{name}: one line: {stderr}");
+    let prefix = format!("error: {}:{line}: ", log.display());
+    assert!(stderr.starts_with(&prefix), "{name}: {stderr:?} should start with {prefix:?}");
+    assert!(stderr.contains(needle), "{name}: {stderr}");
+}
+
+#[test]
+fn bad_header_is_reported_with_its_line() {
+    expect_error("header", "# exported\ntime,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n0,1,2,3,4,5,6\n", 2, "bad header");
+}
+
+#[test]
+fn non_number_is_reported_with_its_line() {
+    expect_error("nonnum", &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n1,1.75,2,40,4,abc,0.1\n"), 3, "roll_deg: not a number");
+}
+
+#[test]
+fn short_row_is_reported_with_its_line() {
+    expect_error("short", &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n\n1,1.75,2,40,4,0.5\n"), 4, "short row");
+}
+
+#[test]
+fn missing_file_is_an_error_not_a_panic() {
+    let out = host_sim(&["estimate", "/nonexistent/log.csv"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/log.csv:0: cannot open"));
+}
+
+#[test]
+fn nan_rows_are_rejected_and_gaps_bridged_the_rest_processed() {
+    let dir = temp_dir("cli-nan-gap");
+    let log = dir.join("p.csv");
+    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "4000", "--out", path_str(&log)]);
+    let text = std::fs::read_to_string(&log).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    // Line index = 1 + time. NaN roll at t = 1000, inf pitch at t = 1001 (counted as non-finite);
+    // drop t = 2000..=2001 (a 2-sample gap: bridged) and t = 3000..=3009 (a long gap: window restart).
+    let set = |l: &mut String, col: usize, v: &str| {
+        let mut f: Vec<&str> = l.split(',').collect();
+        f[col] = v;
+        *l = f.join(",");
+    };
+    set(&mut lines[1001], 5, "nan");
+    set(&mut lines[1002], 6, "inf");
+    lines.insert(500, "# a comment in the middle".into());
+    let kept: Vec<String> = lines
+        .into_iter()
+        .filter(|l| {
+            let t: f64 = l.split(',').next().unwrap().parse().unwrap_or(-1.0);
+            !(2000.0..=2001.0).contains(&t) && !(3000.0..=3009.0).contains(&t)
+        })
+        .collect();
+    std::fs::write(&log, kept.join("\n") + "\n").unwrap();
+    // Default: no bridging; the NaN pair and both gaps restart the moving average.
+    let est = dir.join("e.csv");
+    let stdout = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&est)]);
+    assert!(stdout.contains("3988 rows, 3986 accepted, 0 bridged"), "{stdout}");
+    assert!(stdout.contains("3 window restarts"), "{stdout}");
+    assert!(stdout.contains("rejected rows: 2 (non_finite 2,"), "{stdout}");
+    // Bridging up to 2 samples: the NaN pair and the short gap are interpolated, the long gap restarts.
+    let bridged = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("b.csv")), "--max-bridged-gap-samples", "2"]);
+    assert!(bridged.contains("3988 rows, 3986 accepted, 4 bridged"), "{bridged}");
+    assert!(bridged.contains("1 window restarts"), "{bridged}");
+    let rows = read_estimates(&est).unwrap();
+    assert_eq!(rows.len(), 3988, "one estimates row per input row");
+    let r1000 = rows.iter().find(|r| r.time_s == 1000.0).unwrap();
+    assert_eq!(r1000.status, "rejected_non_finite");
+    let r999 = rows.iter().find(|r| r.time_s == 999.0).unwrap();
+    assert_eq!(r1000.x_arcsec, r999.x_arcsec, "a rejected row carries the held estimate");
+    // After the long gap the window refills (holding), then estimation resumes.
+    let r3010 = rows.iter().find(|r| r.time_s == 3010.0).unwrap();
+    assert_eq!(r3010.status, "holding");
+    assert!(rows.last().unwrap().status == "estimating" || rows.last().unwrap().status == "converged");
+    // The truth file is still there: the accuracy table is printed and the estimate is good.
+    let x = [200.0, -150.0, 300.0, -250.0];
+    let e = rows.last().unwrap().x_arcsec.unwrap();
+    for i in 0..4 {
+        assert!((e[i] - x[i]).abs() < 10.0, "x{}: {}", i + 1, e[i]);
+    }
+}
