@@ -1,0 +1,314 @@
+//! Bad input, everywhere: arbitrary sample sequences into the core.
+//!
+//! A healthy sample stream (short rotation period, so the filter is updating within a few dozen
+//! samples) is interleaved with arbitrary corruption: NaN and infinities in any field, huge and
+//! subnormal values, angles at and just past their limits, time going back, repeated, irregular,
+//! non-finite or jumping far ahead (long gaps), and fully random samples. For every step:
+//! - no panic;
+//! - the step is rejected exactly when the documented checks say so, with the documented reason
+//!   (an oracle written here from the documentation, not from the code), and the rejection is
+//!   counted under that reason and changes nothing else in the state (checkpoint image compared
+//!   byte for byte, the rejection counters masked);
+//! - every number in an accepted step's output is finite.
+//! After every sequence: accepted + rejected = samples fed, and the state checkpoints and restores
+//! (restore checks every value finite, every covariance symmetric positive definite and every
+//! running sum equal to its window).
+
+use estimator_core::checkpoint::METHOD_OFFSET;
+use estimator_core::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S};
+use estimator_core::{Attitude, Config, Estimator, Field, Method, Output, Real, Sample, SampleError};
+use proptest::prelude::*;
+use std::f64::consts::PI;
+
+const CAP: usize = 32;
+const PERIOD: usize = 16;
+
+/// One event in the input stream.
+#[derive(Clone, Debug)]
+enum Event {
+    /// The next healthy sample.
+    Good,
+    /// The next healthy sample with one field replaced (0 time, 1 rotation, 2 platform, 3 latitude,
+    /// 4 heading, 5 roll, 6 pitch).
+    Field(u8, f64),
+    /// A sample `back_s` before the last one sent (time going back or repeated).
+    TimeBack(f64),
+    /// The healthy stream jumps ahead by this many seconds (a gap: whole or not).
+    Gap(f64),
+    /// A completely arbitrary sample.
+    Random(f64, [u32; 6]),
+}
+
+fn special() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        Just(f64::NAN),
+        Just(f64::INFINITY),
+        Just(f64::NEG_INFINITY),
+        Just(1e30),
+        Just(-1e30),
+        Just(f64::MAX),
+        Just(f32::MAX as f64),
+        Just(1e-40),  // subnormal in f32
+        Just(0.0),
+        Just(-0.0),
+        Just(PI / 2.0), // roll/pitch limit; latitude out of range
+        Just(PI / 2.0 - 1e-7),
+        Just(-PI / 2.0 + 1e-7),
+        Just(2.0 * PI),
+        Just(2.0 * PI + 1e-5),
+        Just(-7.0),
+        -10.0f64..10.0,
+        any::<f64>(),
+    ]
+}
+
+fn event() -> impl Strategy<Value = Event> {
+    prop_oneof![
+        60 => Just(Event::Good),
+        12 => (0u8..7, special()).prop_map(|(f, v)| Event::Field(f, v)),
+        4 => prop_oneof![Just(0.0), Just(1.0), Just(1e9), 0.0f64..5.0, any::<f64>()].prop_map(Event::TimeBack),
+        6 => prop_oneof![Just(2.0), Just(3.0), Just(4.0), Just(1.4), Just(2.6), Just(1e6), Just(4.3e9), Just(1e300), 1.0f64..100.0].prop_map(Event::Gap),
+        3 => (any::<f64>(), any::<[u32; 6]>()).prop_map(|(t, b)| Event::Random(t, b)),
+    ]
+}
+
+/// The healthy stream: rotation of PERIOD samples, sway, eq (2)-like roll/pitch content.
+fn healthy(t: f64) -> Sample {
+    let rho = 0.3 + 2.0 * PI * t / PERIOD as f64;
+    let s = 0.9 + EARTH_RATE_RAD_PER_S * t;
+    let lat: f64 = 0.7;
+    let x = [150.0, -100.0, 220.0, -60.0].map(arcsec_to_rad);
+    let roll = 0.05 * (2.0 * PI * t / 6.0).sin() - x[0] * lat.sin() * (rho - s).cos() + x[2] * lat.cos() * rho.sin();
+    let pitch = 0.02 * (2.0 * PI * t / 9.0).sin() + x[0] * (rho - s).sin() - x[1] * (rho - s).cos();
+    let wrap = |a: f64| (a + PI).rem_euclid(2.0 * PI) - PI;
+    Sample {
+        time_s: t,
+        rotation_rad: wrap(rho) as Real,
+        platform_rad: wrap(s) as Real,
+        latitude_rad: lat as Real,
+        attitude: Attitude { heading_rad: 0.4, roll_rad: roll as Real, pitch_rad: pitch as Real },
+    }
+}
+
+/// The documented checks, written independently of the code: fields first (non-finite in field
+/// order, then ranges in field order), then time against the last accepted sample.
+fn expected(sample: &Sample, last_accepted_s: Option<f64>, interval_s: f64) -> Result<(), SampleError> {
+    if !sample.time_s.is_finite() {
+        return Err(SampleError::NonFinite(Field::Time));
+    }
+    let fields = [
+        (Field::Rotation, sample.rotation_rad),
+        (Field::Platform, sample.platform_rad),
+        (Field::Latitude, sample.latitude_rad),
+        (Field::Heading, sample.attitude.heading_rad),
+        (Field::Roll, sample.attitude.roll_rad),
+        (Field::Pitch, sample.attitude.pitch_rad),
+    ];
+    for (f, v) in fields {
+        if !v.is_finite() {
+            return Err(SampleError::NonFinite(f));
+        }
+    }
+    let half_pi = (PI / 2.0) as Real;
+    let two_pi = (2.0 * PI) as Real;
+    for (f, v) in fields {
+        match f {
+            Field::Latitude if v.abs() >= half_pi => return Err(SampleError::LatitudeOutOfRange),
+            Field::Roll | Field::Pitch if v.abs() > half_pi => return Err(SampleError::AngleOutOfRange(f)),
+            Field::Rotation | Field::Platform | Field::Heading if v.abs() > two_pi => {
+                return Err(SampleError::AngleOutOfRange(f))
+            }
+            _ => {}
+        }
+    }
+    if let Some(last) = last_accepted_s {
+        let dt = sample.time_s - last;
+        if !(dt > 0.0) {
+            return Err(SampleError::TimeNotIncreasing);
+        }
+        let n = (dt / interval_s).round();
+        if n < 1.0 || (dt - n * interval_s).abs() > 0.25 * interval_s {
+            return Err(SampleError::IrregularTimeStep);
+        }
+    }
+    Ok(())
+}
+
+fn all_finite(o: &Output) -> bool {
+    let mut v: Vec<f64> = vec![
+        o.time_s,
+        o.corrected.heading_rad as f64,
+        o.corrected.roll_rad as f64,
+        o.corrected.pitch_rad as f64,
+    ];
+    if let Some(e) = o.estimate {
+        v.extend(e.x_rad.iter().chain(e.sigma_rad.iter()).map(|x| *x as f64));
+    }
+    v.iter().all(|x| x.is_finite())
+}
+
+fn image(est: &Estimator<CAP>) -> Vec<u8> {
+    let mut buf = vec![0u8; Estimator::<CAP>::CHECKPOINT_LEN];
+    est.checkpoint(&mut buf).unwrap();
+    // Mask the rejection counters: 5 x u32 just before the last three u32 counters of the common part.
+    buf[METHOD_OFFSET - 32..METHOD_OFFSET - 12].fill(0);
+    // ... and the CRC, which covers them.
+    let n = buf.len();
+    buf[n - 4..].fill(0);
+    buf
+}
+
+fn run(config: Config, events: &[Event]) -> Result<(), TestCaseError> {
+    let mut est = Estimator::<CAP>::new(config).unwrap();
+    let mut t_next = 1000.0;
+    let mut last_sent = t_next;
+    let mut last_accepted: Option<f64> = None;
+    let mut fed = 0u32;
+    let mut reasons = [0u32; SampleError::COUNT];
+    let mut estimating_steps = 0u32;
+    for ev in events {
+        let sample = match ev {
+            Event::Good => healthy(t_next),
+            Event::Field(f, v) => {
+                let mut s = healthy(t_next);
+                let r = *v as Real;
+                match f {
+                    0 => s.time_s = *v,
+                    1 => s.rotation_rad = r,
+                    2 => s.platform_rad = r,
+                    3 => s.latitude_rad = r,
+                    4 => s.attitude.heading_rad = r,
+                    5 => s.attitude.roll_rad = r,
+                    _ => s.attitude.pitch_rad = r,
+                }
+                s
+            }
+            Event::TimeBack(back) => healthy(last_sent - back.abs()),
+            Event::Gap(gap) => {
+                t_next += gap.abs() - 1.0;
+                healthy(t_next)
+            }
+            Event::Random(t, b) => Sample {
+                time_s: *t,
+                rotation_rad: f32::from_bits(b[0]) as Real,
+                platform_rad: f32::from_bits(b[1]) as Real,
+                latitude_rad: f32::from_bits(b[2]) as Real,
+                attitude: Attitude {
+                    heading_rad: f32::from_bits(b[3]) as Real,
+                    roll_rad: f32::from_bits(b[4]) as Real,
+                    pitch_rad: f32::from_bits(b[5]) as Real,
+                },
+            },
+        };
+        let want = expected(&sample, last_accepted, config.sample_interval_s);
+        let before_image = image(&est);
+        let before_rejected = est.rejected();
+        let before_counters = est.counters();
+        let result = est.step(&sample);
+        fed += 1;
+        if sample.time_s.is_finite() {
+            last_sent = sample.time_s;
+        }
+        match (&result, want) {
+            (Ok(out), Ok(())) => {
+                prop_assert!(all_finite(out), "non-finite output {out:?} for {sample:?}");
+                prop_assert_eq!(est.counters().0, before_counters.0 + 1);
+                last_accepted = Some(sample.time_s);
+                if sample.time_s >= t_next {
+                    t_next = sample.time_s + 1.0;
+                }
+                if out.estimate.is_some() {
+                    estimating_steps += 1;
+                }
+            }
+            (Err(e), Err(w)) => {
+                prop_assert_eq!(*e, w, "sample {:?}", sample);
+                reasons[e.reason_index()] += 1;
+                let mut want_rejected = before_rejected;
+                want_rejected.0[e.reason_index()] += 1;
+                prop_assert_eq!(est.rejected(), want_rejected);
+                prop_assert_eq!(est.counters(), before_counters);
+                prop_assert!(image(&est) == before_image, "a rejected sample changed the state");
+            }
+            (got, want) => prop_assert!(false, "got {got:?}, documented {want:?}, sample {sample:?}"),
+        }
+    }
+    prop_assert_eq!(est.rejected().0, reasons);
+    prop_assert_eq!(est.rejected().total() + est.counters().0, fed);
+    let mut buf = vec![0u8; Estimator::<CAP>::CHECKPOINT_LEN];
+    est.checkpoint(&mut buf).unwrap();
+    let back = Estimator::<CAP>::from_checkpoint(&buf);
+    prop_assert!(back.is_ok(), "state after bad input does not validate: {:?}", back.err());
+    let _ = estimating_steps;
+    Ok(())
+}
+
+fn config(method: u8, bridged: u32) -> Config {
+    Config {
+        rotation_period_samples: PERIOD,
+        max_bridged_gap_samples: bridged,
+        ..Config::with_method(Method::from_code(method % 3).unwrap_or_default())
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn arbitrary_sequences_never_panic_are_finite_and_counted(
+        events in proptest::collection::vec(event(), 1..400),
+        method in 0u8..3,
+        bridged in prop_oneof![Just(0u32), Just(2u32), Just(3u32)],
+    ) {
+        run(config(method, bridged), &events)?;
+    }
+
+    /// Fully random samples only (almost all rejected): the first valid one is accepted.
+    #[test]
+    fn random_bit_patterns_never_panic(
+        samples in proptest::collection::vec((any::<f64>(), any::<[u32; 6]>()), 1..200),
+        method in 0u8..3,
+    ) {
+        let events: Vec<Event> = samples.into_iter().map(|(t, b)| Event::Random(t, b)).collect();
+        run(config(method, 2), &events)?;
+    }
+}
+
+/// The healthy stream alone really reaches the estimating state, so the property above exercises
+/// the filter and not only the checks.
+#[test]
+fn healthy_stream_reaches_estimation_in_a_few_periods() {
+    for method in 0..3 {
+        let mut est = Estimator::<CAP>::new(config(method, 0)).unwrap();
+        let mut updating = 0;
+        for k in 0..200 {
+            let out = est.step(&healthy(1000.0 + k as f64)).unwrap();
+            if out.estimate.is_some() {
+                updating += 1;
+            }
+        }
+        assert!(updating >= 200 - 2 * PERIOD, "method {method}: estimate on {updating} of 200 steps");
+    }
+}
+
+/// Fixed regression cases: extremes in every field after the filter is running.
+#[test]
+fn extremes_in_every_field_while_estimating() {
+    let mut events = vec![Event::Good; 64];
+    for f in 0..7u8 {
+        for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e30, f64::MAX, 1e-40, PI / 2.0, 2.0 * PI + 1e-5] {
+            events.push(Event::Field(f, v));
+            events.push(Event::Good);
+        }
+    }
+    events.push(Event::Gap(1e300));
+    events.extend(vec![Event::Good; 40]);
+    events.push(Event::TimeBack(1e9));
+    events.push(Event::Gap(4.3e9));
+    events.extend(vec![Event::Good; 40]);
+    for method in 0..3 {
+        for bridged in [0, 2] {
+            run(config(method, bridged), &events).unwrap();
+        }
+    }
+}
