@@ -1,2 +1,78 @@
+//! RINS installation-error estimator firmware (Cortex-M4F).
+//!
+//! Thin layers, one file each:
+//! - [`board`]: the hardware (UART as `embedded_io`, the cost counter, logging, fatal exit);
+//! - [`link`]: frames in and out (the codec itself is the `link-protocol` crate);
+//! - [`service`]: request in, `estimator-core` step, response out;
+//! - [`stack`]: stack painting for the high-water mark; [`fault`]: panic and hard-fault handlers.
+//!
+//! This file wires them together and runs the loop. The protocol is in `firmware/PROTOCOL.md`.
 #![no_std]
 #![no_main]
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+
+mod board;
+mod fault;
+mod link;
+mod service;
+mod stack;
+
+use cortex_m_rt::entry;
+use core::mem::MaybeUninit;
+use estimator_core::{Config, ConfigError, Estimator};
+use link_protocol::FrameError;
+
+/// Builds the estimator into its static slot. Out of line: `Estimator::new` returns the 13.8 KB
+/// state by value and the copy into the slot needs a temporary, which should not stay in `main`'s
+/// frame for ever.
+#[inline(never)]
+fn init_estimator(slot: &'static mut MaybeUninit<Result<Estimator, ConfigError>>) -> &'static mut Result<Estimator, ConfigError> {
+    slot.write(Estimator::new(Config::default()))
+}
+
+#[entry]
+fn main() -> ! {
+    stack::paint();
+    let Some(board) = board::Board::init() else {
+        defmt::error!("board already initialised");
+        board::fatal()
+    };
+    // The estimator's state lives in .bss; the result of `new` is written straight into it rather
+    // than built on main's stack and copied.
+    static mut ESTIMATOR: MaybeUninit<Result<Estimator, ConfigError>> = MaybeUninit::uninit();
+    // SAFETY: `main` runs once and is the only code that names ESTIMATOR.
+    let slot = unsafe { &mut *core::ptr::addr_of_mut!(ESTIMATOR) };
+    let estimator = match init_estimator(slot) {
+        Ok(e) => e,
+        Err(_) => {
+            defmt::error!("default configuration rejected by the core");
+            board::fatal()
+        }
+    };
+    let boot_stack_peak_bytes = stack::peak_bytes();
+    // Paint again: from here on the high-water mark is the service loop's own.
+    stack::paint();
+    defmt::info!(
+        "estimator firmware up: protocol {=u8}, estimator state {=usize} bytes, stack {=u32} bytes, {=u32} used by the start-up",
+        link_protocol::PROTOCOL_VERSION,
+        core::mem::size_of::<Estimator>(),
+        stack::size_bytes(),
+        boot_stack_peak_bytes
+    );
+    let mut link = link::Link::new(board.uart);
+    let mut service = service::Service::new(estimator, board.cost, boot_stack_peak_bytes);
+    loop {
+        match link.receive() {
+            Ok(request) => {
+                let response = service.handle(&request);
+                if !link.send(&response) {
+                    defmt::error!("response could not be sent");
+                }
+            }
+            Err(error) => {
+                service.count_bad_frame(error);
+                defmt::warn!("bad frame: {=str}", FrameError::name(error.index()));
+            }
+        }
+    }
+}

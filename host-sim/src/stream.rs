@@ -213,8 +213,8 @@ fn print_summary(log: &Path, out: &Path, what: &str, s: &StreamSummary, target: 
         (0..SampleError::COUNT).map(|i| format!("{} {}", SampleError::reason_name(i), st.counters.rejected_samples[i])).collect();
     println!("  rejected samples: {} ({})", st.counters.rejected_samples_total(), samples.join(", "));
     println!(
-        "  stack: peak {} of {} bytes (painted; {} bytes at the first status, after boot)",
-        st.stack_peak_bytes, st.stack_size_bytes, target.boot_status.stack_peak_bytes
+        "  stack (painted): start-up peak {} bytes, service loop peak {} bytes, of {} bytes",
+        st.boot_stack_peak_bytes, st.stack_peak_bytes, st.stack_size_bytes
     );
     println!("{}", target.unit.summary(&s.cost));
 }

@@ -157,6 +157,7 @@ mod tests {
             window_restarts: 2,
             estimate: step_reply().estimate,
             cost_counter_hz: 25_000_000,
+            boot_stack_peak_bytes: 30_000,
             stack_peak_bytes: 1000,
             stack_size_bytes: 4_000_000,
         };

@@ -248,7 +248,9 @@ pub struct StatusReply {
     pub estimate: Option<EstimateMsg>,
     /// Frequency of the cost counter behind `step_cost_ticks` (the core clock, for SysTick).
     pub cost_counter_hz: u32,
-    /// Stack high-water mark since boot (painted stack), and the stack's size.
+    /// Stack high-water marks (painted stack): of the start-up (the core's `Estimator::new`), and
+    /// of the service loop since then (includes a `Reset`'s if one was served); the stack's size.
+    pub boot_stack_peak_bytes: u32,
     pub stack_peak_bytes: u32,
     pub stack_size_bytes: u32,
 }

@@ -1,0 +1,167 @@
+//! ARM MPS2+ AN386 (Cortex-M4F, 25 MHz) as QEMU emulates it (`-machine mps2-an386`).
+//!
+//! - UART0: CMSDK APB UART at 0x4000_4000, 115200 baud from the 25 MHz peripheral clock. Polled.
+//! - Cost counter: SysTick on the core clock, free-running over 24 bits. On real silicon a tick is a
+//!   core cycle (40 ns). Under QEMU with `-icount shift=0` each instruction takes 1 ns of virtual
+//!   time, so one tick is exactly 40 instructions (shared/notes/toolchain.md section 6).
+//! - Logs: defmt over semihosting (QEMU's stdout). Fatal errors: semihosting exit with status 1.
+
+use core::convert::Infallible;
+use core::ptr::{read_volatile, write_volatile};
+
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m::peripheral::SYST;
+use defmt_semihosting as _;
+
+/// Core (and SysTick) clock, Hz.
+pub const CORE_CLOCK_HZ: u32 = 25_000_000;
+const UART_CLOCK_HZ: u32 = 25_000_000;
+const BAUD: u32 = 115_200;
+
+const UART0_BASE: usize = 0x4000_4000;
+const UART_DATA: usize = 0x00;
+const UART_STATE: usize = 0x04;
+const UART_CTRL: usize = 0x08;
+const UART_INTSTATUS: usize = 0x0C;
+const UART_BAUDDIV: usize = 0x10;
+const STATE_TX_FULL: u32 = 1 << 0;
+const STATE_RX_FULL: u32 = 1 << 1;
+const CTRL_TX_EN: u32 = 1 << 0;
+const CTRL_RX_EN: u32 = 1 << 1;
+
+/// The board's parts.
+pub struct Board {
+    pub uart: Uart,
+    pub cost: CostCounter,
+}
+
+impl Board {
+    /// Sets up the UART and the cost counter. Call once.
+    pub fn init() -> Option<Board> {
+        let peripherals = cortex_m::Peripherals::take()?;
+        Some(Board { uart: Uart::init(), cost: CostCounter::init(peripherals.SYST) })
+    }
+}
+
+/// UART0, polled.
+pub struct Uart {
+    _private: (),
+}
+
+impl Uart {
+    fn init() -> Uart {
+        // SAFETY: UART0's registers, owned by this one `Uart` created once in `Board::init`.
+        unsafe {
+            reg_write(UART_BAUDDIV, UART_CLOCK_HZ / BAUD);
+            reg_write(UART_CTRL, CTRL_TX_EN | CTRL_RX_EN);
+            reg_write(UART_INTSTATUS, 0xF);
+            // One dummy read: QEMU wakes its chardev only when DATA is read, so without it the first
+            // input byte waits about a second (shared/notes/target-costs.md).
+            let _ = reg_read(UART_DATA);
+        }
+        Uart { _private: () }
+    }
+
+    fn read_byte(&mut self) -> u8 {
+        // SAFETY: see `init`.
+        unsafe {
+            while reg_read(UART_STATE) & STATE_RX_FULL == 0 {}
+            reg_read(UART_DATA) as u8
+        }
+    }
+
+    fn rx_ready(&self) -> bool {
+        // SAFETY: see `init`; reading STATE has no side effect.
+        unsafe { reg_read(UART_STATE) & STATE_RX_FULL != 0 }
+    }
+
+    fn write_byte(&mut self, byte: u8) {
+        // SAFETY: see `init`.
+        unsafe {
+            while reg_read(UART_STATE) & STATE_TX_FULL != 0 {}
+            reg_write(UART_DATA, byte as u32);
+        }
+    }
+}
+
+impl embedded_io::ErrorType for Uart {
+    type Error = Infallible;
+}
+
+impl embedded_io::Read for Uart {
+    /// Blocks until at least one byte has arrived, then takes what is already there.
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
+        let mut n = 0;
+        for slot in buf.iter_mut() {
+            if n > 0 && !self.rx_ready() {
+                break;
+            }
+            *slot = self.read_byte();
+            n += 1;
+        }
+        Ok(n)
+    }
+}
+
+impl embedded_io::Write for Uart {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
+        for &b in buf {
+            self.write_byte(b);
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> Result<(), Infallible> {
+        // SAFETY: see `init`.
+        unsafe { while reg_read(UART_STATE) & STATE_TX_FULL != 0 {} }
+        Ok(())
+    }
+}
+
+unsafe fn reg_read(offset: usize) -> u32 {
+    read_volatile((UART0_BASE + offset) as *const u32)
+}
+
+unsafe fn reg_write(offset: usize, value: u32) {
+    write_volatile((UART0_BASE + offset) as *mut u32, value)
+}
+
+/// SysTick as a free-running 24-bit down-counter at [`CORE_CLOCK_HZ`].
+pub struct CostCounter {
+    _syst: SYST,
+}
+
+/// A reading of the [`CostCounter`].
+#[derive(Clone, Copy)]
+pub struct CostStamp(u32);
+
+impl CostCounter {
+    /// Frequency of the ticks, Hz.
+    pub const HZ: u32 = CORE_CLOCK_HZ;
+
+    fn init(mut syst: SYST) -> CostCounter {
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(0x00FF_FFFF);
+        syst.clear_current();
+        syst.enable_counter();
+        CostCounter { _syst: syst }
+    }
+
+    /// Now.
+    #[inline(always)]
+    pub fn stamp(&self) -> CostStamp {
+        CostStamp(SYST::get_current())
+    }
+
+    /// Ticks from `start` to now (correct for intervals below 2^24 ticks, 0.67 s).
+    #[inline(always)]
+    pub fn ticks_since(&self, start: CostStamp) -> u32 {
+        start.0.wrapping_sub(SYST::get_current()) & 0x00FF_FFFF
+    }
+}
+
+/// After a panic or a fault has been logged: end the QEMU run with exit status 1 (on a real board
+/// this would be `SCB::sys_reset()`).
+pub fn fatal() -> ! {
+    semihosting::process::exit(1)
+}
