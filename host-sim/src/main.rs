@@ -6,7 +6,7 @@ use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Method, SampleError};
 use host_sim::cli_args::{method_label, MethodArg, ScenarioArg, ScenarioOverrides, TuningArgs};
 use host_sim::log_csv::{self, Truth};
-use host_sim::pipeline::{default_estimates_path, estimate_file, load_truth, report, Estimated};
+use host_sim::pipeline::{default_estimates_path, estimate_file, estimate_file_with_restarts, load_truth, report, Estimated};
 use host_sim::replay::Replay;
 use host_sim::report::{format_accuracy, format_rms, Report};
 use host_sim::monte_carlo::{format_summary, run_all, summarize, Draw, MC_TIMES_S};
@@ -64,6 +64,10 @@ struct EstimateArgs {
     method: MethodArg,
     #[command(flatten)]
     tuning: TuningArgs,
+    /// Checkpoint the estimator after the rows at these times, drop it and restore a fresh one
+    /// from the bytes (the estimates must not change).
+    #[arg(long, value_name = "T1,T2,...", value_delimiter = ',')]
+    restart_at: Vec<f64>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -220,7 +224,13 @@ fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
 fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     let out = a.out.clone().unwrap_or_else(|| default_estimates_path(&a.log));
     let method: Method = a.method.into();
-    let est = estimate_file(&a.log, &out, a.tuning.config(method))?;
+    let mut restart_at = a.restart_at.clone();
+    anyhow::ensure!(restart_at.iter().all(|t| t.is_finite()), "--restart-at needs finite times");
+    restart_at.sort_by(f64::total_cmp);
+    let est = estimate_file_with_restarts(&a.log, &out, a.tuning.config(method), &restart_at)?;
+    if !restart_at.is_empty() {
+        println!("restarted from a checkpoint after the rows at {restart_at:?} s");
+    }
     print_summary(&a.log.display().to_string(), method, &est.replay, &out.display().to_string());
     if let Some((truth, generated)) = load_truth(&a.log)? {
         print_report(method, &report(&est, &truth, &generated));

@@ -2,7 +2,7 @@
 
 use crate::estimates_csv::EstimatesWriter;
 use crate::log_csv::{self, LogError, LogLine, Truth};
-use crate::replay::{replay, Replay};
+use crate::replay::{replay_with_restarts, Replay};
 use crate::report::{evaluate, Report};
 use crate::scenario::{generate, Generated, Row};
 use anyhow::Context;
@@ -26,10 +26,15 @@ pub fn default_estimates_path(log: &Path) -> PathBuf {
 /// Reads the log (any malformed line stops it with `FILE:LINE: message`), replays it and writes
 /// the estimates CSV to `out`.
 pub fn estimate_file(log: &Path, out: &Path, config: Config) -> anyhow::Result<Estimated> {
+    estimate_file_with_restarts(log, out, config, &[])
+}
+
+/// As [`estimate_file`], restarting the estimator from a checkpoint at `restart_at_s`.
+pub fn estimate_file_with_restarts(log: &Path, out: &Path, config: Config, restart_at_s: &[f64]) -> anyhow::Result<Estimated> {
     let lines: Vec<LogLine> = log_csv::read_log(log)?;
     let file = File::create(out).map_err(|e| LogError::new(out, 0, format!("cannot create: {e}")))?;
     let mut writer = EstimatesWriter::new(BufWriter::new(file)).with_context(|| format!("{}:0: cannot write", out.display()))?;
-    let replay = replay(lines.iter().map(|l| Ok(*l)), config, Some(&mut writer))?;
+    let replay = replay_with_restarts(lines.iter().map(|l| Ok(*l)), config, Some(&mut writer), restart_at_s)?;
     writer.finish().with_context(|| format!("{}:0: cannot write", out.display()))?;
     Ok(Estimated { rows: lines.into_iter().map(|l| l.row).collect(), replay })
 }

@@ -39,6 +39,17 @@ pub enum ReplayError {
     Config(ConfigError),
     #[error("cannot write estimates: {0}")]
     Write(#[from] std::io::Error),
+    #[error("checkpoint at {time_s} s: {message}")]
+    Checkpoint { time_s: f64, message: String },
+}
+
+/// Checkpoints the estimator, drops it and restores a fresh one from the bytes.
+fn restart(est: HostEstimator, time_s: f64) -> Result<HostEstimator, ReplayError> {
+    let fail = |e: estimator_core::checkpoint::CheckpointError| ReplayError::Checkpoint { time_s, message: e.to_string() };
+    let mut buf = vec![0u8; HostEstimator::CHECKPOINT_LEN];
+    let n = est.checkpoint(&mut buf).map_err(fail)?;
+    drop(est);
+    HostEstimator::from_checkpoint(&buf[..n]).map_err(fail)
 }
 
 /// The core's sample for a log row.
@@ -47,13 +58,30 @@ pub fn sample_of(row: &Row) -> Sample {
 }
 
 /// Runs rows through a fresh estimator; writes one estimates row per input row when `writer` is given.
-pub fn replay<I, W>(rows: I, config: Config, mut writer: Option<&mut EstimatesWriter<W>>) -> Result<Replay, ReplayError>
+pub fn replay<I, W>(rows: I, config: Config, writer: Option<&mut EstimatesWriter<W>>) -> Result<Replay, ReplayError>
+where
+    I: IntoIterator<Item = Result<LogLine, LogError>>,
+    W: Write,
+{
+    replay_with_restarts(rows, config, writer, &[])
+}
+
+/// As [`replay`], and after the first row at or after each of `restart_at_s` (ascending) the
+/// estimator is checkpointed, dropped and restored from the bytes: a power cycle with a saved
+/// state. The outputs must not change.
+pub fn replay_with_restarts<I, W>(
+    rows: I,
+    config: Config,
+    mut writer: Option<&mut EstimatesWriter<W>>,
+    restart_at_s: &[f64],
+) -> Result<Replay, ReplayError>
 where
     I: IntoIterator<Item = Result<LogLine, LogError>>,
     W: Write,
 {
     let mut est = HostEstimator::new(config).map_err(ReplayError::Config)?;
     let mut steps = Vec::new();
+    let mut next_restart = 0;
     for line in rows {
         let line = line?;
         let result = est.step(&sample_of(&line.row));
@@ -61,6 +89,14 @@ where
             w.write_step(line.row.time_s, &result)?;
         }
         steps.push(Step { time_s: line.row.time_s, result });
+        let mut due = false;
+        while next_restart < restart_at_s.len() && line.row.time_s >= restart_at_s[next_restart] {
+            next_restart += 1;
+            due = true;
+        }
+        if due {
+            est = restart(est, line.row.time_s)?;
+        }
     }
     let (accepted, bridged, window_restarts) = est.counters();
     Ok(Replay { steps, rejected: est.rejected(), accepted, bridged, window_restarts, final_estimate: est.estimate() })

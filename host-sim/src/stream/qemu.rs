@@ -24,6 +24,12 @@ use std::time::{Duration, Instant};
 /// `-icount shift` used; instructions per nanosecond of virtual time = 1 / 2^shift.
 pub const ICOUNT_SHIFT: u32 = 0;
 
+/// Extra QEMU arguments from `$HOST_SIM_QEMU_ARGS` (split at whitespace), e.g. a TCG plugin:
+/// `HOST_SIM_QEMU_ARGS="-plugin firmware/tools/libpcprofile.so,out=profile.txt"`.
+pub fn extra_args() -> Vec<String> {
+    std::env::var("HOST_SIM_QEMU_ARGS").map(|a| a.split_whitespace().map(String::from).collect()).unwrap_or_default()
+}
+
 /// A running QEMU.
 pub struct Qemu {
     child: Child,
@@ -64,6 +70,7 @@ impl Qemu {
             .arg(format!("socket,id=uart0,path={},server=on,wait=on", socket.display()))
             .args(["-serial", "chardev:uart0", "-kernel"])
             .arg(elf)
+            .args(extra_args())
             .stdin(Stdio::null())
             .stdout(stdout)
             .stderr(Stdio::from(File::create(&stderr_path)?));
