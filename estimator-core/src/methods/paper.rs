@@ -78,11 +78,9 @@ impl<const CAP: usize> Paper<CAP> {
         let half_cos_lat = 0.5 * angles.cos_lat as f64;
         let gains = [0.5, -0.5, half_cos_lat, -half_cos_lat];
         let sigma = config.measurement_sigma_rad as f64;
-        let drift = config.drift_rad_per_sqrt_s as f64;
-        let q = drift * drift * config.sample_interval_s;
         let mut applied = false;
         for j in 0..4 {
-            self.kf[j].predict(&[q, 0.0, 0.0]);
+            // No prediction step: eq (18) neglects the state equation (constant states, Q = 0).
             applied |= self.kf[j].update(&[gains[j], cos_e, sin_e], r_bar[j] as f64, sigma * sigma).is_ok();
         }
         if applied {
