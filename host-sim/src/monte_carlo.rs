@@ -130,6 +130,9 @@ pub fn quantile(sorted: &[f64], q: f64) -> f64 {
     if i + 1 < sorted.len() {
         if f == 0.0 {
             sorted[i]
+        } else if !sorted[i + 1].is_finite() {
+            // Past the last finite value (runs without an estimate count as infinite errors).
+            sorted[i + 1]
         } else {
             sorted[i] + (sorted[i + 1] - sorted[i]) * f
         }
@@ -211,6 +214,9 @@ mod tests {
         assert_eq!(quantile(&v, 0.5), 3.0);
         assert_eq!(quantile(&v, 1.0), 5.0);
         assert!((quantile(&v, 0.95) - 4.8).abs() < 1e-12);
+        let with_inf = sorted([1.0, f64::INFINITY, f64::INFINITY]);
+        assert_eq!(quantile(&with_inf, 0.95), f64::INFINITY);
+        assert_eq!(quantile(&with_inf, 0.25), f64::INFINITY);
     }
 
     #[test]
