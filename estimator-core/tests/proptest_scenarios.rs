@@ -1,0 +1,466 @@
+//! Long and adverse scenarios through the core (default configuration: windowed method, 480 s
+//! window, CAP 480):
+//! - a 30-day run (2,592,000 samples; release mode only, a few seconds there);
+//! - latitudes 0, 45, 80 and 89 deg: what roll can and cannot tell, and whether the 1-sigma and the
+//!   status say so honestly;
+//! - the rotation stopping, running at another period, reversing: the status says so, the estimates
+//!   freeze and estimation resumes once the rotation is healthy again.
+//!
+//! The sample source is local and deterministic: sinusoidal roll and pitch sway, eq (2)'s
+//! oscillation for known errors (in f64), white noise from a 64-bit LCG, the platform turning at
+//! the Earth rate. Internal values (Kalman covariance, window sums) are read from the checkpoint
+//! image, whose layout is documented in `estimator_core::checkpoint`.
+
+use estimator_core::checkpoint::METHOD_OFFSET;
+use estimator_core::units::{arcsec_to_rad, rad_to_arcsec, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
+use estimator_core::{Config, Estimator, Output, Real, RotationFault, Sample, Status};
+use std::f64::consts::PI;
+
+const R: usize = std::mem::size_of::<Real>();
+const X_ARCSEC: [f64; 4] = [120.0, -80.0, 250.0, -190.0];
+
+/// Eq (2) in f64: heading, roll, pitch errors (rad).
+fn oscillation(x: &[f64; 4], rho: f64, s: f64, lat: f64) -> [f64; 3] {
+    let (sl, cl) = lat.sin_cos();
+    let (srs, crs) = (rho - s).sin_cos();
+    let (sr, cr) = rho.sin_cos();
+    [
+        -x[0] * cl * crs - x[1] * cl * srs - x[2] * sl * sr + x[3] * sl * cr,
+        -x[0] * sl * crs - x[1] * sl * srs + x[2] * cl * sr - x[3] * cl * cr,
+        x[0] * srs - x[1] * crs,
+    ]
+}
+
+/// Deterministic RINS output with known errors; the caller advances the rotation angle.
+struct Source {
+    x_rad: [f64; 4],
+    latitude_rad: f64,
+    noise_arcsec: f64,
+    rho_rad: f64,
+    t_s: f64,
+    lcg: u64,
+}
+
+impl Source {
+    fn new(latitude_deg: f64) -> Source {
+        Source {
+            x_rad: X_ARCSEC.map(arcsec_to_rad),
+            latitude_rad: latitude_deg * RAD_PER_DEG,
+            noise_arcsec: 10.0,
+            rho_rad: 0.4,
+            t_s: 0.0,
+            lcg: 0x9E37_79B9_7F4A_7C15,
+        }
+    }
+
+    /// White noise of 1-sigma `noise_arcsec` (sum of four uniforms), rad.
+    fn noise(&mut self) -> f64 {
+        let mut acc = 0.0;
+        for _ in 0..4 {
+            self.lcg = self.lcg.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            acc += (self.lcg >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+        }
+        acc * 3f64.sqrt() * arcsec_to_rad(self.noise_arcsec)
+    }
+
+    /// The next sample, one second later, the rotation having turned by `increment_rad`.
+    fn next(&mut self, increment_rad: f64) -> Sample {
+        self.t_s += 1.0;
+        self.rho_rad = (self.rho_rad + increment_rad).rem_euclid(2.0 * PI);
+        let t = self.t_s;
+        let s = (1.3 + EARTH_RATE_RAD_PER_S * t).rem_euclid(2.0 * PI);
+        let d = oscillation(&self.x_rad, self.rho_rad, s, self.latitude_rad);
+        let roll = 3.0 * RAD_PER_DEG * (2.0 * PI * t / 6.0).sin() + d[1] + self.noise();
+        let pitch = 1.0 * RAD_PER_DEG * (2.0 * PI * t / 9.0 + 0.3).sin() + d[2] + self.noise();
+        let heading = 0.5 + d[0] + self.noise();
+        let wrap = |a: f64| ((a + PI).rem_euclid(2.0 * PI) - PI) as Real;
+        Sample {
+            time_s: t,
+            rotation_rad: wrap(self.rho_rad),
+            platform_rad: wrap(s),
+            latitude_rad: self.latitude_rad as Real,
+            attitude: estimator_core::Attitude {
+                heading_rad: wrap(heading),
+                roll_rad: roll as Real,
+                pitch_rad: pitch as Real,
+            },
+        }
+    }
+}
+
+/// Nominal rotation increment for the default 480-sample period.
+const NOMINAL_RAD: f64 = 2.0 * PI / 480.0;
+
+fn errors_arcsec(out: &Output) -> [f64; 4] {
+    let e = out.estimate.expect("estimate");
+    std::array::from_fn(|i| rad_to_arcsec(e.x_rad[i] as f64) - X_ARCSEC[i])
+}
+
+fn sigma_arcsec(out: &Output) -> [f64; 4] {
+    let e = out.estimate.expect("estimate");
+    std::array::from_fn(|i| rad_to_arcsec(e.sigma_rad[i] as f64))
+}
+
+fn updating(status: Status) -> bool {
+    matches!(status, Status::Estimating | Status::Converged | Status::ModelMismatch)
+}
+
+/// The windowed method's internals, read from a checkpoint image (layout: module doc of
+/// `estimator_core::checkpoint`).
+struct Internals {
+    updates: u32,
+    p: [[f64; 4]; 4],
+    window_len: usize,
+    window_filled: usize,
+    sums: [i64; 7],
+    /// Exact sum of the stored window samples, per channel.
+    direct_sums: [i64; 7],
+}
+
+fn real_at(b: &[u8], at: usize) -> f64 {
+    if R == 4 {
+        f32::from_le_bytes(b[at..at + 4].try_into().unwrap()) as f64
+    } else {
+        f64::from_le_bytes(b[at..at + 8].try_into().unwrap())
+    }
+}
+
+fn internals(est: &Estimator<480>) -> Internals {
+    let mut b = vec![0u8; Estimator::<480>::CHECKPOINT_LEN];
+    est.checkpoint(&mut b).unwrap();
+    // The image must restore: every value finite, covariance symmetric positive definite,
+    // window sums equal to the stored samples.
+    let back = Estimator::<480>::from_checkpoint(&b).expect("state validates");
+    assert!(back == *est);
+    let u32_at = |at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap());
+    let m = METHOD_OFFSET;
+    let updates = u32_at(m);
+    let p_at = m + 4 + 4 * R;
+    let p = std::array::from_fn(|i| std::array::from_fn(|j| real_at(&b, p_at + (4 * i + j) * R)));
+    // After P: residual means 4 R, residual count u32, gains 4 R, then the window.
+    let w = p_at + 16 * R + 4 * R + 4 + 4 * R;
+    let window_len = u32_at(w) as usize;
+    let window_filled = u32_at(w + 8) as usize;
+    let sums = std::array::from_fn(|ch| i64::from_le_bytes(b[w + 12 + 8 * ch..w + 20 + 8 * ch].try_into().unwrap()));
+    let ring = w + 12 + 7 * 8;
+    let mut direct_sums = [0i64; 7];
+    for k in 0..window_filled {
+        for (ch, d) in direct_sums.iter_mut().enumerate() {
+            let at = ring + (k * 7 + ch) * 4;
+            *d += i64::from(i32::from_le_bytes(b[at..at + 4].try_into().unwrap()));
+        }
+    }
+    Internals { updates, p, window_len, window_filled, sums, direct_sums }
+}
+
+/// Cholesky in f64: true if every pivot is positive.
+fn positive_definite(p: &[[f64; 4]; 4]) -> bool {
+    let mut l = [[0.0f64; 4]; 4];
+    for i in 0..4 {
+        for j in 0..=i {
+            let s: f64 = p[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
+            if i == j {
+                if !(s > 0.0) {
+                    return false;
+                }
+                l[i][i] = s.sqrt();
+            } else {
+                l[i][j] = s / l[j][j];
+            }
+        }
+    }
+    true
+}
+
+/// 30 days at 1 Hz through the default estimator.
+/// - running sums: each day, every window sum equals the exact sum of the window's samples;
+/// - covariance: each day, exactly symmetric and positive definite (and restore validates it);
+/// - estimates: from the end of day 1 on, every step's four errors within 10 arcsec of truth;
+/// - per-step work constant: after the first window, every step takes the same path: one sample
+///   accepted, nothing bridged, no window restart, the window full, exactly one filter update
+///   (Kalman update count = accepted - 479 at every day boundary), status updating. The step has no
+///   loop whose count depends on the data except gap bridging, which is counted and stays 0, so the
+///   same path is the same amount of work. (Instructions per step are measured on the target.)
+#[test]
+#[cfg_attr(debug_assertions, ignore = "30-day run: 2.6 million steps, run with `cargo test --release`")]
+fn thirty_day_run_keeps_sums_exact_covariance_spd_estimates_within_10_arcsec_and_work_constant() {
+    const DAY: u64 = 86_400;
+    const DAYS: u64 = 30;
+    let mut est = Estimator::<480>::new(Config::default()).unwrap();
+    let mut src = Source::new(40.0);
+    let mut worst_after_day1 = [0.0f64; 4];
+    let mut statuses = std::collections::BTreeMap::<&'static str, u64>::new();
+    for k in 1..=DAYS * DAY {
+        let before = est.counters();
+        let out = est.step(&src.next(NOMINAL_RAD)).expect("healthy sample accepted");
+        let after = est.counters();
+        assert_eq!(after, (before.0 + 1, before.1, before.2), "step {k}: counters");
+        *statuses.entry(out.status.name()).or_default() += 1;
+        if k >= 480 {
+            assert!(updating(out.status), "step {k}: status {:?}", out.status);
+        }
+        if k > DAY {
+            let e = errors_arcsec(&out);
+            for i in 0..4 {
+                worst_after_day1[i] = worst_after_day1[i].max(e[i].abs());
+            }
+            assert!(e.iter().all(|v| v.abs() < 10.0), "step {k}: errors {e:?} arcsec");
+        }
+        if k % DAY == 0 {
+            let s = internals(&est);
+            assert_eq!(s.sums, s.direct_sums, "day {}: running sums drifted", k / DAY);
+            assert_eq!((s.window_len, s.window_filled), (480, 480));
+            assert_eq!(u64::from(s.updates), k - 479, "day {}: not one filter update per step", k / DAY);
+            for i in 0..4 {
+                for j in 0..4 {
+                    assert_eq!(s.p[i][j].to_bits(), s.p[j][i].to_bits(), "day {}: P not symmetric", k / DAY);
+                }
+            }
+            assert!(positive_definite(&s.p), "day {}: P not positive definite: {:?}", k / DAY, s.p);
+            let sigma = sigma_arcsec(&out);
+            let e = errors_arcsec(&out);
+            println!("day {:2}: errors {:7.3?} arcsec, 1-sigma {:6.3?} arcsec, {}", k / DAY, e, sigma, out.status.name());
+        }
+    }
+    println!("worst |error| after day 1: {worst_after_day1:.3?} arcsec; statuses {statuses:?}");
+    assert_eq!(est.counters(), (2_592_000, 0, 0));
+}
+
+/// Runs `steps` healthy samples at `latitude_deg`; returns the last output and whether any step
+/// was `Converged`, and checks honesty at every hour: each error within 3 sigma.
+fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator<480>) {
+    let mut est = Estimator::<480>::new(Config::default()).unwrap();
+    let mut src = Source::new(latitude_deg);
+    let mut last = None;
+    let mut converged = false;
+    for k in 1..=steps {
+        let out = est.step(&src.next(NOMINAL_RAD)).unwrap();
+        converged |= out.status == Status::Converged;
+        if k % 3600 == 0 {
+            let (e, s) = (errors_arcsec(&out), sigma_arcsec(&out));
+            for i in 0..4 {
+                assert!(e[i].abs() <= 3.0 * s[i], "lat {latitude_deg}, hour {}: x{} error {:.3} arcsec > 3 sigma {:.3}", k / 3600, i + 1, e[i], s[i]);
+            }
+        }
+        last = Some(out);
+    }
+    (last.unwrap(), converged, est)
+}
+
+/// The scalar filter x1 would have if it were observed by the pitch channel alone
+/// (gain 1/2, the default measurement noise and random walk): its variance after `updates`.
+fn pitch_only_variance(updates: u64) -> f64 {
+    let c = Config::default();
+    let (r, q) = ((c.measurement_sigma_rad as f64).powi(2), (c.drift_rad_per_sqrt_s as f64).powi(2) * c.sample_interval_s);
+    let mut p = (c.prior_sigma_rad as f64).powi(2);
+    for _ in 0..updates {
+        p += q;
+        p = p * r / (0.25 * p + r);
+    }
+    p
+}
+
+const LATITUDE_STEPS: u64 = 8 * 3600;
+
+/// At the equator roll carries no x1, x2 (sin L = 0): they come from pitch alone. The filter's
+/// x1 and x2 variances equal those of a pitch-only scalar filter (within f32 rounding), the errors
+/// are within 3 sigma, and everything converges.
+#[test]
+fn equator_x1_x2_come_from_pitch_alone() {
+    let (out, converged, est) = run_latitude(0.0, LATITUDE_STEPS);
+    let p = internals(&est).p;
+    let pitch_only = pitch_only_variance(LATITUDE_STEPS - 479);
+    for i in 0..2 {
+        assert!((p[i][i] / pitch_only - 1.0).abs() < 1e-3, "x{}: variance {} vs pitch-only {}", i + 1, p[i][i], pitch_only);
+        assert_eq!(p[i][2], 0.0);
+        assert_eq!(p[i][3], 0.0);
+    }
+    assert!(converged && out.status == Status::Converged, "{:?}", out.status);
+    let e = errors_arcsec(&out);
+    assert!(e.iter().all(|v| v.abs() < 1.0), "errors {e:?}");
+    println!("lat 0: errors {e:.3?}, sigma {:.3?} arcsec", sigma_arcsec(&out));
+}
+
+/// At 45 deg roll also informs x1 (through the leakage of eq 12): its variance is below the
+/// pitch-only one; everything converges within 3 sigma.
+#[test]
+fn mid_latitude_converges_honestly() {
+    let (out, converged, est) = run_latitude(45.0, LATITUDE_STEPS);
+    let p = internals(&est).p;
+    assert!(p[0][0] < pitch_only_variance(LATITUDE_STEPS - 479));
+    assert!(converged && out.status == Status::Converged, "{:?}", out.status);
+    let e = errors_arcsec(&out);
+    assert!(e.iter().all(|v| v.abs() < 1.0), "errors {e:?}");
+    println!("lat 45: errors {e:.3?}, sigma {:.3?} arcsec", sigma_arcsec(&out));
+}
+
+/// At 80 deg (cos L = 0.17) roll sees x3, x4 six times more weakly: their 1-sigma is at least
+/// twice that of x1, x2, and the errors stay within 3 sigma.
+#[test]
+fn high_latitude_weakens_x3_x4_and_says_so() {
+    let (out, _, _) = run_latitude(80.0, LATITUDE_STEPS);
+    let s = sigma_arcsec(&out);
+    for j in 2..4 {
+        for i in 0..2 {
+            assert!(s[j] > 2.0 * s[i], "sigma {s:?}");
+        }
+    }
+    println!("lat 80: errors {:.3?}, sigma {s:.3?} arcsec, {}", errors_arcsec(&out), out.status.name());
+}
+
+/// At 89 deg (cos L = 0.017) x3, x4 are all but unobservable from roll: their 1-sigma stays above
+/// the convergence threshold and at least 10 times that of x1, x2, the status is never
+/// `converged`, and the errors stay within 3 sigma. x1, x2 still converge (pitch).
+#[test]
+fn near_pole_x3_x4_unobservable_and_status_says_so() {
+    let (out, converged, _) = run_latitude(89.0, LATITUDE_STEPS);
+    let s = sigma_arcsec(&out);
+    let threshold = rad_to_arcsec(Config::default().converged_sigma_rad as f64);
+    assert!(!converged, "status was converged at 89 deg");
+    for j in 2..4 {
+        assert!(s[j] > threshold, "x{} sigma {} arcsec", j + 1, s[j]);
+        for i in 0..2 {
+            assert!(s[j] > 10.0 * s[i], "sigma {s:?}");
+        }
+    }
+    let e = errors_arcsec(&out);
+    assert!(e[0].abs() < 1.0 && e[1].abs() < 1.0, "x1, x2 errors {e:?}");
+    assert!(s[0] < threshold && s[1] < threshold, "x1, x2 sigma {s:?}");
+    println!("lat 89: errors {e:.3?}, sigma {s:.3?} arcsec, {}", out.status.name());
+}
+
+/// What happened around a rotation fault.
+struct FaultRun {
+    /// Status of the first faulty sample.
+    first_fault_status: Status,
+    /// Samples from the return of healthy rotation to the first updating step.
+    resume_delay: u64,
+    /// Largest change of any estimate while not updating (must be exactly 0), arcsec.
+    frozen_change_arcsec: f64,
+    /// Change of the estimate from the last step before the fault to the step before resumption.
+    change_across_fault_arcsec: f64,
+    /// Errors at the end.
+    final_errors_arcsec: [f64; 4],
+    final_status: Status,
+    /// Fault samples after the first report that did not report the same fault.
+    unreported_fault_samples: u64,
+}
+
+/// 3 h healthy, `fault_s` of the given rotation increment, then healthy again for 3 h.
+fn run_fault(fault_increment_rad: f64, fault_s: u64) -> FaultRun {
+    let mut est = Estimator::<480>::new(Config::default()).unwrap();
+    let mut src = Source::new(40.0);
+    let healthy_s = 3 * 3600;
+    let mut pre_fault = None;
+    let mut frozen_at: Option<[Real; 4]> = None;
+    let mut frozen_change: f64 = 0.0;
+    let mut first_fault_status = None;
+    let mut resume_delay = None;
+    let mut change_across = 0.0f64;
+    let mut last = None;
+    let mut unreported = 0u64;
+    let direction_after = if fault_increment_rad < 0.0 { -1.0 } else { 1.0 };
+    for k in 1..=(2 * healthy_s + fault_s) {
+        let in_fault = k > healthy_s && k <= healthy_s + fault_s;
+        let increment = if k <= healthy_s {
+            NOMINAL_RAD
+        } else if in_fault {
+            fault_increment_rad
+        } else {
+            direction_after * NOMINAL_RAD
+        };
+        let out = est.step(&src.next(increment)).unwrap();
+        let Some(estimate) = out.estimate else {
+            assert!(k < 480, "no estimate at step {k}");
+            continue;
+        };
+        let x = estimate.x_rad;
+        if k == healthy_s {
+            assert!(updating(out.status));
+            pre_fault = Some(x);
+        }
+        if k > healthy_s && first_fault_status.is_none() && !updating(out.status) {
+            first_fault_status = Some(out.status);
+        }
+        if in_fault && first_fault_status.is_some() && Some(out.status) != first_fault_status {
+            unreported += 1;
+        }
+        if k > healthy_s && resume_delay.is_none() {
+            if updating(out.status) {
+                if !in_fault && first_fault_status.is_some() {
+                    resume_delay = Some(k - healthy_s - fault_s);
+                }
+                frozen_at = None;
+            } else {
+                let f = *frozen_at.get_or_insert(x);
+                for i in 0..4 {
+                    frozen_change = frozen_change.max(rad_to_arcsec((x[i] - f[i]).abs() as f64));
+                    change_across = change_across.max(rad_to_arcsec((x[i] - pre_fault.unwrap()[i]).abs() as f64));
+                }
+            }
+        }
+        last = Some(out);
+    }
+    let last = last.unwrap();
+    FaultRun {
+        first_fault_status: first_fault_status.expect("the fault was never reported"),
+        resume_delay: resume_delay.expect("estimation never resumed"),
+        frozen_change_arcsec: frozen_change,
+        change_across_fault_arcsec: change_across,
+        final_errors_arcsec: errors_arcsec(&last),
+        final_status: last.status,
+        unreported_fault_samples: unreported,
+    }
+}
+
+/// The longest resumption delay after a rate fault: the mean-rate ratio (an exponential mean over
+/// one period, W = 480 samples) must come back from 20 % off to within the 1 % tolerance, which
+/// takes W ln(0.20 / 0.01) samples, and then a full window must pass.
+fn rate_fault_resume_bound() -> u64 {
+    (480.0 * (0.20f64 / 0.01).ln()).ceil() as u64 + 480 + 1
+}
+
+fn check_fault(name: &str, run: &FaultRun, expected: RotationFault, max_resume_delay: u64) {
+    println!(
+        "{name}: first status {:?}, resumed {} samples after healthy rotation, frozen change {} arcsec, change across fault {:.4} arcsec, final errors {:.3?}, {:?}",
+        run.first_fault_status, run.resume_delay, run.frozen_change_arcsec, run.change_across_fault_arcsec, run.final_errors_arcsec, run.final_status
+    );
+    assert_eq!(run.first_fault_status, Status::RotationFault(expected), "{name}");
+    assert_eq!(run.unreported_fault_samples, 0, "{name}: the status stopped reporting the fault");
+    assert_eq!(run.frozen_change_arcsec, 0.0, "{name}: estimates moved while frozen");
+    assert!(run.change_across_fault_arcsec < 1.0, "{name}: estimates drifted by {} arcsec", run.change_across_fault_arcsec);
+    assert!(run.resume_delay <= max_resume_delay, "{name}: resumed after {} samples", run.resume_delay);
+    assert!(run.final_errors_arcsec.iter().all(|e| e.abs() < 1.0), "{name}: {:?}", run.final_errors_arcsec);
+    assert!(updating(run.final_status), "{name}: {:?}", run.final_status);
+}
+
+/// Rotation stopped for an hour: `rotation_stopped`, frozen, resumes one window (480 samples)
+/// after the rotation restarts.
+#[test]
+fn rotation_stopped_freezes_and_resumes() {
+    let run = run_fault(0.0, 3600);
+    check_fault("stopped", &run, RotationFault::Stopped, 480);
+}
+
+/// Rotating at a 400 s period (20 % fast) for an hour: `rotation_rate_mismatch`, frozen; resumes
+/// once the mean rate is back within 1 % and a full window has passed.
+#[test]
+fn rotation_at_another_period_freezes_and_resumes() {
+    let run = run_fault(2.0 * PI / 400.0, 3600);
+    check_fault("period 400 s", &run, RotationFault::RateMismatch, rate_fault_resume_bound());
+}
+
+/// Rotating at a 600 s period (20 % slow) for an hour: same.
+#[test]
+fn rotation_slower_freezes_and_resumes() {
+    let run = run_fault(2.0 * PI / 600.0, 3600);
+    check_fault("period 600 s", &run, RotationFault::RateMismatch, rate_fault_resume_bound());
+}
+
+/// The rotation reverses and goes on the other way: `rotation_reversed` at once, frozen for a
+/// window, then estimating again (eq 2 holds in either direction).
+#[test]
+fn rotation_reversal_freezes_and_resumes() {
+    let run = run_fault(-NOMINAL_RAD, 1);
+    check_fault("reversed", &run, RotationFault::Reversed, 480);
+}
