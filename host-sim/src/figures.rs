@@ -1,6 +1,6 @@
 //! The data of the paper's figures from a replay and the generator's truth, drawn by [`crate::plots`].
 
-use crate::plots;
+use crate::plots::{self, CorrelationPanel, Curve};
 use crate::replay::Step;
 use crate::report::{errors_arcsec, percent_error, residual_arcsec, truth_index};
 use crate::scenario::{Row, RowTruth};
@@ -34,7 +34,7 @@ pub fn percent_curves(steps: &[Step], truth: &[RowTruth], interval_s: f64) -> [V
 
 /// Attitude error of eq (2) before (the oscillation put in) and after compensation, arcsec
 /// (Figs. 7 and 8).
-pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interval_s: f64) -> ([Vec<(f64, f64)>; 3], [Vec<(f64, f64)>; 3]) {
+pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interval_s: f64) -> ([Curve; 3], [Curve; 3]) {
     let mut before: [Vec<(f64, f64)>; 3] = Default::default();
     let mut after: [Vec<(f64, f64)>; 3] = Default::default();
     for (row, step) in rows.iter().zip(steps) {
@@ -51,7 +51,7 @@ pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interva
 /// Fig. 3: for the true roll, the oscillatory roll and the rest (low-frequency errors + noise), the
 /// cumulative correlation with sin(rho) of eq (8) and its moving average over one rotation period
 /// (`window` samples) of eq (11), arcsec. Uses the core's correlation products.
-pub fn correlation_panels(rows: &[Row], truth: &[RowTruth], window: usize) -> Vec<(String, Vec<(f64, f64)>, Vec<(f64, f64)>)> {
+pub fn correlation_panels(rows: &[Row], truth: &[RowTruth], window: usize) -> Vec<CorrelationPanel> {
     let names = ["true roll", "oscillatory roll (installation errors)", "low-frequency errors + noise"];
     let mut sums = [0.0f64; 3];
     let mut corr: [Vec<(f64, f64)>; 3] = Default::default();

@@ -27,6 +27,11 @@ fn register_font() {
     });
 }
 
+/// `(x, y)` points of one line.
+pub type Curve = Vec<(f64, f64)>;
+/// A Fig. 3 panel: name, correlation values, their averages.
+pub type CorrelationPanel = (String, Curve, Curve);
+
 /// One line of a panel.
 #[derive(Clone, Debug)]
 pub struct Series {
@@ -159,7 +164,7 @@ pub fn percent_error_figure(path: &Path, title: &str, curves: &[Vec<(f64, f64)>;
 /// Fig. 3: three panels (true roll, oscillatory roll, low-frequency errors + noise), each with
 /// the correlation value of eq (8) (blue) and its average of eq (11) (red); `target_arcsec` is
 /// x3 cos L / 2 drawn on the oscillatory panel.
-pub fn correlation_figure(path: &Path, panels: &[(String, Vec<(f64, f64)>, Vec<(f64, f64)>)], target_arcsec: f64) -> Result<()> {
+pub fn correlation_figure(path: &Path, panels: &[CorrelationPanel], target_arcsec: f64) -> Result<()> {
     let span = 3.0 * target_arcsec.abs().max(50.0);
     let out: Vec<Panel> = panels
         .iter()

@@ -48,7 +48,7 @@ fn restart(est: HostEstimator, time_s: f64) -> Result<HostEstimator, ReplayError
     let fail = |e: estimator_core::checkpoint::CheckpointError| ReplayError::Checkpoint { time_s, message: e.to_string() };
     let mut buf = vec![0u8; HostEstimator::CHECKPOINT_LEN];
     let n = est.checkpoint(&mut buf).map_err(fail)?;
-    drop(est);
+    // `est` was moved in and is gone after this function: only the bytes carry the state.
     HostEstimator::from_checkpoint(&buf[..n]).map_err(fail)
 }
 

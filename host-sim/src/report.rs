@@ -192,11 +192,12 @@ impl RmsAccumulator {
     }
 
     pub fn add(&mut self, time_s: f64, residual_arcsec: &[f64; 3], truth: &RowTruth) {
-        if !(time_s >= self.from_s) {
+        if time_s.is_nan() || time_s < self.from_s {
             return;
         }
         self.rows += 1;
         self.to_s = time_s;
+        #[allow(clippy::needless_range_loop)]
         for a in 0..3 {
             let b = truth.oscillation_deg[a] * 3600.0;
             self.before[a] += b * b;
