@@ -279,14 +279,20 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     log_csv::write_truth(&log_csv::truth_path(&log), &truth)?;
     println!("wrote {} ({} rows) and its truth file", log.display(), generated.rows.len());
     let mut runs: Vec<(Method, Estimated)> = Vec::new();
+    let mut reports: Vec<(Method, Report)> = Vec::new();
     for method in [Method::Windowed, Method::Paper, Method::Traditional] {
         let out = dir.join(format!("{}.estimates.{}.csv", params.scenario.name(), method.name()));
         let est = estimate_file(&log, &out, a.tuning.config(method))?;
         print_summary(&log.display().to_string(), method, &est.replay, &out.display().to_string());
-        print_report(method, &report(&est, &truth, &generated));
+        let rep = report(&est, &truth, &generated);
+        print_report(method, &rep);
         println!();
         runs.push((method, est));
+        reports.push((method, rep));
     }
+    println!("side by side ({} scenario, seed {}):", params.scenario.name(), params.seed);
+    let side: Vec<(&str, &Report)> = reports.iter().map(|(m, r)| (method_label(*m), r)).collect();
+    print!("{}", host_sim::report::format_side_by_side(&side));
     if !a.no_plots {
         let steps: Vec<(&str, &[host_sim::replay::Step])> = runs.iter().map(|(m, e)| (m.name(), e.replay.steps.as_slice())).collect();
         let window = (params.rotation_period_s / params.sample_interval_s).round() as usize;

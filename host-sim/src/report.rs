@@ -303,6 +303,38 @@ pub fn format_rms(label: &str, r: &AttitudeRms) -> String {
     s
 }
 
+/// Methods side by side (one line each): largest percentage error of the four at each report
+/// time, settling times of all four, attitude RMS after compensation over the last quarter.
+pub fn format_side_by_side(reports: &[(&str, &Report)]) -> String {
+    let times: Vec<f64> = reports.first().map(|(_, r)| r.accuracy.points.iter().map(|p| p.time_s).collect()).unwrap_or_default();
+    let mut s = String::from("| method | ");
+    for t in &times {
+        s.push_str(&format!("max % at {t:.0} s | "));
+    }
+    s.push_str("all within 0.5 % from | all within 10 arcsec from | RMS after, last quarter (heading / roll / pitch arcsec) |\n|---|");
+    s.push_str(&"---|".repeat(times.len() + 3));
+    s.push('\n');
+    for (name, r) in reports {
+        s.push_str(&format!("| {name} | "));
+        for p in &r.accuracy.points {
+            match p.percent {
+                Some(pc) => s.push_str(&format!("{:.3} | ", pc.iter().fold(0.0f64, |m, v| m.max(*v)))),
+                None => s.push_str("no estimate | "),
+            }
+        }
+        let q = &r.rms_last_quarter.after_arcsec;
+        s.push_str(&format!(
+            "{} | {} | {:.2} / {:.2} / {:.2} |\n",
+            fmt_time(r.accuracy.all_within_percent_from_s()),
+            fmt_time(r.accuracy.all_within_arcsec_from_s()),
+            q[0],
+            q[1],
+            q[2]
+        ));
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

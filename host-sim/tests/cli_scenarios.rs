@@ -100,3 +100,22 @@ fn monte_carlo_writes_summary() {
     let max5000: Vec<f64> = v["max_abs_error_arcsec"][1].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
     assert!(max5000.iter().all(|e| *e < 10.0), "{max5000:?}");
 }
+
+#[test]
+fn compare_prints_a_markdown_line_per_scenario_and_method() {
+    let stdout = host_sim_ok(&["compare", "--seeds", "2", "--duration", "3000", "--scenarios", "turntable,sea"]);
+    let lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("| ")).collect();
+    assert_eq!(lines.len(), 1 + 6, "{stdout}");
+    assert!(lines[0].contains("time to 0.5 %") && lines[0].contains("at 45000 s"));
+    let ours = lines.iter().find(|l| l.starts_with("| sea | ours (windowed) | 2 |")).expect("sea/ours line");
+    // Outside the 3000 s run, the 20000 s and 45000 s columns are "-".
+    assert!(ours.ends_with("| - / - | - / - |"), "{ours}");
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    for cmd in ["generate", "estimate", "run", "monte-carlo", "compare", "stream"] {
+        let out = host_sim_ok(&[cmd, "--help"]);
+        assert!(out.contains("Usage: host-sim"), "{cmd}: {out}");
+    }
+}
