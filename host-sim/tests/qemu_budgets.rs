@@ -1,0 +1,72 @@
+//! The firmware's budgets, measured on the release ELF (`--profile firmware`):
+//! flash <= 64 KiB and static RAM <= 32 KiB (read from the ELF's section headers, the figures
+//! `llvm-size` prints as text + data and data + bss), the painted stack's peaks reported, and the
+//! estimator step <= 5000 instructions (max over a 6000 s stream, counted in QEMU with
+//! `-icount shift=0` and SysTick: 40 instructions per tick).
+
+mod qemu_support;
+
+use qemu_support::*;
+
+const FLASH_BUDGET_BYTES: u64 = 64 * 1024;
+const STATIC_RAM_BUDGET_BYTES: u64 = 32 * 1024;
+const STEP_BUDGET_INSTRUCTIONS: f64 = 5000.0;
+
+/// `(text, data, bss)` as `llvm-size` (Berkeley format) counts them: allocated sections that are
+/// read-only, writable with contents, writable without contents (NOBITS).
+fn berkeley_sizes(elf: &[u8]) -> (u64, u64, u64) {
+    let u16_at = |o: usize| u16::from_le_bytes([elf[o], elf[o + 1]]) as usize;
+    let u32_at = |o: usize| u32::from_le_bytes([elf[o], elf[o + 1], elf[o + 2], elf[o + 3]]) as u64;
+    assert_eq!(&elf[..4], b"\x7fELF");
+    assert_eq!((elf[4], elf[5]), (1, 1), "ELF32 little-endian");
+    let shoff = u32_at(0x20) as usize;
+    let (shentsize, shnum) = (u16_at(0x2E), u16_at(0x30));
+    let (mut text, mut data, mut bss) = (0, 0, 0);
+    for i in 0..shnum {
+        let h = shoff + i * shentsize;
+        let (kind, flags, size) = (u32_at(h + 4), u32_at(h + 8), u32_at(h + 20));
+        const SHF_WRITE: u64 = 1;
+        const SHF_ALLOC: u64 = 2;
+        const SHT_NOBITS: u64 = 8;
+        if flags & SHF_ALLOC == 0 {
+            continue;
+        }
+        match (flags & SHF_WRITE != 0, kind == SHT_NOBITS) {
+            (false, _) => text += size,
+            (true, false) => data += size,
+            (true, true) => bss += size,
+        }
+    }
+    (text, data, bss)
+}
+
+#[test]
+fn flash_and_static_ram_are_within_budget() {
+    let elf = firmware_elf();
+    let (text, data, bss) = berkeley_sizes(&std::fs::read(&elf).unwrap());
+    let (flash, ram) = (text + data, data + bss);
+    println!("{}: text {text} data {data} bss {bss}: flash {flash} bytes, static RAM {ram} bytes", elf.display());
+    assert!(flash <= FLASH_BUDGET_BYTES, "flash {flash} bytes > {FLASH_BUDGET_BYTES}");
+    assert!(ram <= STATIC_RAM_BUDGET_BYTES, "static RAM {ram} bytes > {STATIC_RAM_BUDGET_BYTES}");
+    assert!(bss >= std::mem::size_of::<host_sim::replay::HostEstimator>() as u64, "the estimator's state is static");
+}
+
+#[test]
+fn step_cost_is_within_5000_instructions_and_the_stack_is_measured() {
+    let elf = firmware_elf();
+    let dir = scratch("budgets");
+    let log = dir.join("paper.csv");
+    host_sim(&["generate", "--scenario", "paper", "--duration", "6000", "--out", log.to_str().unwrap()]);
+    let out = host_sim(&["stream", "--qemu", elf.to_str().unwrap(), log.to_str().unwrap(), "--out", dir.join("stream.csv").to_str().unwrap()]);
+    println!("{out}");
+    let stack_line = out.lines().find(|l| l.contains("stack (painted)")).expect("stack line");
+    let numbers: Vec<u64> = stack_line.split_whitespace().filter_map(|w| w.parse().ok()).collect();
+    assert_eq!(numbers.len(), 3, "{stack_line}");
+    let (boot, service, size) = (numbers[0], numbers[1], numbers[2]);
+    assert!(boot > 0 && service > 0 && boot < size && service < size, "painting measured nothing: {stack_line}");
+    let (max, mean) = step_cost(&out);
+    assert!(
+        max <= STEP_BUDGET_INSTRUCTIONS,
+        "estimator step: max {max} instructions (mean {mean}) > {STEP_BUDGET_INSTRUCTIONS}"
+    );
+}
