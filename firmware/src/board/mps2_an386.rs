@@ -1,6 +1,9 @@
 //! ARM MPS2+ AN386 (Cortex-M4F, 25 MHz) as QEMU emulates it (`-machine mps2-an386`).
 //!
-//! - UART0: CMSDK APB UART at 0x4000_4000, 115200 baud from the 25 MHz peripheral clock. Polled.
+//! - UART0: CMSDK APB UART at 0x4000_4000, 115200 baud from the 25 MHz peripheral clock. The core
+//!   sleeps (WFI) until a byte arrives: the RX interrupt (IRQ 0) is enabled in the UART and the NVIC
+//!   but masked by PRIMASK, so it wakes the core without running a handler; no interrupt handler
+//!   exists. Sleeping instead of spinning leaves the host's CPU to QEMU's I/O thread.
 //! - Cost counter: SysTick on the core clock, free-running over 24 bits. On real silicon a tick is a
 //!   core cycle (40 ns). Under QEMU with `-icount shift=0` each instruction takes 1 ns of virtual
 //!   time, so one tick is exactly 40 instructions (shared/notes/toolchain.md section 6).
@@ -28,6 +31,10 @@ const STATE_TX_FULL: u32 = 1 << 0;
 const STATE_RX_FULL: u32 = 1 << 1;
 const CTRL_TX_EN: u32 = 1 << 0;
 const CTRL_RX_EN: u32 = 1 << 1;
+const CTRL_RX_INT_EN: u32 = 1 << 3;
+const INTSTATUS_RX: u32 = 1 << 1;
+/// UART0's receive interrupt on this board (QEMU hw/arm/mps2.c: UART0 RX = IRQ 0).
+const UART0_RX_IRQ: u32 = 0;
 
 /// The board's parts.
 pub struct Board {
@@ -39,35 +46,48 @@ impl Board {
     /// Sets up the UART and the cost counter. Call once.
     pub fn init() -> Option<Board> {
         let peripherals = cortex_m::Peripherals::take()?;
-        Some(Board { uart: Uart::init(), cost: CostCounter::init(peripherals.SYST) })
+        // Interrupts stay masked: a pending UART interrupt only wakes the core from WFI.
+        cortex_m::interrupt::disable();
+        let nvic = peripherals.NVIC;
+        // SAFETY: enabling an interrupt that PRIMASK keeps from being taken.
+        unsafe { nvic.iser[0].write(1 << UART0_RX_IRQ) };
+        Some(Board { uart: Uart::init(nvic), cost: CostCounter::init(peripherals.SYST) })
     }
 }
 
 /// UART0, polled.
 pub struct Uart {
-    _private: (),
+    nvic: cortex_m::peripheral::NVIC,
 }
 
 impl Uart {
-    fn init() -> Uart {
+    fn init(nvic: cortex_m::peripheral::NVIC) -> Uart {
         // SAFETY: UART0's registers, owned by this one `Uart` created once in `Board::init`.
         unsafe {
             reg_write(UART_BAUDDIV, UART_CLOCK_HZ / BAUD);
-            reg_write(UART_CTRL, CTRL_TX_EN | CTRL_RX_EN);
+            reg_write(UART_CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_INT_EN);
             reg_write(UART_INTSTATUS, 0xF);
             // One dummy read: QEMU wakes its chardev only when DATA is read, so without it the first
             // input byte waits about a second (shared/notes/target-costs.md).
             let _ = reg_read(UART_DATA);
         }
-        Uart { _private: () }
+        Uart { nvic }
     }
 
     fn read_byte(&mut self) -> u8 {
-        // SAFETY: see `init`.
-        unsafe {
-            while reg_read(UART_STATE) & STATE_RX_FULL == 0 {}
-            reg_read(UART_DATA) as u8
+        while !self.rx_ready() {
+            // Wakes when UART0's RX interrupt is pending (also if it became pending just before).
+            cortex_m::asm::wfi();
         }
+        // SAFETY: see `init`.
+        let byte = unsafe { reg_read(UART_DATA) as u8 };
+        // Clear the interrupt at the UART, then in the NVIC, so the next WFI sleeps.
+        // SAFETY: see `init`; ICPR only clears a pending bit.
+        unsafe {
+            reg_write(UART_INTSTATUS, INTSTATUS_RX);
+            self.nvic.icpr[0].write(1 << UART0_RX_IRQ);
+        }
+        byte
     }
 
     fn rx_ready(&self) -> bool {
