@@ -87,6 +87,15 @@ impl TuningArgs {
     }
 }
 
+/// Longest log the generator is asked for, s (30 days: 2.6 million rows, about 200 MB of CSV).
+pub const MAX_DURATION_S: f64 = 30.0 * 86_400.0;
+
+/// Checks a `--duration`.
+pub fn check_duration(d: f64) -> anyhow::Result<f64> {
+    anyhow::ensure!(d.is_finite() && (1.0..=MAX_DURATION_S).contains(&d), "--duration must be between 1 and {MAX_DURATION_S} s, got {d}");
+    Ok(d)
+}
+
 /// Parses `N` comma-separated finite numbers (negative numbers allowed).
 pub fn parse_list<const N: usize>(text: &str) -> Result<[f64; N], String> {
     let parts: Vec<&str> = text.split(',').collect();
@@ -128,8 +137,7 @@ impl ScenarioOverrides {
     pub fn params(&self, kind: ScenarioKind, seed: u64) -> anyhow::Result<ScenarioParams> {
         let mut p = ScenarioParams::new(kind, seed);
         if let Some(d) = self.duration {
-            anyhow::ensure!(d.is_finite() && d >= 1.0, "--duration must be at least 1 s, got {d}");
-            p.duration_s = d;
+            p.duration_s = check_duration(d)?;
         }
         if let Some(l) = self.latitude {
             anyhow::ensure!(l.is_finite() && l.abs() < 90.0, "--latitude must be inside (-90, 90), got {l}");

@@ -157,8 +157,7 @@ impl SpreadArgs {
             d.max_roll_deg = Some(m);
         }
         if let Some(t) = self.duration {
-            anyhow::ensure!(t.is_finite() && t >= 1.0, "--duration must be at least 1 s");
-            d.duration_s = Some(t);
+            d.duration_s = Some(host_sim::cli_args::check_duration(t)?);
         }
         let finite = [self.period_error, self.rotation_jitter_deg, self.error_drift_arcsec_per_day, self.lowfreq_rate_error, self.coloured_noise_arcsec];
         anyhow::ensure!(finite.iter().all(|v| v.is_finite()), "mismatch switches must be finite");
