@@ -13,8 +13,10 @@
 //! magic, version, float width, ring capacity, the length in the header, the CRC-32 over
 //! everything before it; then every field: the configuration must pass [`Config::check`], every
 //! float must be finite (and in range where it has one: the previous sample must pass
-//! [`Sample::check`], monitor ratios non-negative), every covariance exactly symmetric and positive
-//! definite (Cholesky), every moving-average window consistent (length equal to the configured
+//! [`Sample::check`], monitor ratios non-negative, Kalman states within [`MAX_STATE`], variances
+//! within [`MAX_VARIANCE`] or four times the prior, residual means within [`MAX_RESIDUAL`], channel
+//! gains 0 or at least one fixed-point count, so that every output of the restored estimator is
+//! finite), every covariance exactly symmetric and positive definite (Cholesky), every moving-average window consistent (length equal to the configured
 //! period, head and fill count in range, every stored value within the fixed-point range and each
 //! running sum equal to the exact sum of the stored samples), flags 0 or 1, unused bytes zero.
 //! The new state is built in a local (`size_of::<Estimator<CAP>>()` bytes of stack, about
@@ -74,6 +76,26 @@ pub const VERSION: u16 = 1;
 pub const HEADER_LEN: usize = 16;
 /// Bytes of the CRC at the end.
 pub const CRC_LEN: usize = 4;
+
+/// Largest magnitude a restored Kalman state may have (rad, or correlation units for the paper's
+/// bias states). Every measurement is a window mean of values clamped to +-2 and the states are
+/// installation errors of arcseconds to degrees, so no running estimator comes near; the bound keeps
+/// a crafted image with a finite but huge state (which would overflow the outputs, or turn
+/// infinite when the paper's `f64` states are narrowed to `f32`) from being accepted. Found by the
+/// `checkpoint_restore` fuzz target.
+pub const MAX_STATE: f64 = 1e3;
+/// Largest magnitude of a restored residual mean of the windowed method: a residual is a window
+/// mean (|m| <= 2) minus `H x` (|H x| <= 4 [`MAX_STATE`]).
+pub const MAX_RESIDUAL: f64 = 1e4;
+/// Largest restored variance, unless the configured prior is larger: `max(1e12, 4 prior^2)`. The
+/// covariance starts at `prior^2` and a measurement update never increases it; only the (tiny)
+/// random walk does.
+pub const MAX_VARIANCE: f64 = 1e12;
+
+fn max_variance(config: &Config) -> f64 {
+    let prior = config.prior_sigma_rad as f64;
+    MAX_VARIANCE.max(4.0 * prior * prior)
+}
 
 const R: usize = core::mem::size_of::<Real>();
 const CONFIG_LEN: usize = 4 + 8 + 9 * R + 4;
@@ -221,6 +243,7 @@ trait Wire: Copy {
     fn put(self, w: &mut Writer<'_>);
     fn get(r: &mut Reader<'_>) -> Self;
     fn finite(self) -> bool;
+    fn to_f64(self) -> f64;
 }
 
 impl Wire for f32 {
@@ -233,6 +256,9 @@ impl Wire for f32 {
     fn finite(self) -> bool {
         self.is_finite()
     }
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
 }
 
 impl Wire for f64 {
@@ -244,6 +270,9 @@ impl Wire for f64 {
     }
     fn finite(self) -> bool {
         self.is_finite()
+    }
+    fn to_f64(self) -> f64 {
+        self
     }
 }
 
@@ -351,13 +380,16 @@ impl Reader<'_> {
             Err(CheckpointError::InvalidValue(part))
         }
     }
+    /// A Kalman filter: states within [`MAX_STATE`], variances within `max_variance`, covariance
+    /// symmetric positive definite.
     fn kalman<T: Wire + RealField, const N: usize>(
         &mut self,
         kf: &mut ConstantStateKalman<T, N>,
+        max_variance: f64,
     ) -> Result<(), CheckpointError> {
         for i in 0..N {
             let v: T = self.real();
-            if !v.finite() {
+            if !(v.finite() && v.to_f64().abs() <= MAX_STATE) {
                 return Err(CheckpointError::InvalidValue(Part::KalmanState));
             }
             kf.x[i] = v;
@@ -365,7 +397,7 @@ impl Reader<'_> {
         for i in 0..N {
             for j in 0..N {
                 let v: T = self.real();
-                if !v.finite() {
+                if !(v.finite() && (i != j || v.to_f64() <= max_variance)) {
                     return Err(CheckpointError::InvalidValue(Part::KalmanCovariance));
                 }
                 kf.p[(i, j)] = v;
@@ -647,13 +679,13 @@ impl<const CAP: usize> Estimator<CAP> {
         let period = config.rotation_period_samples;
         match &mut est.method {
             MethodState::Windowed(m) => {
-                read_windowed(&mut r, m, period)?;
+                read_windowed(&mut r, m, period, max_variance(&config))?;
             }
             MethodState::Paper(m) => {
-                read_paper(&mut r, m, period)?;
+                read_paper(&mut r, m, period, max_variance(&config))?;
             }
             MethodState::Traditional(m) => {
-                read_traditional(&mut r, m)?;
+                read_traditional(&mut r, m, max_variance(&config))?;
             }
         }
         if image.get(r.pos..len - CRC_LEN).is_none_or(|b| b.iter().any(|v| *v != 0)) {
@@ -667,16 +699,25 @@ fn read_windowed<const CAP: usize>(
     r: &mut Reader<'_>,
     m: &mut Windowed<CAP>,
     period: usize,
+    max_variance: f64,
 ) -> Result<(), CheckpointError> {
     m.updates = r.u32();
-    r.kalman(&mut m.kf)?;
+    r.kalman(&mut m.kf, max_variance)?;
     for v in m.residual_mean.iter_mut() {
         *v = r.finite(Part::Residuals)?;
+        if f64::from(v.abs()) > MAX_RESIDUAL {
+            return Err(CheckpointError::InvalidValue(Part::Residuals));
+        }
     }
     m.residual_count = r.u32();
+    // A gain is 0.5 or 0.5 times a window mean of quantized cos L: 0, or at least one count
+    // (2^-30) over at most CAP samples. Anything between 0 and that would blow the widened
+    // 1-sigma (residual / gain) up to infinity.
+    let min_gain = 0.25 / (crate::moving_average::COUNTS_PER_UNIT as f64 * CAP as f64);
     for v in m.gains.iter_mut() {
         *v = r.finite(Part::Residuals)?;
-        if *v < 0.0 {
+        let g = f64::from(*v);
+        if !(g == 0.0 || (min_gain..=1.0).contains(&g)) {
             return Err(CheckpointError::InvalidValue(Part::Residuals));
         }
     }
@@ -687,6 +728,7 @@ fn read_paper<const CAP: usize>(
     r: &mut Reader<'_>,
     m: &mut Paper<CAP>,
     period: usize,
+    max_variance: f64,
 ) -> Result<(), CheckpointError> {
     m.updates = r.u32();
     m.samples = r.u32();
@@ -702,14 +744,14 @@ fn read_paper<const CAP: usize>(
         }
     }
     for kf in m.kf.iter_mut() {
-        r.kalman(kf)?;
+        r.kalman(kf, max_variance)?;
     }
     r.window(&mut m.window, period)
 }
 
-fn read_traditional(r: &mut Reader<'_>, m: &mut Traditional) -> Result<(), CheckpointError> {
+fn read_traditional(r: &mut Reader<'_>, m: &mut Traditional, max_variance: f64) -> Result<(), CheckpointError> {
     m.updates = r.u32();
-    r.kalman(&mut m.kf)
+    r.kalman(&mut m.kf, max_variance)
 }
 
 #[cfg(test)]
@@ -875,6 +917,40 @@ mod tests {
             m.integrals[1] = i64::MAX;
         }
         rejects(&e, CheckpointError::InvalidValue(Part::PaperIntegrals));
+    }
+
+    /// Regression, fuzz target `checkpoint_restore` (crash-daa82956...): an image of a paper-method
+    /// estimator whose first filter's b2 state had its top byte flipped (finite, ~1e300 in f64) was
+    /// accepted; the next update moved x1 beyond f32 range and the output was infinite/NaN.
+    #[test]
+    fn regression_fuzz_huge_finite_states_are_refused() {
+        let mut e = running(Method::Paper);
+        if let MethodState::Paper(m) = &mut e.method {
+            m.kf[0].x[2] = 1e300;
+        }
+        rejects(&e, CheckpointError::InvalidValue(Part::KalmanState));
+        let mut e = running(Method::Paper);
+        if let MethodState::Paper(m) = &mut e.method {
+            m.kf[1].p[(0, 0)] = 1e200;
+        }
+        rejects(&e, CheckpointError::InvalidValue(Part::KalmanCovariance));
+        let base = running(Method::Windowed);
+        let with_windowed = |f: &dyn Fn(&mut Windowed<64>)| {
+            let mut e = base.clone();
+            if let MethodState::Windowed(m) = &mut e.method {
+                f(m);
+            }
+            e
+        };
+        rejects(&with_windowed(&|m| m.kf.x[0] = 1e30), CheckpointError::InvalidValue(Part::KalmanState));
+        rejects(&with_windowed(&|m| m.residual_mean[2] = 1e30), CheckpointError::InvalidValue(Part::Residuals));
+        rejects(&with_windowed(&|m| m.gains[3] = 1e-30), CheckpointError::InvalidValue(Part::Residuals));
+        rejects(&with_windowed(&|m| m.gains[3] = -0.5), CheckpointError::InvalidValue(Part::Residuals));
+        // A zero gain (what a window entirely at |L| = 90 deg - 1 ulp could give in f64) is a state
+        // the running estimator can be in, so it restores.
+        let e = with_windowed(&|m| m.gains[3] = 0.0);
+        let buf = image_of(&e);
+        assert_eq!(Estimator::<64>::from_checkpoint(&buf).map(|b| b == e), Ok(true));
     }
 
     #[test]
