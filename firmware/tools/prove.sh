@@ -32,7 +32,7 @@ section "link-protocol unit tests"
 run cargo test -p link-protocol
 
 section "QEMU tests (faults, 50000 s end to end, budgets)"
-run cargo test -p host-sim --release --test qemu_faults --test qemu_e2e --test qemu_budgets -- --nocapture --test-threads=1
+run cargo test -p host-sim --release --no-fail-fast --test qemu_faults --test qemu_e2e --test qemu_budgets -- --nocapture --test-threads=1
 
 section "exact step instruction count (TCG plugin firmware/tools/stepcount.c)"
 WORK=target/qemu-tests/plugin
@@ -42,7 +42,7 @@ qemu-system-arm --version | grep -q 'version [1-9][0-9]\.' && PLUGIN_API=2
 run gcc -O2 -shared -fPIC -fvisibility=hidden -DPLUGIN_API=$PLUGIN_API -o "$WORK/libstepcount.so" firmware/tools/stepcount.c
 OBJDUMP=$(command -v llvm-objdump || command -v arm-none-eabi-objdump)
 # The call of the timed step in the service loop: count from the `bl` to the instruction after it.
-CALL=$("$OBJDUMP" -d "$ELF" | grep -E 'bl\s.*<firmware::service::step' | head -1 | awk '{print $1}' | tr -d ':')
+CALL=$("$OBJDUMP" -d -C "$ELF" | grep -E 'bl\s.*<firmware::service::step' | head -1 | awk '{print $1}' | tr -d ':')
 if [ -z "$CALL" ]; then
   failed+=("find the call of firmware::service::step")
 else

@@ -213,22 +213,17 @@ mod tests {
         }
         assert_eq!(bytes, expect);
         assert_eq!(bytes.len(), 33);
-        // Whole frame: leading 0x00, 33 + 2 bytes COBS-encoded into at most 36, trailing 0x00.
-        let frame = frame_of(&Request::Sample(m));
-        assert!(frame.len() <= 38);
-        assert_eq!(frame_of(&Request::Reset), reset_frame());
-    }
-
-    fn reset_frame() -> Vec<u8> {
-        let crc = crate::crc::crc16(&[0x01]).to_le_bytes();
-        let mut raw = std::vec![0x01, crc[0], crc[1]];
-        let mut enc = std::vec![0u8; 8];
-        let n = cobs::encode(&raw, &mut enc).unwrap();
-        raw.clear();
-        raw.push(0);
-        raw.extend_from_slice(&enc[..n]);
-        raw.push(0);
-        raw
+        // The examples of firmware/PROTOCOL.md, byte for byte.
+        let sample_frame = [
+            0x00, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xf0, 0x3f, 0x01, 0x01, 0x02, 0x40, 0x01, 0x01, 0x01,
+            0x01, 0x01, 0x01, 0x02, 0x3f, 0x01, 0x03, 0x80, 0xbf, 0x01, 0x03, 0x80, 0x3e, 0x01, 0x01, 0x04, 0x3e, 0x7a,
+            0x62, 0x00,
+        ];
+        assert_eq!(frame_of(&Request::Sample(m)), sample_frame.to_vec());
+        assert_eq!(frame_of(&Request::Reset), [0x00, 0x04, 0x01, 0xd1, 0xf1, 0x00].to_vec());
+        assert_eq!(frame_of(&Request::ReadStatus), [0x00, 0x04, 0x02, 0xb2, 0xc1, 0x00].to_vec());
+        // No sample frame is longer than 38 bytes: 33 + 2 bytes COBS-encoded into at most 36.
+        assert!(frame_of(&Request::Sample(sample())).len() <= 38);
     }
 
     #[test]

@@ -26,7 +26,7 @@ pub fn firmware_elf() -> PathBuf {
             .expect("cannot run cargo to build the firmware");
         assert!(
             status.success(),
-            "building the firmware failed ({status}); it needs `rustup target add thumbv7em-none-eabihf`"
+            "building the firmware failed ({status}): see cargo's output above (a missing target needs `rustup target add thumbv7em-none-eabihf`)"
         );
         let target_dir = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root.join("target"));
         let target_dir = if target_dir.is_absolute() { target_dir } else { root.join(target_dir) };
