@@ -48,13 +48,14 @@ pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interva
     (before, after)
 }
 
-/// Fig. 3: for the true roll, the oscillatory roll and the rest (low-frequency errors + noise), the
+/// Fig. 3: for the roll as logged, and split with the truth into the true roll, the oscillatory
+/// roll and the rest (low-frequency errors + noise), the
 /// cumulative correlation with sin(rho) of eq (8) and its moving average over one rotation period
 /// (`window` samples) of eq (11), arcsec. Uses the core's correlation products.
 pub fn correlation_panels(rows: &[Row], truth: &[RowTruth], window: usize) -> Vec<CorrelationPanel> {
-    let names = ["true roll", "oscillatory roll (installation errors)", "low-frequency errors + noise"];
-    let mut sums = [0.0f64; 3];
-    let mut corr: [Vec<(f64, f64)>; 3] = Default::default();
+    let names = ["roll as logged (sum of the three below)", "true roll", "oscillatory roll (installation errors)", "low-frequency errors + noise"];
+    let mut sums = [0.0f64; 4];
+    let mut corr: [Curve; 4] = Default::default();
     for (n, (row, tr)) in rows.iter().zip(truth).enumerate() {
         let rad = |deg: f64| (deg * RAD_PER_DEG) as Real;
         let lat = row.latitude_deg * RAD_PER_DEG;
@@ -66,7 +67,7 @@ pub fn correlation_panels(rows: &[Row], truth: &[RowTruth], window: usize) -> Ve
         let true_roll = tr.true_attitude_deg[1];
         let osc_roll = tr.oscillation_deg[1];
         let rest_roll = row.roll_deg - true_roll - osc_roll;
-        for (c, roll_deg) in [true_roll, osc_roll, rest_roll].into_iter().enumerate() {
+        for (c, roll_deg) in [row.roll_deg, true_roll, osc_roll, rest_roll].into_iter().enumerate() {
             let p = products(&Attitude { heading_rad: 0.0, roll_rad: rad(roll_deg), pitch_rad: 0.0 }, &angles)[ROLL_SIN];
             sums[c] += p as f64;
             corr[c].push((row.time_s, rad_to_arcsec(sums[c] / (n + 1) as f64)));

@@ -162,7 +162,7 @@ pub fn percent_error_figure(path: &Path, title: &str, curves: &[Vec<(f64, f64)>;
     draw_png(path, &[panel], 1000, 600)
 }
 
-/// Fig. 3: three panels (true roll, oscillatory roll, low-frequency errors + noise), each with
+/// Fig. 3: one panel per roll component, each with
 /// the correlation value of eq (8) (blue) and its average of eq (11) (red); `target_arcsec` is
 /// x3 cos L / 2 drawn on the oscillatory panel.
 pub fn correlation_figure(path: &Path, panels: &[CorrelationPanel], target_arcsec: f64) -> Result<()> {
@@ -174,7 +174,7 @@ pub fn correlation_figure(path: &Path, panels: &[CorrelationPanel], target_arcse
                 Series { label: "correlation value (eq 8)".into(), color: BLUE_LINE, points: decimate(corr.clone(), 6000) },
                 Series { label: "average (eq 11)".into(), color: RED_LINE, points: decimate(avg.clone(), 6000) },
             ];
-            if name.starts_with("oscillatory") {
+            if name.starts_with("oscillatory") || name.starts_with("roll as logged") {
                 let (x0, x1) = (corr.first().map_or(0.0, |p| p.0), corr.last().map_or(1.0, |p| p.0));
                 series.push(Series { label: "x3 cos L / 2".into(), color: BLACK, points: vec![(x0, target_arcsec), (x1, target_arcsec)] });
             }
