@@ -316,12 +316,9 @@ fn extremes_in_every_field_while_estimating() {
 /// The largest accepted latitude (one ulp below 90 deg) for many whole windows: cos L is then
 /// ~1e-7 (f32) or ~1e-16 (f64), below one fixed-point count of the window in f64. Every output
 /// must stay finite: x3, x4 are simply unobservable there.
-///
-/// KNOWN FAILURE with the `f64` feature (reported to the core's owner): the window mean of cos L
-/// quantizes to 0, the windowed method's residual check divides by that zero gain and reports an
-/// infinite 1-sigma for x3, x4 (`methods/windowed.rs`, `consistency`). Un-ignore once fixed.
+/// (In f64 the window mean of cos L is then 0 in fixed point: this test found the residual check
+/// dividing by that zero gain; it now caps its widening at the prior 1-sigma.)
 #[test]
-#[cfg_attr(feature = "f64", ignore = "known: infinite x3/x4 1-sigma at one ulp below 90 deg in f64 (zero channel gain)")]
 fn latitude_one_ulp_below_the_pole_keeps_outputs_finite() {
     let pole = (PI / 2.0) as Real;
     // The check rejects |L| >= pi/2 rounded to Real: one ulp below is the largest accepted.

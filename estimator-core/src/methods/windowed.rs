@@ -136,8 +136,17 @@ impl<const CAP: usize> Windowed<CAP> {
         let mut out = Consistency { model_sigma_rad: [0.0; 4], mismatch: false };
         for ch in 0..4 {
             let excess = (self.residual_mean[ch].abs() - 2.0 * s_e).max(0.0);
-            // A gain of zero (latitude 90 deg is rejected, so only in theory) maps to an infinite sigma.
-            out.model_sigma_rad[ch] = if self.gains[ch] > 0.0 { excess / self.gains[ch] } else { Real::INFINITY };
+            // A bias b on a channel of gain g means an error of about b/g, but never more than the
+            // prior says we could not know anyway: within 1e-9 rad of the pole the window mean of
+            // cos L is 0 in fixed point, and x3, x4 are unobservable (their filter 1-sigma stays at
+            // the prior).
+            out.model_sigma_rad[ch] = if excess <= 0.0 {
+                0.0
+            } else if self.gains[ch] > 0.0 {
+                (excess / self.gains[ch]).min(config.prior_sigma_rad)
+            } else {
+                config.prior_sigma_rad
+            };
             out.mismatch |= self.residual_mean[ch].abs() > 4.0 * s_e;
         }
         // Flag only with a full horizon of residuals: the first windows carry sway residuals of
