@@ -1,0 +1,32 @@
+//! host-sim's CSV log reader on arbitrary bytes; every row it accepts goes through the core.
+//! Checks: no panic, the reader stops after its first error, finite core output.
+#![no_main]
+
+#[path = "common/mod.rs"]
+mod common;
+
+use common::{assert_finite, CAP};
+use estimator_core::{Config, Estimator, Sample};
+use host_sim::log_csv::LogReader;
+use libfuzzer_sys::fuzz_target;
+use std::path::Path;
+
+fuzz_target!(|data: &[u8]| {
+    let mut est = Estimator::<CAP>::new(Config { rotation_period_samples: 16, ..Config::default() }).expect("config");
+    let reader = LogReader::new(Path::new("fuzz.csv"), std::io::Cursor::new(data));
+    let mut errors = 0;
+    for line in reader.take(10_000) {
+        match line {
+            Ok(l) => {
+                assert_eq!(errors, 0, "a row after an error");
+                let r = l.row;
+                let s = Sample::from_degrees(r.time_s, r.rotation_deg, r.platform_deg, r.latitude_deg, r.heading_deg, r.roll_deg, r.pitch_deg);
+                if let Ok(out) = est.step(&s) {
+                    assert_finite(&out);
+                }
+            }
+            Err(_) => errors += 1,
+        }
+    }
+    assert!(errors <= 1, "the reader went on after an error");
+});
