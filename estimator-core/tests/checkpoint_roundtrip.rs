@@ -138,8 +138,13 @@ fn method(i: u8) -> Method {
     Method::from_code(i % 3).unwrap()
 }
 
+/// Cases per property: `n`, or `PROPTEST_CASES` from the environment for longer runs.
+fn cases(n: u32) -> u32 {
+    std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(n)
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(96), ..ProptestConfig::default() })]
 
     /// Short rotation period (48 samples), 1200-sample scenario: every kind of state is visited
     /// many times, so random cuts land in all of them.
@@ -152,7 +157,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(24), ..ProptestConfig::default() })]
 
     /// The default configuration (480-sample window, CAP 480), 2400 samples: five windows.
     #[test]
@@ -179,7 +184,7 @@ fn sources() -> &'static [(Estimator<480>, Vec<u8>); 3] {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 1024, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(1024), ..ProptestConfig::default() })]
 
     /// Any single-bit flip anywhere in the image is refused (CRC-32 detects every single-bit
     /// error; a flip in the header fields checked first gives their error instead) and the

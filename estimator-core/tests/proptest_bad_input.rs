@@ -251,8 +251,13 @@ fn config(method: u8, bridged: u32) -> Config {
     }
 }
 
+/// Cases per property: `n`, or `PROPTEST_CASES` from the environment for longer runs.
+fn cases(n: u32) -> u32 {
+    std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(n)
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: cases(256), ..ProptestConfig::default() })]
 
     #[test]
     fn arbitrary_sequences_never_panic_are_finite_and_counted(
