@@ -11,7 +11,8 @@
 //! # Validation
 //! Restore checks, in this order, and returns the first failure as a [`CheckpointError`]:
 //! magic, version, float width, ring capacity, the length in the header, the CRC-32 over
-//! everything before it; then every field: the configuration must pass [`Config::check`], every
+//! everything before it; then every field: the configuration must pass [`Config::check`] and
+//! [`numerically_safe`] (squares of its sigmas and random walks finite and positive), every
 //! float must be finite (and in range where it has one: the previous sample must pass
 //! [`Sample::check`], monitor ratios non-negative, Kalman states within [`MAX_STATE`], variances
 //! within [`MAX_VARIANCE`] or four times the prior, residual means within [`MAX_RESIDUAL`], channel
@@ -64,7 +65,7 @@ use crate::methods::windowed::CHANNELS;
 use crate::methods::{MethodState, Paper, Traditional, Windowed};
 use crate::moving_average::{WindowAverage, MAX_MAGNITUDE};
 use crate::sample::{Attitude, Sample};
-use crate::trig::sin_cos;
+use crate::math::sin_cos;
 use crate::Real;
 use nalgebra::RealField;
 
@@ -91,6 +92,26 @@ pub const MAX_RESIDUAL: f64 = 1e4;
 /// covariance starts at `prior^2` and a measurement update never increases it; only the (tiny)
 /// random walk does.
 pub const MAX_VARIANCE: f64 = 1e12;
+
+/// What [`Config::check`] does not (yet) require but the step needs for finite output: every
+/// sigma squared finite and positive, every random-walk variance per step finite. A configuration
+/// failing this makes even a fresh estimator's 1-sigma infinite (a restore of it is refused).
+/// Found by the `checkpoint_restore` fuzz target (a flipped exponent in
+/// `traditional_drift_rad_per_sqrt_s`).
+pub fn numerically_safe(config: &Config) -> bool {
+    let dt = config.sample_interval_s as Real;
+    let sigmas = [
+        config.prior_sigma_rad,
+        config.measurement_sigma_rad,
+        config.traditional_sigma_rad,
+        config.converged_sigma_rad,
+    ];
+    let drifts = [config.drift_rad_per_sqrt_s, config.traditional_drift_rad_per_sqrt_s];
+    sigmas.iter().all(|s| {
+        let v = s * s;
+        v.is_finite() && v > 0.0
+    }) && drifts.iter().all(|d| (d * d * dt).is_finite())
+}
 
 fn max_variance(config: &Config) -> f64 {
     let prior = config.prior_sigma_rad as f64;
@@ -629,6 +650,9 @@ impl<const CAP: usize> Estimator<CAP> {
             max_bridged_gap_samples: r.u32(),
         };
         let mut est = Estimator::<CAP>::new(config).map_err(CheckpointError::InvalidConfig)?;
+        if !numerically_safe(&config) {
+            return Err(CheckpointError::InvalidConfig(ConfigError::Parameter));
+        }
 
         est.previous = match r.u8() {
             0 => {
@@ -783,14 +807,14 @@ mod tests {
         let rho = 2.0 * core::f64::consts::PI * t / 48.0;
         let x = [200.0, -150.0, 300.0, -250.0].map(|a| arcsec_to_rad(a) as Real);
         let angles = crate::installation::Angles::new(
-            crate::trig::wrap_pi(rho as Real),
+            crate::math::wrap_pi(rho as Real),
             0.5,
             sin_cos((40.0 * RAD_PER_DEG) as Real),
         );
         let d = angles.oscillation(&x);
         Sample {
             time_s: t,
-            rotation_rad: crate::trig::wrap_pi(rho as Real),
+            rotation_rad: crate::math::wrap_pi(rho as Real),
             platform_rad: 0.5,
             latitude_rad: (40.0 * RAD_PER_DEG) as Real,
             attitude: Attitude {
@@ -883,6 +907,14 @@ mod tests {
 
         let mut e = base.clone();
         e.config.measurement_sigma_rad = -1.0;
+        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter));
+        // Regression, fuzz target `checkpoint_restore` (crash-76b5517c...): a flipped exponent made
+        // the traditional random walk 1e26 rad/sqrt(s), whose square is infinite in f32.
+        let mut e = base.clone();
+        e.config.traditional_drift_rad_per_sqrt_s = 2.0 * Real::MAX.sqrt();
+        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter));
+        let mut e = base.clone();
+        e.config.measurement_sigma_rad = (if R == 4 { 1e-30 } else { 1e-200 }) as Real;
         rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter));
         let mut e = base.clone();
         e.config.rotation_period_samples = 65;
