@@ -14,7 +14,11 @@ pub struct Link<U> {
 
 impl<U: Read + Write> Link<U> {
     pub fn new(port: U) -> Self {
-        Link { port, rx: FrameAccumulator::new(), tx: [0; MAX_FRAME] }
+        Link {
+            port,
+            rx: FrameAccumulator::new(),
+            tx: [0; MAX_FRAME],
+        }
     }
 
     /// Blocks until a frame has ended; returns its request or why it was dropped. A read error of

@@ -17,8 +17,8 @@ mod link;
 mod service;
 mod stack;
 
-use cortex_m_rt::entry;
 use core::mem::MaybeUninit;
+use cortex_m_rt::entry;
 use estimator_core::{Config, ConfigError, Estimator};
 use link_protocol::FrameError;
 
@@ -26,7 +26,9 @@ use link_protocol::FrameError;
 /// state by value and the copy into the slot needs a temporary, which should not stay in `main`'s
 /// frame for ever.
 #[inline(never)]
-fn init_estimator(slot: &'static mut MaybeUninit<Result<Estimator, ConfigError>>) -> &'static mut Result<Estimator, ConfigError> {
+fn init_estimator(
+    slot: &'static mut MaybeUninit<Result<Estimator, ConfigError>>,
+) -> &'static mut Result<Estimator, ConfigError> {
     slot.write(Estimator::new(Config::default()))
 }
 

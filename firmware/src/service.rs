@@ -3,8 +3,7 @@
 
 use estimator_core::{Estimator, Output, Sample, SampleError};
 use link_protocol::{
-    Counters, EstimateMsg, FrameError, RejectedReply, Request, Response, StatusReply, StepReply,
-    PROTOCOL_VERSION,
+    Counters, EstimateMsg, FrameError, RejectedReply, Request, Response, StatusReply, StepReply, PROTOCOL_VERSION,
 };
 
 use crate::board::CostCounter;
@@ -20,7 +19,12 @@ pub struct Service<'a> {
 
 impl<'a> Service<'a> {
     pub fn new(estimator: &'a mut Estimator, cost: CostCounter, boot_stack_peak_bytes: u32) -> Self {
-        Service { estimator, cost, bad_frames: Counters::default(), boot_stack_peak_bytes }
+        Service {
+            estimator,
+            cost,
+            bad_frames: Counters::default(),
+            boot_stack_peak_bytes,
+        }
     }
 
     /// Counts a frame the link dropped.
@@ -50,7 +54,10 @@ impl<'a> Service<'a> {
     }
 
     fn counters(&self) -> Counters {
-        Counters { bad_frames: self.bad_frames.bad_frames, rejected_samples: self.estimator.rejected().0 }
+        Counters {
+            bad_frames: self.bad_frames.bad_frames,
+            rejected_samples: self.estimator.rejected().0,
+        }
     }
 
     fn status(&self) -> StatusReply {

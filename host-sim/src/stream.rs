@@ -32,7 +32,12 @@ use std::time::{Duration, Instant};
 pub struct StreamArgs {
     /// Boot this firmware ELF in QEMU (mps2-an386, `qemu-system-arm` or $QEMU_SYSTEM_ARM) and
     /// stream through its UART0.
-    #[arg(long, value_name = "FIRMWARE.elf", required_unless_present = "port", conflicts_with = "port")]
+    #[arg(
+        long,
+        value_name = "FIRMWARE.elf",
+        required_unless_present = "port",
+        conflicts_with = "port"
+    )]
     pub qemu: Option<PathBuf>,
     /// Attitude log (CSV, see shared/log-format.md).
     #[arg(value_name = "FILE.csv")]
@@ -69,7 +74,10 @@ impl Target {
         let (qemu, stream) = Qemu::boot(elf, defmt_log)?;
         stream.set_read_timeout(Some(timeout))?;
         let link = FirmwareLink::new(Box::new(stream));
-        Target::hello(link, Some(qemu), |hz| CostUnit::QemuInstructions { icount_shift: qemu::ICOUNT_SHIFT, counter_hz: hz })
+        Target::hello(link, Some(qemu), |hz| CostUnit::QemuInstructions {
+            icount_shift: qemu::ICOUNT_SHIFT,
+            counter_hz: hz,
+        })
     }
 
     /// Opens a board's serial port and checks that the firmware answers.
@@ -89,14 +97,24 @@ impl Target {
             Err(e) => return Err(e.context(describe_exit(&mut qemu))),
         };
         if status.protocol_version != PROTOCOL_VERSION {
-            bail!("firmware speaks protocol {}, host-sim speaks {PROTOCOL_VERSION}", status.protocol_version);
+            bail!(
+                "firmware speaks protocol {}, host-sim speaks {PROTOCOL_VERSION}",
+                status.protocol_version
+            );
         }
-        Ok(Target { link, qemu, unit: unit(status.cost_counter_hz), boot_status: status })
+        Ok(Target {
+            link,
+            qemu,
+            unit: unit(status.cost_counter_hz),
+            boot_status: status,
+        })
     }
 
     /// One request, one response (with QEMU's exit status in the error if it died).
     pub fn request(&mut self, request: &Request) -> anyhow::Result<Response> {
-        self.link.request(request).map_err(|e| e.context(describe_exit(&mut self.qemu)))
+        self.link
+            .request(request)
+            .map_err(|e| e.context(describe_exit(&mut self.qemu)))
     }
 
     /// `ReadStatus`.
@@ -111,7 +129,10 @@ impl Target {
 fn describe_exit(qemu: &mut Option<Qemu>) -> String {
     match qemu {
         Some(q) => match q.exited() {
-            Some(status) => format!("QEMU exited ({status}; 1 = firmware panic or fault, see --defmt-log); {}", q.stderr_tail()),
+            Some(status) => format!(
+                "QEMU exited ({status}; 1 = firmware panic or fault, see --defmt-log); {}",
+                q.stderr_tail()
+            ),
             None => "QEMU is still running".to_string(),
         },
         None => "on the serial port".to_string(),
@@ -133,15 +154,27 @@ pub fn step_remote(target: &mut Target, msg: &SampleMsg) -> anyhow::Result<Answe
             if r.time_s.to_bits() != msg.time_s.to_bits() {
                 bail!("answer for time {} to the sample of time {}", r.time_s, msg.time_s);
             }
-            let output = r.output().with_context(|| format!("unknown status code {}", r.status))?;
-            Ok(Answer { result: Ok(output), step_cost_ticks: r.step_cost_ticks, counters: r.counters })
+            let output = r
+                .output()
+                .with_context(|| format!("unknown status code {}", r.status))?;
+            Ok(Answer {
+                result: Ok(output),
+                step_cost_ticks: r.step_cost_ticks,
+                counters: r.counters,
+            })
         }
         Response::Rejected(r) => {
             if r.time_s.to_bits() != msg.time_s.to_bits() {
                 bail!("rejection of time {} for the sample of time {}", r.time_s, msg.time_s);
             }
-            let error = r.error().with_context(|| format!("unknown rejection reason {}/{}", r.reason, r.field))?;
-            Ok(Answer { result: Err(error), step_cost_ticks: r.step_cost_ticks, counters: r.counters })
+            let error = r
+                .error()
+                .with_context(|| format!("unknown rejection reason {}/{}", r.reason, r.field))?;
+            Ok(Answer {
+                result: Err(error),
+                step_cost_ticks: r.step_cost_ticks,
+                counters: r.counters,
+            })
         }
         Response::Status(_) => bail!("the firmware answered a sample with a status"),
     }
@@ -157,7 +190,11 @@ pub struct StreamSummary {
 }
 
 /// Streams log lines through the target, writing one estimates row per line.
-pub fn stream_lines<I, W>(target: &mut Target, lines: I, writer: &mut EstimatesWriter<W>) -> anyhow::Result<StreamSummary>
+pub fn stream_lines<I, W>(
+    target: &mut Target,
+    lines: I,
+    writer: &mut EstimatesWriter<W>,
+) -> anyhow::Result<StreamSummary>
 where
     I: IntoIterator<Item = Result<LogLine, LogError>>,
     W: Write,
@@ -168,13 +205,19 @@ where
     for line in lines {
         let line = line?;
         let sample = sample_of(&line.row);
-        let answer = step_remote(target, &SampleMsg::from(&sample)).with_context(|| format!("log line {}", line.line))?;
+        let answer =
+            step_remote(target, &SampleMsg::from(&sample)).with_context(|| format!("log line {}", line.line))?;
         cost.add(answer.step_cost_ticks);
         writer.write_step(line.row.time_s, &answer.result)?;
         rows += 1;
     }
     let final_status = target.status()?;
-    Ok(StreamSummary { rows, cost, final_status, wall: start.elapsed() })
+    Ok(StreamSummary {
+        rows,
+        cost,
+        final_status,
+        wall: start.elapsed(),
+    })
 }
 
 /// `host-sim stream`.
@@ -183,14 +226,23 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let out = args.out.clone().unwrap_or_else(|| default_estimates_path(&args.log));
     let lines = LogReader::open(&args.log)?;
     let (mut target, what) = match (&args.qemu, &args.port) {
-        (Some(elf), _) => (Target::boot_qemu(elf, args.defmt_log.as_deref(), timeout)?, format!("QEMU mps2-an386 ({})", elf.display())),
-        (None, Some(device)) => (Target::open_port(device, args.baud, timeout)?, format!("{device} at {} baud", args.baud)),
+        (Some(elf), _) => (
+            Target::boot_qemu(elf, args.defmt_log.as_deref(), timeout)?,
+            format!("QEMU mps2-an386 ({})", elf.display()),
+        ),
+        (None, Some(device)) => (
+            Target::open_port(device, args.baud, timeout)?,
+            format!("{device} at {} baud", args.baud),
+        ),
         (None, None) => bail!("give --qemu FIRMWARE.elf or --port DEVICE"),
     };
     let file = File::create(&out).map_err(|e| LogError::new(&out, 0, format!("cannot create: {e}")))?;
-    let mut writer = EstimatesWriter::new(BufWriter::new(file)).with_context(|| format!("{}:0: cannot write", out.display()))?;
+    let mut writer =
+        EstimatesWriter::new(BufWriter::new(file)).with_context(|| format!("{}:0: cannot write", out.display()))?;
     let summary = stream_lines(&mut target, lines, &mut writer)?;
-    writer.finish().with_context(|| format!("{}:0: cannot write", out.display()))?;
+    writer
+        .finish()
+        .with_context(|| format!("{}:0: cannot write", out.display()))?;
     drop(target.qemu.take());
     print_summary(&args.log, &out, &what, &summary, &target);
     Ok(())
@@ -206,12 +258,26 @@ fn print_summary(log: &Path, out: &Path, what: &str, s: &StreamSummary, target: 
         s.rows as f64 / s.wall.as_secs_f64().max(1e-9),
         out.display()
     );
-    println!("  firmware: {} accepted, {} bridged, {} window restarts", st.accepted, st.bridged, st.window_restarts);
-    let frames: Vec<String> = (0..FrameError::COUNT).map(|i| format!("{} {}", FrameError::name(i), st.counters.bad_frames[i])).collect();
-    println!("  bad frames: {} ({})", st.counters.bad_frames_total(), frames.join(", "));
-    let samples: Vec<String> =
-        (0..SampleError::COUNT).map(|i| format!("{} {}", SampleError::reason_name(i), st.counters.rejected_samples[i])).collect();
-    println!("  rejected samples: {} ({})", st.counters.rejected_samples_total(), samples.join(", "));
+    println!(
+        "  firmware: {} accepted, {} bridged, {} window restarts",
+        st.accepted, st.bridged, st.window_restarts
+    );
+    let frames: Vec<String> = (0..FrameError::COUNT)
+        .map(|i| format!("{} {}", FrameError::name(i), st.counters.bad_frames[i]))
+        .collect();
+    println!(
+        "  bad frames: {} ({})",
+        st.counters.bad_frames_total(),
+        frames.join(", ")
+    );
+    let samples: Vec<String> = (0..SampleError::COUNT)
+        .map(|i| format!("{} {}", SampleError::reason_name(i), st.counters.rejected_samples[i]))
+        .collect();
+    println!(
+        "  rejected samples: {} ({})",
+        st.counters.rejected_samples_total(),
+        samples.join(", ")
+    );
     println!(
         "  stack (painted): start-up peak {} bytes, service loop peak {} bytes, of {} bytes",
         st.boot_stack_peak_bytes, st.stack_peak_bytes, st.stack_size_bytes

@@ -45,10 +45,22 @@ fn flash_and_static_ram_are_within_budget() {
     let elf = firmware_elf();
     let (text, data, bss) = berkeley_sizes(&std::fs::read(&elf).unwrap());
     let (flash, ram) = (text + data, data + bss);
-    println!("{}: text {text} data {data} bss {bss}: flash {flash} bytes, static RAM {ram} bytes", elf.display());
-    assert!(flash <= FLASH_BUDGET_BYTES, "flash {flash} bytes > {FLASH_BUDGET_BYTES}");
-    assert!(ram <= STATIC_RAM_BUDGET_BYTES, "static RAM {ram} bytes > {STATIC_RAM_BUDGET_BYTES}");
-    assert!(bss >= std::mem::size_of::<host_sim::replay::HostEstimator>() as u64, "the estimator's state is static");
+    println!(
+        "{}: text {text} data {data} bss {bss}: flash {flash} bytes, static RAM {ram} bytes",
+        elf.display()
+    );
+    assert!(
+        flash <= FLASH_BUDGET_BYTES,
+        "flash {flash} bytes > {FLASH_BUDGET_BYTES}"
+    );
+    assert!(
+        ram <= STATIC_RAM_BUDGET_BYTES,
+        "static RAM {ram} bytes > {STATIC_RAM_BUDGET_BYTES}"
+    );
+    assert!(
+        bss >= std::mem::size_of::<host_sim::replay::HostEstimator>() as u64,
+        "the estimator's state is static"
+    );
 }
 
 #[test]
@@ -56,14 +68,32 @@ fn step_cost_is_within_5000_instructions_and_the_stack_is_measured() {
     let elf = firmware_elf();
     let dir = scratch("budgets");
     let log = dir.join("paper.csv");
-    host_sim(&["generate", "--scenario", "paper", "--duration", "6000", "--out", log.to_str().unwrap()]);
-    let out = host_sim(&["stream", "--qemu", elf.to_str().unwrap(), log.to_str().unwrap(), "--out", dir.join("stream.csv").to_str().unwrap()]);
+    host_sim(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        "6000",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    let out = host_sim(&[
+        "stream",
+        "--qemu",
+        elf.to_str().unwrap(),
+        log.to_str().unwrap(),
+        "--out",
+        dir.join("stream.csv").to_str().unwrap(),
+    ]);
     println!("{out}");
     let stack_line = out.lines().find(|l| l.contains("stack (painted)")).expect("stack line");
     let numbers: Vec<u64> = stack_line.split_whitespace().filter_map(|w| w.parse().ok()).collect();
     assert_eq!(numbers.len(), 3, "{stack_line}");
     let (boot, service, size) = (numbers[0], numbers[1], numbers[2]);
-    assert!(boot > 0 && service > 0 && boot < size && service < size, "painting measured nothing: {stack_line}");
+    assert!(
+        boot > 0 && service > 0 && boot < size && service < size,
+        "painting measured nothing: {stack_line}"
+    );
     let (max, mean) = step_cost(&out);
     assert!(
         max <= STEP_BUDGET_INSTRUCTIONS,

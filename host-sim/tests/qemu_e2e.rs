@@ -18,26 +18,45 @@ fn stream_of_50000_s_through_qemu_is_byte_identical_to_estimate_and_within_10_ar
     host_sim(&["generate", "--scenario", "paper", "--duration", "50000", "--out", log_s]);
     host_sim(&["estimate", log_s, "--out", est_s.to_str().unwrap()]);
     let start = Instant::now();
-    let out = host_sim(&["stream", "--qemu", elf.to_str().unwrap(), log_s, "--out", stream_s.to_str().unwrap()]);
+    let out = host_sim(&[
+        "stream",
+        "--qemu",
+        elf.to_str().unwrap(),
+        log_s,
+        "--out",
+        stream_s.to_str().unwrap(),
+    ]);
     let wall = start.elapsed();
     println!("{out}e2e wall time {:.1} s", wall.as_secs_f64());
 
     let expected = std::fs::read(&est_s).unwrap();
     let streamed = std::fs::read(&stream_s).unwrap();
-    assert_eq!(expected.iter().filter(|b| **b == b'\n').count(), 50_001, "header + one row per second");
+    assert_eq!(
+        expected.iter().filter(|b| **b == b'\n').count(),
+        50_001,
+        "header + one row per second"
+    );
     if let Some(i) = (0..expected.len().min(streamed.len())).find(|&i| expected[i] != streamed[i]) {
         let line = expected[..i].iter().filter(|b| **b == b'\n').count() + 1;
         panic!("stream and estimate differ first at line {line}");
     }
     assert_eq!(expected.len(), streamed.len(), "stream and estimate differ in length");
 
-    let truth = read_truth(&truth_path(&log)).unwrap().expect("generate writes the truth");
+    let truth = read_truth(&truth_path(&log))
+        .unwrap()
+        .expect("generate writes the truth");
     let rows = read_estimates(&stream_s).unwrap();
     let last = rows.last().unwrap();
     let x = last.x_arcsec.expect("an estimate at the end of the run");
     for i in 0..4 {
         let err = (x[i] - truth.x_arcsec[i]).abs();
-        assert!(err < 10.0, "x{} = {} arcsec, truth {} arcsec: off by {err}", i + 1, x[i], truth.x_arcsec[i]);
+        assert!(
+            err < 10.0,
+            "x{} = {} arcsec, truth {} arcsec: off by {err}",
+            i + 1,
+            x[i],
+            truth.x_arcsec[i]
+        );
     }
     let (max, mean) = step_cost(&out);
     assert!(max >= mean && mean > 0.0, "step cost must be measured: {max} {mean}");

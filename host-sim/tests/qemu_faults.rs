@@ -11,7 +11,9 @@ use host_sim::log_csv::read_log;
 use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::frame::MAX_FRAME;
-use link_protocol::{cobs, crc, encode_frame, FrameAccumulator, FrameError, Request, Response, SampleMsg, MAX_REQUEST_ENCODED};
+use link_protocol::{
+    cobs, crc, encode_frame, FrameAccumulator, FrameError, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
+};
 use qemu_support::*;
 use std::time::Duration;
 
@@ -94,7 +96,15 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
     let elf = firmware_elf();
     let dir = scratch("faults");
     let log = dir.join("paper.csv");
-    host_sim(&["generate", "--scenario", "paper", "--duration", "2400", "--out", log.to_str().unwrap()]);
+    host_sim(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        "2400",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
     let lines = read_log(&log).unwrap();
 
     // The clean answers, from the host's own estimator.
@@ -145,7 +155,10 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
                 Fault::UnknownMessage => frame_of_unknown_message(),
                 // Valid COBS of one byte: no room for a message and its CRC.
                 Fault::Runt => vec![0x00, 0x02, 0x55, 0x00],
-                Fault::NanSample => frame(&Request::Sample(SampleMsg { roll_rad: f32::NAN, ..msg })),
+                Fault::NanSample => frame(&Request::Sample(SampleMsg {
+                    roll_rad: f32::NAN,
+                    ..msg
+                })),
                 Fault::DuplicateTime => frame(&Request::Sample(previous.expect("not the first row"))),
             };
             // Faults without a closing 0x00 are closed by the next frame's leading 0x00.
@@ -159,7 +172,11 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
                         Response::Rejected(r) => r.error(),
                         other => panic!("{fault:?} answered with {other:?}"),
                     };
-                    let want = if fault == Fault::NanSample { SampleError::NonFinite(Field::Roll) } else { SampleError::TimeNotIncreasing };
+                    let want = if fault == Fault::NanSample {
+                        SampleError::NonFinite(Field::Roll)
+                    } else {
+                        SampleError::TimeNotIncreasing
+                    };
                     assert_eq!(answer, Some(want), "row {i}");
                 }
                 Fault::Garbage | Fault::Truncated | Fault::Oversize => {
@@ -170,18 +187,33 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
         }
         let f = frame(&Request::Sample(msg));
         let (bad, good) = shadow_feed(&f, &mut predicted);
-        assert_eq!((bad, good), (pending_closing_zero as u32, 1), "row {i}: the valid frame closes a pending fault and decodes");
+        assert_eq!(
+            (bad, good),
+            (pending_closing_zero as u32, 1),
+            "row {i}: the valid frame closes a pending fault and decodes"
+        );
         pending_closing_zero = false;
         // step_remote sends exactly these bytes (`f`), as the stream command does.
         let answer = step_remote(&mut target, &msg).unwrap_or_else(|e| panic!("row {i}: {e:#}"));
-        assert_eq!(key(&answer.result), expected[i], "row {i}: answer differs from the clean stream's");
+        assert_eq!(
+            key(&answer.result),
+            expected[i],
+            "row {i}: answer differs from the clean stream's"
+        );
         previous = Some(msg);
     }
     let status = target.status().unwrap();
     println!("injected {injected:?}; firmware counters {:?}", status.counters);
-    assert_eq!(status.counters.bad_frames, predicted, "bad frames by kind (oversize, cobs, too_short, crc, message)");
+    assert_eq!(
+        status.counters.bad_frames, predicted,
+        "bad frames by kind (oversize, cobs, too_short, crc, message)"
+    );
     let frame_faults: u32 = injected[..6].iter().sum();
-    assert_eq!(status.counters.bad_frames_total(), frame_faults, "one bad frame per injected frame fault");
+    assert_eq!(
+        status.counters.bad_frames_total(),
+        frame_faults,
+        "one bad frame per injected frame fault"
+    );
     for (kind, n) in predicted.iter().enumerate() {
         assert!(*n > 0, "no {} fault exercised", FrameError::name(kind));
     }
@@ -191,13 +223,18 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
     assert_eq!(bad[FrameError::Message.index()], injected[4]);
     assert!(bad[FrameError::TooShort.index()] >= injected[5]);
     let rejected = status.counters.rejected_samples;
-    assert_eq!(rejected[SampleError::NonFinite(Field::Roll).reason_index()], injected[6]);
+    assert_eq!(
+        rejected[SampleError::NonFinite(Field::Roll).reason_index()],
+        injected[6]
+    );
     assert_eq!(rejected[SampleError::TimeNotIncreasing.reason_index()], injected[7]);
     assert_eq!(status.counters.rejected_samples_total(), injected[6] + injected[7]);
     assert_eq!(status.accepted as usize, lines.len());
 
     // Random bytes, zeros included: nothing may stop the firmware.
-    let noise: Vec<u8> = (0..20_000).map(|_| if rng.next() % 29 == 0 { 0 } else { rng.nonzero_byte() }).collect();
+    let noise: Vec<u8> = (0..20_000)
+        .map(|_| if rng.next() % 29 == 0 { 0 } else { rng.nonzero_byte() })
+        .collect();
     target.link.send_raw(&noise).unwrap();
     let mut answered = false;
     target.link.send(&Request::ReadStatus).unwrap();

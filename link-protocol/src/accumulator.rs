@@ -24,7 +24,11 @@ impl<const N: usize> Default for FrameAccumulator<N> {
 impl<const N: usize> FrameAccumulator<N> {
     /// An empty receiver.
     pub const fn new() -> Self {
-        FrameAccumulator { buffer: [0; N], len: 0, oversize: false }
+        FrameAccumulator {
+            buffer: [0; N],
+            len: 0,
+            oversize: false,
+        }
     }
 
     /// Takes one byte. At a frame's end returns its COBS bytes (without delimiters), or
@@ -82,7 +86,15 @@ mod tests {
     }
 
     fn sample(t: f64) -> Request {
-        Request::Sample(SampleMsg::from(&Sample::from_degrees(t, t * 0.75, 3.0, 30.0, 1.0, 0.5, -0.5)))
+        Request::Sample(SampleMsg::from(&Sample::from_degrees(
+            t,
+            t * 0.75,
+            3.0,
+            30.0,
+            1.0,
+            0.5,
+            -0.5,
+        )))
     }
 
     fn feed(rx: &mut Rx, bytes: &[u8]) -> Vec<Result<Request, FrameError>> {
@@ -93,7 +105,10 @@ mod tests {
     fn back_to_back_frames_come_out_in_order() {
         let mut rx = Rx::new();
         let mut stream = Vec::new();
-        let sent: Vec<Request> = (0..50).map(|i| sample(i as f64)).chain([Request::Reset, Request::ReadStatus]).collect();
+        let sent: Vec<Request> = (0..50)
+            .map(|i| sample(i as f64))
+            .chain([Request::Reset, Request::ReadStatus])
+            .collect();
         for r in &sent {
             stream.extend(frame(r));
         }
@@ -132,7 +147,11 @@ mod tests {
             stream.extend(frame(&sample(3.0)));
             let got = feed(&mut rx, &stream);
             assert_eq!(got.len(), 2, "cut {cut}");
-            assert!(matches!(got[0], Err(FrameError::Cobs | FrameError::TooShort | FrameError::Crc)), "cut {cut}: {:?}", got[0]);
+            assert!(
+                matches!(got[0], Err(FrameError::Cobs | FrameError::TooShort | FrameError::Crc)),
+                "cut {cut}: {:?}",
+                got[0]
+            );
             assert_eq!(got[1], Ok(sample(3.0)));
         }
     }

@@ -127,7 +127,9 @@ mod tests {
     #[test]
     fn round_trips_every_length_and_long_runs() {
         for len in 0..600usize {
-            let data: Vec<u8> = (0..len).map(|i| if i % 97 == 5 { 0 } else { (i % 251) as u8 + 1 }).collect();
+            let data: Vec<u8> = (0..len)
+                .map(|i| if i % 97 == 5 { 0 } else { (i % 251) as u8 + 1 })
+                .collect();
             let enc = round_trip(&data);
             assert!(enc.len() <= max_encoded_len(len));
         }

@@ -70,10 +70,14 @@ pub fn encode_frame<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, 
     let mut raw = [0u8; MAX_MESSAGE + 2];
     let n = {
         let body = raw.get_mut(..MAX_MESSAGE).ok_or(EncodeError::MessageTooLarge)?;
-        postcard::to_slice(message, body).map_err(|_| EncodeError::MessageTooLarge)?.len()
+        postcard::to_slice(message, body)
+            .map_err(|_| EncodeError::MessageTooLarge)?
+            .len()
     };
     let crc = crc16(raw.get(..n).ok_or(EncodeError::MessageTooLarge)?).to_le_bytes();
-    raw.get_mut(n..n + 2).ok_or(EncodeError::MessageTooLarge)?.copy_from_slice(&crc);
+    raw.get_mut(n..n + 2)
+        .ok_or(EncodeError::MessageTooLarge)?
+        .copy_from_slice(&crc);
     let data = raw.get(..n + 2).ok_or(EncodeError::MessageTooLarge)?;
     *out.first_mut().ok_or(EncodeError::BufferTooSmall)? = 0;
     let body = out.get_mut(1..).ok_or(EncodeError::BufferTooSmall)?;
@@ -133,10 +137,20 @@ mod tests {
         let output = Output {
             time_s: 49_999.0,
             status: Status::Converged,
-            estimate: Some(estimator_core::Estimate { x_rad: [1e-4, -2e-4, 3e-4, 4e-4], sigma_rad: [1e-6; 4] }),
-            corrected: estimator_core::Attitude { heading_rad: 0.1, roll_rad: -0.01, pitch_rad: 0.02 },
+            estimate: Some(estimator_core::Estimate {
+                x_rad: [1e-4, -2e-4, 3e-4, 4e-4],
+                sigma_rad: [1e-6; 4],
+            }),
+            corrected: estimator_core::Attitude {
+                heading_rad: 0.1,
+                roll_rad: -0.01,
+                pitch_rad: 0.02,
+            },
         };
-        let counters = Counters { bad_frames: [u32::MAX; 5], rejected_samples: [u32::MAX; 5] };
+        let counters = Counters {
+            bad_frames: [u32::MAX; 5],
+            rejected_samples: [u32::MAX; 5],
+        };
         StepReply::new(&output, 123, counters)
     }
 
@@ -167,7 +181,11 @@ mod tests {
             u32::MAX,
             Counters::default(),
         );
-        for r in [Response::Step(step_reply()), Response::Rejected(rejected), Response::Status(status)] {
+        for r in [
+            Response::Step(step_reply()),
+            Response::Rejected(rejected),
+            Response::Status(status),
+        ] {
             let mut inner = body(&frame_of(&r));
             assert!(inner.len() <= MAX_RESPONSE_ENCODED, "{} bytes", inner.len());
             assert_eq!(decode_frame::<Response>(&mut inner), Ok(r));
@@ -221,7 +239,10 @@ mod tests {
         ];
         assert_eq!(frame_of(&Request::Sample(m)), sample_frame.to_vec());
         assert_eq!(frame_of(&Request::Reset), [0x00, 0x04, 0x01, 0xd1, 0xf1, 0x00].to_vec());
-        assert_eq!(frame_of(&Request::ReadStatus), [0x00, 0x04, 0x02, 0xb2, 0xc1, 0x00].to_vec());
+        assert_eq!(
+            frame_of(&Request::ReadStatus),
+            [0x00, 0x04, 0x02, 0xb2, 0xc1, 0x00].to_vec()
+        );
         // No sample frame is longer than 38 bytes: 33 + 2 bytes COBS-encoded into at most 36.
         assert!(frame_of(&Request::Sample(sample())).len() <= 38);
     }
@@ -230,7 +251,9 @@ mod tests {
     fn corrupted_crc_is_detected_for_every_single_bit_flip() {
         let frame = frame_of(&Request::Sample(sample()));
         let mut raw = [0u8; 64];
-        let msg = postcard::to_slice(&Request::Sample(sample()), &mut raw).unwrap().to_vec();
+        let msg = postcard::to_slice(&Request::Sample(sample()), &mut raw)
+            .unwrap()
+            .to_vec();
         let crc = crate::crc::crc16(&msg).to_le_bytes();
         let mut data = msg.clone();
         data.extend_from_slice(&crc);
@@ -239,7 +262,11 @@ mod tests {
             bad[bit / 8] ^= 1 << (bit % 8);
             let mut enc = std::vec![0u8; 64];
             let n = cobs::encode(&bad, &mut enc).unwrap();
-            assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::Crc), "bit {bit}");
+            assert_eq!(
+                decode_frame::<Request>(&mut enc[..n]),
+                Err(FrameError::Crc),
+                "bit {bit}"
+            );
         }
         assert!(frame.len() > 3);
     }
@@ -264,6 +291,9 @@ mod tests {
     #[test]
     fn encoding_into_a_small_buffer_is_an_error() {
         let mut out = [0u8; 10];
-        assert_eq!(encode_frame(&Request::Sample(sample()), &mut out), Err(EncodeError::BufferTooSmall));
+        assert_eq!(
+            encode_frame(&Request::Sample(sample()), &mut out),
+            Err(EncodeError::BufferTooSmall)
+        );
     }
 }

@@ -31,9 +31,7 @@ pub mod message;
 
 pub use accumulator::FrameAccumulator;
 pub use frame::{decode_frame, encode_frame, EncodeError, FrameError};
-pub use message::{
-    Counters, EstimateMsg, RejectedReply, Request, Response, SampleMsg, StatusReply, StepReply,
-};
+pub use message::{Counters, EstimateMsg, RejectedReply, Request, Response, SampleMsg, StatusReply, StepReply};
 
 /// Version of this protocol, reported in [`StatusReply::protocol_version`].
 pub const PROTOCOL_VERSION: u8 = 1;

@@ -69,7 +69,11 @@ impl From<&SampleMsg> for Sample {
             rotation_rad: m.rotation_rad,
             platform_rad: m.platform_rad,
             latitude_rad: m.latitude_rad,
-            attitude: Attitude { heading_rad: m.heading_rad, roll_rad: m.roll_rad, pitch_rad: m.pitch_rad },
+            attitude: Attitude {
+                heading_rad: m.heading_rad,
+                roll_rad: m.roll_rad,
+                pitch_rad: m.pitch_rad,
+            },
         }
     }
 }
@@ -83,13 +87,19 @@ pub struct EstimateMsg {
 
 impl From<&Estimate> for EstimateMsg {
     fn from(e: &Estimate) -> Self {
-        EstimateMsg { x_rad: e.x_rad, sigma_rad: e.sigma_rad }
+        EstimateMsg {
+            x_rad: e.x_rad,
+            sigma_rad: e.sigma_rad,
+        }
     }
 }
 
 impl From<&EstimateMsg> for Estimate {
     fn from(e: &EstimateMsg) -> Self {
-        Estimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad }
+        Estimate {
+            x_rad: e.x_rad,
+            sigma_rad: e.sigma_rad,
+        }
     }
 }
 
@@ -189,7 +199,13 @@ impl RejectedReply {
             SampleError::NonFinite(f) | SampleError::AngleOutOfRange(f) => field_code(*f),
             _ => NO_FIELD,
         };
-        RejectedReply { time_s, reason: error.reason_index() as u8, field, step_cost_ticks, counters }
+        RejectedReply {
+            time_s,
+            reason: error.reason_index() as u8,
+            field,
+            step_cost_ticks,
+            counters,
+        }
     }
 
     /// The core's error again; `None` for unknown codes.

@@ -51,7 +51,10 @@ impl Board {
         let nvic = peripherals.NVIC;
         // SAFETY: enabling an interrupt that PRIMASK keeps from being taken.
         unsafe { nvic.iser[0].write(1 << UART0_RX_IRQ) };
-        Some(Board { uart: Uart::init(nvic), cost: CostCounter::init(peripherals.SYST) })
+        Some(Board {
+            uart: Uart::init(nvic),
+            cost: CostCounter::init(peripherals.SYST),
+        })
     }
 }
 

@@ -44,7 +44,10 @@ impl CostUnit {
     /// Instructions (QEMU) or cycles (board) per tick.
     pub fn per_tick(&self) -> f64 {
         match *self {
-            CostUnit::QemuInstructions { icount_shift, counter_hz } => 1e9 / ((1u64 << icount_shift) as f64 * counter_hz as f64),
+            CostUnit::QemuInstructions {
+                icount_shift,
+                counter_hz,
+            } => 1e9 / ((1u64 << icount_shift) as f64 * counter_hz as f64),
             CostUnit::BoardCycles { .. } => 1.0,
         }
     }
@@ -54,7 +57,9 @@ impl CostUnit {
         let max = stats.max_ticks as f64 * self.per_tick();
         let mean = stats.mean_ticks() * self.per_tick();
         match self {
-            CostUnit::QemuInstructions { .. } => format!("step cost: max {max:.0} instructions, mean {mean:.0} instructions"),
+            CostUnit::QemuInstructions { .. } => {
+                format!("step cost: max {max:.0} instructions, mean {mean:.0} instructions")
+            }
             CostUnit::BoardCycles { counter_hz } => format!(
                 "step cost: max {max:.0} cycles, mean {mean:.0} cycles (max {:.1} us at {:.1} MHz)",
                 max / *counter_hz as f64 * 1e6,
@@ -70,11 +75,17 @@ mod tests {
 
     #[test]
     fn one_tick_is_forty_instructions_at_icount_shift_0_and_25_mhz() {
-        let unit = CostUnit::QemuInstructions { icount_shift: 0, counter_hz: 25_000_000 };
+        let unit = CostUnit::QemuInstructions {
+            icount_shift: 0,
+            counter_hz: 25_000_000,
+        };
         assert_eq!(unit.per_tick(), 40.0);
         let mut s = CostStats::default();
         s.add(100);
         s.add(50);
-        assert_eq!(unit.summary(&s), "step cost: max 4000 instructions, mean 3000 instructions");
+        assert_eq!(
+            unit.summary(&s),
+            "step cost: max 4000 instructions, mean 3000 instructions"
+        );
     }
 }

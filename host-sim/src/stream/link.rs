@@ -24,12 +24,20 @@ pub struct FirmwareLink {
 impl FirmwareLink {
     /// Wraps a port whose reads time out (a read that times out is a lost firmware).
     pub fn new(port: Box<dyn Port>) -> Self {
-        FirmwareLink { port, rx: FrameAccumulator::new(), received: VecDeque::new(), bytes_out: 0, bytes_in: 0 }
+        FirmwareLink {
+            port,
+            rx: FrameAccumulator::new(),
+            received: VecDeque::new(),
+            bytes_out: 0,
+            bytes_in: 0,
+        }
     }
 
     /// Sends raw bytes (fault injection, or a frame encoded elsewhere).
     pub fn send_raw(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        self.port.write_all(bytes).context("cannot write to the firmware's port")?;
+        self.port
+            .write_all(bytes)
+            .context("cannot write to the firmware's port")?;
         self.port.flush().context("cannot write to the firmware's port")?;
         self.bytes_out += bytes.len() as u64;
         Ok(())

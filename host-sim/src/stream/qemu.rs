@@ -27,7 +27,9 @@ pub const ICOUNT_SHIFT: u32 = 0;
 /// Extra QEMU arguments from `$HOST_SIM_QEMU_ARGS` (split at whitespace), e.g. a TCG plugin:
 /// `HOST_SIM_QEMU_ARGS="-plugin firmware/tools/libpcprofile.so,out=profile.txt"`.
 pub fn extra_args() -> Vec<String> {
-    std::env::var("HOST_SIM_QEMU_ARGS").map(|a| a.split_whitespace().map(String::from).collect()).unwrap_or_default()
+    std::env::var("HOST_SIM_QEMU_ARGS")
+        .map(|a| a.split_whitespace().map(String::from).collect())
+        .unwrap_or_default()
 }
 
 /// A running QEMU.
@@ -51,7 +53,11 @@ impl Qemu {
         if !elf.is_file() {
             bail!("{}: no such firmware ELF", elf.display());
         }
-        let dir = std::env::temp_dir().join(format!("host-sim-qemu-{}-{}", std::process::id(), RUNS.fetch_add(1, Ordering::Relaxed)));
+        let dir = std::env::temp_dir().join(format!(
+            "host-sim-qemu-{}-{}",
+            std::process::id(),
+            RUNS.fetch_add(1, Ordering::Relaxed)
+        ));
         std::fs::create_dir_all(&dir).with_context(|| format!("{}: cannot create", dir.display()))?;
         let socket = dir.join("uart0.sock");
         let stderr_path = dir.join("qemu.stderr");
@@ -83,17 +89,28 @@ impl Qemu {
             }
             Err(e) => return Err(e).with_context(|| format!("cannot start {binary}")),
         };
-        let mut qemu = Qemu { child, dir, stderr_path };
+        let mut qemu = Qemu {
+            child,
+            dir,
+            stderr_path,
+        };
         let deadline = Instant::now() + Duration::from_secs(20);
         loop {
             if let Some(status) = qemu.child.try_wait()? {
-                bail!("QEMU exited ({status}) before the UART connected: {}", qemu.stderr_tail());
+                bail!(
+                    "QEMU exited ({status}) before the UART connected: {}",
+                    qemu.stderr_tail()
+                );
             }
             if let Ok(stream) = UnixStream::connect(&socket) {
                 return Ok((qemu, stream));
             }
             if Instant::now() > deadline {
-                bail!("QEMU's UART socket {} did not open within 20 s: {}", socket.display(), qemu.stderr_tail());
+                bail!(
+                    "QEMU's UART socket {} did not open within 20 s: {}",
+                    socket.display(),
+                    qemu.stderr_tail()
+                );
             }
             std::thread::sleep(Duration::from_millis(20));
         }
@@ -107,7 +124,14 @@ impl Qemu {
     /// The end of QEMU's stderr, for error messages.
     pub fn stderr_tail(&self) -> String {
         let text = std::fs::read_to_string(&self.stderr_path).unwrap_or_default();
-        let tail: String = text.chars().rev().take(800).collect::<Vec<_>>().into_iter().rev().collect();
+        let tail: String = text
+            .chars()
+            .rev()
+            .take(800)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .rev()
+            .collect();
         if tail.trim().is_empty() {
             "(QEMU printed nothing on stderr)".to_string()
         } else {

@@ -8,7 +8,10 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 pub fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("host-sim sits in the workspace").to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("host-sim sits in the workspace")
+        .to_path_buf()
 }
 
 /// Builds `firmware` for thumbv7em-none-eabihf with `--profile firmware` (once per test binary)
@@ -48,7 +51,10 @@ pub fn require_qemu() {
 
 /// A fresh scratch directory under the target directory.
 pub fn scratch(name: &str) -> PathBuf {
-    let dir = workspace_root().join("target").join("qemu-tests").join(format!("{name}-{}", std::process::id()));
+    let dir = workspace_root()
+        .join("target")
+        .join("qemu-tests")
+        .join(format!("{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create scratch dir");
     dir
@@ -56,17 +62,31 @@ pub fn scratch(name: &str) -> PathBuf {
 
 /// Runs the host-sim binary; returns stdout; panics with its stderr if it fails.
 pub fn host_sim(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_host-sim")).args(args).output().expect("run host-sim");
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(args)
+        .output()
+        .expect("run host-sim");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(out.status.success(), "host-sim {args:?} failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "host-sim {args:?} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     stdout
 }
 
 /// `(max, mean)` from the `step cost: max N instructions, mean M instructions` line.
 pub fn step_cost(stdout: &str) -> (f64, f64) {
-    let line = stdout.lines().find(|l| l.starts_with("step cost: ")).unwrap_or_else(|| panic!("no step cost line in:\n{stdout}"));
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("step cost: "))
+        .unwrap_or_else(|| panic!("no step cost line in:\n{stdout}"));
     let words: Vec<&str> = line.split_whitespace().collect();
     assert_eq!(words.len(), 8, "{line}");
-    assert_eq!((words[2], words[4], words[7]), ("max", "instructions,", "instructions"), "{line}");
+    assert_eq!(
+        (words[2], words[4], words[7]),
+        ("max", "instructions,", "instructions"),
+        "{line}"
+    );
     (words[3].parse().expect(line), words[6].parse().expect(line))
 }
