@@ -41,7 +41,7 @@ use crate::config::{Config, ConfigError};
 use crate::installation::Angles;
 use crate::methods::MethodState;
 use crate::sample::{Attitude, Sample, SampleError};
-use crate::trig::{sin_cos, wrap_pi};
+use crate::math::{sin_cos, sqrt, wrap_pi};
 use crate::Real;
 
 /// Why the rotation is not healthy.
@@ -212,11 +212,7 @@ impl SwayMonitor {
     /// Amplitude of a sinusoid with the same RMS about the mean.
     pub fn amplitude_rad(&self) -> Real {
         let var = (self.mean_square_rad2 - self.mean_rad * self.mean_rad).max(0.0);
-        let two_var = 2.0 * var;
-        #[cfg(not(feature = "f64"))]
-        return libm::sqrtf(two_var);
-        #[cfg(feature = "f64")]
-        return libm::sqrt(two_var);
+        sqrt(2.0 * var)
     }
 }
 
@@ -288,7 +284,7 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// The current estimate, if any.
     pub fn estimate(&self) -> Option<Estimate> {
-        self.method.estimate(&self.config).map(|(x_rad, sigma_rad)| Estimate { x_rad, sigma_rad })
+        self.method.estimate(&self.config).map(|(x_rad, sigma_rad, _)| Estimate { x_rad, sigma_rad })
     }
 
     /// Processes one sample. On error nothing changes but the rejection counter.
@@ -308,16 +304,18 @@ impl<const CAP: usize> Estimator<CAP> {
             } else {
                 for m in 1..=missing {
                     let filler = interpolate(&prev, sample, m as Real / intervals as Real);
-                    self.process(&filler);
+                    let _ = self.process(&filler);
                     self.bridged = self.bridged.saturating_add(1);
                 }
             }
         }
-        let status = self.process(sample);
+        let (status, angles) = self.process(sample);
         self.accepted = self.accepted.saturating_add(1);
-        let estimate = self.estimate();
+        let method_estimate = self.method.estimate(&self.config);
+        let mismatch = matches!(method_estimate, Some((_, _, true)));
+        let estimate = method_estimate.map(|(x_rad, sigma_rad, _)| Estimate { x_rad, sigma_rad });
         let status = match (status, estimate) {
-            (Status::Estimating, Some(_)) if self.method.model_mismatch(&self.config) => Status::ModelMismatch,
+            (Status::Estimating, Some(_)) if mismatch => Status::ModelMismatch,
             (Status::Estimating, Some(e)) if e.sigma_rad.iter().all(|s| *s < self.config.converged_sigma_rad) => {
                 Status::Converged
             }
@@ -326,7 +324,6 @@ impl<const CAP: usize> Estimator<CAP> {
         };
         let corrected = match estimate {
             Some(e) => {
-                let angles = self.angles(sample);
                 let d = angles.oscillation(&e.x_rad);
                 Attitude {
                     heading_rad: wrap_pi(sample.attitude.heading_rad - d.heading_rad),
@@ -351,6 +348,10 @@ impl<const CAP: usize> Estimator<CAP> {
             return Err(SampleError::TimeNotIncreasing);
         }
         let interval = self.config.sample_interval_s;
+        if dt == interval {
+            // The usual case, without the (software, on the M4F) f64 division below.
+            return Ok(1);
+        }
         let n = libm::round(dt / interval);
         if n < 1.0 || (dt - n * interval).abs() > 0.25 * interval {
             return Err(SampleError::IrregularTimeStep);
@@ -372,8 +373,9 @@ impl<const CAP: usize> Estimator<CAP> {
         Angles::new(sample.rotation_rad, sample.platform_rad, (self.latitude_trig.1, self.latitude_trig.2))
     }
 
-    /// Runs one checked (or interpolated) sample through gate, rotation check and method.
-    fn process(&mut self, sample: &Sample) -> Status {
+    /// Runs one checked (or interpolated) sample through gate, rotation check and method; returns
+    /// the status and the sample's angles (reused for the corrected attitude).
+    fn process(&mut self, sample: &Sample) -> (Status, Angles) {
         let angles = self.angles(sample);
         let increment = self.previous.map(|p| wrap_pi(sample.rotation_rad - p.rotation_rad));
         let continuous = self.rotation_continuous;
@@ -384,7 +386,7 @@ impl<const CAP: usize> Estimator<CAP> {
             if self.sway.samples >= SwayMonitor::SAMPLES && self.sway.amplitude_rad() >= self.config.sway_gate_rad {
                 self.gate_open = true;
             } else {
-                return Status::WaitingForSway;
+                return (Status::WaitingForSway, angles);
             }
         }
         if let (Some(inc), true) = (increment, continuous) {
@@ -392,14 +394,11 @@ impl<const CAP: usize> Estimator<CAP> {
                 self.restart_window();
                 // The sample after a fault is compared with this one again.
                 self.rotation_continuous = true;
-                return Status::RotationFault(fault);
+                return (Status::RotationFault(fault), angles);
             }
         }
-        if self.method.step(&self.config, sample, &angles) {
-            Status::Estimating
-        } else {
-            Status::WarmingUp
-        }
+        let status = if self.method.step(&self.config, sample, &angles) { Status::Estimating } else { Status::WarmingUp };
+        (status, angles)
     }
 }
 

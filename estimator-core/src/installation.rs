@@ -13,7 +13,7 @@
 //! [`crate::correlation`]) to derive the correlation channels.
 
 use crate::sample::Attitude;
-use crate::trig::sin_cos;
+use crate::math::sin_cos;
 use crate::Real;
 
 /// Sines and cosines of one sample's angles, computed once per step.

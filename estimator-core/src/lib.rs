@@ -40,7 +40,7 @@ pub mod kalman;
 pub mod methods;
 pub mod moving_average;
 pub mod sample;
-pub mod trig;
+pub mod math;
 pub mod units;
 
 pub use config::{Config, ConfigError, Method};

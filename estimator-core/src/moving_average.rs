@@ -12,6 +12,7 @@
 //! (a floating-point running sum accumulates rounding as a random walk: 0.3 arcsec after two days
 //! in `f32`). Each value is rounded once, on the way in.
 
+use crate::math::round;
 use crate::Real;
 
 /// Fixed-point counts per unit.
@@ -113,14 +114,6 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
     }
 }
 
-#[cfg(not(feature = "f64"))]
-fn round(x: f32) -> f32 {
-    libm::rintf(x)
-}
-#[cfg(feature = "f64")]
-fn round(x: f64) -> f64 {
-    libm::rint(x)
-}
 
 #[cfg(test)]
 mod tests {

@@ -6,7 +6,7 @@ mod common;
 use common::Signal;
 use estimator_core::correlation::{products, ROLL_SIN};
 use estimator_core::installation::Angles;
-use estimator_core::trig::sin_cos;
+use estimator_core::math::sin_cos;
 use estimator_core::units::{arcsec_to_rad, rad_to_arcsec, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use estimator_core::{Config, Estimator, Method, Real, Status};
 

@@ -44,14 +44,6 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
-    /// True when the method's residual check finds the model inconsistent (windowed method only).
-    pub fn model_mismatch(&self, config: &Config) -> bool {
-        match self {
-            MethodState::Windowed(m) => m.updates > 0 && m.consistency(config).mismatch,
-            _ => false,
-        }
-    }
-
     /// Forgets the moving-average window (the filter keeps what it learnt).
     pub fn restart_window(&mut self) {
         match self {
@@ -61,12 +53,13 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
-    /// `(x, sigma)` of x1..x4 in rad, once the filter has had a measurement.
-    pub fn estimate(&self, config: &Config) -> Option<([Real; 4], [Real; 4])> {
+    /// `(x, sigma, model mismatch)` of x1..x4 in rad, once the filter has had a measurement. Only
+    /// the windowed method checks its residuals; the others never report a mismatch.
+    pub fn estimate(&self, config: &Config) -> Option<([Real; 4], [Real; 4], bool)> {
         match self {
             MethodState::Windowed(m) => m.estimate(config),
-            MethodState::Paper(m) => m.estimate(),
-            MethodState::Traditional(m) => m.estimate(),
+            MethodState::Paper(m) => m.estimate().map(|(x, s)| (x, s, false)),
+            MethodState::Traditional(m) => m.estimate().map(|(x, s)| (x, s, false)),
         }
     }
 }

@@ -47,6 +47,7 @@ use crate::config::Config;
 use crate::correlation::{leakage_coefficients, measurement_rows, products};
 use crate::installation::Angles;
 use crate::kalman::ConstantStateKalman;
+use crate::math::sqrt;
 use crate::moving_average::WindowAverage;
 use crate::sample::Sample;
 use crate::Real;
@@ -161,26 +162,16 @@ impl<const CAP: usize> Windowed<CAP> {
         self.window.clear();
     }
 
-    /// Current estimate and 1-sigma (the filter's, widened by the residual check), once updated.
-    pub fn estimate(&self, config: &Config) -> Option<([Real; 4], [Real; 4])> {
+    /// Current estimate, 1-sigma (the filter's, widened by the residual check) and whether the
+    /// residual check reports a model mismatch, once updated.
+    pub fn estimate(&self, config: &Config) -> Option<([Real; 4], [Real; 4], bool)> {
         if self.updates == 0 {
             return None;
         }
-        let model = self.consistency(config).model_sigma_rad;
+        let check = self.consistency(config);
+        let model = check.model_sigma_rad;
         let x = [self.kf.x[0], self.kf.x[1], self.kf.x[2], self.kf.x[3]];
-        let s = core::array::from_fn(|i| {
-            let k = self.kf.sigma(i);
-            sqrt(k * k + model[i] * model[i])
-        });
-        Some((x, s))
+        let s = core::array::from_fn(|i| sqrt(self.kf.p[(i, i)].max(0.0) + model[i] * model[i]));
+        Some((x, s, check.mismatch))
     }
-}
-
-#[cfg(not(feature = "f64"))]
-fn sqrt(x: f32) -> f32 {
-    libm::sqrtf(x)
-}
-#[cfg(feature = "f64")]
-fn sqrt(x: f64) -> f64 {
-    libm::sqrt(x)
 }

@@ -1,4 +1,12 @@
-//! Sine and cosine for the step.
+//! The step's elementary functions: sine and cosine, square root, rounding, angle wrapping.
+//!
+//! # Square root
+//! `libm` has no ARM implementation of `sqrtf`: on the Cortex-M4F it runs a software loop of a few
+//! hundred instructions, and stable Rust cannot reach the FPU's `vsqrt.f32` on this target (the
+//! `sreg` asm operand class needs `vfp2`, which the single-precision M4F does not report). [`sqrt`]
+//! is therefore a short Newton iteration in plain IEEE arithmetic, identical on every target.
+//!
+//! # Sine and cosine
 //!
 //! The `libm` crate's `sinf`/`cosf` compute in `f64`, which the Cortex-M4F runs in software
 //! (about 2,350 instructions a pair, `shared/notes/target-costs.md`). The `f32` build therefore uses
@@ -16,13 +24,39 @@ pub fn wrap_pi(angle_rad: Real) -> Real {
     angle_rad - two_pi * round(angle_rad / two_pi)
 }
 
+/// Round to nearest, ties to even.
 #[cfg(not(feature = "f64"))]
-fn round(x: f32) -> f32 {
+pub fn round(x: f32) -> f32 {
     libm::rintf(x)
 }
+/// Round to nearest, ties to even.
 #[cfg(feature = "f64")]
-fn round(x: f64) -> f64 {
+pub fn round(x: f64) -> f64 {
     libm::rint(x)
+}
+
+/// Square root (NaN for negative input), within 1 ulp: an exponent-halving seed (relative error
+/// below 4 %) and three Newton steps `y = (y + x/y) / 2` (error 4e-2 -> 8e-4 -> 3e-7 -> rounding).
+/// About 15 instructions on the M4F, against several hundred for `libm::sqrtf`, which has no ARM
+/// implementation and runs a bit-by-bit loop. Only IEEE operations: the same bits on every target.
+#[cfg(not(feature = "f64"))]
+pub fn sqrt(x: f32) -> f32 {
+    if !(x > 0.0) || x == f32::INFINITY {
+        // 0 -> 0, +inf -> +inf, negative or NaN -> NaN.
+        return if x == 0.0 || x == f32::INFINITY { x } else { f32::NAN };
+    }
+    // Scale subnormals into the normal range first (sqrt(x) = sqrt(x 2^24) / 2^12).
+    let (x, scale) = if x < f32::MIN_POSITIVE { (x * 16_777_216.0, 1.0 / 4096.0) } else { (x, 1.0) };
+    let mut y = f32::from_bits((x.to_bits() >> 1) + 0x1FBD_1DF5);
+    y = 0.5 * (y + x / y);
+    y = 0.5 * (y + x / y);
+    y = 0.5 * (y + x / y);
+    y * scale
+}
+/// Square root (NaN for negative input).
+#[cfg(feature = "f64")]
+pub fn sqrt(x: f64) -> f64 {
+    libm::sqrt(x)
 }
 
 /// `(sin x, cos x)`.
@@ -69,6 +103,23 @@ mod tests {
             worst = worst.max((s as f64 - libm::sin(xe)).abs()).max((c as f64 - libm::cos(xe)).abs());
         }
         assert!(worst < 2e-7, "worst error {worst}");
+    }
+
+    #[test]
+    fn sqrt_is_within_one_ulp_and_handles_edge_cases() {
+        // Every 997th float from the smallest subnormal to the largest finite value.
+        let mut bits: u32 = 1;
+        while bits < f32::MAX.to_bits() {
+            let x = f32::from_bits(bits) as Real;
+            let exact = libm::sqrt(x as f64);
+            let got = sqrt(x) as f64;
+            let ulp = (exact as f32).to_bits().abs_diff((got as f32).to_bits());
+            assert!(ulp <= 1, "sqrt({x:e}) = {got:e}, exact {exact:e}");
+            bits += 997;
+        }
+        assert_eq!(sqrt(0.0), 0.0);
+        assert!(sqrt(-1.0).is_nan() && sqrt(Real::NAN).is_nan());
+        assert_eq!(sqrt(Real::INFINITY), Real::INFINITY);
     }
 
     #[test]
