@@ -12,7 +12,8 @@
 //! Restore checks, in this order, and returns the first failure as a [`CheckpointError`]:
 //! magic, version, float width, ring capacity, the length in the header, the CRC-32 over
 //! everything before it; then every field: the configuration must pass [`Config::check`] and
-//! [`numerically_safe`] (squares of its sigmas and random walks finite and positive), every
+//! [`numerically_safe`] (squares of its sigmas and random walks finite and positive) and
+//! [`bounded_work`] (at most one rotation period of missing samples bridged), every
 //! float must be finite (and in range where it has one: the previous sample must pass
 //! [`Sample::check`], monitor ratios non-negative, Kalman states within [`MAX_STATE`], variances
 //! within [`MAX_VARIANCE`] or four times the prior, residual means within [`MAX_RESIDUAL`], channel
@@ -111,6 +112,15 @@ pub fn numerically_safe(config: &Config) -> bool {
         let v = s * s;
         v.is_finite() && v > 0.0
     }) && drifts.iter().all(|d| (d * d * dt).is_finite())
+}
+
+/// What [`Config::check`] does not (yet) require but a bounded step needs: at most one rotation
+/// period of missing samples bridged (each bridged sample is a full step's work, so a step's work
+/// is at most `1 + max_bridged_gap_samples` steps; bridging more than a window is pointless, the
+/// window restarts instead). Found by the `checkpoint_restore` fuzz target: a flipped top byte made
+/// it 1.8e9 and one step after a long gap ran for minutes.
+pub fn bounded_work(config: &Config) -> bool {
+    (config.max_bridged_gap_samples as usize) <= config.rotation_period_samples
 }
 
 fn max_variance(config: &Config) -> f64 {
@@ -650,7 +660,7 @@ impl<const CAP: usize> Estimator<CAP> {
             max_bridged_gap_samples: r.u32(),
         };
         let mut est = Estimator::<CAP>::new(config).map_err(CheckpointError::InvalidConfig)?;
-        if !numerically_safe(&config) {
+        if !numerically_safe(&config) || !bounded_work(&config) {
             return Err(CheckpointError::InvalidConfig(ConfigError::Parameter));
         }
 
@@ -916,6 +926,14 @@ mod tests {
         let mut e = base.clone();
         e.config.measurement_sigma_rad = (if R == 4 { 1e-30 } else { 1e-200 }) as Real;
         rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter));
+        // Regression, fuzz target `checkpoint_restore` (slow-unit-4b0caebd..., slow-unit-91df4c6c...):
+        // max_bridged_gap_samples with a flipped top byte (1.8e9) made one step bridge for minutes.
+        let mut e = base.clone();
+        e.config.max_bridged_gap_samples = 0x6c00_0000;
+        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter));
+        let mut e = base.clone();
+        e.config.max_bridged_gap_samples = 48;
+        assert_eq!(Estimator::<64>::from_checkpoint(&image_of(&e)).map(|b| b == e), Ok(true));
         let mut e = base.clone();
         e.config.rotation_period_samples = 65;
         rejects(&e, CheckpointError::InvalidConfig(ConfigError::RotationPeriod));
