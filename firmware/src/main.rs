@@ -4,6 +4,7 @@
 //! - [`board`]: the hardware (UART as `embedded_io`, the cost counter, logging, fatal exit);
 //! - [`link`]: frames in and out (the codec itself is the `link-protocol` crate);
 //! - [`service`]: request in, `estimator-core` step, response out;
+//! - [`checkpoint_store`]: the estimator's checkpoint in two alternating flash slots;
 //! - [`stack`]: stack painting for the high-water mark; [`fault`]: panic and hard-fault handlers.
 //!
 //! This file wires them together and runs the loop. The protocol is in `firmware/PROTOCOL.md`.
@@ -12,6 +13,8 @@
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
 
 mod board;
+#[cfg_attr(not(feature = "checkpoint"), allow(dead_code))]
+mod checkpoint_store;
 mod fault;
 mod link;
 mod service;
@@ -51,6 +54,28 @@ fn main() -> ! {
             board::fatal()
         }
     };
+    // The newest checkpoint the core accepts, if the board has flash holding one.
+    #[cfg(feature = "checkpoint")]
+    static mut IMAGE: [u8; checkpoint_store::IMAGE_BYTES] = [0; checkpoint_store::IMAGE_BYTES];
+    #[cfg(feature = "checkpoint")]
+    // SAFETY: `main` runs once and is the only code that names IMAGE.
+    let image = unsafe { &mut *core::ptr::addr_of_mut!(IMAGE) };
+    #[cfg(feature = "checkpoint")]
+    let persistence = board.flash.map(|flash| {
+        let mut store = checkpoint_store::CheckpointStore::new(flash);
+        let restored = store.restore(estimator, image);
+        match restored {
+            Some(t) => defmt::info!("restored the checkpoint of {=f64} s", t),
+            None => defmt::info!("no checkpoint to restore"),
+        }
+        service::Persistence {
+            store,
+            image,
+            last_s: restored,
+        }
+    });
+    #[cfg(not(feature = "checkpoint"))]
+    let persistence = None;
     let boot_stack_peak_bytes = stack::peak_bytes();
     // Paint again: from here on the high-water mark is the service loop's own.
     stack::paint();
@@ -62,7 +87,7 @@ fn main() -> ! {
         boot_stack_peak_bytes
     );
     let mut link = link::Link::new(board.uart);
-    let mut service = service::Service::new(estimator, board.cost, boot_stack_peak_bytes);
+    let mut service = service::Service::new(estimator, board.cost, boot_stack_peak_bytes, persistence);
     loop {
         match link.receive() {
             Ok(request) => {

@@ -6,24 +6,58 @@ use link_protocol::{
     Counters, EstimateMsg, FrameError, RejectedReply, Request, Response, StatusReply, StepReply, PROTOCOL_VERSION,
 };
 
-use crate::board::CostCounter;
+use crate::board::{CostCounter, Flash};
+use crate::checkpoint_store::{CheckpointStore, IMAGE_BYTES};
 use crate::stack;
 
-/// The estimator, the cost counter and the link counters.
+/// Seconds of sample time between checkpoints.
+pub const CHECKPOINT_INTERVAL_S: f64 = 60.0;
+
+/// Where checkpoints go: the store and the scratch image.
+pub struct Persistence<'a> {
+    pub store: CheckpointStore<Flash>,
+    pub image: &'a mut [u8; IMAGE_BYTES],
+    /// Time of the last checkpoint (or of the first sample, before there is one).
+    pub last_s: Option<f64>,
+}
+
+/// The estimator, the cost counter, the link counters and the checkpoints.
 pub struct Service<'a> {
     estimator: &'a mut Estimator,
     cost: CostCounter,
     bad_frames: Counters,
     boot_stack_peak_bytes: u32,
+    persistence: Option<Persistence<'a>>,
 }
 
 impl<'a> Service<'a> {
-    pub fn new(estimator: &'a mut Estimator, cost: CostCounter, boot_stack_peak_bytes: u32) -> Self {
+    pub fn new(
+        estimator: &'a mut Estimator,
+        cost: CostCounter,
+        boot_stack_peak_bytes: u32,
+        persistence: Option<Persistence<'a>>,
+    ) -> Self {
         Service {
             estimator,
             cost,
             bad_frames: Counters::default(),
             boot_stack_peak_bytes,
+            persistence,
+        }
+    }
+
+    /// Saves a checkpoint when `CHECKPOINT_INTERVAL_S` of sample time has passed since the last.
+    fn maybe_checkpoint(&mut self, time_s: f64) {
+        let Some(p) = self.persistence.as_mut() else { return };
+        match p.last_s {
+            None => p.last_s = Some(time_s),
+            Some(last) if time_s - last >= CHECKPOINT_INTERVAL_S => {
+                p.last_s = Some(time_s);
+                if p.store.save(self.estimator, time_s, p.image).is_err() {
+                    defmt::error!("checkpoint at {=f64} s not saved", time_s);
+                }
+            }
+            Some(_) => {}
         }
     }
 
@@ -41,7 +75,11 @@ impl<'a> Service<'a> {
                 let result = step(self.estimator, &sample);
                 let ticks = self.cost.ticks_since(start);
                 match result {
-                    Ok(output) => Response::Step(StepReply::new(&output, ticks, self.counters())),
+                    Ok(output) => {
+                        // Saved before the answer: the host's next request waits for it.
+                        self.maybe_checkpoint(output.time_s);
+                        Response::Step(StepReply::new(&output, ticks, self.counters()))
+                    }
                     Err(error) => Response::Rejected(RejectedReply::new(sample.time_s, &error, ticks, self.counters())),
                 }
             }
@@ -74,6 +112,8 @@ impl<'a> Service<'a> {
             boot_stack_peak_bytes: self.boot_stack_peak_bytes,
             stack_peak_bytes: stack::peak_bytes(),
             stack_size_bytes: stack::size_bytes(),
+            checkpoint_time_s: self.persistence.as_ref().and_then(|p| p.store.time_s),
+            checkpoints_saved: self.persistence.as_ref().map_or(0, |p| p.store.saved),
         }
     }
 }

@@ -57,6 +57,13 @@ pub struct StreamArgs {
     /// Save the firmware's defmt log (QEMU's semihosting output; decode with `defmt-print -e ELF`).
     #[arg(long, value_name = "FILE")]
     pub defmt_log: Option<PathBuf>,
+    /// QEMU's working directory, where a firmware built with `--features checkpoint` keeps its
+    /// flash (`rins-flash.bin`) across runs (default: a fresh scratch directory).
+    #[arg(long, value_name = "DIR", requires = "qemu")]
+    pub flash_dir: Option<PathBuf>,
+    /// Skip the log rows up to the time of the checkpoint the firmware restored at boot.
+    #[arg(long)]
+    pub resume: bool,
 }
 
 /// The firmware, wherever it runs.
@@ -70,8 +77,13 @@ pub struct Target {
 
 impl Target {
     /// Boots `elf` in QEMU and checks that the firmware answers.
-    pub fn boot_qemu(elf: &Path, defmt_log: Option<&Path>, timeout: Duration) -> anyhow::Result<Target> {
-        let (qemu, stream) = Qemu::boot(elf, defmt_log)?;
+    pub fn boot_qemu(
+        elf: &Path,
+        defmt_log: Option<&Path>,
+        flash_dir: Option<&Path>,
+        timeout: Duration,
+    ) -> anyhow::Result<Target> {
+        let (qemu, stream) = Qemu::boot(elf, defmt_log, flash_dir)?;
         stream.set_read_timeout(Some(timeout))?;
         let link = FirmwareLink::new(Box::new(stream));
         Target::hello(link, Some(qemu), |hz| CostUnit::QemuInstructions {
@@ -227,7 +239,7 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let lines = LogReader::open(&args.log)?;
     let (mut target, what) = match (&args.qemu, &args.port) {
         (Some(elf), _) => (
-            Target::boot_qemu(elf, args.defmt_log.as_deref(), timeout)?,
+            Target::boot_qemu(elf, args.defmt_log.as_deref(), args.flash_dir.as_deref(), timeout)?,
             format!("QEMU mps2-an386 ({})", elf.display()),
         ),
         (None, Some(device)) => (
@@ -239,6 +251,18 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let file = File::create(&out).map_err(|e| LogError::new(&out, 0, format!("cannot create: {e}")))?;
     let mut writer =
         EstimatesWriter::new(BufWriter::new(file)).with_context(|| format!("{}:0: cannot write", out.display()))?;
+    let resume_after_s = if args.resume {
+        target.boot_status.checkpoint_time_s
+    } else {
+        None
+    };
+    if let Some(t) = resume_after_s {
+        println!("resuming after the firmware's checkpoint of {t} s");
+    }
+    let lines = lines.filter(move |l| match (l, resume_after_s) {
+        (Ok(line), Some(t)) => line.row.time_s > t,
+        _ => true,
+    });
     let summary = stream_lines(&mut target, lines, &mut writer)?;
     writer
         .finish()
@@ -282,5 +306,11 @@ fn print_summary(log: &Path, out: &Path, what: &str, s: &StreamSummary, target: 
         "  stack (painted): start-up peak {} bytes, service loop peak {} bytes, of {} bytes",
         st.boot_stack_peak_bytes, st.stack_peak_bytes, st.stack_size_bytes
     );
+    if let Some(t) = st.checkpoint_time_s {
+        println!(
+            "  checkpoints: {} saved in this run, newest at {t} s",
+            st.checkpoints_saved
+        );
+    }
     println!("{}", target.unit.summary(&s.cost));
 }

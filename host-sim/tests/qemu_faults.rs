@@ -111,7 +111,7 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
     let mut host = HostEstimator::new(Config::default()).unwrap();
     let expected: Vec<String> = lines.iter().map(|l| key(&host.step(&sample_of(&l.row)))).collect();
 
-    let mut target = Target::boot_qemu(&elf, Some(&dir.join("defmt.bin")), Duration::from_secs(10)).unwrap();
+    let mut target = Target::boot_qemu(&elf, Some(&dir.join("defmt.bin")), None, Duration::from_secs(10)).unwrap();
     // A shadow of the firmware's receiver, fed every byte sent, predicts its bad-frame counters.
     let mut shadow = FrameAccumulator::<MAX_REQUEST_ENCODED>::new();
     let mut predicted = [0u32; FrameError::COUNT];

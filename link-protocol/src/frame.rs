@@ -174,6 +174,8 @@ mod tests {
             boot_stack_peak_bytes: 30_000,
             stack_peak_bytes: 1000,
             stack_size_bytes: 4_000_000,
+            checkpoint_time_s: Some(12_345.0),
+            checkpoints_saved: 7,
         };
         let rejected = RejectedReply::new(
             3.0,

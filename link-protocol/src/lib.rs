@@ -34,7 +34,7 @@ pub use frame::{decode_frame, encode_frame, EncodeError, FrameError};
 pub use message::{Counters, EstimateMsg, RejectedReply, Request, Response, SampleMsg, StatusReply, StepReply};
 
 /// Version of this protocol, reported in [`StatusReply::protocol_version`].
-pub const PROTOCOL_VERSION: u8 = 1;
+pub const PROTOCOL_VERSION: u8 = 2;
 
 /// Largest COBS-encoded request the firmware accepts (without the two 0x00 delimiters). The largest
 /// request, a sample, encodes to 36 bytes; anything longer than this is counted as oversized.

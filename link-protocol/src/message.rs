@@ -269,6 +269,10 @@ pub struct StatusReply {
     pub boot_stack_peak_bytes: u32,
     pub stack_peak_bytes: u32,
     pub stack_size_bytes: u32,
+    /// Sample time of the newest checkpoint saved or restored at boot (`None`: none, or no flash).
+    pub checkpoint_time_s: Option<f64>,
+    /// Checkpoints saved since boot.
+    pub checkpoints_saved: u32,
 }
 
 #[cfg(test)]

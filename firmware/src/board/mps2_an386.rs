@@ -8,6 +8,8 @@
 //!   core cycle (40 ns). Under QEMU with `-icount shift=0` each instruction takes 1 ns of virtual
 //!   time, so one tick is exactly 40 instructions (shared/notes/toolchain.md section 6).
 //! - Logs: defmt over semihosting (QEMU's stdout). Fatal errors: semihosting exit with status 1.
+//! - Flash for checkpoints: the host file `rins-flash.bin` in QEMU's working directory
+//!   (semihosting), behind the `embedded_storage` NOR flash traits.
 
 use core::convert::Infallible;
 use core::ptr::{read_volatile, write_volatile};
@@ -15,6 +17,7 @@ use core::ptr::{read_volatile, write_volatile};
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
 use defmt_semihosting as _;
+use embedded_storage::nor_flash::{NorFlash, NorFlashErrorKind, ReadNorFlash};
 
 /// Core (and SysTick) clock, Hz.
 pub const CORE_CLOCK_HZ: u32 = 25_000_000;
@@ -40,6 +43,10 @@ const UART0_RX_IRQ: u32 = 0;
 pub struct Board {
     pub uart: Uart,
     pub cost: CostCounter,
+    /// Non-volatile storage for checkpoints; `None` without the `checkpoint` feature or if the
+    /// host file cannot be opened.
+    #[cfg_attr(not(feature = "checkpoint"), allow(dead_code))]
+    pub flash: Option<Flash>,
 }
 
 impl Board {
@@ -54,11 +61,16 @@ impl Board {
         Some(Board {
             uart: Uart::init(nvic),
             cost: CostCounter::init(peripherals.SYST),
+            flash: if cfg!(feature = "checkpoint") {
+                Flash::open()
+            } else {
+                None
+            },
         })
     }
 }
 
-/// UART0, polled.
+/// UART0.
 pub struct Uart {
     nvic: cortex_m::peripheral::NVIC,
 }
@@ -180,6 +192,122 @@ impl CostCounter {
     #[inline(always)]
     pub fn ticks_since(&self, start: CostStamp) -> u32 {
         start.0.wrapping_sub(SYST::get_current()) & 0x00FF_FFFF
+    }
+}
+
+/// The board's NOR flash for checkpoints, emulated by the host file `rins-flash.bin` in QEMU's
+/// working directory (semihosting). 64 KiB, 4 KiB erase blocks, 4-byte writes; bytes past the end
+/// of the file read as erased (0xFF). Writes overwrite (the checkpoint store always erases first).
+pub struct Flash {
+    file: semihosting::fs::File,
+}
+
+impl Flash {
+    const CAPACITY: usize = 64 * 1024;
+    const PATH: &'static core::ffi::CStr = c"rins-flash.bin";
+
+    fn open() -> Option<Flash> {
+        use semihosting::fs::File;
+        let file = File::options()
+            .read(true)
+            .write(true)
+            .open(Self::PATH)
+            .ok()
+            .or_else(|| {
+                File::options()
+                    .read(true)
+                    .write(true)
+                    .create(true)
+                    .truncate(true)
+                    .open(Self::PATH)
+                    .ok()
+            })?;
+        Some(Flash { file })
+    }
+
+    #[allow(clippy::manual_is_multiple_of)] // is_multiple_of needs Rust 1.87; the workspace says 1.85
+    fn check(offset: u32, len: usize, align: usize) -> Result<(), NorFlashErrorKind> {
+        let end = offset as usize + len;
+        if offset as usize % align != 0 || len % align != 0 {
+            return Err(NorFlashErrorKind::NotAligned);
+        }
+        if end > Self::CAPACITY {
+            return Err(NorFlashErrorKind::OutOfBounds);
+        }
+        Ok(())
+    }
+
+    /// Writes page by page (256 bytes, a NOR flash's program page) and takes a NOR flash's time
+    /// per page (0.5 ms of core clock), so that a save lasts about as long as on a real part and a
+    /// power cut can land between any two pages.
+    fn write_at(&mut self, offset: u32, bytes: &[u8]) -> Result<(), NorFlashErrorKind> {
+        use semihosting::io::{Seek, SeekFrom, Write};
+        const PAGE_PROGRAM_CYCLES: u32 = CORE_CLOCK_HZ / 2000;
+        self.file
+            .seek(SeekFrom::Start(offset as u64))
+            .map_err(|_| NorFlashErrorKind::Other)?;
+        for page in bytes.chunks(256) {
+            self.file.write_all(page).map_err(|_| NorFlashErrorKind::Other)?;
+            cortex_m::asm::delay(PAGE_PROGRAM_CYCLES);
+        }
+        Ok(())
+    }
+}
+
+impl embedded_storage::nor_flash::ErrorType for Flash {
+    type Error = NorFlashErrorKind;
+}
+
+impl ReadNorFlash for Flash {
+    const READ_SIZE: usize = 1;
+
+    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), NorFlashErrorKind> {
+        use semihosting::io::{Read, Seek, SeekFrom};
+        Self::check(offset, bytes.len(), 1)?;
+        bytes.fill(0xFF);
+        self.file
+            .seek(SeekFrom::Start(offset as u64))
+            .map_err(|_| NorFlashErrorKind::Other)?;
+        let mut done = 0;
+        while let Some(rest) = bytes.get_mut(done..) {
+            if rest.is_empty() {
+                break;
+            }
+            match self.file.read(rest) {
+                Ok(0) => break,
+                Ok(n) => done += n,
+                Err(_) => return Err(NorFlashErrorKind::Other),
+            }
+        }
+        Ok(())
+    }
+
+    fn capacity(&self) -> usize {
+        Self::CAPACITY
+    }
+}
+
+impl NorFlash for Flash {
+    const WRITE_SIZE: usize = 4;
+    const ERASE_SIZE: usize = 4096;
+
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), NorFlashErrorKind> {
+        if to < from {
+            return Err(NorFlashErrorKind::OutOfBounds);
+        }
+        Self::check(from, (to - from) as usize, Self::ERASE_SIZE)?;
+        let erased = [0xFFu8; 256];
+        let mut at = from;
+        while at < to {
+            self.write_at(at, &erased)?;
+            at += erased.len() as u32;
+        }
+        Ok(())
+    }
+
+    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), NorFlashErrorKind> {
+        Self::check(offset, bytes.len(), Self::WRITE_SIZE)?;
+        self.write_at(offset, bytes)
     }
 }
 

@@ -49,10 +49,13 @@ pub fn qemu_binary() -> String {
 impl Qemu {
     /// Boots `elf`; the firmware's defmt log goes to `defmt_log` (or is discarded). Returns once the
     /// UART socket is connected.
-    pub fn boot(elf: &Path, defmt_log: Option<&Path>) -> anyhow::Result<(Qemu, UnixStream)> {
+    /// QEMU runs in `flash_dir` (where a firmware built with its `checkpoint` feature keeps its
+    /// flash, `rins-flash.bin`), or in a fresh scratch directory.
+    pub fn boot(elf: &Path, defmt_log: Option<&Path>, flash_dir: Option<&Path>) -> anyhow::Result<(Qemu, UnixStream)> {
         if !elf.is_file() {
             bail!("{}: no such firmware ELF", elf.display());
         }
+        let elf = &std::fs::canonicalize(elf)?;
         let dir = std::env::temp_dir().join(format!(
             "host-sim-qemu-{}-{}",
             std::process::id(),
@@ -77,6 +80,7 @@ impl Qemu {
             .args(["-serial", "chardev:uart0", "-kernel"])
             .arg(elf)
             .args(extra_args())
+            .current_dir(flash_dir.unwrap_or(&dir))
             .stdin(Stdio::null())
             .stdout(stdout)
             .stderr(Stdio::from(File::create(&stderr_path)?));

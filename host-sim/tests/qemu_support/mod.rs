@@ -40,6 +40,53 @@ pub fn firmware_elf() -> PathBuf {
     .clone()
 }
 
+/// Builds `firmware` with `--features checkpoint` and copies the ELF to
+/// `target/qemu-tests/firmware-checkpoint.elf` (the default build of other tests overwrites the
+/// original).
+pub fn firmware_elf_with_checkpoints() -> PathBuf {
+    static ELF: OnceLock<PathBuf> = OnceLock::new();
+    ELF.get_or_init(|| {
+        require_qemu();
+        let root = workspace_root();
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
+        let status = Command::new(&cargo)
+            .current_dir(&root)
+            .args([
+                "build",
+                "-p",
+                "firmware",
+                "--target",
+                "thumbv7em-none-eabihf",
+                "--profile",
+                "firmware",
+            ])
+            .args(["--features", "checkpoint"])
+            .status()
+            .expect("cannot run cargo to build the firmware");
+        assert!(
+            status.success(),
+            "building the firmware with --features checkpoint failed ({status})"
+        );
+        let target_dir = std::env::var_os("CARGO_TARGET_DIR")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| root.join("target"));
+        let target_dir = if target_dir.is_absolute() {
+            target_dir
+        } else {
+            root.join(target_dir)
+        };
+        let built = target_dir
+            .join("thumbv7em-none-eabihf")
+            .join("firmware")
+            .join("firmware");
+        let copy = root.join("target").join("qemu-tests").join("firmware-checkpoint.elf");
+        std::fs::create_dir_all(copy.parent().unwrap()).unwrap();
+        std::fs::copy(&built, &copy).expect("copy the checkpoint firmware");
+        copy
+    })
+    .clone()
+}
+
 /// Fails (never skips) when QEMU is missing: CI installs it, and a skipped test would hide that.
 pub fn require_qemu() {
     let qemu = host_sim::stream::qemu::qemu_binary();

@@ -1,0 +1,127 @@
+//! The estimator's checkpoint in two alternating flash slots (any `embedded_storage` NOR flash).
+//!
+//! Slot `i` starts at `i * SLOT_BYTES`: a 16-byte header (magic `RCKP`, sequence number u32 LE,
+//! the checkpointed sample's `time_s` f64 LE), then the core's checkpoint image
+//! (`Estimator::CHECKPOINT_LEN` bytes, with its own magic, version and CRC-32). A save erases the
+//! slot that does not hold the newest image, writes the image, and writes the header last. A power
+//! cut at any point of a save leaves that slot without a valid header or with an image that fails
+//! the core's checks, and the other slot, untouched, still holds the last good image. At boot the
+//! slots are tried newest first; the first one the core restores wins.
+
+use embedded_storage::nor_flash::NorFlash;
+use estimator_core::Estimator;
+
+const MAGIC: [u8; 4] = *b"RCKP";
+const HEADER_BYTES: usize = 16;
+/// Bytes of one checkpoint image.
+pub const IMAGE_BYTES: usize = <Estimator>::CHECKPOINT_LEN;
+/// One slot: header and image, rounded up to 4 KiB erase blocks.
+pub const SLOT_BYTES: usize = (HEADER_BYTES + IMAGE_BYTES).div_ceil(4096) * 4096;
+
+/// A slot's header.
+#[derive(Clone, Copy)]
+struct Header {
+    sequence: u32,
+    time_s: f64,
+}
+
+/// Why a save failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StoreError {
+    Checkpoint,
+    Flash,
+}
+
+/// The two slots on a flash.
+pub struct CheckpointStore<F> {
+    flash: F,
+    /// Sequence number and slot of the newest valid image, if any.
+    newest: Option<(u32, usize)>,
+    /// Images written since boot.
+    pub saved: u32,
+    /// Time of the newest image saved or restored.
+    pub time_s: Option<f64>,
+}
+
+impl<F: NorFlash> CheckpointStore<F> {
+    pub fn new(flash: F) -> Self {
+        CheckpointStore {
+            flash,
+            newest: None,
+            saved: 0,
+            time_s: None,
+        }
+    }
+
+    fn header(&mut self, slot: usize) -> Option<Header> {
+        let mut bytes = [0u8; HEADER_BYTES];
+        self.flash.read((slot * SLOT_BYTES) as u32, &mut bytes).ok()?;
+        let (magic, rest) = bytes.split_first_chunk::<4>()?;
+        let (sequence, rest) = rest.split_first_chunk::<4>()?;
+        let (time, _) = rest.split_first_chunk::<8>()?;
+        (*magic == MAGIC).then(|| Header {
+            sequence: u32::from_le_bytes(*sequence),
+            time_s: f64::from_le_bytes(*time),
+        })
+    }
+
+    /// Restores the newest image the core accepts; returns its time. `image` is scratch space.
+    pub fn restore(&mut self, estimator: &mut Estimator, image: &mut [u8; IMAGE_BYTES]) -> Option<f64> {
+        let mut slots = [(0usize, self.header(0)), (1usize, self.header(1))];
+        if let [(_, Some(a)), (_, Some(b))] = &slots {
+            if b.sequence > a.sequence {
+                slots.swap(0, 1);
+            }
+        }
+        for (slot, header) in slots {
+            let Some(header) = header else { continue };
+            if self
+                .flash
+                .read((slot * SLOT_BYTES + HEADER_BYTES) as u32, image)
+                .is_err()
+            {
+                continue;
+            }
+            if estimator.restore(image).is_ok() {
+                self.newest = Some((header.sequence, slot));
+                self.time_s = Some(header.time_s);
+                return Some(header.time_s);
+            }
+        }
+        None
+    }
+
+    /// Saves the estimator's state, taken at the sample of `time_s`, into the older slot.
+    pub fn save(
+        &mut self,
+        estimator: &Estimator,
+        time_s: f64,
+        image: &mut [u8; IMAGE_BYTES],
+    ) -> Result<(), StoreError> {
+        estimator.checkpoint(image).map_err(|_| StoreError::Checkpoint)?;
+        let (sequence, slot) = match self.newest {
+            Some((s, slot)) => (s.wrapping_add(1), 1 - slot),
+            None => (1, 0),
+        };
+        let base = (slot * SLOT_BYTES) as u32;
+        self.flash
+            .erase(base, base + SLOT_BYTES as u32)
+            .map_err(|_| StoreError::Flash)?;
+        self.flash
+            .write(base + HEADER_BYTES as u32, image)
+            .map_err(|_| StoreError::Flash)?;
+        let mut header = [0u8; HEADER_BYTES];
+        let (magic, rest) = header.split_at_mut(4);
+        magic.copy_from_slice(&MAGIC);
+        let (seq, rest) = rest.split_at_mut(4);
+        seq.copy_from_slice(&sequence.to_le_bytes());
+        if let Some(t) = rest.get_mut(..8) {
+            t.copy_from_slice(&time_s.to_le_bytes());
+        }
+        self.flash.write(base, &header).map_err(|_| StoreError::Flash)?;
+        self.newest = Some((sequence, slot));
+        self.saved = self.saved.saturating_add(1);
+        self.time_s = Some(time_s);
+        Ok(())
+    }
+}
