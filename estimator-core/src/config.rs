@@ -122,7 +122,8 @@ pub enum ConfigError {
     RotationPeriod,
     /// `sample_interval_s` is not positive and finite.
     SampleInterval,
-    /// A noise, tolerance or gate is negative or not finite, or a sigma is zero.
+    /// A noise, tolerance or gate is negative or not finite, a sigma is zero or its square not
+    /// finite, or more than one rotation period of missing samples would be bridged.
     Parameter,
 }
 
@@ -153,6 +154,21 @@ impl Config {
         if positive.iter().any(|v| !(*v > 0.0 && v.is_finite()))
             || non_negative.iter().any(|v| !(*v >= 0.0 && v.is_finite()))
         {
+            return Err(ConfigError::Parameter);
+        }
+        // The step squares sigmas and random walks: their squares must be finite (and the sigmas'
+        // positive) or even a fresh estimator's 1-sigma is infinite. Found by fuzzing the
+        // checkpoint restore (a flipped exponent in `traditional_drift_rad_per_sqrt_s`).
+        let dt = self.sample_interval_s as Real;
+        let sigmas = [self.prior_sigma_rad, self.measurement_sigma_rad, self.traditional_sigma_rad, self.converged_sigma_rad];
+        let drifts = [self.drift_rad_per_sqrt_s, self.traditional_drift_rad_per_sqrt_s];
+        if sigmas.iter().any(|s| !((s * s).is_finite() && s * s > 0.0)) || drifts.iter().any(|d| !(d * d * dt).is_finite()) {
+            return Err(ConfigError::Parameter);
+        }
+        // Each bridged sample is a full step's work; bridging more than a window is pointless (the
+        // window would restart anyway), so a step never does more than `1 + period` steps of work.
+        // Found by fuzzing the checkpoint restore (1.8e9 bridged samples: minutes for one step).
+        if self.max_bridged_gap_samples as usize > self.rotation_period_samples {
             return Err(ConfigError::Parameter);
         }
         Ok(())
