@@ -23,6 +23,8 @@ pub struct CompareRow {
     /// median and 95th percentile, arcsec.
     pub error_at_arcsec: Vec<(f64, f64)>,
     pub duration_s: f64,
+    /// Status at the end of each run, with how many runs ended in it (most frequent first).
+    pub final_status: Vec<(&'static str, usize)>,
 }
 
 fn stats(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
@@ -47,8 +49,17 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
             }))
         })
         .collect();
+    let mut final_status: Vec<(&'static str, usize)> = Vec::new();
+    for name in results.iter().map(|r| r.final_status.map_or("none", |s| s.name())) {
+        match final_status.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, count)) => *count += 1,
+            None => final_status.push((name, 1)),
+        }
+    }
+    final_status.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
     Ok(CompareRow {
         scenario: draw.kind,
+        final_status,
         method: config.method,
         runs: seeds,
         to_percent_s: stats(results.iter().map(|r| r.all_within_percent_from_s().unwrap_or(inf))),
@@ -79,12 +90,12 @@ fn fmt_err(e: f64) -> String {
 /// The markdown table.
 pub fn format_table(rows: &[CompareRow]) -> String {
     let mut s = String::from(
-        "| scenario | method | runs | time to 0.5 % s (median / p95) | time to 10 arcsec s (median / p95) | max abs error at 20000 s arcsec (median / p95) | max abs error at 45000 s arcsec (median / p95) |\n|---|---|---|---|---|---|---|\n",
+        "| scenario | method | runs | time to 0.5 % s (median / p95) | time to 10 arcsec s (median / p95) | max abs error at 20000 s arcsec (median / p95) | max abs error at 45000 s arcsec (median / p95) | status at the end (runs) |\n|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let d = r.duration_s;
         s.push_str(&format!(
-            "| {} | {} | {} | {} / {} | {} / {} | {} / {} | {} / {} |\n",
+            "| {} | {} | {} | {} / {} | {} / {} | {} / {} | {} / {} | {} |\n",
             r.scenario.name(),
             method_label(r.method),
             r.runs,
@@ -96,6 +107,7 @@ pub fn format_table(rows: &[CompareRow]) -> String {
             fmt_err(r.error_at_arcsec[0].1),
             fmt_err(r.error_at_arcsec[1].0),
             fmt_err(r.error_at_arcsec[1].1),
+            r.final_status.iter().map(|(n, c)| format!("{n} ({c})")).collect::<Vec<_>>().join(", "),
         ));
     }
     s

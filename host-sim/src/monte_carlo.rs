@@ -99,13 +99,15 @@ pub fn track_run(params: &ScenarioParams, config: Config, times_s: &[f64]) -> an
     let mut est = HostEstimator::new(config).map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
     let mut tracker = Tracker::new(times_s);
     let mut held = None;
+    let mut status = None;
     for (row, truth) in g.rows.iter().zip(&g.truth) {
         if let Ok(out) = est.step(&sample_of(row)) {
             held = out.estimate;
+            status = Some(out.status);
         }
         tracker.observe(row.time_s, held.as_ref(), &truth.errors_arcsec);
     }
-    Ok(tracker.finish(params.sample_interval_s))
+    Ok(Accuracy { final_status: status, ..tracker.finish(params.sample_interval_s) })
 }
 
 /// Runs `runs` draws in parallel; `on_done` is called after each run (progress).

@@ -114,7 +114,12 @@ impl Tracker {
                 percent: state.map(|(e, x)| core::array::from_fn(|i| percent_error(e[i], x[i]))),
             });
         }
-        Accuracy { points, within_percent_from_s: self.within_percent_since, within_arcsec_from_s: self.within_arcsec_since }
+        Accuracy {
+            points,
+            within_percent_from_s: self.within_percent_since,
+            within_arcsec_from_s: self.within_arcsec_since,
+            final_status: None,
+        }
     }
 }
 
@@ -135,6 +140,8 @@ pub struct Accuracy {
     pub within_percent_from_s: [Option<f64>; 4],
     /// Per error: first time after which it stays within 10 arcsec.
     pub within_arcsec_from_s: [Option<f64>; 4],
+    /// The estimator's status at the last accepted row, where the caller recorded it.
+    pub final_status: Option<estimator_core::Status>,
 }
 
 impl Accuracy {
