@@ -37,7 +37,9 @@ section "QEMU tests (faults, serial-port path, 50000 s end to end, budgets)"
 run cargo test -p host-sim --release --no-fail-fast --test qemu_faults --test qemu_port --test qemu_power_cut --test qemu_e2e --test qemu_budgets -- --nocapture --test-threads=1
 
 section "exact step instruction count (TCG plugin firmware/tools/stepcount.c)"
-WORK=target/qemu-tests/plugin
+# The QEMU tests leave the --features checkpoint build in place: build the default ELF again.
+run cargo build -q -p firmware --target thumbv7em-none-eabihf --profile firmware
+WORK="$PWD/target/qemu-tests/plugin"   # absolute: host-sim runs QEMU in a scratch directory
 mkdir -p "$WORK"
 PLUGIN_API=1
 qemu-system-arm --version | grep -q 'version [1-9][0-9]\.' && PLUGIN_API=2
