@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Runs every test of the project on a fresh machine, installing what is missing first:
 #   1. the thumbv7em-none-eabihf Rust target and qemu-system-arm (apt), if absent;
-#   2. host tests in release mode: estimator-core, link-protocol, host-sim (including the QEMU
-#      end-to-end tests, which build the firmware themselves);
+#   2. `cargo test --workspace --release`: estimator-core, link-protocol, host-sim (including the
+#      QEMU end-to-end tests, which build the firmware for the target themselves);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
-#   4. the firmware build for the target, with its size budgets checked.
+#   4. the firmware build for the target (its budgets are checked by host-sim's qemu_budgets test);
+#   5. clippy on the firmware and the link code, which deny every panicking construct.
 # Usage: bash scripts/test-all.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,6 +16,9 @@ log "toolchain"
 if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
     rustup target add thumbv7em-none-eabihf
 fi
+if ! cargo clippy --version >/dev/null 2>&1; then
+    rustup component add clippy
+fi
 if ! command -v qemu-system-arm >/dev/null 2>&1; then
     SUDO=""
     if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
@@ -24,11 +28,16 @@ fi
 qemu-system-arm --version | head -n 1
 cargo --version
 
-log "host tests (release): estimator-core, link-protocol, host-sim (with QEMU end-to-end)"
-cargo test --release
+log "every crate's tests (release): estimator-core, link-protocol, host-sim (with the QEMU end-to-end tests), firmware (empty on the host)"
+cargo test --workspace --release
 
 log "estimator-core with f64"
 cargo test --release -p estimator-core --features f64
 
 log "firmware build for thumbv7em-none-eabihf"
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
+
+log "no panicking path on the link: clippy's deny(unwrap_used, expect_used, indexing_slicing, panic)"
+# The firmware, link-protocol and estimator-core deny these lints in their sources; only clippy
+# enforces them, so it runs here (warnings of other lints do not fail the run).
+cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware

@@ -7,27 +7,48 @@
 //! - [`checkpoint_store`]: the estimator's checkpoint in two alternating flash slots;
 //! - [`stack`]: stack painting for the high-water mark; [`fault`]: panic and hard-fault handlers.
 //!
-//! This file wires them together and runs the loop. The protocol is in `firmware/PROTOCOL.md`.
-#![no_std]
-#![no_main]
+//! This file wires them together and runs the loop. The protocol is in the README's *Link protocol* section.
+//!
+//! Built for any other target (as `cargo test --workspace` does on the host), the crate is an
+//! empty program that says where it runs; nothing of the firmware is compiled.
+#![cfg_attr(target_os = "none", no_std)]
+#![cfg_attr(target_os = "none", no_main)]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
 
+#[cfg(target_os = "none")]
 mod board;
+#[cfg(target_os = "none")]
 #[cfg_attr(not(feature = "checkpoint"), allow(dead_code))]
 mod checkpoint_store;
+#[cfg(target_os = "none")]
 mod fault;
+#[cfg(target_os = "none")]
 mod link;
+#[cfg(target_os = "none")]
 mod service;
+#[cfg(target_os = "none")]
 mod stack;
 
+#[cfg(target_os = "none")]
 use core::mem::MaybeUninit;
+#[cfg(target_os = "none")]
 use cortex_m_rt::entry;
+#[cfg(target_os = "none")]
 use estimator_core::{Config, ConfigError, Estimator};
+#[cfg(target_os = "none")]
 use link_protocol::FrameError;
+
+/// On the host: the firmware is not built; say how to build it.
+#[cfg(not(target_os = "none"))]
+fn main() {
+    eprintln!("the firmware runs on thumbv7em-none-eabihf: cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware");
+    std::process::exit(2);
+}
 
 /// Builds the estimator into its static slot. Out of line: `Estimator::new` returns the 13.8 KB
 /// state by value and the copy into the slot needs a temporary, which should not stay in `main`'s
 /// frame for ever.
+#[cfg(target_os = "none")]
 #[inline(never)]
 fn init_estimator(
     slot: &'static mut MaybeUninit<Result<Estimator, ConfigError>>,
@@ -35,6 +56,7 @@ fn init_estimator(
     slot.write(Estimator::new(Config::default()))
 }
 
+#[cfg(target_os = "none")]
 #[entry]
 fn main() -> ! {
     stack::paint();

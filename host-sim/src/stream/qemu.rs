@@ -1,6 +1,6 @@
 //! Boots a firmware ELF on QEMU's mps2-an386 with UART0 on a unix socket, and stops it when dropped.
 //!
-//! The command line (also in firmware/NOTES.md):
+//! The command line (also in README.md (Firmware)):
 //!
 //! ```text
 //! qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -icount shift=0 -display none -monitor none
