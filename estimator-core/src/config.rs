@@ -122,8 +122,9 @@ pub enum ConfigError {
     RotationPeriod,
     /// `sample_interval_s` is not positive and finite.
     SampleInterval,
-    /// A noise, tolerance or gate is negative or not finite, a sigma is zero or its square not
-    /// finite, or more than one rotation period of missing samples would be bridged.
+    /// A noise, tolerance or gate is negative or not finite, a sigma is zero (or its square
+    /// underflows) or above 1 rad, one step's random walk exceeds 1 rad, or more than one rotation
+    /// period of missing samples would be bridged.
     Parameter,
 }
 
@@ -156,13 +157,15 @@ impl Config {
         {
             return Err(ConfigError::Parameter);
         }
-        // The step squares sigmas and random walks: their squares must be finite (and the sigmas'
-        // positive) or even a fresh estimator's 1-sigma is infinite. Found by fuzzing the
-        // checkpoint restore (a flipped exponent in `traditional_drift_rad_per_sqrt_s`).
+        // Every sigma, and the random walk of one step, at most 1 rad: no installation error or
+        // attitude noise comes near a radian, and with that bound no variance can overflow (the
+        // prior plus 2^32 steps of random walk stays below 5e9 rad^2). Found by fuzzing the
+        // checkpoint restore: a random walk of 9e18 rad/sqrt(s) passed a finiteness check and
+        // overflowed the covariance two steps later; a sigma of 1e20 rad squared to infinity.
         let dt = self.sample_interval_s as Real;
         let sigmas = [self.prior_sigma_rad, self.measurement_sigma_rad, self.traditional_sigma_rad, self.converged_sigma_rad];
         let drifts = [self.drift_rad_per_sqrt_s, self.traditional_drift_rad_per_sqrt_s];
-        if sigmas.iter().any(|s| !((s * s).is_finite() && s * s > 0.0)) || drifts.iter().any(|d| !(d * d * dt).is_finite()) {
+        if sigmas.iter().any(|s| !(*s <= 1.0 && s * s > 0.0)) || drifts.iter().any(|d| !(d * d * dt <= 1.0)) {
             return Err(ConfigError::Parameter);
         }
         // Each bridged sample is a full step's work; bridging more than a window is pointless (the

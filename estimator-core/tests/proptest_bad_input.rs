@@ -410,10 +410,8 @@ proptest! {
 /// infinite: the 1-sigma is `inf`. Either `Estimator::new` refuses the configuration or every
 /// output stays finite.
 ///
-/// OPEN (reported to the core's owner, suggested fix: `Config::check` requires `d * d * dt <= 1`,
-/// one rad^2 of random walk per step, far above any physical installation-error drift).
+/// Fixed: `Config::check` bounds every sigma and one step's random walk by 1 rad.
 #[test]
-#[ignore = "open finding 4: Config::check accepts random walks whose accumulated variance overflows"]
 fn huge_but_finite_random_walk_is_refused_or_stays_finite() {
     for method in [Method::Windowed, Method::Traditional, Method::Paper] {
         let config = Config {
