@@ -123,8 +123,9 @@ pub enum ConfigError {
     /// `sample_interval_s` is not positive and finite.
     SampleInterval,
     /// A noise, tolerance or gate is negative or not finite, a sigma is zero (or its square
-    /// underflows) or above 1 rad, one step's random walk exceeds 1 rad, or more than one rotation
-    /// period of missing samples would be bridged.
+    /// underflows) or above 1 rad, the prior is more than 1000 times a measurement sigma, one
+    /// step's random walk exceeds 1 rad, or more than one rotation period of missing samples would
+    /// be bridged.
     Parameter,
 }
 
@@ -166,6 +167,15 @@ impl Config {
         let sigmas = [self.prior_sigma_rad, self.measurement_sigma_rad, self.traditional_sigma_rad, self.converged_sigma_rad];
         let drifts = [self.drift_rad_per_sqrt_s, self.traditional_drift_rad_per_sqrt_s];
         if sigmas.iter().any(|s| !(*s <= 1.0 && s * s > 0.0)) || drifts.iter().any(|d| !(d * d * dt <= 1.0)) {
+            return Err(ConfigError::Parameter);
+        }
+        // In f32 a prior far wider than the measurement noise makes the first updates lose the
+        // covariance's definiteness (`crate::kalman`: the variance ratio must stay well below
+        // 1/eps). Prior at most 1000 times each measurement sigma (variance ratio 1e6; the
+        // defaults' are 141 and 0.13).
+        if self.prior_sigma_rad > 1000.0 * self.measurement_sigma_rad
+            || self.prior_sigma_rad > 1000.0 * self.traditional_sigma_rad
+        {
             return Err(ConfigError::Parameter);
         }
         // Each bridged sample is a full step's work; bridging more than a window is pointless (the
