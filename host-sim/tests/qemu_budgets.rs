@@ -67,16 +67,7 @@ fn flash_and_static_ram_are_within_budget() {
 fn step_cost_is_within_5000_instructions_and_the_stack_is_measured() {
     let elf = firmware_elf();
     let dir = scratch("budgets");
-    let log = dir.join("paper.csv");
-    host_sim(&[
-        "generate",
-        "--scenario",
-        "paper",
-        "--duration",
-        "6000",
-        "--out",
-        log.to_str().unwrap(),
-    ]);
+    let log = paper_log(&dir, 6000);
     let out = host_sim(&[
         "stream",
         "--qemu",

@@ -13,9 +13,8 @@ use std::time::Instant;
 fn stream_of_50000_s_through_qemu_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth() {
     let elf = firmware_elf();
     let dir = scratch("e2e");
-    let log = dir.join("paper.csv");
+    let log = paper_log(&dir, 50000);
     let (log_s, est_s, stream_s) = (log.to_str().unwrap(), dir.join("estimate.csv"), dir.join("stream.csv"));
-    host_sim(&["generate", "--scenario", "paper", "--duration", "50000", "--out", log_s]);
     host_sim(&["estimate", log_s, "--out", est_s.to_str().unwrap()]);
     let start = Instant::now();
     let out = host_sim(&[

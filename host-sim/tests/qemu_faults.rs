@@ -95,16 +95,7 @@ fn key(o: &Result<Output, SampleError>) -> String {
 fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
     let elf = firmware_elf();
     let dir = scratch("faults");
-    let log = dir.join("paper.csv");
-    host_sim(&[
-        "generate",
-        "--scenario",
-        "paper",
-        "--duration",
-        "2400",
-        "--out",
-        log.to_str().unwrap(),
-    ]);
+    let log = paper_log(&dir, 2400);
     let lines = read_log(&log).unwrap();
 
     // The clean answers, from the host's own estimator.

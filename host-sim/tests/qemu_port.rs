@@ -21,17 +21,8 @@ impl Drop for Guard {
 fn stream_over_a_serial_port_matches_estimate() {
     let elf = firmware_elf();
     let dir = scratch("port");
-    let log = dir.join("paper.csv");
+    let log = paper_log(&dir, 1200);
     let (est, streamed) = (dir.join("estimate.csv"), dir.join("stream.csv"));
-    host_sim(&[
-        "generate",
-        "--scenario",
-        "paper",
-        "--duration",
-        "1200",
-        "--out",
-        log.to_str().unwrap(),
-    ]);
     host_sim(&["estimate", log.to_str().unwrap(), "--out", est.to_str().unwrap()]);
 
     // QEMU names the pseudo-terminal on its stdout (which also carries the defmt log):

@@ -48,16 +48,7 @@ impl Rng {
 fn power_cuts_at_random_points_and_mid_write_lose_nothing() {
     let elf = firmware_elf_with_checkpoints();
     let dir = scratch("power-cut");
-    let log = dir.join("paper.csv");
-    host_sim(&[
-        "generate",
-        "--scenario",
-        "paper",
-        "--duration",
-        "6000",
-        "--out",
-        log.to_str().unwrap(),
-    ]);
+    let log = paper_log(&dir, 6000);
     let lines = read_log(&log).unwrap();
     let mut host = HostEstimator::new(Config::default()).unwrap();
     for l in &lines {

@@ -14,77 +14,58 @@ pub fn workspace_root() -> PathBuf {
         .to_path_buf()
 }
 
-/// Builds `firmware` for thumbv7em-none-eabihf with `--profile firmware` (once per test binary)
-/// and returns the ELF's path.
-pub fn firmware_elf() -> PathBuf {
-    static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| {
-        require_qemu();
-        let root = workspace_root();
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
-        let status = Command::new(&cargo)
-            .current_dir(&root)
-            .args(["build", "-p", "firmware", "--target", "thumbv7em-none-eabihf", "--profile", "firmware"])
-            .status()
-            .expect("cannot run cargo to build the firmware");
-        assert!(
-            status.success(),
-            "building the firmware failed ({status}): see cargo's output above (a missing target needs `rustup target add thumbv7em-none-eabihf`)"
-        );
-        let target_dir = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root.join("target"));
-        let target_dir = if target_dir.is_absolute() { target_dir } else { root.join(target_dir) };
-        let elf = target_dir.join("thumbv7em-none-eabihf").join("firmware").join("firmware");
-        assert!(elf.is_file(), "{} missing after the build", elf.display());
-        elf
-    })
-    .clone()
+/// Builds `firmware` for thumbv7em-none-eabihf with `--profile firmware` and `features`, and
+/// returns the path cargo wrote the ELF to (shared by every feature set: copy it to keep it).
+fn build_firmware(features: &[&str]) -> PathBuf {
+    require_qemu();
+    let root = workspace_root();
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
+    let mut command = Command::new(&cargo);
+    command
+        .current_dir(&root)
+        .args(["build", "-p", "firmware", "--target", "thumbv7em-none-eabihf", "--profile", "firmware"]);
+    if !features.is_empty() {
+        command.args(["--features", &features.join(",")]);
+    }
+    let status = command.status().expect("cannot run cargo to build the firmware");
+    assert!(
+        status.success(),
+        "building the firmware with features {features:?} failed ({status}): see cargo's output above (a missing target needs `rustup target add thumbv7em-none-eabihf`)"
+    );
+    let target_dir = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root.join("target"));
+    let target_dir = if target_dir.is_absolute() { target_dir } else { root.join(target_dir) };
+    let elf = target_dir.join("thumbv7em-none-eabihf").join("firmware").join("firmware");
+    assert!(elf.is_file(), "{} missing after the build", elf.display());
+    elf
 }
 
-/// Builds `firmware` with `--features checkpoint` and copies the ELF to
+/// The default firmware ELF, built once per test binary.
+pub fn firmware_elf() -> PathBuf {
+    static ELF: OnceLock<PathBuf> = OnceLock::new();
+    ELF.get_or_init(|| build_firmware(&[])).clone()
+}
+
+/// The firmware built with `--features checkpoint`, copied to
 /// `target/qemu-tests/firmware-checkpoint.elf` (the default build of other tests overwrites the
 /// original).
 pub fn firmware_elf_with_checkpoints() -> PathBuf {
     static ELF: OnceLock<PathBuf> = OnceLock::new();
     ELF.get_or_init(|| {
-        require_qemu();
-        let root = workspace_root();
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
-        let status = Command::new(&cargo)
-            .current_dir(&root)
-            .args([
-                "build",
-                "-p",
-                "firmware",
-                "--target",
-                "thumbv7em-none-eabihf",
-                "--profile",
-                "firmware",
-            ])
-            .args(["--features", "checkpoint"])
-            .status()
-            .expect("cannot run cargo to build the firmware");
-        assert!(
-            status.success(),
-            "building the firmware with --features checkpoint failed ({status})"
-        );
-        let target_dir = std::env::var_os("CARGO_TARGET_DIR")
-            .map(PathBuf::from)
-            .unwrap_or_else(|| root.join("target"));
-        let target_dir = if target_dir.is_absolute() {
-            target_dir
-        } else {
-            root.join(target_dir)
-        };
-        let built = target_dir
-            .join("thumbv7em-none-eabihf")
-            .join("firmware")
-            .join("firmware");
-        let copy = root.join("target").join("qemu-tests").join("firmware-checkpoint.elf");
+        let built = build_firmware(&["checkpoint"]);
+        let copy = workspace_root().join("target").join("qemu-tests").join("firmware-checkpoint.elf");
         std::fs::create_dir_all(copy.parent().unwrap()).unwrap();
         std::fs::copy(&built, &copy).expect("copy the checkpoint firmware");
         copy
     })
     .clone()
+}
+
+/// Generates the paper scenario (default seed) for `duration_s` into `dir/paper.csv` and its truth
+/// file; returns the log's path.
+pub fn paper_log(dir: &Path, duration_s: u32) -> PathBuf {
+    let log = dir.join("paper.csv");
+    host_sim(&["generate", "--scenario", "paper", "--duration", &duration_s.to_string(), "--out", log.to_str().unwrap()]);
+    log
 }
 
 /// Fails (never skips) when QEMU is missing: CI installs it, and a skipped test would hide that.
