@@ -10,23 +10,14 @@
 //! The sample source is local (estimator-core cannot use host-sim): sinusoidal sway, eq (2)'s
 //! oscillation for known errors, white noise from a 64-bit LCG.
 
+mod common;
+
+use common::oscillation;
 use estimator_core::checkpoint::{CheckpointError, CHECKPOINT_LEN};
 use estimator_core::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use estimator_core::{Config, Estimator, Method, Output, Real, Sample, SampleError};
 use proptest::prelude::*;
 use std::f64::consts::PI;
-
-/// Eq (2) in f64: heading, roll, pitch errors for errors `x` (rad).
-fn oscillation(x: &[f64; 4], rho: f64, s: f64, lat: f64) -> [f64; 3] {
-    let (sl, cl) = lat.sin_cos();
-    let (srs, crs) = (rho - s).sin_cos();
-    let (sr, cr) = rho.sin_cos();
-    [
-        -x[0] * cl * crs - x[1] * cl * srs - x[2] * sl * sr + x[3] * sl * cr,
-        -x[0] * sl * crs - x[1] * sl * srs + x[2] * cl * sr - x[3] * cl * cr,
-        x[0] * srs - x[1] * crs,
-    ]
-}
 
 /// A deterministic log of `n` samples with a few faults in it. `period_samples`: rotation period.
 fn scenario(n: usize, period_samples: usize, seed: u64) -> Vec<Sample> {

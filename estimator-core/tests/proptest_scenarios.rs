@@ -11,6 +11,9 @@
 //! the Earth rate. Internal values (Kalman covariance, window sums) are read from the checkpoint
 //! image, whose layout is documented in `estimator_core::checkpoint`.
 
+mod common;
+
+use common::oscillation;
 use estimator_core::checkpoint::METHOD_OFFSET;
 use estimator_core::units::{arcsec_to_rad, rad_to_arcsec, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use estimator_core::{Config, Estimator, Output, Real, RotationFault, Sample, Status};
@@ -18,18 +21,6 @@ use std::f64::consts::PI;
 
 const R: usize = std::mem::size_of::<Real>();
 const X_ARCSEC: [f64; 4] = [120.0, -80.0, 250.0, -190.0];
-
-/// Eq (2) in f64: heading, roll, pitch errors (rad).
-fn oscillation(x: &[f64; 4], rho: f64, s: f64, lat: f64) -> [f64; 3] {
-    let (sl, cl) = lat.sin_cos();
-    let (srs, crs) = (rho - s).sin_cos();
-    let (sr, cr) = rho.sin_cos();
-    [
-        -x[0] * cl * crs - x[1] * cl * srs - x[2] * sl * sr + x[3] * sl * cr,
-        -x[0] * sl * crs - x[1] * sl * srs + x[2] * cl * sr - x[3] * cl * cr,
-        x[0] * srs - x[1] * crs,
-    ]
-}
 
 /// Deterministic RINS output with known errors; the caller advances the rotation angle.
 struct Source {

@@ -59,14 +59,7 @@ impl Signal {
     pub fn oscillation(&self, t: f64) -> [f64; 3] {
         let x: [f64; 4] = core::array::from_fn(|i| arcsec_to_rad(self.x_arcsec[i]));
         let (rho, s, lat) = self.angles(t);
-        let (sl, cl) = lat.sin_cos();
-        let (sr, cr) = rho.sin_cos();
-        let (srs, crs) = (rho - s).sin_cos();
-        [
-            -x[0] * cl * crs - x[1] * cl * srs - x[2] * sl * sr + x[3] * sl * cr,
-            -x[0] * sl * crs - x[1] * sl * srs + x[2] * cl * sr - x[3] * cl * cr,
-            x[0] * srs - x[1] * crs,
-        ]
+        oscillation(&x, rho, s, lat)
     }
 
     /// The sample at time `t`.
@@ -88,4 +81,17 @@ impl Signal {
             pitch / RAD_PER_DEG,
         )
     }
+}
+
+/// Eq (2) in f64: heading, roll, pitch errors (rad) for errors `x` (rad) at rotation angle `rho`,
+/// platform angle `s` and latitude `lat`. The core's tests' truth, independent of the core's f32 rows.
+pub fn oscillation(x: &[f64; 4], rho: f64, s: f64, lat: f64) -> [f64; 3] {
+    let (sl, cl) = lat.sin_cos();
+    let (sr, cr) = rho.sin_cos();
+    let (srs, crs) = (rho - s).sin_cos();
+    [
+        -x[0] * cl * crs - x[1] * cl * srs - x[2] * sl * sr + x[3] * sl * cr,
+        -x[0] * sl * crs - x[1] * sl * srs + x[2] * cl * sr - x[3] * cl * cr,
+        x[0] * srs - x[1] * crs,
+    ]
 }
