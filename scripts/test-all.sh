@@ -4,7 +4,8 @@
 #   2. `cargo test --workspace --release`: estimator-core, link-protocol, host-sim (including the
 #      QEMU end-to-end tests, which build the firmware for the target themselves);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
-#   4. the firmware build for the target (its budgets are checked by host-sim's qemu_budgets test);
+#   4. the firmware build for the target, with and without its checkpoint feature (its budgets are
+#      checked by host-sim's qemu_budgets test);
 #   5. clippy on the firmware and the link code, which deny every panicking construct.
 # Usage: bash scripts/test-all.sh
 set -euo pipefail
@@ -34,7 +35,8 @@ cargo test --workspace --release
 log "estimator-core with f64"
 cargo test --release -p estimator-core --features f64
 
-log "firmware build for thumbv7em-none-eabihf"
+log "firmware build for thumbv7em-none-eabihf (default, and without its checkpoint feature)"
+cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
 
 log "no panicking path on the link: clippy's deny(unwrap_used, expect_used, indexing_slicing, panic)"

@@ -20,9 +20,9 @@
 //! finite), every covariance exactly symmetric and positive definite (Cholesky), every moving-average window consistent (length equal to the configured
 //! period, head and fill count in range, every stored value within the fixed-point range and each
 //! running sum equal to the exact sum of the stored samples), flags 0 or 1, unused bytes zero.
-//! The new state is built in a local (`size_of::<Estimator<CAP>>()` bytes of stack, about
-//! 14 KB for the default) and assigned only when all of this has passed: on any error the running
-//! estimator is untouched.
+//! Nothing is written before all of this has passed, so on any error the running estimator is
+//! untouched; then the state is written in place (see [`Estimator::restore`]: no second estimator
+//! on the stack).
 //!
 //! The image carries the configuration; restoring replaces the estimator's configuration with the
 //! image's (it must pass [`Config::check`] for this `CAP`).
@@ -62,7 +62,9 @@ use crate::config::{Config, ConfigError, Method};
 use crate::estimator::{Estimator, RejectCounts, RotationMonitor, SwayMonitor};
 use crate::kalman::ConstantStateKalman;
 use crate::methods::windowed::CHANNELS;
-use crate::methods::{MethodState, Paper, Traditional, Windowed};
+#[cfg(feature = "paper-method")]
+use crate::methods::Paper;
+use crate::methods::{MethodState, Traditional, Windowed};
 use crate::moving_average::{WindowAverage, MAX_MAGNITUDE};
 use crate::sample::{Attitude, Sample};
 use crate::math::sin_cos;
@@ -411,9 +413,12 @@ impl Reader<'_> {
         }
         Ok(())
     }
+    /// A moving-average window, checked as it streams past (indices, every stored value within
+    /// the fixed-point range, each running sum equal to the exact sum of its samples); with `dst`,
+    /// also written into it.
     fn window<const CH: usize, const CAP: usize>(
         &mut self,
-        w: &mut WindowAverage<CH, CAP>,
+        mut dst: Option<&mut WindowAverage<CH, CAP>>,
         expected_len: usize,
     ) -> Result<(), CheckpointError> {
         let len = self.u32() as usize;
@@ -432,24 +437,29 @@ impl Reader<'_> {
         }
         let bound = WindowAverage::<CH, CAP>::quantize(MAX_MAGNITUDE);
         let mut direct = [0i64; CH];
-        for (k, slot) in w.ring.iter_mut().enumerate() {
-            for (ch, v) in slot.iter_mut().enumerate() {
-                *v = self.i32();
-                if *v > bound || *v < -bound {
+        for k in 0..CAP {
+            for ch in 0..CH {
+                let v = self.i32();
+                if v > bound || v < -bound {
                     return Err(CheckpointError::InvalidValue(Part::WindowSamples));
                 }
                 if k < filled {
-                    direct[ch] += i64::from(*v);
+                    direct[ch] += i64::from(v);
+                }
+                if let Some(w) = dst.as_deref_mut() {
+                    w.ring[k][ch] = v;
                 }
             }
         }
         if direct != sums {
             return Err(CheckpointError::Inconsistent(Part::WindowSums));
         }
-        w.sums = sums;
-        w.len = len;
-        w.head = head;
-        w.filled = filled;
+        if let Some(w) = dst {
+            w.sums = sums;
+            w.len = len;
+            w.head = head;
+            w.filled = filled;
+        }
         Ok(())
     }
 }
@@ -540,6 +550,7 @@ impl<const CAP: usize> Estimator<CAP> {
                 }
                 w.window(&m.window);
             }
+            #[cfg(feature = "paper-method")]
             MethodState::Paper(m) => {
                 w.u32(m.updates);
                 w.u32(m.samples);
@@ -566,195 +577,280 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// Replaces the whole state (configuration included) with the image in `buf` (which may be
     /// longer than the image). On any error the estimator is left exactly as it was.
+    ///
+    /// Works in place, in two passes over the image: the first checks every field and stores only
+    /// what it must compare (the running sums, one small Kalman filter at a time); the second, once
+    /// everything has passed, resets the estimator in place ([`Estimator::reset`]'s way) and reads
+    /// the same bytes straight into it. No second estimator is built, so restoring needs about a
+    /// kilobyte of stack instead of the estimator's size (13.8 KB) several times over, which is what
+    /// lets the firmware restore at boot on a microcontroller's stack.
     pub fn restore(&mut self, buf: &[u8]) -> Result<(), CheckpointError> {
-        let restored = Self::from_checkpoint(buf)?;
-        *self = restored;
-        Ok(())
+        let (image, method) = verified_image::<CAP>(buf)?;
+        read_state::<CAP>(image, method, None)?;
+        // The same bytes pass the same checks again, so this cannot fail half-way.
+        read_state(image, method, Some(self)).map(|_| ())
     }
 
     /// A new estimator from a checkpoint image (see [`Estimator::restore`]).
     pub fn from_checkpoint(buf: &[u8]) -> Result<Self, CheckpointError> {
-        let len = Self::CHECKPOINT_LEN;
-        let Some(header) = buf.get(..HEADER_LEN) else {
-            return Err(CheckpointError::BufferTooSmall { needed: HEADER_LEN, available: buf.len() });
-        };
-        let mut r = Reader { buf: header, pos: 0 };
-        if r.array::<4>() != MAGIC {
-            return Err(CheckpointError::BadMagic);
-        }
-        let version = u16::from_le_bytes(r.array());
-        if version != VERSION {
-            return Err(CheckpointError::UnsupportedVersion(version));
-        }
-        let real_bytes = r.u8();
-        if real_bytes as usize != R {
-            return Err(CheckpointError::RealWidthMismatch(real_bytes));
-        }
-        let method_code = r.u8();
-        let capacity = r.u32();
-        if capacity as usize != CAP {
-            return Err(CheckpointError::CapacityMismatch(capacity));
-        }
-        let found = r.u32() as usize;
-        if found != len {
-            return Err(CheckpointError::LengthMismatch { expected: len, found });
-        }
-        let Some(image) = buf.get(..len) else {
-            return Err(CheckpointError::BufferTooSmall { needed: len, available: buf.len() });
-        };
-        let stored = u32::from_le_bytes(Reader { buf: image, pos: len - CRC_LEN }.array());
-        let computed = crc32(image.get(..len - CRC_LEN).unwrap_or(&[]));
-        if stored != computed {
-            return Err(CheckpointError::CrcMismatch { stored, computed });
-        }
-        let method = Method::from_code(method_code).ok_or(CheckpointError::UnknownMethod(method_code))?;
-
-        let mut r = Reader { buf: image, pos: HEADER_LEN };
-        let rotation_period_samples = r.u32() as usize;
-        let sample_interval_s = r.f64();
-        let mut reals = [0.0 as Real; 9];
-        for v in reals.iter_mut() {
-            *v = r.real();
-        }
-        let config = Config {
-            method,
-            rotation_period_samples,
-            sample_interval_s,
-            prior_sigma_rad: reals[0],
-            measurement_sigma_rad: reals[1],
-            drift_rad_per_sqrt_s: reals[2],
-            traditional_sigma_rad: reals[3],
-            traditional_drift_rad_per_sqrt_s: reals[4],
-            sway_gate_rad: reals[5],
-            converged_sigma_rad: reals[6],
-            rotation_step_tolerance: reals[7],
-            rotation_period_tolerance: reals[8],
-            max_bridged_gap_samples: r.u32(),
-        };
+        let (image, method) = verified_image::<CAP>(buf)?;
+        let config = read_state::<CAP>(image, method, None)?;
         let mut est = Estimator::<CAP>::new(config).map_err(CheckpointError::InvalidConfig)?;
-
-        est.previous = match r.u8() {
-            0 => {
-                let start = r.pos;
-                r.pos += 8 + 6 * R;
-                if image.get(start..r.pos).is_none_or(|b| b.iter().any(|v| *v != 0)) {
-                    return Err(CheckpointError::Inconsistent(Part::PreviousSample));
-                }
-                None
-            }
-            1 => {
-                let time_s = r.f64();
-                let v: [Real; 6] = core::array::from_fn(|_| r.real());
-                let s = Sample {
-                    time_s,
-                    rotation_rad: v[0],
-                    platform_rad: v[1],
-                    latitude_rad: v[2],
-                    attitude: Attitude { heading_rad: v[3], roll_rad: v[4], pitch_rad: v[5] },
-                };
-                if s.check().is_err() {
-                    return Err(CheckpointError::InvalidValue(Part::PreviousSample));
-                }
-                Some(s)
-            }
-            _ => return Err(CheckpointError::Inconsistent(Part::Flags)),
-        };
-        est.rotation_continuous = r.flag()?;
-        est.gate_open = r.flag()?;
-        let latitude_rad = r.finite(Part::Latitude)?;
-        let (sin_lat, cos_lat) = sin_cos(latitude_rad);
-        est.latitude_trig = (latitude_rad, sin_lat, cos_lat);
-        let direction = i8::from_le_bytes(r.array());
-        let mean_rate_ratio = r.finite(Part::RotationMonitor)?;
-        if !(-1..=1).contains(&direction) || mean_rate_ratio < 0.0 {
-            return Err(CheckpointError::InvalidValue(Part::RotationMonitor));
-        }
-        est.rotation = RotationMonitor { direction, mean_rate_ratio };
-        let mean_rad = r.finite(Part::SwayMonitor)?;
-        let mean_square_rad2 = r.finite(Part::SwayMonitor)?;
-        est.sway = SwayMonitor { mean_rad, mean_square_rad2, samples: r.u32() };
-        est.rejected = RejectCounts(core::array::from_fn(|_| r.u32()));
-        est.accepted = r.u32();
-        est.bridged = r.u32();
-        est.window_restarts = r.u32();
-
-        r.pos = METHOD_OFFSET;
-        let period = config.rotation_period_samples;
-        match &mut est.method {
-            MethodState::Windowed(m) => {
-                read_windowed(&mut r, m, period, max_variance(&config))?;
-            }
-            MethodState::Paper(m) => {
-                read_paper(&mut r, m, period, max_variance(&config))?;
-            }
-            MethodState::Traditional(m) => {
-                read_traditional(&mut r, m, max_variance(&config))?;
-            }
-        }
-        if image.get(r.pos..len - CRC_LEN).is_none_or(|b| b.iter().any(|v| *v != 0)) {
-            return Err(CheckpointError::Inconsistent(Part::Padding));
-        }
+        read_state(image, method, Some(&mut est))?;
         Ok(est)
     }
 }
 
+/// Checks the header (magic, version, float width, capacity, length) and the CRC; returns the
+/// image (`buf[..CHECKPOINT_LEN]`) and the method code of its header.
+fn verified_image<const CAP: usize>(buf: &[u8]) -> Result<(&[u8], u8), CheckpointError> {
+    let len = checkpoint_len(CAP);
+    let Some(header) = buf.get(..HEADER_LEN) else {
+        return Err(CheckpointError::BufferTooSmall { needed: HEADER_LEN, available: buf.len() });
+    };
+    let mut r = Reader { buf: header, pos: 0 };
+    if r.array::<4>() != MAGIC {
+        return Err(CheckpointError::BadMagic);
+    }
+    let version = u16::from_le_bytes(r.array());
+    if version != VERSION {
+        return Err(CheckpointError::UnsupportedVersion(version));
+    }
+    let real_bytes = r.u8();
+    if real_bytes as usize != R {
+        return Err(CheckpointError::RealWidthMismatch(real_bytes));
+    }
+    let method_code = r.u8();
+    let capacity = r.u32();
+    if capacity as usize != CAP {
+        return Err(CheckpointError::CapacityMismatch(capacity));
+    }
+    let found = r.u32() as usize;
+    if found != len {
+        return Err(CheckpointError::LengthMismatch { expected: len, found });
+    }
+    let Some(image) = buf.get(..len) else {
+        return Err(CheckpointError::BufferTooSmall { needed: len, available: buf.len() });
+    };
+    let stored = u32::from_le_bytes(Reader { buf: image, pos: len - CRC_LEN }.array());
+    let computed = crc32(image.get(..len - CRC_LEN).unwrap_or(&[]));
+    if stored != computed {
+        return Err(CheckpointError::CrcMismatch { stored, computed });
+    }
+    Ok((image, method_code))
+}
+
+/// Reads and checks every field of a verified image (see the module doc) and returns its
+/// configuration. With `target`, also writes the state into it, after resetting it in place to
+/// that configuration; without, stores nothing. The checks are the same either way, so a target
+/// is written only by a pass that cannot fail once a pass without one has succeeded.
+fn read_state<const CAP: usize>(
+    image: &[u8],
+    method_code: u8,
+    mut target: Option<&mut Estimator<CAP>>,
+) -> Result<Config, CheckpointError> {
+    let method = Method::from_code(method_code).ok_or(CheckpointError::UnknownMethod(method_code))?;
+    let mut r = Reader { buf: image, pos: HEADER_LEN };
+    let rotation_period_samples = r.u32() as usize;
+    let sample_interval_s = r.f64();
+    let mut reals = [0.0 as Real; 9];
+    for v in reals.iter_mut() {
+        *v = r.real();
+    }
+    let config = Config {
+        method,
+        rotation_period_samples,
+        sample_interval_s,
+        prior_sigma_rad: reals[0],
+        measurement_sigma_rad: reals[1],
+        drift_rad_per_sqrt_s: reals[2],
+        traditional_sigma_rad: reals[3],
+        traditional_drift_rad_per_sqrt_s: reals[4],
+        sway_gate_rad: reals[5],
+        converged_sigma_rad: reals[6],
+        rotation_step_tolerance: reals[7],
+        rotation_period_tolerance: reals[8],
+        max_bridged_gap_samples: r.u32(),
+    };
+    config.check(CAP).map_err(CheckpointError::InvalidConfig)?;
+
+    let previous = match r.u8() {
+        0 => {
+            let start = r.pos;
+            r.pos += 8 + 6 * R;
+            if image.get(start..r.pos).is_none_or(|b| b.iter().any(|v| *v != 0)) {
+                return Err(CheckpointError::Inconsistent(Part::PreviousSample));
+            }
+            None
+        }
+        1 => {
+            let time_s = r.f64();
+            let v: [Real; 6] = core::array::from_fn(|_| r.real());
+            let s = Sample {
+                time_s,
+                rotation_rad: v[0],
+                platform_rad: v[1],
+                latitude_rad: v[2],
+                attitude: Attitude { heading_rad: v[3], roll_rad: v[4], pitch_rad: v[5] },
+            };
+            if s.check().is_err() {
+                return Err(CheckpointError::InvalidValue(Part::PreviousSample));
+            }
+            Some(s)
+        }
+        _ => return Err(CheckpointError::Inconsistent(Part::Flags)),
+    };
+    let rotation_continuous = r.flag()?;
+    let gate_open = r.flag()?;
+    let latitude_rad = r.finite(Part::Latitude)?;
+    let direction = i8::from_le_bytes(r.array());
+    let mean_rate_ratio = r.finite(Part::RotationMonitor)?;
+    if !(-1..=1).contains(&direction) || mean_rate_ratio < 0.0 {
+        return Err(CheckpointError::InvalidValue(Part::RotationMonitor));
+    }
+    let mean_rad = r.finite(Part::SwayMonitor)?;
+    let mean_square_rad2 = r.finite(Part::SwayMonitor)?;
+    let sway = SwayMonitor { mean_rad, mean_square_rad2, samples: r.u32() };
+    let rejected = RejectCounts(core::array::from_fn(|_| r.u32()));
+    let (accepted, bridged, window_restarts) = (r.u32(), r.u32(), r.u32());
+    if let Some(est) = target.as_deref_mut() {
+        est.reinit(config).map_err(CheckpointError::InvalidConfig)?;
+        est.previous = previous;
+        est.rotation_continuous = rotation_continuous;
+        est.gate_open = gate_open;
+        let (sin_lat, cos_lat) = sin_cos(latitude_rad);
+        est.latitude_trig = (latitude_rad, sin_lat, cos_lat);
+        est.rotation = RotationMonitor { direction, mean_rate_ratio };
+        est.sway = sway;
+        est.rejected = rejected;
+        est.accepted = accepted;
+        est.bridged = bridged;
+        est.window_restarts = window_restarts;
+    }
+
+    r.pos = METHOD_OFFSET;
+    let period = config.rotation_period_samples;
+    let max_variance = max_variance(&config);
+    // After `reinit` the target's method state is the image's.
+    let state = target.map(|est| &mut est.method);
+    match method {
+        Method::Windowed => {
+            let dst = match state {
+                Some(MethodState::Windowed(m)) => Some(m),
+                _ => None,
+            };
+            read_windowed(&mut r, dst, period, max_variance)?;
+        }
+        #[cfg(feature = "paper-method")]
+        Method::Paper => {
+            let dst = match state {
+                Some(MethodState::Paper(m)) => Some(m),
+                _ => None,
+            };
+            read_paper(&mut r, dst, period, max_variance)?;
+        }
+        // Not reached: `Config::check` above refused it.
+        #[cfg(not(feature = "paper-method"))]
+        Method::Paper => return Err(CheckpointError::InvalidConfig(ConfigError::MethodUnavailable)),
+        Method::Traditional => {
+            let dst = match state {
+                Some(MethodState::Traditional(m)) => Some(m),
+                _ => None,
+            };
+            read_traditional(&mut r, dst, max_variance)?;
+        }
+    }
+    if image.get(r.pos..image.len() - CRC_LEN).is_none_or(|b| b.iter().any(|v| *v != 0)) {
+        return Err(CheckpointError::Inconsistent(Part::Padding));
+    }
+    Ok(config)
+}
+
 fn read_windowed<const CAP: usize>(
     r: &mut Reader<'_>,
-    m: &mut Windowed<CAP>,
+    mut dst: Option<&mut Windowed<CAP>>,
     period: usize,
     max_variance: f64,
 ) -> Result<(), CheckpointError> {
-    m.updates = r.u32();
-    r.kalman(&mut m.kf, max_variance)?;
-    for v in m.residual_mean.iter_mut() {
+    let updates = r.u32();
+    let mut kf = ConstantStateKalman::new([0.0; 4]);
+    r.kalman(&mut kf, max_variance)?;
+    let mut residual_mean = [0.0; 4];
+    for v in residual_mean.iter_mut() {
         *v = r.finite(Part::Residuals)?;
         if f64::from(v.abs()) > MAX_RESIDUAL {
             return Err(CheckpointError::InvalidValue(Part::Residuals));
         }
     }
-    m.residual_count = r.u32();
+    let residual_count = r.u32();
     // A gain is 0.5 or 0.5 times a window mean of quantized cos L: 0, or at least one count
     // (2^-30) over at most CAP samples. Anything between 0 and that would blow the widened
     // 1-sigma (residual / gain) up to infinity.
     let min_gain = 0.25 / (crate::moving_average::COUNTS_PER_UNIT as f64 * CAP as f64);
-    for v in m.gains.iter_mut() {
+    let mut gains = [0.0; 4];
+    for v in gains.iter_mut() {
         *v = r.finite(Part::Residuals)?;
         let g = f64::from(*v);
         if !(g == 0.0 || (min_gain..=1.0).contains(&g)) {
             return Err(CheckpointError::InvalidValue(Part::Residuals));
         }
     }
-    r.window(&mut m.window, period)
+    r.window(dst.as_deref_mut().map(|m| &mut m.window), period)?;
+    if let Some(m) = dst {
+        m.updates = updates;
+        m.kf = kf;
+        m.residual_mean = residual_mean;
+        m.residual_count = residual_count;
+        m.gains = gains;
+    }
+    Ok(())
 }
 
+#[cfg(feature = "paper-method")]
 fn read_paper<const CAP: usize>(
     r: &mut Reader<'_>,
-    m: &mut Paper<CAP>,
+    mut dst: Option<&mut Paper<CAP>>,
     period: usize,
     max_variance: f64,
 ) -> Result<(), CheckpointError> {
-    m.updates = r.u32();
-    m.samples = r.u32();
-    m.start_time_s = r.f64();
-    if !m.start_time_s.is_finite() {
+    let updates = r.u32();
+    let samples = r.u32();
+    let start_time_s = r.f64();
+    if !start_time_s.is_finite() {
         return Err(CheckpointError::InvalidValue(Part::PaperStartTime));
     }
-    let bound = i64::from(WindowAverage::<4, CAP>::quantize(MAX_MAGNITUDE)) * i64::from(m.samples);
-    for v in m.integrals.iter_mut() {
+    let bound = i64::from(WindowAverage::<4, CAP>::quantize(MAX_MAGNITUDE)) * i64::from(samples);
+    let mut integrals = [0i64; 4];
+    for v in integrals.iter_mut() {
         *v = r.i64();
         if *v > bound || *v < -bound {
             return Err(CheckpointError::InvalidValue(Part::PaperIntegrals));
         }
     }
-    for kf in m.kf.iter_mut() {
+    let mut kfs: [ConstantStateKalman<f64, 3>; 4] = core::array::from_fn(|_| ConstantStateKalman::new([0.0; 3]));
+    for kf in kfs.iter_mut() {
         r.kalman(kf, max_variance)?;
     }
-    r.window(&mut m.window, period)
+    r.window(dst.as_deref_mut().map(|m| &mut m.window), period)?;
+    if let Some(m) = dst {
+        m.updates = updates;
+        m.samples = samples;
+        m.start_time_s = start_time_s;
+        m.integrals = integrals;
+        m.kf = kfs;
+    }
+    Ok(())
 }
 
-fn read_traditional(r: &mut Reader<'_>, m: &mut Traditional, max_variance: f64) -> Result<(), CheckpointError> {
-    m.updates = r.u32();
-    r.kalman(&mut m.kf, max_variance)
+fn read_traditional(r: &mut Reader<'_>, dst: Option<&mut Traditional>, max_variance: f64) -> Result<(), CheckpointError> {
+    let updates = r.u32();
+    let mut kf = ConstantStateKalman::new([0.0; 4]);
+    r.kalman(&mut kf, max_variance)?;
+    if let Some(m) = dst {
+        m.updates = updates;
+        m.kf = kf;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

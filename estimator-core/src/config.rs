@@ -127,6 +127,8 @@ pub enum ConfigError {
     /// step's random walk exceeds 1 rad, or more than one rotation period of missing samples would
     /// be bridged.
     Parameter,
+    /// The method is not in this build (the paper's method needs the `paper-method` feature).
+    MethodUnavailable,
 }
 
 impl Config {
@@ -137,6 +139,9 @@ impl Config {
 
     /// Checks the configuration against a ring capacity.
     pub fn check(&self, capacity: usize) -> Result<(), ConfigError> {
+        if self.method == Method::Paper && !cfg!(feature = "paper-method") {
+            return Err(ConfigError::MethodUnavailable);
+        }
         if self.rotation_period_samples < 2 || self.rotation_period_samples > capacity {
             return Err(ConfigError::RotationPeriod);
         }

@@ -258,13 +258,35 @@ impl<const CAP: usize> Estimator<CAP> {
         })
     }
 
-    /// Forgets everything learnt (keeps the configuration).
+    /// Forgets everything learnt (keeps the configuration and the rejection counters). In place:
+    /// nothing the size of the estimator passes through the stack.
     pub fn reset(&mut self) {
         let rejected = self.rejected;
-        if let Ok(fresh) = Self::new(self.config) {
-            *self = fresh;
+        // The configuration passed its check when this estimator was made.
+        if self.reinit(self.config).is_ok() {
             self.rejected = rejected;
         }
+    }
+
+    /// Becomes, in place, what [`Estimator::new`]`(config)` returns (`tests::reinit_equals_new`),
+    /// or returns why the configuration cannot run and changes nothing. Used by [`Estimator::reset`]
+    /// and by checkpoint restore, so that neither needs a second estimator on the stack.
+    pub(crate) fn reinit(&mut self, config: Config) -> Result<(), ConfigError> {
+        config.check(CAP)?;
+        self.method.reset(&config);
+        let (s, c) = sin_cos(0.0);
+        self.config = config;
+        self.previous = None;
+        self.rotation_continuous = false;
+        self.latitude_trig = (0.0, s, c);
+        self.rotation = RotationMonitor::default();
+        self.sway = SwayMonitor::default();
+        self.gate_open = config.sway_gate_rad == 0.0;
+        self.rejected = RejectCounts::default();
+        self.accepted = 0;
+        self.bridged = 0;
+        self.window_restarts = 0;
+        Ok(())
     }
 
     /// The configuration.
@@ -602,6 +624,50 @@ mod tests {
         for (i, e) in errors_arcsec(&est).iter().enumerate() {
             assert!(e.abs() < 1.5, "x{}: {e:.3}", i + 1);
         }
+    }
+
+    /// `reinit` (behind `reset` and checkpoint restore) and `new` give the same estimator, for every
+    /// method, from a used estimator of the same or another method.
+    #[test]
+    fn reinit_equals_new() {
+        use crate::config::Method;
+        let methods = [Method::Windowed, Method::Paper, Method::Traditional];
+        for from in methods {
+            for to in methods {
+                let mut est: Estimator = Estimator::new(Config::with_method(from)).unwrap();
+                for k in 0..700 {
+                    est.step(&sample(k as f64, 3.0)).unwrap();
+                }
+                let config = Config { rotation_period_samples: 300, sway_gate_rad: 0.01, ..Config::with_method(to) };
+                est.reinit(config).unwrap();
+                assert!(est == Estimator::new(config).unwrap(), "{from:?} -> {to:?}");
+            }
+        }
+        let mut est: Estimator = Estimator::new(Config::default()).unwrap();
+        for k in 0..700 {
+            est.step(&sample(k as f64, 3.0)).unwrap();
+        }
+        let before = est.clone();
+        let bad = Config { rotation_period_samples: 481, ..Config::default() };
+        assert_eq!(est.reinit(bad), Err(ConfigError::RotationPeriod));
+        assert!(est == before, "a refused configuration changed the estimator");
+    }
+
+    #[test]
+    fn reset_forgets_all_but_the_configuration_and_rejections() {
+        let config = Config { rotation_period_samples: 300, ..Config::default() };
+        let mut est: Estimator = Estimator::new(config).unwrap();
+        for k in 0..700 {
+            est.step(&sample(k as f64, 3.0)).unwrap();
+        }
+        let mut late = sample(10.0, 3.0);
+        late.time_s = 5.0;
+        assert!(est.step(&late).is_err());
+        let rejected = est.rejected();
+        est.reset();
+        let mut fresh: Estimator = Estimator::new(config).unwrap();
+        fresh.rejected = rejected;
+        assert!(est == fresh);
     }
 
     #[test]

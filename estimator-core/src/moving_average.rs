@@ -82,6 +82,14 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
         self.filled
     }
 
+    /// Back to the state of [`WindowAverage::new`]`(len)`, in place: no `CAP x CH` temporary on
+    /// the stack (13 KB for the default estimator), which a microcontroller's stack may not hold.
+    pub fn reset(&mut self, len: usize) {
+        self.ring.fill([0; CH]);
+        self.clear();
+        self.len = len.clamp(1, CAP.max(1));
+    }
+
     /// Forgets every sample (after a long gap or a rotation fault).
     pub fn clear(&mut self) {
         self.sums = [0; CH];

@@ -4,7 +4,7 @@
 #   1. builds the release ELF (`--profile firmware`) and prints its sizes;
 #   2. runs link-protocol's unit tests (round trips, every fault kind);
 #   3. runs the QEMU tests: link faults (qemu_faults), `--port` over a QEMU pty (qemu_port), power
-#      cuts with checkpoints in flash (qemu_power_cut, firmware built with --features checkpoint), the
+#      cuts with checkpoints in flash (qemu_power_cut), the
 #      50000 s end-to-end run byte-identical to
 #      `host-sim estimate` and within 10 arcsec of truth (qemu_e2e), flash/RAM/stack/step budgets
 #      (qemu_budgets);
@@ -37,8 +37,6 @@ section "QEMU tests (faults, serial-port path, 50000 s end to end, budgets)"
 run cargo test -p host-sim --release --no-fail-fast --test qemu_faults --test qemu_port --test qemu_power_cut --test qemu_e2e --test qemu_budgets -- --nocapture --test-threads=1
 
 section "exact step instruction count (TCG plugin firmware/tools/stepcount.c)"
-# The QEMU tests leave the --features checkpoint build in place: build the default ELF again.
-run cargo build -q -p firmware --target thumbv7em-none-eabihf --profile firmware
 WORK="$PWD/target/qemu-tests/plugin"   # absolute: host-sim runs QEMU in a scratch directory
 mkdir -p "$WORK"
 PLUGIN_API=1

@@ -57,8 +57,8 @@ pub struct StreamArgs {
     /// Save the firmware's defmt log (QEMU's semihosting output; decode with `defmt-print -e ELF`).
     #[arg(long, value_name = "FILE")]
     pub defmt_log: Option<PathBuf>,
-    /// QEMU's working directory, where a firmware built with `--features checkpoint` keeps its
-    /// flash (`rins-flash.bin`) across runs (default: a fresh scratch directory).
+    /// QEMU's working directory, where the firmware keeps its flash (`rins-flash.bin`, the
+    /// checkpoints) across runs (default: a fresh scratch directory, so every boot starts empty).
     #[arg(long, value_name = "DIR", requires = "qemu")]
     pub flash_dir: Option<PathBuf>,
     /// Skip the log rows up to the time of the checkpoint the firmware restored at boot.

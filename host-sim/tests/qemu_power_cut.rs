@@ -1,4 +1,4 @@
-//! Power cuts: the firmware built with `--features checkpoint` saves a checkpoint every 60 s of
+//! Power cuts: the firmware (its default build) saves a checkpoint every 60 s of
 //! sample time into two alternating flash slots (a host file under QEMU). QEMU is killed at random
 //! points, once provably in the middle of a save; each time it is restarted on the same flash, the
 //! host resumes streaming after the checkpoint the firmware restored, and at the end the estimates
@@ -46,7 +46,7 @@ impl Rng {
 
 #[test]
 fn power_cuts_at_random_points_and_mid_write_lose_nothing() {
-    let elf = firmware_elf_with_checkpoints();
+    let elf = firmware_elf();
     let dir = scratch("power-cut");
     let log = paper_log(&dir, 6000);
     let lines = read_log(&log).unwrap();

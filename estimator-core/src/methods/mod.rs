@@ -4,6 +4,7 @@
 //! healthy, gate open) and is told when the moving average must restart (a long gap, a rotation
 //! fault). None of them does I/O or allocates.
 
+#[cfg(feature = "paper-method")]
 pub mod paper;
 pub mod traditional;
 pub mod windowed;
@@ -13,6 +14,7 @@ use crate::installation::Angles;
 use crate::sample::Sample;
 use crate::Real;
 
+#[cfg(feature = "paper-method")]
 pub use paper::Paper;
 pub use traditional::Traditional;
 pub use windowed::Windowed;
@@ -21,6 +23,7 @@ pub use windowed::Windowed;
 #[derive(Clone, Debug, PartialEq)]
 pub enum MethodState<const CAP: usize> {
     Windowed(Windowed<CAP>),
+    #[cfg(feature = "paper-method")]
     Paper(Paper<CAP>),
     Traditional(Traditional),
 }
@@ -30,15 +33,42 @@ impl<const CAP: usize> MethodState<CAP> {
     pub fn new(config: &Config) -> Self {
         match config.method {
             Method::Windowed => MethodState::Windowed(Windowed::new(config)),
+            #[cfg(feature = "paper-method")]
             Method::Paper => MethodState::Paper(Paper::new(config)),
+            // Not reached: `Config::check`, which every constructor runs first, refuses the paper
+            // method in a build without it (`ConfigError::MethodUnavailable`).
+            #[cfg(not(feature = "paper-method"))]
+            Method::Paper => MethodState::Traditional(Traditional::new(config)),
             Method::Traditional => MethodState::Traditional(Traditional::new(config)),
         }
+    }
+
+    /// Back to the state of [`MethodState::new`], in place when the method stays the same (the
+    /// windowed and paper states hold a 13 KB ring, which must not pass through the stack of a
+    /// microcontroller); a change of method builds the new state by value.
+    pub fn reset(&mut self, config: &Config) {
+        match (self, config.method) {
+            (MethodState::Windowed(m), Method::Windowed) => m.reset(config),
+            #[cfg(feature = "paper-method")]
+            (MethodState::Paper(m), Method::Paper) => m.reset(config),
+            (MethodState::Traditional(m), Method::Traditional) => *m = Traditional::new(config),
+            (state, _) => state.replace(config),
+        }
+    }
+
+    /// A change of method: the new state is built by value (13 KB of stack for the default
+    /// capacity). Out of line, so that only a change of method uses that stack, not every reset.
+    #[cold]
+    #[inline(never)]
+    fn replace(&mut self, config: &Config) {
+        *self = MethodState::new(config);
     }
 
     /// Feeds one checked sample; true if the filter was updated.
     pub fn step(&mut self, config: &Config, sample: &Sample, angles: &Angles) -> bool {
         match self {
             MethodState::Windowed(m) => m.step(config, sample, angles),
+            #[cfg(feature = "paper-method")]
             MethodState::Paper(m) => m.step(config, sample, angles),
             MethodState::Traditional(m) => m.step(config, sample, angles),
         }
@@ -48,6 +78,7 @@ impl<const CAP: usize> MethodState<CAP> {
     pub fn restart_window(&mut self) {
         match self {
             MethodState::Windowed(m) => m.restart_window(),
+            #[cfg(feature = "paper-method")]
             MethodState::Paper(m) => m.restart_window(),
             MethodState::Traditional(_) => {}
         }
@@ -58,6 +89,7 @@ impl<const CAP: usize> MethodState<CAP> {
     pub fn estimate(&self, config: &Config) -> Option<([Real; 4], [Real; 4], bool)> {
         match self {
             MethodState::Windowed(m) => m.estimate(config),
+            #[cfg(feature = "paper-method")]
             MethodState::Paper(m) => m.estimate().map(|(x, s)| (x, s, false)),
             MethodState::Traditional(m) => m.estimate().map(|(x, s)| (x, s, false)),
         }

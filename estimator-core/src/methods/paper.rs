@@ -55,6 +55,17 @@ impl<const CAP: usize> Paper<CAP> {
         }
     }
 
+    /// Back to the state of [`Paper::new`], in place (see [`WindowAverage::reset`]).
+    pub fn reset(&mut self, config: &Config) {
+        let s = config.prior_sigma_rad as f64;
+        self.integrals = [0; 4];
+        self.samples = 0;
+        self.start_time_s = 0.0;
+        self.window.reset(config.rotation_period_samples);
+        self.kf = core::array::from_fn(|_| ConstantStateKalman::new([s, s, s]));
+        self.updates = 0;
+    }
+
     /// Integrates one sample, averages, and updates the four filters once the window is full.
     pub fn step(&mut self, config: &Config, sample: &Sample, angles: &Angles) -> bool {
         if self.samples == 0 {

@@ -95,6 +95,16 @@ impl<const CAP: usize> Windowed<CAP> {
         }
     }
 
+    /// Back to the state of [`Windowed::new`], in place (see [`WindowAverage::reset`]).
+    pub fn reset(&mut self, config: &Config) {
+        self.window.reset(config.rotation_period_samples);
+        self.kf = ConstantStateKalman::new([config.prior_sigma_rad; 4]);
+        self.updates = 0;
+        self.residual_mean = [0.0; 4];
+        self.residual_count = 0;
+        self.gains = [0.5; 4];
+    }
+
     /// Adds one sample; once the window is full, updates the filter with the four channel means.
     pub fn step(&mut self, config: &Config, sample: &Sample, angles: &Angles) -> bool {
         let p = products(&sample.attitude, angles);

@@ -14,8 +14,8 @@ pub fn workspace_root() -> PathBuf {
         .to_path_buf()
 }
 
-/// Builds `firmware` for thumbv7em-none-eabihf with `--profile firmware` and `features`, and
-/// returns the path cargo wrote the ELF to (shared by every feature set: copy it to keep it).
+/// Builds `firmware` for thumbv7em-none-eabihf with `--profile firmware` and `features` (on top
+/// of its defaults), and returns the path cargo wrote the ELF to.
 fn build_firmware(features: &[&str]) -> PathBuf {
     require_qemu();
     let root = workspace_root();
@@ -39,25 +39,10 @@ fn build_firmware(features: &[&str]) -> PathBuf {
     elf
 }
 
-/// The default firmware ELF, built once per test binary.
+/// The default firmware ELF (checkpoints in flash included), built once per test binary.
 pub fn firmware_elf() -> PathBuf {
     static ELF: OnceLock<PathBuf> = OnceLock::new();
     ELF.get_or_init(|| build_firmware(&[])).clone()
-}
-
-/// The firmware built with `--features checkpoint`, copied to
-/// `target/qemu-tests/firmware-checkpoint.elf` (the default build of other tests overwrites the
-/// original).
-pub fn firmware_elf_with_checkpoints() -> PathBuf {
-    static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| {
-        let built = build_firmware(&["checkpoint"]);
-        let copy = workspace_root().join("target").join("qemu-tests").join("firmware-checkpoint.elf");
-        std::fs::create_dir_all(copy.parent().unwrap()).unwrap();
-        std::fs::copy(&built, &copy).expect("copy the checkpoint firmware");
-        copy
-    })
-    .clone()
 }
 
 /// Generates the paper scenario (default seed) for `duration_s` into `dir/paper.csv` and its truth
