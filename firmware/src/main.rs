@@ -101,6 +101,8 @@ fn main() -> ! {
     let boot_stack_peak_bytes = stack::peak_bytes();
     // Paint again: from here on the high-water mark is the service loop's own.
     stack::paint();
+    #[cfg(feature = "checkpoint")]
+    defmt::info!("checkpoint every {=u32} s of sample time", service::CHECKPOINT_INTERVAL_S);
     defmt::info!(
         "estimator firmware up: protocol {=u8}, estimator state {=usize} bytes, stack {=u32} bytes, {=u32} used by the start-up",
         link_protocol::PROTOCOL_VERSION,

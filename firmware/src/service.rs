@@ -10,8 +10,9 @@ use crate::board::{CostCounter, Flash};
 use crate::checkpoint_store::{CheckpointStore, IMAGE_BYTES};
 use crate::stack;
 
-/// Seconds of sample time between checkpoints.
-pub const CHECKPOINT_INTERVAL_S: f64 = 60.0;
+// `CHECKPOINT_INTERVAL_S`: 60 s, or `RINS_CHECKPOINT_INTERVAL_S` when the firmware was built
+// (checked and written by build.rs).
+include!(concat!(env!("OUT_DIR"), "/checkpoint_interval.rs"));
 
 /// Where checkpoints go: the store and the scratch image.
 pub struct Persistence<'a> {
@@ -51,7 +52,7 @@ impl<'a> Service<'a> {
         let Some(p) = self.persistence.as_mut() else { return };
         match p.last_s {
             None => p.last_s = Some(time_s),
-            Some(last) if time_s - last >= CHECKPOINT_INTERVAL_S => {
+            Some(last) if time_s - last >= f64::from(CHECKPOINT_INTERVAL_S) => {
                 p.last_s = Some(time_s);
                 if p.store.save(self.estimator, time_s, p.image).is_err() {
                     defmt::error!("checkpoint at {=f64} s not saved", time_s);

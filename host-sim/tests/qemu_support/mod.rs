@@ -17,6 +17,11 @@ pub fn workspace_root() -> PathBuf {
 /// Builds `firmware` for thumbv7em-none-eabihf with `--profile firmware` and `features` (on top
 /// of its defaults), and returns the path cargo wrote the ELF to.
 fn build_firmware(features: &[&str]) -> PathBuf {
+    build_firmware_with_env(features, &[])
+}
+
+/// [`build_firmware`] with build-time environment variables (e.g. `RINS_CHECKPOINT_INTERVAL_S`).
+fn build_firmware_with_env(features: &[&str], env: &[(&str, &str)]) -> PathBuf {
     require_qemu();
     let root = workspace_root();
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
@@ -27,6 +32,7 @@ fn build_firmware(features: &[&str]) -> PathBuf {
     if !features.is_empty() {
         command.args(["--features", &features.join(",")]);
     }
+    command.envs(env.iter().copied());
     let status = command.status().expect("cannot run cargo to build the firmware");
     assert!(
         status.success(),
@@ -43,6 +49,16 @@ fn build_firmware(features: &[&str]) -> PathBuf {
 pub fn firmware_elf() -> PathBuf {
     static ELF: OnceLock<PathBuf> = OnceLock::new();
     ELF.get_or_init(|| build_firmware(&[])).clone()
+}
+
+/// The default firmware built with build-time environment `env`, copied to
+/// `target/qemu-tests/NAME.elf`, where no later build overwrites it.
+pub fn firmware_elf_with_env(name: &str, env: &[(&str, &str)]) -> PathBuf {
+    let built = build_firmware_with_env(&[], env);
+    let copy = workspace_root().join("target").join("qemu-tests").join(format!("{name}.elf"));
+    std::fs::create_dir_all(copy.parent().expect("a parent")).expect("create target/qemu-tests");
+    std::fs::copy(&built, &copy).expect("copy the firmware ELF");
+    copy
 }
 
 /// Generates the paper scenario (default seed) for `duration_s` into `dir/paper.csv` and its truth
