@@ -3,7 +3,7 @@
 //!
 //! [`Estimator::checkpoint`] writes the image into a caller-provided buffer of at least
 //! [`Estimator::CHECKPOINT_LEN`] bytes ([`CHECKPOINT_LEN`] for the default capacity of 480:
-//! **13 788 bytes** with `f32`, 13 976 with the `f64` feature; four 4 KiB flash pages).
+//! **13 796 bytes** with `f32`, 13 988 with the `f64` feature; four 4 KiB flash pages).
 //! [`Estimator::restore`] reads one back. Restoring an image into a fresh estimator and
 //! continuing gives outputs bit-identical to the uninterrupted run (tested in
 //! `tests/checkpoint_roundtrip.rs` for many random cut points and all three methods).
@@ -47,7 +47,8 @@
 //! `rotation_step_tolerance`, `rotation_period_tolerance` as `R`, `max_bridged_gap_samples` u32);
 //! previous sample (flag u8, `time_s` f64, rotation, platform, latitude, heading, roll, pitch as `R`;
 //! all zero when there is none); `rotation_continuous` u8; `gate_open` u8; the cached latitude `R`
-//! (its sine and cosine are recomputed); rotation monitor (direction i8, mean rate ratio `R`); sway
+//! (its sine and cosine are recomputed); rotation monitor (direction i8, steps u32, short rate
+//! ratio `R`, mean rate ratio `R`); sway
 //! monitor (mean `R`, mean square `R`, samples u32); rejected counts 5 x u32; accepted, bridged,
 //! window restarts u32.
 //!
@@ -74,7 +75,7 @@ use nalgebra::RealField;
 /// First four bytes of every image.
 pub const MAGIC: [u8; 4] = *b"RIEC";
 /// Format version written and the only one accepted.
-pub const VERSION: u16 = 1;
+pub const VERSION: u16 = 2;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 16;
 /// Bytes of the CRC at the end.
@@ -106,7 +107,7 @@ const R: usize = core::mem::size_of::<Real>();
 const CONFIG_LEN: usize = 4 + 8 + 9 * R + 4;
 const PREVIOUS_LEN: usize = 1 + 8 + 6 * R;
 /// Bytes of the common part (configuration, previous sample, monitors, counters).
-pub const COMMON_LEN: usize = CONFIG_LEN + PREVIOUS_LEN + 2 + R + (1 + R) + (2 * R + 4) + 5 * 4 + 3 * 4;
+pub const COMMON_LEN: usize = CONFIG_LEN + PREVIOUS_LEN + 2 + R + (1 + 4 + 2 * R) + (2 * R + 4) + 5 * 4 + 3 * 4;
 /// Offset of the method part.
 pub const METHOD_OFFSET: usize = HEADER_LEN + COMMON_LEN;
 
@@ -134,7 +135,7 @@ pub const fn method_len(cap: usize) -> usize {
 pub const fn checkpoint_len(cap: usize) -> usize {
     METHOD_OFFSET + method_len(cap) + CRC_LEN
 }
-/// Image length for the default capacity (480): 13 788 bytes with `f32`.
+/// Image length for the default capacity (480): 13 796 bytes with `f32`.
 pub const CHECKPOINT_LEN: usize = checkpoint_len(480);
 
 /// A part of the image, named in errors.
@@ -465,7 +466,7 @@ impl Reader<'_> {
 }
 
 impl<const CAP: usize> Estimator<CAP> {
-    /// Bytes of a checkpoint image of this estimator (13 788 for `CAP` = 480 with `f32`).
+    /// Bytes of a checkpoint image of this estimator (13 796 for `CAP` = 480 with `f32`).
     pub const CHECKPOINT_LEN: usize = checkpoint_len(CAP);
 
     /// Writes the whole state into `buf[..CHECKPOINT_LEN]`; returns the bytes written.
@@ -526,6 +527,8 @@ impl<const CAP: usize> Estimator<CAP> {
         w.u8(u8::from(self.gate_open));
         w.real(self.latitude_trig.0);
         w.bytes(&self.rotation.direction.to_le_bytes());
+        w.u32(self.rotation.steps);
+        w.real(self.rotation.short_rate_ratio);
         w.real(self.rotation.mean_rate_ratio);
         w.real(self.sway.mean_rad);
         w.real(self.sway.mean_square_rad2);
@@ -704,8 +707,12 @@ fn read_state<const CAP: usize>(
     let gate_open = r.flag()?;
     let latitude_rad = r.finite(Part::Latitude)?;
     let direction = i8::from_le_bytes(r.array());
+    let steps = r.u32();
+    let short_rate_ratio = r.finite(Part::RotationMonitor)?;
     let mean_rate_ratio = r.finite(Part::RotationMonitor)?;
-    if !(-1..=1).contains(&direction) || mean_rate_ratio < 0.0 {
+    // A ratio is an increment (at most pi after wrapping) over the nominal 2 pi / W: |ratio| <= W/2.
+    let max_ratio = rotation_period_samples as Real;
+    if !(-1..=1).contains(&direction) || !(0.0..=max_ratio).contains(&mean_rate_ratio) || short_rate_ratio.abs() > max_ratio {
         return Err(CheckpointError::InvalidValue(Part::RotationMonitor));
     }
     let mean_rad = r.finite(Part::SwayMonitor)?;
@@ -720,7 +727,7 @@ fn read_state<const CAP: usize>(
         est.gate_open = gate_open;
         let (sin_lat, cos_lat) = sin_cos(latitude_rad);
         est.latitude_trig = (latitude_rad, sin_lat, cos_lat);
-        est.rotation = RotationMonitor { direction, mean_rate_ratio };
+        est.rotation = RotationMonitor { direction, steps, short_rate_ratio, mean_rate_ratio };
         est.sway = sway;
         est.rejected = rejected;
         est.accepted = accepted;
@@ -868,11 +875,11 @@ mod tests {
     }
 
     #[test]
-    fn default_image_is_13788_bytes_with_f32() {
+    fn default_image_is_13796_bytes_with_f32() {
         #[cfg(not(feature = "f64"))]
-        assert_eq!(CHECKPOINT_LEN, 13_788);
+        assert_eq!(CHECKPOINT_LEN, 13_796);
         #[cfg(feature = "f64")]
-        assert_eq!(CHECKPOINT_LEN, 13_976);
+        assert_eq!(CHECKPOINT_LEN, 13_988);
         assert_eq!(Estimator::<480>::CHECKPOINT_LEN, CHECKPOINT_LEN);
     }
 

@@ -86,9 +86,9 @@ pub struct Config {
     pub max_bridged_gap_samples: u32,
     /// An error counts as converged once its 1-sigma is below this. Default 1 arcsec.
     pub converged_sigma_rad: Real,
-    /// Largest relative deviation of one step's rotation increment from nominal. Default 0.5: wide,
-    /// because encoder and rate jitter make single steps noisy (0.05 deg of jitter is 9 % of a 0.75 deg
-    /// step); the period itself is held to `rotation_period_tolerance` through the mean rate.
+    /// Largest relative deviation of the rotation rate over the last few steps (the mean over
+    /// `RotationMonitor::SHORT_STEPS`) from nominal. Default 0.5: a gross check; the period itself
+    /// is held to `rotation_period_tolerance` through the mean rate over one period.
     pub rotation_step_tolerance: Real,
     /// Largest relative deviation of the mean rotation rate (over about one period) from the
     /// configured period. Default 0.01 (1 %): a window then spans 360 +- 3.6 deg.

@@ -13,7 +13,7 @@
 mod common;
 
 use common::oscillation;
-use estimator_core::checkpoint::{CheckpointError, CHECKPOINT_LEN};
+use estimator_core::checkpoint::{CheckpointError, CHECKPOINT_LEN, VERSION};
 use estimator_core::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use estimator_core::{Config, Estimator, Method, Output, Real, Sample, SampleError};
 use proptest::prelude::*;
@@ -210,7 +210,7 @@ proptest! {
 #[test]
 fn default_image_size_is_documented_and_fits_four_flash_pages() {
     #[cfg(not(feature = "f64"))]
-    assert_eq!(CHECKPOINT_LEN, 13_788);
+    assert_eq!(CHECKPOINT_LEN, 13_796);
     assert!(CHECKPOINT_LEN <= 4 * 4096);
     let est = Estimator::<480>::new(Config::default()).unwrap();
     let mut big = vec![0xAAu8; CHECKPOINT_LEN + 100];
@@ -247,8 +247,9 @@ fn header_errors_are_typed() {
     b[0] = b'X';
     assert_eq!(target.restore(&b), Err(CheckpointError::BadMagic));
     let mut b = good.clone();
-    b[4..6].copy_from_slice(&2u16.to_le_bytes());
-    assert_eq!(target.restore(&b), Err(CheckpointError::UnsupportedVersion(2)));
+    // The previous format (version 1, before the rotation monitor's short mean) is refused.
+    b[4..6].copy_from_slice(&(VERSION - 1).to_le_bytes());
+    assert_eq!(target.restore(&b), Err(CheckpointError::UnsupportedVersion(VERSION - 1)));
     let mut b = good.clone();
     b[6] = 8 / (std::mem::size_of::<Real>() as u8 / 4); // the other float width
     assert_eq!(target.restore(&b), Err(CheckpointError::RealWidthMismatch(b[6])));
