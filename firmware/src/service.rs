@@ -119,8 +119,8 @@ impl<'a> Service<'a> {
     }
 }
 
-/// Out of line: the core's `reset` builds a fresh estimator on the stack (about 27 KiB of stack
-/// with `new`'s own frame); kept out of `main`'s frame, that stack is used only while it runs.
+/// Out of line, so that whatever `Estimator::reset` needs (it works in place, a few hundred
+/// bytes) stays out of `main`'s frame, which lives for ever.
 #[inline(never)]
 fn reset(estimator: &mut Estimator) {
     estimator.reset();
