@@ -1,7 +1,13 @@
 //! Estimator configuration: a plain struct whose [`Default`] reproduces the paper's setting.
 
+use crate::gap_fill::MAX_FILLABLE_GAP;
 use crate::units::{arcsec_to_rad, RAD_PER_DEG};
 use crate::Real;
+
+/// Rotation periods that can be pinned or are detected, s.
+pub const ROTATION_PERIOD_RANGE_S: (f64, f64) = (60.0, 3600.0);
+/// Sample intervals that can be pinned or are learned, s.
+pub const SAMPLE_INTERVAL_RANGE_S: (f64, f64) = (0.1, 10.0);
 
 /// Which identification method runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -54,11 +60,13 @@ impl Method {
 pub struct Config {
     /// Identification method. Default: [`Method::Windowed`].
     pub method: Method,
-    /// Rotation period in samples: the length of the moving average of eq (11). Default 480
-    /// (480 s at 1 Hz, the paper's). Must not exceed the estimator's ring capacity.
-    pub rotation_period_samples: usize,
-    /// Nominal sample interval, s. Default 1.
-    pub sample_interval_s: f64,
+    /// Period of the rotation pattern, s: the span of the moving average of eq (11). Default
+    /// `None`: detected from the rotation angle within the first one or two cycles (see
+    /// [`crate::rotation_pattern`]). Pinned: [`ROTATION_PERIOD_RANGE_S`].
+    pub rotation_period_s: Option<f64>,
+    /// Sample interval, s. Default `None`: learned from the time stamps (see
+    /// [`crate::time_grid`]). Pinned: [`SAMPLE_INTERVAL_RANGE_S`].
+    pub sample_interval_s: Option<f64>,
     /// Prior 1-sigma of each installation error. Default 1000 arcsec ("a few hundred" in the paper).
     pub prior_sigma_rad: Real,
     /// 1-sigma of one correlation measurement (windowed and paper methods). Default 10/sqrt(2)
@@ -80,18 +88,14 @@ pub struct Config {
     /// Start gate: estimation starts once the roll sway amplitude exceeds this (the paper's sea test
     /// used 3 deg). Default 0: off.
     pub sway_gate_rad: Real,
-    /// Gaps of up to this many missing samples are bridged by linear interpolation of every input;
-    /// longer gaps restart the moving average. Default 0: every gap restarts it, which costs one
-    /// rotation period of updates but no accuracy (see [`crate::estimator`] for the measured trade-off).
-    pub max_bridged_gap_samples: u32,
+    /// Gaps of up to this many lost samples in a row are filled from their neighbours (see
+    /// [`crate::gap_fill`]); longer gaps restart the moving average. Default 3, at most
+    /// [`crate::gap_fill::MAX_FILLABLE_GAP`]; 0 restarts it at every gap.
+    pub max_filled_gap_samples: u32,
     /// An error counts as converged once its 1-sigma is below this. Default 1 arcsec.
     pub converged_sigma_rad: Real,
-    /// Largest relative deviation of the rotation rate over the last few steps (the mean over
-    /// `RotationMonitor::SHORT_STEPS`) from nominal. Default 0.5: a gross check; the period itself
-    /// is held to `rotation_period_tolerance` through the mean rate over one period.
-    pub rotation_step_tolerance: Real,
-    /// Largest relative deviation of the mean rotation rate (over about one period) from the
-    /// configured period. Default 0.01 (1 %): a window then spans 360 +- 3.6 deg.
+    /// Largest relative deviation of the time between two passes of the rotation pattern through
+    /// the same angle from its period (see [`crate::rotation_pattern`]). Default 0.01 (1 %).
     pub rotation_period_tolerance: Real,
 }
 
@@ -99,17 +103,16 @@ impl Default for Config {
     fn default() -> Self {
         Config {
             method: Method::Windowed,
-            rotation_period_samples: 480,
-            sample_interval_s: 1.0,
+            rotation_period_s: None,
+            sample_interval_s: None,
             prior_sigma_rad: arcsec_to_rad(1000.0) as Real,
             measurement_sigma_rad: arcsec_to_rad(10.0 / core::f64::consts::SQRT_2) as Real,
             drift_rad_per_sqrt_s: arcsec_to_rad(0.003) as Real,
             traditional_sigma_rad: (3.0 * RAD_PER_DEG / core::f64::consts::SQRT_2) as Real,
             traditional_drift_rad_per_sqrt_s: 0.0,
             sway_gate_rad: 0.0,
-            max_bridged_gap_samples: 0,
+            max_filled_gap_samples: 3,
             converged_sigma_rad: arcsec_to_rad(1.0) as Real,
-            rotation_step_tolerance: 0.5,
             rotation_period_tolerance: 0.01,
         }
     }
@@ -118,14 +121,15 @@ impl Default for Config {
 /// A configuration the estimator cannot run with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ConfigError {
-    /// `rotation_period_samples` is 0 or above the ring capacity.
+    /// A pinned `rotation_period_s` outside [`ROTATION_PERIOD_RANGE_S`], or a ring capacity
+    /// below 2.
     RotationPeriod,
-    /// `sample_interval_s` is not positive and finite.
+    /// A pinned `sample_interval_s` outside [`SAMPLE_INTERVAL_RANGE_S`].
     SampleInterval,
     /// A noise, tolerance or gate is negative or not finite, a sigma is zero (or its square
     /// underflows) or above 1 rad, the prior is more than 1000 times a measurement sigma, one
-    /// step's random walk exceeds 1 rad, or more than one rotation period of missing samples would
-    /// be bridged.
+    /// step's random walk exceeds 1 rad, or gaps longer than
+    /// [`crate::gap_fill::MAX_FILLABLE_GAP`] would be filled.
     Parameter,
     /// The method is not in this build (the paper's method needs the `paper-method` feature).
     MethodUnavailable,
@@ -142,10 +146,11 @@ impl Config {
         if self.method == Method::Paper && !cfg!(feature = "paper-method") {
             return Err(ConfigError::MethodUnavailable);
         }
-        if self.rotation_period_samples < 2 || self.rotation_period_samples > capacity {
+        let within = |v: Option<f64>, (lo, hi): (f64, f64)| v.is_none_or(|v| v >= lo && v <= hi);
+        if capacity < 2 || !within(self.rotation_period_s, ROTATION_PERIOD_RANGE_S) {
             return Err(ConfigError::RotationPeriod);
         }
-        if !(self.sample_interval_s > 0.0 && self.sample_interval_s.is_finite()) {
+        if !within(self.sample_interval_s, SAMPLE_INTERVAL_RANGE_S) {
             return Err(ConfigError::SampleInterval);
         }
         let positive = [
@@ -153,7 +158,6 @@ impl Config {
             self.measurement_sigma_rad,
             self.traditional_sigma_rad,
             self.converged_sigma_rad,
-            self.rotation_step_tolerance,
             self.rotation_period_tolerance,
         ];
         let non_negative =
@@ -168,7 +172,7 @@ impl Config {
         // prior plus 2^32 steps of random walk stays below 5e9 rad^2). Found by fuzzing the
         // checkpoint restore: a random walk of 9e18 rad/sqrt(s) passed a finiteness check and
         // overflowed the covariance two steps later; a sigma of 1e20 rad squared to infinity.
-        let dt = self.sample_interval_s as Real;
+        let dt = self.sample_interval_s.unwrap_or(SAMPLE_INTERVAL_RANGE_S.1) as Real;
         let sigmas = [self.prior_sigma_rad, self.measurement_sigma_rad, self.traditional_sigma_rad, self.converged_sigma_rad];
         let drifts = [self.drift_rad_per_sqrt_s, self.traditional_drift_rad_per_sqrt_s];
         if sigmas.iter().any(|s| !(*s <= 1.0 && s * s > 0.0)) || drifts.iter().any(|d| !(d * d * dt <= 1.0)) {
@@ -183,10 +187,9 @@ impl Config {
         {
             return Err(ConfigError::Parameter);
         }
-        // Each bridged sample is a full step's work; bridging more than a window is pointless (the
-        // window would restart anyway), so a step never does more than `1 + period` steps of work.
-        // Found by fuzzing the checkpoint restore (1.8e9 bridged samples: minutes for one step).
-        if self.max_bridged_gap_samples as usize > self.rotation_period_samples {
+        // A filled sample is interpolated from its neighbours, which a longer gap does not have;
+        // at most 50 % off the period, or the pattern is not the one detected.
+        if self.max_filled_gap_samples > MAX_FILLABLE_GAP || !(self.rotation_period_tolerance <= 0.5) {
             return Err(ConfigError::Parameter);
         }
         Ok(())

@@ -32,8 +32,39 @@
 //! The ship's sway (eq 4) multiplies `sin rho` into components at the sway frequency +- 1/480 Hz;
 //! the low-frequency errors of eq (5) multiply it into components at (multiples of) 1/480 Hz +- the
 //! Earth rate. Both are removed by the averaging of [`crate::moving_average`].
+//!
+//! # Any rotation pattern: rows from the angles observed, and a centred reference
+//! The slow parts above hold for a uniform one-way rotation over whole periods, where the means
+//! of `sin^2 rho`, `sin rho cos rho`, ... are exactly 1/2 and 0. A reciprocating or stop-and-go
+//! rotation, or a window with samples missing, has other means. So the measurement rows are not
+//! those constants: each channel's row is eq (2)'s row pushed through the same correlation and
+//! averaging as the data, over the samples actually in the window. With `c` a channel's reference
+//! (`sin(rho-s)`, `cos(rho-s)`, `sin rho`, `cos rho`), `y` the attitude it correlates (pitch,
+//! pitch, roll, roll) and `h` eq (2)'s row of that attitude:
+//!
+//! ```text
+//! z = mean((c - mean c) y),    row = mean((c - mean c) h),    z = row . x  + (sway, noise)
+//! ```
+//!
+//! This is a regression of `y` on the reference with an intercept. Without the centring, a
+//! constant attitude offset `a` (a heel or trim of degrees, eq (5)'s `a0`) adds `a mean(c)` to
+//! `z`: zero for a uniform rotation over a whole window, but arcsec as soon as the reference does
+//! not average to exactly zero (a sample missing, a pattern that dwells unevenly). With it, a
+//! constant offset cancels exactly, whatever the pattern and whatever is missing. For a uniform
+//! one-way rotation over a whole window `mean c = 0` and the rows are the slow parts derived above
+//! (the test `rows_of_a_uniform_rotation_are_the_derived_slow_parts` checks this).
+//!
+//! # Exact running sums
+//! Everything above is a mean of products of the sample's quantities, so the window keeps their
+//! sums ([`CorrelationSums`]): counts, the references, the attitudes, the channel products, and the
+//! products of the references with eq (2)'s rows. Each sample enters in fixed point
+//! ([`QuantizedSample`]: attitude 2^30 counts per rad, sines and cosines 2^14 counts per unit) and
+//! every product is formed in integers, so adding a sample and later subtracting the same sample
+//! is exact: the sums never drift, and host and target agree bit for bit. The quantization of a
+//! reference is no bias: the same quantized value is used in the measurement and in its row.
 
 use crate::installation::Angles;
+use crate::math::round;
 use crate::sample::Attitude;
 use crate::Real;
 
@@ -46,7 +77,8 @@ pub const ROLL_SIN: usize = 2;
 /// Index of the channel that isolates x4: roll * cos(rho).
 pub const ROLL_COS: usize = 3;
 
-/// The four correlation products of one sample, in channel order.
+/// The four correlation products of one sample, in channel order (the paper's method uses them
+/// as they are).
 pub fn products(attitude: &Attitude, angles: &Angles) -> [Real; 4] {
     [
         attitude.pitch_rad * angles.sin_rho_s,
@@ -56,22 +88,227 @@ pub fn products(attitude: &Attitude, angles: &Angles) -> [Real; 4] {
     ]
 }
 
-/// The coefficients of the leakage of x1, x2 into the roll channels for one sample:
-/// `(sinL sin s, sinL cos s, cosL)`. Their means over the same window as the products give the
-/// exact slow-part measurement rows (see [`measurement_rows`]).
-pub fn leakage_coefficients(angles: &Angles) -> [Real; 3] {
-    let (sin_s, cos_s) = angles.sin_cos_platform();
-    [angles.sin_lat * sin_s, angles.sin_lat * cos_s, angles.cos_lat]
+/// Fixed-point counts per rad of roll and pitch.
+pub const ATTITUDE_COUNTS: f64 = (1u64 << 30) as f64;
+/// Fixed-point counts per unit of a sine or cosine.
+pub const TRIG_COUNTS: f64 = (1u64 << 14) as f64;
+
+/// One sample's inputs to the sums, in fixed point.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct QuantizedSample {
+    pub roll: i32,
+    pub pitch: i32,
+    pub sin_rho: i16,
+    pub cos_rho: i16,
+    pub sin_rho_s: i16,
+    pub cos_rho_s: i16,
+    pub sin_lat: i16,
+    pub cos_lat: i16,
 }
 
-/// Rows `h` with `mean(channel) = h . x` for the slow parts derived above, given the window means of
-/// [`leakage_coefficients`] `(m_ss, m_sc, m_c) = mean(sinL sin s), mean(sinL cos s), mean(cosL)`.
-pub fn measurement_rows(leakage_means: &[Real; 3]) -> [[Real; 4]; 4] {
-    let [m_ss, m_sc, m_c] = *leakage_means;
-    let mut rows = [[0.0; 4]; 4];
-    rows[PITCH_SIN] = [0.5, 0.0, 0.0, 0.0];
-    rows[PITCH_COS] = [0.0, -0.5, 0.0, 0.0];
-    rows[ROLL_SIN] = [-0.5 * m_ss, -0.5 * m_sc, 0.5 * m_c, 0.0];
-    rows[ROLL_COS] = [-0.5 * m_sc, 0.5 * m_ss, 0.0, -0.5 * m_c];
-    rows
+/// Largest attitude magnitude stored, rad (roll and pitch are checked to within 90 deg).
+const MAX_ATTITUDE_RAD: Real = 1.999;
+
+impl QuantizedSample {
+    /// Rounds a sample's roll, pitch and trigonometry to fixed point.
+    pub fn new(roll_rad: Real, pitch_rad: Real, angles: &Angles) -> QuantizedSample {
+        let att = |v: Real| {
+            let v = if v.is_nan() { 0.0 } else { v.clamp(-MAX_ATTITUDE_RAD, MAX_ATTITUDE_RAD) };
+            round(v * ATTITUDE_COUNTS as Real) as i32
+        };
+        let trig = |v: Real| {
+            let v = if v.is_nan() { 0.0 } else { v.clamp(-1.0, 1.0) };
+            round(v * TRIG_COUNTS as Real) as i16
+        };
+        QuantizedSample {
+            roll: att(roll_rad),
+            pitch: att(pitch_rad),
+            sin_rho: trig(angles.sin_rho),
+            cos_rho: trig(angles.cos_rho),
+            sin_rho_s: trig(angles.sin_rho_s),
+            cos_rho_s: trig(angles.cos_rho_s),
+            sin_lat: trig(angles.sin_lat),
+            cos_lat: trig(angles.cos_lat),
+        }
+    }
+
+    /// The products summed by the window, in the order of [`CorrelationSums::sums`] (see there).
+    pub fn terms(&self) -> [i64; SUMS] {
+        let (sr, cr, ss, cs) = (i32::from(self.sin_rho), i32::from(self.cos_rho), i32::from(self.sin_rho_s), i32::from(self.cos_rho_s));
+        let (sl, cl) = (i32::from(self.sin_lat), i32::from(self.cos_lat));
+        let (r, p) = (i64::from(self.roll), i64::from(self.pitch));
+        // eq (2)'s roll row without its signs: sinL cos(rho-s), sinL sin(rho-s), cosL sin rho, cosL cos rho.
+        let (h0, h1, h2, h3) = (sl * cs, sl * ss, cl * sr, cl * cr);
+        let w = |a: i32, b: i32| i64::from(a) * i64::from(b);
+        [
+            i64::from(sr),
+            i64::from(cr),
+            i64::from(ss),
+            i64::from(cs),
+            r,
+            p,
+            p * i64::from(ss),
+            p * i64::from(cs),
+            r * i64::from(sr),
+            r * i64::from(cr),
+            w(ss, ss),
+            w(ss, cs),
+            w(cs, cs),
+            i64::from(h0),
+            i64::from(h1),
+            i64::from(h2),
+            i64::from(h3),
+            w(sr, h0),
+            w(sr, h1),
+            w(sr, h2),
+            w(sr, h3),
+            w(cr, h0),
+            w(cr, h1),
+            w(cr, h3),
+        ]
+    }
+}
+
+/// Number of running sums.
+pub const SUMS: usize = 24;
+
+/// The window's exact running sums.
+///
+/// `sums`, in fixed-point counts (T = 2^14 per unit of a sine or cosine, A = 2^30 per rad):
+/// 0-3 `sin rho, cos rho, sin(rho-s), cos(rho-s)` (T); 4-5 roll, pitch (A); 6-9 the channel
+/// products pitch `sin(rho-s)`, pitch `cos(rho-s)`, roll `sin rho`, roll `cos rho` (A T);
+/// 10-12 `sin^2(rho-s)`, `sin(rho-s) cos(rho-s)`, `cos^2(rho-s)` (T^2); 13-16 the roll row's
+/// terms `sinL cos(rho-s)`, `sinL sin(rho-s)`, `cosL sin rho`, `cosL cos rho` (T^2); 17-20
+/// `sin rho` times each of those, 21-23 `cos rho` times the first, second and fourth (the third,
+/// `cos rho cosL sin rho`, is 20) (T^3). Magnitudes: at most 2^46 per sample, so `i64` holds
+/// more than 2^16 samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CorrelationSums {
+    /// Samples (window entries) summed.
+    pub count: u32,
+    pub sums: [i64; SUMS],
+    /// Sum of the entries' fill weights (see [`crate::gap_fill`]).
+    pub fill_weight: u32,
+}
+
+/// A window's measurement: the four channels and their rows (`z = rows x`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measurement {
+    pub z: [Real; 4],
+    pub rows: [[Real; 4]; 4],
+}
+
+impl CorrelationSums {
+    /// Adds one entry.
+    pub fn add(&mut self, q: &QuantizedSample, fill_weight: u16) {
+        let t = q.terms();
+        for i in 0..SUMS {
+            self.sums[i] += t[i];
+        }
+        self.count += 1;
+        self.fill_weight += u32::from(fill_weight);
+    }
+
+    /// Subtracts an entry added before: exactly undoes [`CorrelationSums::add`].
+    pub fn subtract(&mut self, q: &QuantizedSample, fill_weight: u16) {
+        let t = q.terms();
+        for i in 0..SUMS {
+            self.sums[i] -= t[i];
+        }
+        self.count = self.count.saturating_sub(1);
+        self.fill_weight = self.fill_weight.saturating_sub(u32::from(fill_weight));
+    }
+
+    /// The centred measurement of the module doc, or `None` for an empty window.
+    pub fn measurement(&self) -> Option<Measurement> {
+        if self.count == 0 {
+            return None;
+        }
+        // Powers of two: exact in f32, and no software f64 on the Cortex-M4F.
+        let inv_n = 1.0 / self.count as Real;
+        let t = inv_n / TRIG_COUNTS as Real;
+        let tt = t / TRIG_COUNTS as Real;
+        let ttt = tt / TRIG_COUNTS as Real;
+        let a = inv_n / ATTITUDE_COUNTS as Real;
+        let at = a / TRIG_COUNTS as Real;
+        let scale = [t, t, t, t, a, a, at, at, at, at, tt, tt, tt, tt, tt, tt, tt, ttt, ttt, ttt, ttt, ttt, ttt, ttt];
+        let m: [Real; SUMS] = core::array::from_fn(|i| self.sums[i] as Real * scale[i]);
+        let (sr, cr, ss, cs, roll, pitch) = (m[0], m[1], m[2], m[3], m[4], m[5]);
+        let cov = |mean_product: Real, a: Real, b: Real| mean_product - a * b;
+        let z = [cov(m[6], pitch, ss), cov(m[7], pitch, cs), cov(m[8], roll, sr), cov(m[9], roll, cr)];
+        let (h0, h1, h2, h3) = (m[13], m[14], m[15], m[16]);
+        let rows = [
+            [cov(m[10], ss, ss), -cov(m[11], ss, cs), 0.0, 0.0],
+            [cov(m[11], cs, ss), -cov(m[12], cs, cs), 0.0, 0.0],
+            [-cov(m[17], sr, h0), -cov(m[18], sr, h1), cov(m[19], sr, h2), -cov(m[20], sr, h3)],
+            [-cov(m[21], cr, h0), -cov(m[22], cr, h1), cov(m[20], cr, h2), -cov(m[23], cr, h3)],
+        ];
+        Some(Measurement { z, rows })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::sin_cos;
+
+    fn angles(rho: f64, s: f64, lat: f64) -> Angles {
+        Angles::new(rho as Real, s as Real, sin_cos(lat as Real))
+    }
+
+    #[test]
+    fn rows_of_a_uniform_rotation_are_the_derived_slow_parts() {
+        let (lat, s) = (0.7f64, 1.3f64);
+        let mut sums = CorrelationSums::default();
+        for k in 0..480 {
+            let rho = 0.2 + 2.0 * core::f64::consts::PI * k as f64 / 480.0;
+            sums.add(&QuantizedSample::new(0.0, 0.0, &angles(rho, s, lat)), 0);
+        }
+        let rows = sums.measurement().unwrap().rows;
+        let (sl, cl) = (lat.sin() as Real, lat.cos() as Real);
+        let (ssn, scs) = (s.sin() as Real, s.cos() as Real);
+        let expected = [
+            [0.5, 0.0, 0.0, 0.0],
+            [0.0, -0.5, 0.0, 0.0],
+            [-0.5 * sl * ssn, -0.5 * sl * scs, 0.5 * cl, 0.0],
+            [-0.5 * sl * scs, 0.5 * sl * ssn, 0.0, -0.5 * cl],
+        ];
+        for i in 0..4 {
+            for j in 0..4 {
+                assert!((rows[i][j] - expected[i][j]).abs() < 2e-4, "row {i} col {j}: {} vs {}", rows[i][j], expected[i][j]);
+            }
+        }
+    }
+
+    #[test]
+    fn subtracting_every_sample_added_returns_exactly_to_zero() {
+        let mut sums = CorrelationSums::default();
+        let qs: std::vec::Vec<QuantizedSample> = (0..300)
+            .map(|k| QuantizedSample::new(0.05 * (k as Real).sin(), -0.02, &angles(k as f64 * 0.7, 0.1, 0.5)))
+            .collect();
+        for q in &qs {
+            sums.add(q, 1);
+        }
+        for q in &qs {
+            sums.subtract(q, 1);
+        }
+        assert_eq!(sums, CorrelationSums::default());
+    }
+
+    #[test]
+    fn a_constant_offset_does_not_leak_into_any_channel_whatever_the_pattern() {
+        // Four positions with uneven dwells (the reference does not average to zero), 3 deg heel.
+        let heel = (3.0f64).to_radians() as Real;
+        let mut sums = CorrelationSums::default();
+        for k in 0..480 {
+            let rho = [0.0, 1.5708, 3.1416, 4.7124][(k * 7 / 480) % 4];
+            sums.add(&QuantizedSample::new(heel, -heel, &angles(rho, 0.4, 0.6)), 0);
+        }
+        let z = sums.measurement().unwrap().z;
+        for (ch, v) in z.iter().enumerate() {
+            // One fixed-point count of a mean product is below 1e-7 arcsec; f32 rounding of the
+            // means leaves a few 1e-9 rad.
+            assert!(v.abs() < 1e-8, "channel {ch}: {v:e} rad");
+        }
+    }
 }

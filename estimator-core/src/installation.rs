@@ -32,8 +32,13 @@ impl Angles {
     /// Computes the trigonometry of rho, rho - s and L. `lat_sin_cos` is `(sin L, cos L)`, which the
     /// caller caches because latitude changes slowly.
     pub fn new(rotation_rad: Real, platform_rad: Real, lat_sin_cos: (Real, Real)) -> Angles {
+        Angles::from_rotation(rotation_rad, rotation_rad - platform_rad, lat_sin_cos)
+    }
+
+    /// The same from rho and rho - s.
+    pub fn from_rotation(rotation_rad: Real, rotation_minus_platform_rad: Real, lat_sin_cos: (Real, Real)) -> Angles {
         let (sin_rho, cos_rho) = sin_cos(rotation_rad);
-        let (sin_rho_s, cos_rho_s) = sin_cos(rotation_rad - platform_rad);
+        let (sin_rho_s, cos_rho_s) = sin_cos(rotation_minus_platform_rad);
         Angles { sin_rho, cos_rho, sin_rho_s, cos_rho_s, sin_lat: lat_sin_cos.0, cos_lat: lat_sin_cos.1 }
     }
 

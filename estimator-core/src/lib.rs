@@ -11,9 +11,11 @@
 //! Where each step of the method lives:
 //! - eq (2), the oscillation model: [`installation`];
 //! - eq (8), the correlation products: [`correlation`];
-//! - eq (11), the 480 s moving average: [`moving_average`];
+//! - eq (11), the one-period moving average: [`moving_average`];
+//! - the sample grid (interval, jitter, clock steps): [`time_grid`]; lost samples: [`gap_fill`];
+//!   the rotation pattern (period, shape, health): [`rotation_pattern`];
 //! - eqs (13)-(18), the Kalman filter: [`kalman`], used by the three methods in [`methods`];
-//! - input checks, gaps, rotation health and the sway gate: [`estimator`].
+//! - input checks, the sway gate and how it all fits together: [`estimator`].
 //!
 //! `#![no_std]`, no allocator: every buffer has a const-generic capacity, and
 //! `size_of::<Estimator>()` is checked by a test.
@@ -39,18 +41,23 @@ pub type Real = f32;
 #[cfg(feature = "f64")]
 pub type Real = f64;
 
+#[cfg(any())]
 pub mod checkpoint;
 pub mod config;
 pub mod correlation;
 pub mod estimator;
+pub mod gap_fill;
 pub mod installation;
 pub mod kalman;
 pub mod methods;
 pub mod moving_average;
+pub mod rotation_pattern;
 pub mod sample;
 pub mod math;
+pub mod time_grid;
 pub mod units;
 
 pub use config::{Config, ConfigError, Method};
-pub use estimator::{Estimate, Estimator, Output, RejectCounts, RotationFault, Status};
+pub use estimator::{Counters, Estimate, Estimator, Holdup, Output, RejectCounts, RotationFault, RotationSummary, Status};
+pub use rotation_pattern::PatternKind;
 pub use sample::{Attitude, Field, Sample, SampleError};

@@ -10,14 +10,13 @@ pub mod traditional;
 pub mod windowed;
 
 use crate::config::{Config, Method};
-use crate::installation::Angles;
-use crate::sample::Sample;
+use crate::gap_fill::GridSample;
 use crate::Real;
 
 #[cfg(feature = "paper-method")]
 pub use paper::Paper;
 pub use traditional::Traditional;
-pub use windowed::Windowed;
+pub use windowed::{MethodEstimate, Windowed};
 
 /// The running state of whichever method the configuration selects.
 #[derive(Clone, Debug, PartialEq)]
@@ -64,13 +63,38 @@ impl<const CAP: usize> MethodState<CAP> {
         *self = MethodState::new(config);
     }
 
-    /// Feeds one checked sample; true if the filter was updated.
-    pub fn step(&mut self, config: &Config, sample: &Sample, angles: &Angles) -> bool {
+    /// Sets the moving average to one period of the rotation pattern.
+    pub fn configure(&mut self, period_samples: u32) {
         match self {
-            MethodState::Windowed(m) => m.step(config, sample, angles),
+            MethodState::Windowed(m) => m.configure(period_samples),
             #[cfg(feature = "paper-method")]
-            MethodState::Paper(m) => m.step(config, sample, angles),
-            MethodState::Traditional(m) => m.step(config, sample, angles),
+            MethodState::Paper(m) => m.configure(period_samples),
+            MethodState::Traditional(_) => {}
+        }
+    }
+
+    /// Feeds one sample (received or filled); true if the filter was updated (the windowed method
+    /// updates in [`MethodState::update`], once per step).
+    pub fn push(&mut self, config: &Config, interval_s: f64, sample: &GridSample) -> bool {
+        match self {
+            MethodState::Windowed(m) => {
+                m.push(sample);
+                false
+            }
+            #[cfg(feature = "paper-method")]
+            MethodState::Paper(m) => m.step(config, interval_s, sample),
+            MethodState::Traditional(m) => m.step(config, interval_s, sample),
+        }
+    }
+
+    /// The windowed method's one update per step (see [`Windowed::update`]); the others update
+    /// in [`MethodState::push`].
+    pub fn update(&mut self, config: &Config, interval_s: f64, fill_variance_rad2: (Real, Real)) -> bool {
+        match self {
+            MethodState::Windowed(m) => m.update(config, interval_s, fill_variance_rad2),
+            #[cfg(feature = "paper-method")]
+            MethodState::Paper(_) => false,
+            MethodState::Traditional(_) => false,
         }
     }
 
@@ -84,14 +108,31 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
-    /// `(x, sigma, model mismatch)` of x1..x4 in rad, once the filter has had a measurement. Only
-    /// the windowed method checks its residuals; the others never report a mismatch.
-    pub fn estimate(&self, config: &Config) -> Option<([Real; 4], [Real; 4], bool)> {
+    /// Whether the method needs a full window of one period before it can update.
+    pub fn needs_window(&self) -> bool {
+        !matches!(self, MethodState::Traditional(_))
+    }
+
+    /// Whether the method's window is full (always, for a method without one).
+    pub fn window_full(&self) -> bool {
+        match self {
+            MethodState::Windowed(m) => m.window.is_full(),
+            #[cfg(feature = "paper-method")]
+            MethodState::Paper(m) => m.window.is_full(),
+            MethodState::Traditional(_) => true,
+        }
+    }
+
+    /// x1..x4, their 1-sigma and whether the model is inconsistent, in rad, once the filter has
+    /// had a measurement. Only the windowed method checks its residuals; the others never report
+    /// a mismatch.
+    pub fn estimate(&self, config: &Config) -> Option<MethodEstimate> {
+        let plain = |(x_rad, sigma_rad): ([Real; 4], [Real; 4])| MethodEstimate { x_rad, sigma_rad, mismatch: false };
         match self {
             MethodState::Windowed(m) => m.estimate(config),
             #[cfg(feature = "paper-method")]
-            MethodState::Paper(m) => m.estimate().map(|(x, s)| (x, s, false)),
-            MethodState::Traditional(m) => m.estimate().map(|(x, s)| (x, s, false)),
+            MethodState::Paper(m) => m.estimate().map(plain),
+            MethodState::Traditional(m) => m.estimate().map(plain),
         }
     }
 }

@@ -17,10 +17,10 @@
 
 use crate::config::Config;
 use crate::correlation::products;
-use crate::installation::Angles;
+use crate::gap_fill::GridSample;
 use crate::kalman::ConstantStateKalman;
 use crate::moving_average::{WindowAverage, COUNTS_PER_UNIT};
-use crate::sample::Sample;
+use crate::sample::Attitude;
 use crate::units::EARTH_RATE_RAD_PER_S;
 use crate::Real;
 
@@ -49,7 +49,7 @@ impl<const CAP: usize> Paper<CAP> {
             integrals: [0; 4],
             samples: 0,
             start_time_s: 0.0,
-            window: WindowAverage::new(config.rotation_period_samples),
+            window: WindowAverage::new(CAP),
             kf: core::array::from_fn(|_| ConstantStateKalman::new([s, s, s])),
             updates: 0,
         }
@@ -61,17 +61,26 @@ impl<const CAP: usize> Paper<CAP> {
         self.integrals = [0; 4];
         self.samples = 0;
         self.start_time_s = 0.0;
-        self.window.reset(config.rotation_period_samples);
+        self.window.reset(CAP);
         self.kf = core::array::from_fn(|_| ConstantStateKalman::new([s, s, s]));
         self.updates = 0;
     }
 
+    /// Sets the moving average to one period (this method does not bin: a period longer than the
+    /// ring is averaged over the ring's length).
+    pub fn configure(&mut self, period_samples: u32) {
+        self.window.reset(period_samples as usize);
+    }
+
     /// Integrates one sample, averages, and updates the four filters once the window is full.
-    pub fn step(&mut self, config: &Config, sample: &Sample, angles: &Angles) -> bool {
+    pub fn step(&mut self, config: &Config, interval_s: f64, sample: &GridSample) -> bool {
+        let time_s = f64::from(sample.index) * interval_s;
         if self.samples == 0 {
-            self.start_time_s = sample.time_s;
+            self.start_time_s = time_s;
         }
-        let p = products(&sample.attitude, angles);
+        let angles = &sample.angles;
+        let attitude = Attitude { heading_rad: 0.0, roll_rad: sample.roll_rad, pitch_rad: sample.pitch_rad };
+        let p = products(&attitude, angles);
         let mut r_t = [0.0; 4];
         self.samples = self.samples.saturating_add(1);
         for ch in 0..4 {
@@ -82,8 +91,8 @@ impl<const CAP: usize> Paper<CAP> {
         let Some(r_bar) = self.window.means() else {
             return false;
         };
-        let half_window_s = (self.window.len() - 1) as f64 * 0.5 * config.sample_interval_s;
-        let t_c = sample.time_s - self.start_time_s - half_window_s;
+        let half_window_s = (self.window.len() - 1) as f64 * 0.5 * interval_s;
+        let t_c = time_s - self.start_time_s - half_window_s;
         let phase = EARTH_RATE_RAD_PER_S * t_c;
         let (sin_e, cos_e) = (libm::sin(phase), libm::cos(phase));
         let half_cos_lat = 0.5 * angles.cos_lat as f64;

@@ -8,9 +8,8 @@
 //! two settings, which `host-sim` reports.
 
 use crate::config::Config;
-use crate::installation::Angles;
+use crate::gap_fill::GridSample;
 use crate::kalman::ConstantStateKalman;
-use crate::sample::Sample;
 use crate::Real;
 
 /// State of the traditional baseline.
@@ -29,14 +28,13 @@ impl Traditional {
     }
 
     /// Updates with this sample's roll and pitch.
-    pub fn step(&mut self, config: &Config, sample: &Sample, angles: &Angles) -> bool {
-        let q = config.traditional_drift_rad_per_sqrt_s
-            * config.traditional_drift_rad_per_sqrt_s
-            * config.sample_interval_s as Real;
+    pub fn step(&mut self, config: &Config, interval_s: f64, sample: &GridSample) -> bool {
+        let angles = &sample.angles;
+        let q = config.traditional_drift_rad_per_sqrt_s * config.traditional_drift_rad_per_sqrt_s * interval_s as Real;
         self.kf.predict(&[q; 4]);
         let r = config.traditional_sigma_rad * config.traditional_sigma_rad;
-        let roll = self.kf.update(&angles.roll_row(), sample.attitude.roll_rad, r).is_ok();
-        let pitch = self.kf.update(&angles.pitch_row(), sample.attitude.pitch_rad, r).is_ok();
+        let roll = self.kf.update(&angles.roll_row(), sample.roll_rad, r).is_ok();
+        let pitch = self.kf.update(&angles.pitch_row(), sample.pitch_rad, r).is_ok();
         if roll || pitch {
             self.updates = self.updates.saturating_add(1);
         }

@@ -2,12 +2,15 @@
 //! over a moving window of exactly one rotation period.
 //!
 //! # Measurement
-//! Every second, for the window of the last `W` samples (W = rotation period), the mean of each
-//! correlation product of [`crate::correlation`] is
+//! Every sample, for the window of the last `W` samples (W = one period of the rotation pattern),
+//! the centred correlation of each channel of [`crate::correlation`] is
 //!
 //! ```text
-//! z = H x + v,    H = correlation::measurement_rows(mean(sinL sin s), mean(sinL cos s), mean(cosL))
+//! z = H x + v,    H = the same correlation and averaging applied to eq (2)'s rows
 //! ```
+//!
+//! with `H` from the angles observed in that window ([`crate::correlation::CorrelationSums::measurement`]),
+//! so any rotation pattern works and a constant attitude offset cancels.
 //!
 //! This is eq (11) applied to the product itself rather than to the running correlation of eq (8):
 //! `mean over [t-W, t]` = `(I(t) - I(t-W)) / W`, the increment of the correlation integral over one
@@ -16,6 +19,15 @@
 //! channels is a slow term with known coefficients instead of the `1/t` term of eq (12). Those
 //! coefficients are averaged over the same window as the products, so the row belongs to the same
 //! moment as the measurement: the middle of the window, `t - (W-1)/2` samples.
+//!
+//! # Filled samples and bins
+//! A window with filled samples ([`crate::gap_fill`]) carries their interpolation error: the
+//! per-product variance `r` is raised by the window's mean fill variance times 1/2 (the mean square
+//! of a reference), with the fill variance measured from the data. With bins of `b` samples
+//! ([`crate::moving_average::CorrelationWindow`]), an entry is the mean of `b` samples: `r / b`, and
+//! a filled sample's error counts `1 / b^2`. At most one update is made per step: after a filled
+//! gap several entries can come at once, and the filter takes the newest window only (its
+//! information is then slightly understated, never overstated).
 //!
 //! # Noise of an overlapping-window measurement
 //! Consecutive windows share W-1 of their W samples, so consecutive measurements are almost the same
@@ -44,16 +56,11 @@
 //! 20 arcsec/day it raises the 1-sigma to the size of the lag (tested in `host-sim`).
 
 use crate::config::Config;
-use crate::correlation::{leakage_coefficients, measurement_rows, products};
-use crate::installation::Angles;
+use crate::gap_fill::GridSample;
 use crate::kalman::ConstantStateKalman;
 use crate::math::sqrt;
-use crate::moving_average::WindowAverage;
-use crate::sample::Sample;
+use crate::moving_average::CorrelationWindow;
 use crate::Real;
-
-/// Channels averaged: the four correlation products, then the three leakage coefficients.
-pub const CHANNELS: usize = 7;
 
 /// Time constant of the residual average, in rotation periods.
 pub const RESIDUAL_PERIODS: usize = 4;
@@ -61,18 +68,29 @@ pub const RESIDUAL_PERIODS: usize = 4;
 /// State of the windowed method.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Windowed<const CAP: usize> {
-    /// Moving averages of the products and leakage coefficients.
-    pub window: WindowAverage<CHANNELS, CAP>,
+    /// The moving window of the correlation sums.
+    pub window: CorrelationWindow<CAP>,
     /// The 4-state filter of x1..x4.
     pub kf: ConstantStateKalman<Real, 4>,
     /// Measurement steps applied so far.
     pub updates: u32,
+    /// Window entries added since the last update.
+    pub entries_since_update: u32,
     /// Exponential mean of each channel's post-fit residual, rad (see the module doc).
     pub residual_mean: [Real; 4],
     /// Residuals averaged so far (saturates at the averaging time).
     pub residual_count: u32,
-    /// Channel gains `(1/2, 1/2, cosL/2, cosL/2)` of the last update, for mapping residuals to x.
+    /// Channel gains (diagonal of the rows, about `(1/2, 1/2, cosL/2, cosL/2)`) of the last update,
+    /// for mapping residuals to x.
     pub gains: [Real; 4],
+}
+
+/// The estimate of one step: x1..x4, their 1-sigma, and whether the model is inconsistent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MethodEstimate {
+    pub x_rad: [Real; 4],
+    pub sigma_rad: [Real; 4],
+    pub mismatch: bool,
 }
 
 /// The residual check of one step: extra 1-sigma per error and whether the model is inconsistent.
@@ -86,55 +104,79 @@ impl<const CAP: usize> Windowed<CAP> {
     /// Fresh state: empty window, prior covariance.
     pub fn new(config: &Config) -> Self {
         Windowed {
-            window: WindowAverage::new(config.rotation_period_samples),
+            window: CorrelationWindow::new(),
             kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
             updates: 0,
+            entries_since_update: 0,
             residual_mean: [0.0; 4],
             residual_count: 0,
             gains: [0.5; 4],
         }
     }
 
-    /// Back to the state of [`Windowed::new`], in place (see [`WindowAverage::reset`]).
+    /// Back to the state of [`Windowed::new`], in place.
     pub fn reset(&mut self, config: &Config) {
-        self.window.reset(config.rotation_period_samples);
+        self.window.reset();
         self.kf = ConstantStateKalman::new([config.prior_sigma_rad; 4]);
         self.updates = 0;
+        self.entries_since_update = 0;
         self.residual_mean = [0.0; 4];
         self.residual_count = 0;
         self.gains = [0.5; 4];
     }
 
-    /// Adds one sample; once the window is full, updates the filter with the four channel means.
-    pub fn step(&mut self, config: &Config, sample: &Sample, angles: &Angles) -> bool {
-        let p = products(&sample.attitude, angles);
-        let l = leakage_coefficients(angles);
-        self.window.push(&[p[0], p[1], p[2], p[3], l[0], l[1], l[2]]);
-        let Some(m) = self.window.means() else {
+    /// Sets the window to one period of the rotation pattern.
+    pub fn configure(&mut self, period_samples: u32) {
+        self.window.configure(period_samples);
+        self.entries_since_update = 0;
+    }
+
+    /// Adds one sample to the window.
+    pub fn push(&mut self, sample: &GridSample) {
+        if self.window.push(sample) {
+            self.entries_since_update = self.entries_since_update.saturating_add(1);
+        }
+    }
+
+    /// Updates the filter with the window's measurement, if the window is full and has new
+    /// entries. `interval_s` is the sample interval, `fill_variance_rad2` a filled single sample's
+    /// error variance of roll and of pitch ([`crate::gap_fill::GapFiller::single_fill_variance_rad2`]).
+    pub fn update(&mut self, config: &Config, interval_s: f64, fill_variance_rad2: (Real, Real)) -> bool {
+        if !self.window.is_full() || self.entries_since_update == 0 {
+            return false;
+        }
+        let Some(m) = self.window.sums().measurement() else {
             return false;
         };
-        let rows = measurement_rows(&[m[4], m[5], m[6]]);
-        let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * config.sample_interval_s as Real;
+        let bin = self.window.bin() as Real;
+        let elapsed_s = interval_s as Real * bin * self.entries_since_update as Real;
+        self.entries_since_update = 0;
+        let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
         self.kf.predict(&[q; 4]);
-        let r = config.measurement_sigma_rad * config.measurement_sigma_rad;
+        let sums = self.window.sums();
+        let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
+        let r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
+        let r_pitch = r0 + 0.5 * filled * fill_variance_rad2.1;
+        let r_roll = r0 + 0.5 * filled * fill_variance_rad2.0;
         let mut applied = false;
-        for (ch, row) in rows.iter().enumerate() {
-            applied |= self.kf.update(row, m[ch], r).is_ok();
+        for (ch, row) in m.rows.iter().enumerate() {
+            let r = if ch < 2 { r_pitch } else { r_roll };
+            applied |= self.kf.update(row, m.z[ch], r).is_ok();
         }
         if applied {
             self.updates = self.updates.saturating_add(1);
-            self.average_residuals(&rows, &m);
+            self.average_residuals(&m.rows, &m.z);
         }
         applied
     }
 
-    fn average_residuals(&mut self, rows: &[[Real; 4]; 4], m: &[Real; CHANNELS]) {
+    fn average_residuals(&mut self, rows: &[[Real; 4]; 4], z: &[Real; 4]) {
         let horizon = (RESIDUAL_PERIODS * self.window.len()) as u32;
         self.residual_count = self.residual_count.saturating_add(1).min(horizon);
         let alpha = 1.0 / self.residual_count as Real;
         for ch in 0..4 {
             let fit: Real = (0..4).map(|i| rows[ch][i] * self.kf.x[i]).sum();
-            let residual = m[ch] - fit;
+            let residual = z[ch] - fit;
             self.residual_mean[ch] += alpha * (residual - self.residual_mean[ch]);
             self.gains[ch] = rows[ch][ch].abs();
         }
@@ -142,18 +184,17 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// The residual check (see the module doc).
     pub fn consistency(&self, config: &Config) -> Consistency {
-        let n = (self.residual_count as usize).max(self.window.len()) as Real;
+        let n = (self.residual_count as usize).max(self.window.len()) as Real * self.window.bin() as Real;
         let s_e = config.measurement_sigma_rad / sqrt(n);
         let mut out = Consistency { model_sigma_rad: [0.0; 4], mismatch: false };
         for ch in 0..4 {
             let excess = (self.residual_mean[ch].abs() - 2.0 * s_e).max(0.0);
             // A bias b on a channel of gain g means an error of about b/g, but never more than the
-            // prior says we could not know anyway: within 1e-9 rad of the pole the window mean of
-            // cos L is 0 in fixed point, and x3, x4 are unobservable (their filter 1-sigma stays at
-            // the prior).
+            // prior says we could not know anyway: near the pole the gain of x3, x4 is cos L / 2,
+            // about 0, and they are unobservable (their filter 1-sigma stays at the prior).
             out.model_sigma_rad[ch] = if excess <= 0.0 {
                 0.0
-            } else if self.gains[ch] > 0.0 {
+            } else if self.gains[ch] > 1e-6 {
                 (excess / self.gains[ch]).min(config.prior_sigma_rad)
             } else {
                 config.prior_sigma_rad
@@ -170,18 +211,19 @@ impl<const CAP: usize> Windowed<CAP> {
     /// Restarts the moving average.
     pub fn restart_window(&mut self) {
         self.window.clear();
+        self.entries_since_update = 0;
     }
 
     /// Current estimate, 1-sigma (the filter's, widened by the residual check) and whether the
     /// residual check reports a model mismatch, once updated.
-    pub fn estimate(&self, config: &Config) -> Option<([Real; 4], [Real; 4], bool)> {
+    pub fn estimate(&self, config: &Config) -> Option<MethodEstimate> {
         if self.updates == 0 {
             return None;
         }
         let check = self.consistency(config);
         let model = check.model_sigma_rad;
-        let x = [self.kf.x[0], self.kf.x[1], self.kf.x[2], self.kf.x[3]];
-        let s = core::array::from_fn(|i| sqrt(self.kf.p[(i, i)].max(0.0) + model[i] * model[i]));
-        Some((x, s, check.mismatch))
+        let x_rad = [self.kf.x[0], self.kf.x[1], self.kf.x[2], self.kf.x[3]];
+        let sigma_rad = core::array::from_fn(|i| sqrt(self.kf.p[(i, i)].max(0.0) + model[i] * model[i]));
+        Some(MethodEstimate { x_rad, sigma_rad, mismatch: check.mismatch })
     }
 }

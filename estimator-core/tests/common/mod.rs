@@ -15,6 +15,7 @@ pub struct Signal {
     pub low_frequency_deg: f64,
     pub noise_arcsec: f64,
     pub rotation_period_s: f64,
+    pub scheme: Scheme,
     pub rotation_phase_rad: f64,
     pub platform_phase_rad: f64,
     state: u64,
@@ -30,6 +31,7 @@ impl Signal {
             low_frequency_deg: 0.05,
             noise_arcsec: 0.0,
             rotation_period_s: 480.0,
+            scheme: Scheme::OneWay(1.0),
             rotation_phase_rad: 0.7,
             platform_phase_rad: 1.9,
             state: 0x1234_5678,
@@ -49,7 +51,7 @@ impl Signal {
     /// Rotation angle, platform angle and latitude at time `t`, rad.
     pub fn angles(&self, t: f64) -> (f64, f64, f64) {
         (
-            self.rotation_phase_rad + 2.0 * PI * t / self.rotation_period_s,
+            self.rotation_phase_rad + self.scheme.angle_rad(t, self.rotation_period_s),
             self.platform_phase_rad + EARTH_RATE_RAD_PER_S * t,
             self.latitude_deg * RAD_PER_DEG,
         )
@@ -80,6 +82,48 @@ impl Signal {
             roll / RAD_PER_DEG,
             pitch / RAD_PER_DEG,
         )
+    }
+}
+
+/// Rotation schemes of real RINS (the generator of `host-sim` has the same ones).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Scheme {
+    /// One way at a constant rate, +1 or -1.
+    OneWay(f64),
+    /// +360 deg in half a period, back in the other half.
+    Reciprocating,
+    /// Four 90 deg moves of 15 s (cosine profile) one way, dwelling between them.
+    FourPosition,
+    /// Eight 90 deg moves of 15 s: four forward, four back, dwelling between them.
+    EightPosition,
+}
+
+impl Scheme {
+    /// The rotation angle at `t`, rad (unwrapped, 0 at t = 0).
+    pub fn angle_rad(&self, t: f64, period_s: f64) -> f64 {
+        let cycles = (t / period_s).floor();
+        let tau = t - cycles * period_s;
+        let quarter = PI / 2.0;
+        // A 90 deg move of 15 s with a cosine velocity profile: fraction done `tau` s into it.
+        let moved = |tau: f64| 0.5 * (1.0 - ((tau / 15.0).clamp(0.0, 1.0) * PI).cos());
+        match self {
+            Scheme::OneWay(dir) => dir * 2.0 * PI * t / period_s,
+            Scheme::Reciprocating => {
+                let half = period_s / 2.0;
+                if tau < half { 2.0 * PI * tau / half } else { 2.0 * PI * (1.0 - (tau - half) / half) }
+            }
+            Scheme::FourPosition => {
+                let seg = period_s / 4.0;
+                let q = (tau / seg).floor();
+                2.0 * PI * cycles + (q + moved(tau - q * seg)) * quarter
+            }
+            Scheme::EightPosition => {
+                let seg = period_s / 8.0;
+                let j = (tau / seg).floor();
+                let f = moved(tau - j * seg);
+                if j < 4.0 { (j + f) * quarter } else { (8.0 - j - f) * quarter }
+            }
+        }
     }
 }
 

@@ -1,0 +1,359 @@
+//! The rotation pattern: its period learned from the rotation angle, and its health judged against
+//! what was learned.
+//!
+//! The moving average of eq (11) blocks the rotation harmonics when its window spans one period of
+//! the rotation pattern, whatever the pattern: one-way in either direction, reciprocating,
+//! multi-position stop-and-go with or without reversals. Nothing here assumes a constant rate.
+//!
+//! # Period
+//! Pinned by [`crate::Config::rotation_period_s`], or detected: eight reference angles 45 deg apart
+//! are placed around the first angle seen (offset by 22.5 deg, so that none sits on a dwell position
+//! of a scheme that stops at multiples of 45 deg from where it started). A pattern that repeats
+//! passes every angle it reaches once per period in each direction it turns, so the time between two
+//! passes of the same reference angle in the same direction is the period. A pass is counted with
+//! 1 deg of hysteresis (jitter of the angle reading does not count as passes). The first reference
+//! passed twice in one direction gives the period, within the first one or two cycles.
+//!
+//! # What the pattern looks like
+//! Over the cycle after the period is known (while the first window fills), with `w_n = 2 pi / T`
+//! the rate of a one-way rotation of the same period, and the rate judged on the mean increment of
+//! the last few samples ([`SHORT_STEPS`], exponential: jitter of the angle readings averages down):
+//! the longest dwell (run of samples below `w_n / 4`), whether it turns both ways (a run
+//! below `-w_n / 2` against the way it turned first), and the net direction (the sign of the
+//! rotation over the cycle; none for a pattern that comes back).
+//!
+//! # Health
+//! Once learned, a sample is a fault ([`RotationFault`]) when the rotation no longer repeats its
+//! pattern:
+//! - stopped for longer than its longest dwell (plus an eighth and 2 samples of margin; a pattern
+//!   with no dwell: any stop): [`RotationFault::Stopped`];
+//! - turning against its direction when the pattern never does: [`RotationFault::Reversed`];
+//! - the time between two passes of the reference angle more than `rotation_period_tolerance` (1 %
+//!   by default) plus one sample off the period, or no pass for that long:
+//!   [`RotationFault::RateMismatch`]. The pattern is then forgotten and detected anew (a pinned
+//!   period is kept).
+//!
+//! A pattern's own dwells and reversals are not faults.
+
+use crate::math::wrap_pi;
+use crate::Real;
+
+/// Reference angles watched for passes.
+pub const LEVELS: usize = 8;
+/// Samples in the short mean of the rotation increment.
+pub const SHORT_STEPS: u32 = 4;
+/// Hysteresis of a pass, rad (1 deg).
+pub const PASS_HYSTERESIS_RAD: Real = 0.017_453_292;
+
+/// Why the rotation is not healthy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RotationFault {
+    /// Stopped for longer than the pattern's longest dwell.
+    Stopped,
+    /// Turning the other way, in a pattern that never does.
+    Reversed,
+    /// The pattern no longer repeats at its period.
+    RateMismatch,
+}
+
+/// The shape of a learned pattern, for people.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PatternKind {
+    /// One way, without stops.
+    OneWay,
+    /// Both ways, without stops.
+    Reciprocating,
+    /// One way, stopping at positions.
+    StopAndGo,
+    /// Both ways, stopping at positions.
+    StopAndGoReciprocating,
+}
+
+impl PatternKind {
+    /// Short name used in files and summaries.
+    pub fn name(&self) -> &'static str {
+        match self {
+            PatternKind::OneWay => "one-way",
+            PatternKind::Reciprocating => "reciprocating",
+            PatternKind::StopAndGo => "stop-and-go",
+            PatternKind::StopAndGoReciprocating => "stop-and-go reciprocating",
+        }
+    }
+}
+
+/// What one sample told the monitor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PatternEvent {
+    /// Nothing new.
+    None,
+    /// The period has just become known, in samples: the window is to be set to it.
+    PeriodKnown(u32),
+}
+
+/// Features learned over one cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Features {
+    /// +1 or -1: the net direction of a one-way pattern; 0 for a pattern that comes back.
+    pub direction: i8,
+    /// Whether the pattern turns both ways.
+    pub reverses: bool,
+    /// Longest dwell, samples.
+    pub longest_dwell_samples: u32,
+}
+
+impl Features {
+    /// The pattern's kind.
+    pub fn kind(&self) -> PatternKind {
+        match (self.reverses, self.longest_dwell_samples > dwell_threshold_samples()) {
+            (false, false) => PatternKind::OneWay,
+            (true, false) => PatternKind::Reciprocating,
+            (false, true) => PatternKind::StopAndGo,
+            (true, true) => PatternKind::StopAndGoReciprocating,
+        }
+    }
+}
+
+/// Dwells up to this long are the slowing of a turnaround or jitter, not stops of a stop-and-go
+/// scheme (for the pattern's name only).
+const fn dwell_threshold_samples() -> u32 {
+    3
+}
+
+/// Bounds the monitor works within, from the configuration and the sample interval.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    /// Shortest and longest period accepted, samples.
+    pub min_period_samples: u32,
+    pub max_period_samples: u32,
+    /// Largest relative deviation of the time between two passes from the period.
+    pub period_tolerance: Real,
+}
+
+/// Whether a pass `elapsed` samples after the previous one is on time: within the tolerance plus
+/// one sample (a pass is timed to the sample).
+fn pass_on_time(elapsed: u32, period: u32, limits: &Limits) -> bool {
+    (elapsed as Real - period as Real).abs() <= limits.period_tolerance * period as Real + 1.0
+}
+
+/// The rotation monitor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotationMonitor {
+    /// The period, samples, once pinned or detected.
+    pub period_samples: Option<u32>,
+    /// Whether the period was pinned by the configuration.
+    pub pinned: bool,
+    /// Features, once a whole cycle has been watched with the period known.
+    pub features: Option<Features>,
+    /// The reference angles, rad (set at the first sample).
+    pub levels_rad: Option<Real>,
+    /// Per reference angle: -1 below, +1 above, 0 far (more than 90 deg away).
+    pub level_side: [i8; LEVELS],
+    /// Per reference angle and direction (0 up, 1 down): sample index of the last pass.
+    pub last_pass: [[Option<u32>; 2]; LEVELS],
+    /// The reference angle and direction whose passes time the period (once known).
+    pub timing_pass: Option<(u8, u8)>,
+    /// The previous sample's rotation angle and index.
+    pub previous: Option<(u32, Real)>,
+    /// Short mean of the increment, rad per sample.
+    pub short_increment_rad: Real,
+    pub short_steps: u32,
+    /// Learning a cycle: its start index, net rotation, dwell run, longest dwell, first direction,
+    /// whether it reversed.
+    pub learn_start: Option<u32>,
+    pub learn_rotation_rad: Real,
+    pub dwell_run: u32,
+    pub learn_longest_dwell: u32,
+    pub learn_first_direction: i8,
+    pub learn_reversed: bool,
+}
+
+impl RotationMonitor {
+    /// A monitor with the period pinned (in samples) or to be detected.
+    pub fn new(pinned_period_samples: Option<u32>) -> RotationMonitor {
+        RotationMonitor {
+            period_samples: pinned_period_samples,
+            pinned: pinned_period_samples.is_some(),
+            features: None,
+            levels_rad: None,
+            level_side: [0; LEVELS],
+            last_pass: [[None; 2]; LEVELS],
+            timing_pass: None,
+            previous: None,
+            short_increment_rad: 0.0,
+            short_steps: 0,
+            learn_start: None,
+            learn_rotation_rad: 0.0,
+            dwell_run: 0,
+            learn_longest_dwell: 0,
+            learn_first_direction: 0,
+            learn_reversed: false,
+        }
+    }
+
+    /// The period in samples and the features, once both are known.
+    pub fn pattern(&self) -> Option<(u32, Features)> {
+        Some((self.period_samples?, self.features?))
+    }
+
+    /// Forgets the sample history (after a gap the window cannot bridge): the next sample starts
+    /// new increments and new pass timings; what was learned stays.
+    pub fn restart(&mut self) {
+        self.previous = None;
+        self.short_steps = 0;
+        self.short_increment_rad = 0.0;
+        self.dwell_run = 0;
+        self.level_side = [0; LEVELS];
+        self.last_pass = [[None; 2]; LEVELS];
+        if self.features.is_none() {
+            // A cycle being learned must be whole.
+            self.learn_start = None;
+        }
+    }
+
+    /// After a fault: the pass timings start again (a stop shifts the pattern's phase); the short
+    /// mean and the dwell run go on, so a stop stays a stop until the rotation moves again.
+    pub fn after_fault(&mut self) {
+        self.level_side = [0; LEVELS];
+        self.last_pass = [[None; 2]; LEVELS];
+    }
+
+    /// Forgets the pattern (a pinned period stays) and detects it anew.
+    fn forget(&mut self) {
+        let pinned = if self.pinned { self.period_samples } else { None };
+        *self = RotationMonitor::new(pinned);
+    }
+
+    /// Watches one sample (index on the sample grid, rotation angle).
+    pub fn observe(&mut self, index: u32, rotation_rad: Real, limits: &Limits) -> Result<PatternEvent, RotationFault> {
+        let base = *self.levels_rad.get_or_insert(wrap_pi(rotation_rad + 0.392_699_08));
+        let previous = self.previous.replace((index, rotation_rad));
+        let increment = match previous {
+            Some((k, rho)) if index.wrapping_sub(k) == 1 => Some(wrap_pi(rotation_rad - rho)),
+            _ => None,
+        };
+        if let Some(inc) = increment {
+            self.short_steps = (self.short_steps + 1).min(SHORT_STEPS);
+            self.short_increment_rad += (inc - self.short_increment_rad) / self.short_steps as Real;
+        }
+        let mut event = PatternEvent::None;
+        // Passes of the reference angles.
+        for m in 0..LEVELS {
+            let level = wrap_pi(base + m as Real * 0.785_398_2);
+            let d = wrap_pi(rotation_rad - level);
+            let old = self.level_side[m];
+            let side = if d.abs() > 1.570_796_4 {
+                0
+            } else if d < -PASS_HYSTERESIS_RAD {
+                -1
+            } else if d > PASS_HYSTERESIS_RAD {
+                1
+            } else {
+                old
+            };
+            self.level_side[m] = side;
+            let dir = match (old, side) {
+                (-1, 1) => 0usize,
+                (1, -1) => 1usize,
+                _ => continue,
+            };
+            let last = self.last_pass[m][dir].replace(index);
+            match (self.period_samples, last) {
+                (None, Some(k)) => {
+                    let period = index.wrapping_sub(k);
+                    if period >= limits.min_period_samples && period <= limits.max_period_samples {
+                        self.period_samples = Some(period);
+                        self.timing_pass = Some((m as u8, dir as u8));
+                        event = PatternEvent::PeriodKnown(period);
+                    }
+                }
+                (Some(period), Some(k)) if self.timing_pass == Some((m as u8, dir as u8)) => {
+                    if self.features.is_some() && !pass_on_time(index.wrapping_sub(k), period, limits) {
+                        self.forget();
+                        return Err(RotationFault::RateMismatch);
+                    }
+                }
+                (Some(_), _) if self.timing_pass.is_none() => self.timing_pass = Some((m as u8, dir as u8)),
+                _ => {}
+            }
+        }
+        if let PatternEvent::PeriodKnown(_) = event {
+            self.learn_start = None;
+        }
+        let Some(period) = self.period_samples else {
+            return Ok(event);
+        };
+        let nominal = (2.0 * core::f64::consts::PI / period as f64) as Real;
+        let still = self.short_steps > 0 && self.short_increment_rad.abs() < 0.25 * nominal;
+        self.dwell_run = if still { self.dwell_run.saturating_add(1) } else { 0 };
+        let Some(features) = self.features else {
+            self.learn(index, increment, nominal, period);
+            return Ok(event);
+        };
+        // Health against the learned pattern.
+        if let Some((m, dir)) = self.timing_pass {
+            if let Some(k) = self.last_pass[m as usize][dir as usize] {
+                if index.wrapping_sub(k) > period && !pass_on_time(index.wrapping_sub(k), period, limits) {
+                    if self.dwell_run > 0 {
+                        // Late because it has stopped: a stop, judged below, not a new period.
+                        self.after_fault();
+                        return Err(RotationFault::Stopped);
+                    }
+                    self.forget();
+                    return Err(RotationFault::RateMismatch);
+                }
+            }
+        }
+        let longest = features.longest_dwell_samples;
+        let allowed = if longest == 0 { 0 } else { longest + longest / 8 + 2 };
+        if self.dwell_run > allowed {
+            return Err(RotationFault::Stopped);
+        }
+        if !features.reverses
+            && self.short_steps > 0
+            && self.short_increment_rad * Real::from(features.direction) < -0.5 * nominal
+        {
+            return Err(RotationFault::Reversed);
+        }
+        Ok(event)
+    }
+
+    /// Learns the features over one whole cycle of consecutive samples.
+    fn learn(&mut self, index: u32, increment: Option<Real>, nominal: Real, period: u32) {
+        let Some(start) = self.learn_start else {
+            self.learn_start = Some(index);
+            self.learn_rotation_rad = 0.0;
+            self.learn_longest_dwell = 0;
+            self.learn_first_direction = 0;
+            self.learn_reversed = false;
+            return;
+        };
+        let Some(inc) = increment else {
+            // A gap inside the cycle: start it again.
+            self.learn_start = None;
+            return;
+        };
+        self.learn_rotation_rad += inc;
+        self.learn_longest_dwell = self.learn_longest_dwell.max(self.dwell_run);
+        let s = self.short_increment_rad;
+        if self.learn_first_direction == 0 && s.abs() > 0.5 * nominal {
+            self.learn_first_direction = if s > 0.0 { 1 } else { -1 };
+        } else if self.learn_first_direction != 0 && s * Real::from(self.learn_first_direction) < -0.5 * nominal {
+            self.learn_reversed = true;
+        }
+        if index.wrapping_sub(start) >= period {
+            let net = self.learn_rotation_rad;
+            let direction = if self.learn_reversed && net.abs() < 0.5 * core::f32::consts::PI as Real {
+                0
+            } else if net >= 0.0 {
+                1
+            } else {
+                -1
+            };
+            self.features = Some(Features {
+                direction,
+                reverses: self.learn_reversed,
+                longest_dwell_samples: self.learn_longest_dwell,
+            });
+        }
+    }
+}

@@ -1,0 +1,218 @@
+//! The sample grid: places each time stamp on a grid of whole sample intervals.
+//!
+//! Real recorders stamp time from their own clocks: Unix or GPS seconds, jitter of tens of
+//! milliseconds, dropped rows, now and then a clock step. The estimator needs only how many sample
+//! intervals lie between two accepted samples (1 for consecutive samples, `n` after `n - 1` lost
+//! ones); the stamps themselves are passed through to the output untouched.
+//!
+//! # The interval
+//! Pinned by [`crate::Config::sample_interval_s`], or learned: the median of the first
+//! [`LEARNING_STEPS`] positive time steps (a median, so that lost rows, which double a step, do not
+//! move it while fewer than half the rows are lost), then refined by the running mean of every step
+//! that was one interval long, so that a recorder whose clock runs 0.1 % fast stays on the grid
+//! across long gaps. The samples used to learn it are accepted but not estimated from.
+//!
+//! # Placing a stamp
+//! With `dt` the step since the previous accepted stamp and `n = round(dt / interval)`:
+//! - `n >= 1` and `|dt - n interval| <= interval / 4`: on the grid, `n - 1` samples missing. Jitter
+//!   of up to +-10 % of the interval on each stamp (+-20 % on their difference) snaps;
+//! - `n >= 1` but further off the grid: a clock jump. Accepted, counted, the grid re-anchored at
+//!   this stamp, and treated as a gap the window cannot bridge;
+//! - `dt` more than two intervals backwards: a clock step backwards. Accepted, counted,
+//!   re-anchored and treated as a gap like a jump;
+//! - otherwise (`dt <= 0`, or `0 < dt` below half an interval): a repeated or out-of-order row,
+//!   rejected ([`SampleError::TimeNotIncreasing`], [`SampleError::IrregularTimeStep`]).
+
+use crate::sample::SampleError;
+
+/// Positive time steps whose median gives the learned interval.
+pub const LEARNING_STEPS: usize = 8;
+
+/// Largest distance of a step from a whole number of intervals that still snaps, in intervals.
+pub const SNAP_TOLERANCE: f64 = 0.25;
+
+/// How far back (in intervals) a stamp must go to be a clock step rather than a repeated row.
+pub const CLOCK_STEP_BACK_INTERVALS: f64 = 2.0;
+
+/// Where a stamp falls on the grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Placement {
+    /// The first stamp, or one of the stamps the interval is being learned from.
+    Learning,
+    /// `intervals` sample intervals after the previous accepted sample (1: the next sample).
+    OnGrid { intervals: u32 },
+    /// A clock jump or a clock step backwards: the grid is re-anchored here.
+    ClockStep,
+}
+
+/// The grid's state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeGrid {
+    /// The interval, s, once pinned or learned.
+    pub interval_s: Option<f64>,
+    /// Whether the interval was pinned by the configuration (never refined).
+    pub pinned: bool,
+    /// The previous accepted stamp, s.
+    pub last_stamp_s: Option<f64>,
+    /// Positive steps seen while learning.
+    pub learning_steps: [f64; LEARNING_STEPS],
+    pub learned: u32,
+    /// Mean of the one-interval steps since the interval was learned (refinement), and their count.
+    pub mean_step_s: f64,
+    pub mean_steps: u32,
+    /// Clock jumps and steps backwards seen.
+    pub clock_steps: u32,
+}
+
+impl TimeGrid {
+    /// A grid with the interval pinned (`Some`) or to be learned (`None`).
+    pub fn new(pinned_interval_s: Option<f64>) -> TimeGrid {
+        TimeGrid {
+            interval_s: pinned_interval_s,
+            pinned: pinned_interval_s.is_some(),
+            last_stamp_s: None,
+            learning_steps: [0.0; LEARNING_STEPS],
+            learned: 0,
+            mean_step_s: 0.0,
+            mean_steps: 0,
+            clock_steps: 0,
+        }
+    }
+
+    /// Where `time_s` falls, or why the stamp is rejected. Changes nothing (see [`TimeGrid::accept`]).
+    pub fn place(&self, time_s: f64) -> Result<Placement, SampleError> {
+        let Some(last) = self.last_stamp_s else {
+            return Ok(Placement::Learning);
+        };
+        let dt = time_s - last;
+        let Some(interval) = self.interval_s else {
+            return if dt > 0.0 { Ok(Placement::Learning) } else { Err(SampleError::TimeNotIncreasing) };
+        };
+        if dt == interval {
+            // The usual case, without the (software, on the M4F) f64 division below.
+            return Ok(Placement::OnGrid { intervals: 1 });
+        }
+        if dt < -CLOCK_STEP_BACK_INTERVALS * interval {
+            return Ok(Placement::ClockStep);
+        }
+        if !(dt > 0.0) {
+            return Err(SampleError::TimeNotIncreasing);
+        }
+        let n = libm::round(dt / interval);
+        if n < 1.0 {
+            return Err(SampleError::IrregularTimeStep);
+        }
+        if (dt - n * interval).abs() > SNAP_TOLERANCE * interval {
+            return Ok(Placement::ClockStep);
+        }
+        Ok(Placement::OnGrid { intervals: if n > u32::MAX as f64 { u32::MAX } else { n as u32 } })
+    }
+
+    /// Records an accepted stamp placed by [`TimeGrid::place`].
+    pub fn accept(&mut self, time_s: f64, placement: Placement) {
+        let previous = self.last_stamp_s.replace(time_s);
+        match placement {
+            Placement::Learning => {
+                if let Some(last) = previous {
+                    let k = self.learned as usize;
+                    if let Some(slot) = self.learning_steps.get_mut(k) {
+                        *slot = time_s - last;
+                    }
+                    self.learned = self.learned.saturating_add(1);
+                    if self.learned as usize >= LEARNING_STEPS {
+                        self.interval_s = Some(median(&self.learning_steps));
+                    }
+                }
+            }
+            Placement::OnGrid { intervals: 1 } => {
+                if let (false, Some(last)) = (self.pinned, previous) {
+                    // Refine the learned interval with the mean one-interval step (bounded memory:
+                    // the mean over the last 2^16 steps at most).
+                    self.mean_steps = (self.mean_steps + 1).min(1 << 16);
+                    self.mean_step_s += (time_s - last - self.mean_step_s) / f64::from(self.mean_steps);
+                    if self.mean_steps >= LEARNING_STEPS as u32 {
+                        self.interval_s = Some(self.mean_step_s);
+                    }
+                }
+            }
+            Placement::OnGrid { .. } => {}
+            Placement::ClockStep => self.clock_steps = self.clock_steps.saturating_add(1),
+        }
+    }
+}
+
+/// Median of a small array (insertion sort of a copy).
+fn median<const N: usize>(values: &[f64; N]) -> f64 {
+    let mut v = *values;
+    for i in 1..N {
+        let mut j = i;
+        while j > 0 && v[j - 1] > v[j] {
+            v.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    match N {
+        0 => 0.0,
+        _ if N % 2 == 1 => v[N / 2],
+        _ => 0.5 * (v[N / 2 - 1] + v[N / 2]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(grid: &mut TimeGrid, stamps: &[f64]) -> std::vec::Vec<Result<Placement, SampleError>> {
+        stamps
+            .iter()
+            .map(|&t| {
+                let p = grid.place(t);
+                if let Ok(p) = p {
+                    grid.accept(t, p);
+                }
+                p
+            })
+            .collect()
+    }
+
+    #[test]
+    fn learns_the_interval_through_lost_rows_and_jitter_and_snaps_unix_stamps() {
+        let mut grid = TimeGrid::new(None);
+        let t0 = 1.7e9;
+        // 2 s interval, +-0.15 s of jitter, rows 3 and 6 lost.
+        let jitter = [0.1, -0.15, 0.05, 0.0, 0.12, -0.08, 0.15, -0.1, 0.02, -0.12, 0.07, 0.0, 0.11, -0.03];
+        let stamps: std::vec::Vec<f64> =
+            (0..14).filter(|k| *k != 3 && *k != 6).map(|k| t0 + 2.0 * k as f64 + jitter[k]).collect();
+        let placed = run(&mut grid, &stamps);
+        assert!(placed[..9].iter().all(|p| *p == Ok(Placement::Learning)));
+        let interval = grid.interval_s.unwrap();
+        assert!((interval - 2.0).abs() < 0.1, "{interval}");
+        assert_eq!(placed[9..], [Ok(Placement::OnGrid { intervals: 1 }); 3]);
+        // A stamp 3 intervals on with jitter, then one 2.6 intervals on (a jump), then a repeat.
+        let last = *stamps.last().unwrap();
+        assert_eq!(grid.place(last + 6.1), Ok(Placement::OnGrid { intervals: 3 }));
+        assert_eq!(grid.place(last + 5.2), Ok(Placement::ClockStep));
+        assert_eq!(grid.place(last), Err(SampleError::TimeNotIncreasing));
+        assert_eq!(grid.place(last + 0.5), Err(SampleError::IrregularTimeStep));
+        assert_eq!(grid.place(last - 3600.0), Ok(Placement::ClockStep));
+        assert_eq!(grid.place(last - 1.0), Err(SampleError::TimeNotIncreasing));
+    }
+
+    #[test]
+    fn a_pinned_interval_needs_no_learning_and_is_never_refined() {
+        let mut grid = TimeGrid::new(Some(1.0));
+        let placed = run(&mut grid, &[10.0, 11.0, 12.02, 13.0, 16.0]);
+        assert_eq!(placed[0], Ok(Placement::Learning));
+        assert_eq!(placed[4], Ok(Placement::OnGrid { intervals: 3 }));
+        assert_eq!(grid.interval_s, Some(1.0));
+    }
+
+    #[test]
+    fn a_slow_clock_stays_on_the_grid_across_a_long_gap() {
+        // The recorder's second is 1.003 s: after learning, a 200-row gap still snaps to 200.
+        let mut grid = TimeGrid::new(None);
+        let stamps: std::vec::Vec<f64> = (0..2000).map(|k| k as f64 * 1.003).collect();
+        run(&mut grid, &stamps);
+        assert_eq!(grid.place(2199.0 * 1.003), Ok(Placement::OnGrid { intervals: 200 }));
+    }
+}
