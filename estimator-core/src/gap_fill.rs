@@ -25,8 +25,9 @@
 //! spectrum, so it is measured as the data come: every present sample whose [`NEIGHBOURS`]
 //! neighbours on each side are present is also predicted from them as if it were lost, and the
 //! mean square of that prediction error (over the last [`FILL_ERROR_SAMPLES`] samples) is the
-//! variance of a filled single sample. Two and three lost in a row are worse by the ratios of the
-//! interpolation errors above (squared: [`GAP_VARIANCE_FACTOR`]). The window counts these
+//! variance of a filled single sample. A sample filled with fewer neighbours (two or three lost in
+//! a row, or other losses nearby) is worse by the ratios of the interpolation errors
+//! ([`MISSING_NEIGHBOUR_VARIANCE_FACTOR`], one factor per lost neighbour). The window counts these
 //! variances, and the filter's measurement variance is raised by their mean over the window (see
 //! [`crate::methods::windowed`]).
 //!
@@ -47,8 +48,10 @@ pub const MAX_FILLABLE_GAP: u32 = 3;
 pub const SLOTS: usize = 16;
 /// Samples over which the prediction error of present samples is averaged.
 pub const FILL_ERROR_SAMPLES: u32 = 256;
-/// Variance of a filled sample in a gap of 1, 2, 3 lost samples, in units of a single one's.
-pub const GAP_VARIANCE_FACTOR: [u16; 3] = [1, 27, 729];
+/// How much each further lost neighbour at distance 1..=5 raises the variance of a filled sample
+/// (squared ratios of the interpolation errors of a 6 s sway at 1 s, rounded up: one neighbour
+/// fewer at distance 1 makes the error 8.7 times larger, at 5 only 2 times).
+pub const MISSING_NEIGHBOUR_VARIANCE_FACTOR: [u32; NEIGHBOURS] = [76, 20, 10, 6, 4];
 
 /// One sample on the grid, as the window takes it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,7 +67,7 @@ pub struct GridSample {
     /// Trigonometry of the angles.
     pub angles: Angles,
     /// 0 for a received sample; for a filled one, its variance in units of a filled single
-    /// sample's ([`GAP_VARIANCE_FACTOR`]).
+    /// sample's ([`MISSING_NEIGHBOUR_VARIANCE_FACTOR`]), saturating.
     pub fill_weight: u16,
 }
 
@@ -225,11 +228,17 @@ impl GapFiller {
         let mut n = 0;
         let mut before: Option<(i32, GridSample)> = None;
         let mut after: Option<(i32, GridSample)> = None;
+        let mut weight = 1u32;
         for offset in -(NEIGHBOURS as i32)..=(NEIGHBOURS as i32) {
             if offset == 0 {
                 continue;
             }
-            if let Some(s) = self.at(index.wrapping_add(offset as u32)) {
+            let Some(s) = self.at(index.wrapping_add(offset as u32)) else {
+                let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR[offset.unsigned_abs() as usize - 1];
+                weight = weight.saturating_mul(factor);
+                continue;
+            };
+            {
                 nodes[n] = offset;
                 values[n] = (s.roll_rad, s.pitch_rad);
                 n += 1;
@@ -254,9 +263,7 @@ impl GapFiller {
         let rotation_minus_platform_rad = ang(b.rotation_minus_platform_rad, a.rotation_minus_platform_rad);
         let latitude_rad = b.latitude_rad + (a.latitude_rad - b.latitude_rad) * f;
         let lat = if latitude_rad == b.latitude_rad { (b.angles.sin_lat, b.angles.cos_lat) } else { sin_cos(latitude_rad) };
-        // The run of lost samples this one belongs to.
-        let run = (oa - ob - 1).clamp(1, MAX_FILLABLE_GAP as i32);
-        let weight = GAP_VARIANCE_FACTOR[(run - 1) as usize];
+        let weight = weight.min(u32::from(u16::MAX)) as u16;
         Some(GridSample {
             index,
             roll_rad: roll,

@@ -25,9 +25,12 @@
 //! # Health
 //! Once learned, a sample is a fault ([`RotationFault`]) when the rotation no longer repeats its
 //! pattern:
-//! - stopped for longer than its longest dwell (plus an eighth and 2 samples of margin; a pattern
-//!   with no dwell: any stop): [`RotationFault::Stopped`];
-//! - turning against its direction when the pattern never does: [`RotationFault::Reversed`];
+//! - stopped for longer than its longest dwell (plus an eighth and 2 samples of margin: a pattern
+//!   without dwells slows through zero for a sample or two at a reversal):
+//!   [`RotationFault::Stopped`];
+//! - turning against its direction when the pattern never does: [`RotationFault::Reversed`]; after
+//!   a whole period the other way, the pattern is detected anew (a one-way rotation that now turns
+//!   the other way is a new pattern);
 //! - the time between two passes of the reference angle more than `rotation_period_tolerance` (1 %
 //!   by default) plus one sample off the period, or no pass for that long:
 //!   [`RotationFault::RateMismatch`]. The pattern is then forgotten and detected anew (a pinned
@@ -165,6 +168,8 @@ pub struct RotationMonitor {
     pub learn_longest_dwell: u32,
     pub learn_first_direction: i8,
     pub learn_reversed: bool,
+    /// Samples in a row turning against a one-way pattern.
+    pub reversed_run: u32,
 }
 
 impl RotationMonitor {
@@ -187,6 +192,7 @@ impl RotationMonitor {
             learn_longest_dwell: 0,
             learn_first_direction: 0,
             learn_reversed: false,
+            reversed_run: 0,
         }
     }
 
@@ -304,14 +310,18 @@ impl RotationMonitor {
             }
         }
         let longest = features.longest_dwell_samples;
-        let allowed = if longest == 0 { 0 } else { longest + longest / 8 + 2 };
-        if self.dwell_run > allowed {
+        if self.dwell_run > longest + longest / 8 + 2 {
             return Err(RotationFault::Stopped);
         }
-        if !features.reverses
+        let reversed = !features.reverses
             && self.short_steps > 0
-            && self.short_increment_rad * Real::from(features.direction) < -0.5 * nominal
-        {
+            && self.short_increment_rad * Real::from(features.direction) < -0.5 * nominal;
+        self.reversed_run = if reversed { self.reversed_run.saturating_add(1) } else { 0 };
+        if reversed {
+            if self.reversed_run > period {
+                // A whole period the other way: a new pattern, not a reversal.
+                self.forget();
+            }
             return Err(RotationFault::Reversed);
         }
         Ok(event)

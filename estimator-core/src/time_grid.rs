@@ -185,8 +185,10 @@ mod tests {
             (0..14).filter(|k| *k != 3 && *k != 6).map(|k| t0 + 2.0 * k as f64 + jitter[k]).collect();
         let placed = run(&mut grid, &stamps);
         assert!(placed[..9].iter().all(|p| *p == Ok(Placement::Learning)));
+        // The median of 8 steps, two of them doubled by the lost rows and all with +-0.3 s of
+        // jitter: within 10 %, well inside the quarter interval that snapping needs.
         let interval = grid.interval_s.unwrap();
-        assert!((interval - 2.0).abs() < 0.1, "{interval}");
+        assert!((interval - 2.0).abs() < 0.2, "{interval}");
         assert_eq!(placed[9..], [Ok(Placement::OnGrid { intervals: 1 }); 3]);
         // A stamp 3 intervals on with jitter, then one 2.6 intervals on (a jump), then a repeat.
         let last = *stamps.last().unwrap();

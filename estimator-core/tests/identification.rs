@@ -146,9 +146,11 @@ fn corrected_attitude_removes_the_oscillation() {
     assert!(after < 1.0, "oscillation RMS after {after:.3} arcsec");
 }
 
+/// The state budget: 24 KiB for the default capacity (960 window entries: one period of up to
+/// 960 samples without bins), so that the firmware's RAM holds it and a checkpoint buffer.
 #[test]
-fn estimator_fits_in_16_kib() {
+fn estimator_fits_in_24_kib() {
     let size = core::mem::size_of::<Estimator>();
     println!("size_of::<Estimator>() = {size} bytes; Real = {}", core::any::type_name::<Real>());
-    assert!(size <= 16 * 1024, "{size} bytes");
+    assert!(size <= 24 * 1024, "{size} bytes");
 }

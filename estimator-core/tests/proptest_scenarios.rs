@@ -1,5 +1,5 @@
-//! Long and adverse scenarios through the core (default configuration: windowed method, 480 s
-//! window, CAP 480):
+//! Long and adverse scenarios through the core (default configuration: windowed method, rotation
+//! period (480 s) and sample interval (1 s) learned from the data):
 //! - a 30-day run (2,592,000 samples; release mode only, a few seconds there);
 //! - latitudes 0, 45, 80 and 89 deg: what roll can and cannot tell, and whether the 1-sigma and the
 //!   status say so honestly;
@@ -8,19 +8,19 @@
 //!
 //! The sample source is local and deterministic: sinusoidal roll and pitch sway, eq (2)'s
 //! oscillation for known errors (in f64), white noise from a 64-bit LCG, the platform turning at
-//! the Earth rate. Internal values (Kalman covariance, window sums) are read from the checkpoint
-//! image, whose layout is documented in `estimator_core::checkpoint`.
+//! the Earth rate. Internal values (Kalman covariance, window sums) are read through
+//! `Estimator::windowed`.
 
 mod common;
 
 use common::oscillation;
-use estimator_core::checkpoint::METHOD_OFFSET;
 use estimator_core::units::{arcsec_to_rad, rad_to_arcsec, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
-use estimator_core::estimator::RotationMonitor;
+use estimator_core::correlation::CorrelationSums;
+use estimator_core::rotation_pattern::SHORT_STEPS;
+use estimator_core::Counters;
 use estimator_core::{Config, Estimator, Output, Real, RotationFault, Sample, Status};
 use std::f64::consts::PI;
 
-const R: usize = std::mem::size_of::<Real>();
 const X_ARCSEC: [f64; 4] = [120.0, -80.0, 250.0, -190.0];
 
 /// Deterministic RINS output with known errors; the caller advances the rotation angle.
@@ -111,52 +111,32 @@ fn updating(status: Status) -> bool {
     matches!(status, Status::Estimating | Status::Converged | Status::ModelMismatch)
 }
 
-/// The windowed method's internals, read from a checkpoint image (layout: module doc of
-/// `estimator_core::checkpoint`).
+/// The windowed method's internals.
 struct Internals {
     updates: u32,
     p: [[f64; 4]; 4],
     window_len: usize,
     window_filled: usize,
-    sums: [i64; 7],
-    /// Exact sum of the stored window samples, per channel.
-    direct_sums: [i64; 7],
+    sums: CorrelationSums,
+    /// The sums formed again from the entries stored in the window.
+    direct_sums: CorrelationSums,
 }
 
-fn real_at(b: &[u8], at: usize) -> f64 {
-    if R == 4 {
-        f32::from_le_bytes(b[at..at + 4].try_into().unwrap()) as f64
-    } else {
-        f64::from_le_bytes(b[at..at + 8].try_into().unwrap())
+fn internals(est: &Estimator) -> Internals {
+    let w = est.windowed().expect("the default method is windowed");
+    let p = std::array::from_fn(|i| std::array::from_fn(|j| w.kf.p[(i, j)] as f64));
+    let mut direct_sums = CorrelationSums::default();
+    for (q, weight) in w.window.entries() {
+        direct_sums.add(&q, weight);
     }
-}
-
-fn internals(est: &Estimator<480>) -> Internals {
-    let mut b = vec![0u8; Estimator::<480>::CHECKPOINT_LEN];
-    est.checkpoint(&mut b).unwrap();
-    // The image must restore: every value finite, covariance symmetric positive definite,
-    // window sums equal to the stored samples.
-    let back = Estimator::<480>::from_checkpoint(&b).expect("state validates");
-    assert!(back == *est);
-    let u32_at = |at: usize| u32::from_le_bytes(b[at..at + 4].try_into().unwrap());
-    let m = METHOD_OFFSET;
-    let updates = u32_at(m);
-    let p_at = m + 4 + 4 * R;
-    let p = std::array::from_fn(|i| std::array::from_fn(|j| real_at(&b, p_at + (4 * i + j) * R)));
-    // After P: residual means 4 R, residual count u32, gains 4 R, then the window.
-    let w = p_at + 16 * R + 4 * R + 4 + 4 * R;
-    let window_len = u32_at(w) as usize;
-    let window_filled = u32_at(w + 8) as usize;
-    let sums = std::array::from_fn(|ch| i64::from_le_bytes(b[w + 12 + 8 * ch..w + 20 + 8 * ch].try_into().unwrap()));
-    let ring = w + 12 + 7 * 8;
-    let mut direct_sums = [0i64; 7];
-    for k in 0..window_filled {
-        for (ch, d) in direct_sums.iter_mut().enumerate() {
-            let at = ring + (k * 7 + ch) * 4;
-            *d += i64::from(i32::from_le_bytes(b[at..at + 4].try_into().unwrap()));
-        }
+    Internals {
+        updates: w.updates,
+        p,
+        window_len: w.window.len(),
+        window_filled: w.window.filled(),
+        sums: *w.window.sums(),
+        direct_sums,
     }
-    Internals { updates, p, window_len, window_filled, sums, direct_sums }
 }
 
 /// Cholesky in f64: true if every pivot is positive.
@@ -183,27 +163,32 @@ fn positive_definite(p: &[[f64; 4]; 4]) -> bool {
 /// - covariance: each day, exactly symmetric and positive definite (and restore validates it);
 /// - estimates: from the end of day 1 on, every step's four errors within 10 arcsec of truth;
 /// - per-step work constant: after the first window, every step takes the same path: one sample
-///   accepted, nothing bridged, no window restart, the window full, exactly one filter update
-///   (Kalman update count = accepted - 479 at every day boundary), status updating. The step has no
-///   loop whose count depends on the data except gap bridging, which is counted and stays 0, so the
-///   same path is the same amount of work. (Instructions per step are measured on the target.)
+///   accepted, nothing filled, no window restart, the window full, exactly one filter update
+///   (the Kalman update count grows by one a step), status updating. The step has no loop whose
+///   count depends on the data except gap filling, which is counted and stays 0, so the same path
+///   is the same amount of work. (Instructions per step are measured on the target.)
 #[test]
 #[cfg_attr(debug_assertions, ignore = "30-day run: 2.6 million steps, run with `cargo test --release`")]
 fn thirty_day_run_keeps_sums_exact_covariance_spd_estimates_within_10_arcsec_and_work_constant() {
     const DAY: u64 = 86_400;
     const DAYS: u64 = 30;
-    let mut est = Estimator::<480>::new(Config::default()).unwrap();
+    let mut est: Estimator = Estimator::new(Config::default()).unwrap();
     let mut src = Source::new(40.0);
     let mut worst_after_day1 = [0.0f64; 4];
+    let mut first_update = None;
     let mut statuses = std::collections::BTreeMap::<&'static str, u64>::new();
     for k in 1..=DAYS * DAY {
         let before = est.counters();
         let out = est.step(&src.next(NOMINAL_RAD)).expect("healthy sample accepted");
         let after = est.counters();
-        assert_eq!(after, (before.0 + 1, before.1, before.2), "step {k}: counters");
+        assert_eq!(after, Counters { accepted: before.accepted + 1, ..before }, "step {k}: counters");
         *statuses.entry(out.status.name()).or_default() += 1;
-        if k >= 480 {
+        if first_update.is_none() && updating(out.status) {
+            first_update = Some(k);
+        }
+        if let Some(first) = first_update {
             assert!(updating(out.status), "step {k}: status {:?}", out.status);
+            assert!(first < 3 * 480, "first update at step {first}");
         }
         if k > DAY {
             let e = errors_arcsec(&out);
@@ -216,7 +201,8 @@ fn thirty_day_run_keeps_sums_exact_covariance_spd_estimates_within_10_arcsec_and
             let s = internals(&est);
             assert_eq!(s.sums, s.direct_sums, "day {}: running sums drifted", k / DAY);
             assert_eq!((s.window_len, s.window_filled), (480, 480));
-            assert_eq!(u64::from(s.updates), k - 479, "day {}: not one filter update per step", k / DAY);
+            let first = first_update.expect("updating by day 1");
+            assert_eq!(u64::from(s.updates), k - first + 1, "day {}: not one filter update per step", k / DAY);
             for i in 0..4 {
                 for j in 0..4 {
                     assert_eq!(s.p[i][j].to_bits(), s.p[j][i].to_bits(), "day {}: P not symmetric", k / DAY);
@@ -229,13 +215,13 @@ fn thirty_day_run_keeps_sums_exact_covariance_spd_estimates_within_10_arcsec_and
         }
     }
     println!("worst |error| after day 1: {worst_after_day1:.3?} arcsec; statuses {statuses:?}");
-    assert_eq!(est.counters(), (2_592_000, 0, 0));
+    assert_eq!(est.counters(), Counters { accepted: 2_592_000, ..Counters::default() });
 }
 
 /// Runs `steps` healthy samples at `latitude_deg`; returns the last output and whether any step
 /// was `Converged`, and checks honesty at every hour: each error within 3 sigma.
-fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator<480>) {
-    let mut est = Estimator::<480>::new(Config::default()).unwrap();
+fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator) {
+    let mut est: Estimator = Estimator::new(Config::default()).unwrap();
     let mut src = Source::new(latitude_deg);
     let mut last = None;
     let mut converged = false;
@@ -257,7 +243,7 @@ fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator<480>)
 /// (gain 1/2, the default measurement noise and random walk): its variance after `updates`.
 fn pitch_only_variance(updates: u64) -> f64 {
     let c = Config::default();
-    let (r, q) = ((c.measurement_sigma_rad as f64).powi(2), (c.drift_rad_per_sqrt_s as f64).powi(2) * c.sample_interval_s);
+    let (r, q) = ((c.measurement_sigma_rad as f64).powi(2), (c.drift_rad_per_sqrt_s as f64).powi(2));
     let mut p = (c.prior_sigma_rad as f64).powi(2);
     for _ in 0..updates {
         p += q;
@@ -274,8 +260,9 @@ const LATITUDE_STEPS: u64 = 8 * 3600;
 #[test]
 fn equator_x1_x2_come_from_pitch_alone() {
     let (out, converged, est) = run_latitude(0.0, LATITUDE_STEPS);
-    let p = internals(&est).p;
-    let pitch_only = pitch_only_variance(LATITUDE_STEPS - 479);
+    let s = internals(&est);
+    let p = s.p;
+    let pitch_only = pitch_only_variance(u64::from(s.updates));
     for i in 0..2 {
         assert!((p[i][i] / pitch_only - 1.0).abs() < 1e-3, "x{}: variance {} vs pitch-only {}", i + 1, p[i][i], pitch_only);
         assert_eq!(p[i][2], 0.0);
@@ -292,8 +279,8 @@ fn equator_x1_x2_come_from_pitch_alone() {
 #[test]
 fn mid_latitude_converges_honestly() {
     let (out, converged, est) = run_latitude(45.0, LATITUDE_STEPS);
-    let p = internals(&est).p;
-    assert!(p[0][0] < pitch_only_variance(LATITUDE_STEPS - 479));
+    let s = internals(&est);
+    assert!(s.p[0][0] < pitch_only_variance(u64::from(s.updates)));
     assert!(converged && out.status == Status::Converged, "{:?}", out.status);
     let e = errors_arcsec(&out);
     assert!(e.iter().all(|v| v.abs() < 1.0), "errors {e:?}");
@@ -354,7 +341,7 @@ struct FaultRun {
 
 /// 3 h healthy, `fault_s` of the given rotation increment, then healthy again for 3 h.
 fn run_fault(fault_increment_rad: f64, fault_s: u64) -> FaultRun {
-    let mut est = Estimator::<480>::new(Config::default()).unwrap();
+    let mut est: Estimator = Estimator::new(Config::default()).unwrap();
     let mut src = Source::new(40.0);
     let healthy_s = 3 * 3600;
     let mut pre_fault = None;
@@ -377,7 +364,7 @@ fn run_fault(fault_increment_rad: f64, fault_s: u64) -> FaultRun {
         };
         let out = est.step(&src.next(increment)).unwrap();
         let Some(estimate) = out.estimate else {
-            assert!(k < 480, "no estimate at step {k}");
+            assert!(k < 3 * 480, "no estimate at step {k}");
             continue;
         };
         let x = estimate.x_rad;
@@ -419,28 +406,32 @@ fn run_fault(fault_increment_rad: f64, fault_s: u64) -> FaultRun {
     }
 }
 
-/// Steps the rotation monitor's short mean (exponential over `SHORT_STEPS` steps) takes to cross
-/// half of a step change: a stop is reported, and a restart recognised, that many steps late.
-fn short_mean_settle() -> u64 {
-    let alpha = 1.0 / RotationMonitor::SHORT_STEPS as f64;
-    (0.5f64.ln() / (1.0 - alpha).ln()).ceil() as u64
+/// Steps the rotation monitor's short mean (exponential over `SHORT_STEPS` steps) takes to fall
+/// below a quarter of a step change (a stop), plus the two samples a pattern without dwells may
+/// stand still (a reversal passes through zero), plus the delay of the gap filler.
+fn stop_settle() -> u64 {
+    let alpha = 1.0 / SHORT_STEPS as f64;
+    (0.25f64.ln() / (1.0 - alpha).ln()).ceil() as u64 + 2 + estimator_core::gap_fill::NEIGHBOURS as u64
 }
 
-/// The longest resumption delay after a rate fault: the mean-rate ratio (an exponential mean over
-/// one period, W = 480 samples, of the short mean) must come back from 20 % off to within the 1 %
-/// tolerance, which takes W ln(0.20 / 0.01) samples after the short mean has settled, and then a
-/// full window must pass.
-fn rate_fault_resume_bound() -> u64 {
-    (480.0 * (0.20f64 / 0.01).ln()).ceil() as u64 + short_mean_settle() + 480 + 1
+/// What the status did during the fault.
+#[derive(PartialEq)]
+enum During {
+    /// Reported the first fault at every faulty sample.
+    SameFault,
+    /// Reported the fault, then (the rotation repeating a new pattern) detected it anew.
+    Relearned,
 }
 
-fn check_fault(name: &str, run: &FaultRun, expected: RotationFault, max_resume_delay: u64) {
+fn check_fault(name: &str, run: &FaultRun, expected: RotationFault, during: During, max_resume_delay: u64) {
     println!(
         "{name}: first status {:?}, resumed {} samples after healthy rotation, frozen change {} arcsec, change across fault {:.4} arcsec, final errors {:.3?}, {:?}",
         run.first_fault_status, run.resume_delay, run.frozen_change_arcsec, run.change_across_fault_arcsec, run.final_errors_arcsec, run.final_status
     );
     assert_eq!(run.first_fault_status, Status::RotationFault(expected), "{name}");
-    assert_eq!(run.unreported_fault_samples, 0, "{name}: the status stopped reporting the fault");
+    if during == During::SameFault {
+        assert_eq!(run.unreported_fault_samples, 0, "{name}: the status stopped reporting the fault");
+    }
     assert_eq!(run.frozen_change_arcsec, 0.0, "{name}: estimates moved while frozen");
     assert!(run.change_across_fault_arcsec < 1.0, "{name}: estimates drifted by {} arcsec", run.change_across_fault_arcsec);
     assert!(run.resume_delay <= max_resume_delay, "{name}: resumed after {} samples", run.resume_delay);
@@ -448,45 +439,43 @@ fn check_fault(name: &str, run: &FaultRun, expected: RotationFault, max_resume_d
     assert!(updating(run.final_status), "{name}: {:?}", run.final_status);
 }
 
-/// Rotation stopped for an hour: `rotation_stopped`, frozen, resumes one window (480 samples)
-/// after the rotation restart is recognised.
+/// Rotation stopped for an hour: `rotation_stopped` at every sample, frozen; resumes one window
+/// (480 samples) after the restart is recognised.
 #[test]
 fn rotation_stopped_freezes_and_resumes() {
     let run = run_fault(0.0, 3600);
-    check_fault("stopped", &run, RotationFault::Stopped, short_mean_settle() + 480);
+    check_fault("stopped", &run, RotationFault::Stopped, During::SameFault, stop_settle() + 480);
 }
 
-/// Rotating at a 400 s period (20 % fast) for an hour: `rotation_rate_mismatch`, frozen; resumes
-/// once the mean rate is back within 1 % and a full window has passed.
+/// Rotating at a 400 s period (20 % fast) for an hour: `rotation_rate_mismatch`, frozen; the new
+/// period is detected and estimation goes on at it; back at 480 s, the same again: the pattern is
+/// learned anew within two periods, and the window fills in a third.
 #[test]
-fn rotation_at_another_period_freezes_and_resumes() {
+fn rotation_at_another_period_freezes_and_relearns() {
     let run = run_fault(2.0 * PI / 400.0, 3600);
-    check_fault("period 400 s", &run, RotationFault::RateMismatch, rate_fault_resume_bound());
+    check_fault("period 400 s", &run, RotationFault::RateMismatch, During::Relearned, 3 * 480 + stop_settle());
 }
 
 /// Rotating at a 600 s period (20 % slow) for an hour: same.
 #[test]
-fn rotation_slower_freezes_and_resumes() {
+fn rotation_slower_freezes_and_relearns() {
     let run = run_fault(2.0 * PI / 600.0, 3600);
-    check_fault("period 600 s", &run, RotationFault::RateMismatch, rate_fault_resume_bound());
+    check_fault("period 600 s", &run, RotationFault::RateMismatch, During::Relearned, 3 * 480 + stop_settle());
 }
 
-/// The rotation reverses and goes on the other way: `rotation_reversed` at once, frozen for a
-/// window, then estimating again (eq 2 holds in either direction).
+/// A one-way rotation reverses and goes on the other way: `rotation_reversed` at once, frozen; after
+/// one period the other way the pattern is learned anew (eq (2) holds in either direction).
 #[test]
-fn rotation_reversal_freezes_and_resumes() {
+fn rotation_reversal_freezes_and_relearns() {
     let run = run_fault(-NOMINAL_RAD, 1);
-    check_fault("reversed", &run, RotationFault::Reversed, 480);
+    check_fault("reversed", &run, RotationFault::Reversed, During::Relearned, 4 * 480 + stop_settle());
 }
 
 /// The rotation angle read with 0.15 deg (1-sigma) of white jitter, 28 % of a 0.75 deg step, for
-/// 6 h: no rotation fault, no window restart, and the estimates converge. (Judged step by step,
-/// as before `RotationMonitor` averaged over a few steps, this jitter tripped a fault every few
-/// dozen steps and the estimator never estimated: `host-sim compare --scenarios sea
-/// --rotation-jitter-deg 0.15`.)
+/// 6 h: no rotation fault, no window restart, and the estimates converge.
 #[test]
 fn rotation_jitter_of_0_15_deg_raises_no_fault() {
-    let mut est = Estimator::<480>::new(Config::default()).unwrap();
+    let mut est: Estimator = Estimator::new(Config::default()).unwrap();
     let mut src = Source::new(40.0);
     src.rotation_jitter_rad = 0.15 * RAD_PER_DEG;
     let mut last = None;
@@ -495,35 +484,10 @@ fn rotation_jitter_of_0_15_deg_raises_no_fault() {
         assert!(!matches!(out.status, Status::RotationFault(_)), "step {k}: {:?}", out.status);
         last = Some(out);
     }
-    assert_eq!(est.counters().2, 0, "window restarts");
+    assert_eq!(est.counters().window_restarts, 0, "window restarts");
     let last = last.unwrap();
     let e = errors_arcsec(&last);
     println!("jitter 0.15 deg, 6 h: errors {e:.3?} arcsec, {}", last.status.name());
     assert!(updating(last.status), "{:?}", last.status);
     assert!(e.iter().all(|v| v.abs() < 1.0), "{e:?}");
-}
-
-/// Two days at 1 Hz with each method: the state validates (checkpoint, restore: finite values,
-/// covariances symmetric positive definite, window sums exact) every 6 hours, and the restored
-/// estimator equals the running one. Guards against a method whose covariance legitimately loses
-/// positive definiteness (the paper's nearly collinear 3-state filters), which would make its
-/// checkpoints unrestorable.
-#[test]
-#[cfg_attr(debug_assertions, ignore = "2 days x 3 methods: run with `cargo test --release`")]
-fn every_method_checkpoints_and_restores_through_two_days() {
-    for method in [estimator_core::Method::Windowed, estimator_core::Method::Paper, estimator_core::Method::Traditional] {
-        let mut est = Estimator::<480>::new(Config::with_method(method)).unwrap();
-        let mut src = Source::new(40.0);
-        let mut buf = vec![0u8; Estimator::<480>::CHECKPOINT_LEN];
-        for k in 1..=2 * 86_400u64 {
-            est.step(&src.next(NOMINAL_RAD)).unwrap();
-            if k % (6 * 3600) == 0 {
-                est.checkpoint(&mut buf).unwrap();
-                match Estimator::<480>::from_checkpoint(&buf) {
-                    Ok(back) => assert!(back == est, "{method:?}, hour {}: restored state differs", k / 3600),
-                    Err(e) => panic!("{method:?}, hour {}: checkpoint does not restore: {e:?}", k / 3600),
-                }
-            }
-        }
-    }
 }

@@ -83,6 +83,9 @@ pub struct Windowed<const CAP: usize> {
     /// Channel gains (diagonal of the rows, about `(1/2, 1/2, cosL/2, cosL/2)`) of the last update,
     /// for mapping residuals to x.
     pub gains: [Real; 4],
+    /// Per-product variance of the pitch and of the roll channels at the last update, rad^2
+    /// (`r` of the module doc, filled samples included).
+    pub product_variance_rad2: [Real; 2],
 }
 
 /// The estimate of one step: x1..x4, their 1-sigma, and whether the model is inconsistent.
@@ -111,6 +114,7 @@ impl<const CAP: usize> Windowed<CAP> {
             residual_mean: [0.0; 4],
             residual_count: 0,
             gains: [0.5; 4],
+            product_variance_rad2: [0.0; 2],
         }
     }
 
@@ -123,6 +127,7 @@ impl<const CAP: usize> Windowed<CAP> {
         self.residual_mean = [0.0; 4];
         self.residual_count = 0;
         self.gains = [0.5; 4];
+        self.product_variance_rad2 = [0.0; 2];
     }
 
     /// Sets the window to one period of the rotation pattern.
@@ -158,6 +163,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
         let r_pitch = r0 + 0.5 * filled * fill_variance_rad2.1;
         let r_roll = r0 + 0.5 * filled * fill_variance_rad2.0;
+        self.product_variance_rad2 = [r_pitch, r_roll];
         let mut applied = false;
         for (ch, row) in m.rows.iter().enumerate() {
             let r = if ch < 2 { r_pitch } else { r_roll };
@@ -184,10 +190,14 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// The residual check (see the module doc).
     pub fn consistency(&self, config: &Config) -> Consistency {
-        let n = (self.residual_count as usize).max(self.window.len()) as Real * self.window.bin() as Real;
-        let s_e = config.measurement_sigma_rad / sqrt(n);
+        // The residual mean averages `n` entries of per-entry variance `r` (filled samples
+        // included); without an update yet, the configured sigma.
+        let n = (self.residual_count as usize).max(self.window.len()) as Real;
+        let sigma2 = config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
         let mut out = Consistency { model_sigma_rad: [0.0; 4], mismatch: false };
         for ch in 0..4 {
+            let r = self.product_variance_rad2[ch / 2].max(sigma2);
+            let s_e = sqrt(r / n);
             let excess = (self.residual_mean[ch].abs() - 2.0 * s_e).max(0.0);
             // A bias b on a channel of gain g means an error of about b/g, but never more than the
             // prior says we could not know anyway: near the pole the gain of x3, x4 is cos L / 2,
