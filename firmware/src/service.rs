@@ -100,14 +100,14 @@ impl<'a> Service<'a> {
     }
 
     fn status(&self) -> StatusReply {
-        let (accepted, bridged, window_restarts) = self.estimator.counters();
+        let counters = self.estimator.counters();
         StatusReply {
             protocol_version: PROTOCOL_VERSION,
             method: self.estimator.config().method.code(),
             counters: self.counters(),
-            accepted,
-            bridged,
-            window_restarts,
+            accepted: counters.accepted,
+            filled: counters.filled,
+            window_restarts: counters.window_restarts,
             estimate: self.estimator.estimate().as_ref().map(EstimateMsg::from),
             cost_counter_hz: CostCounter::HZ,
             boot_stack_peak_bytes: self.boot_stack_peak_bytes,

@@ -64,10 +64,10 @@ pub struct TuningArgs {
     /// Traditional baseline: random-walk process noise of the errors, arcsec/sqrt(s) (default 0).
     #[arg(long, value_name = "ARCSEC")]
     pub traditional_drift_arcsec_per_sqrt_s: Option<f64>,
-    /// Gaps of up to this many missing samples are bridged by interpolation instead of restarting
-    /// the moving average (default: the core's, 0 = never bridge).
+    /// Gaps of up to this many lost samples in a row are filled from their neighbours instead of
+    /// restarting the moving average (default: the core's, 3; 0 = never fill, at most 3).
     #[arg(long, value_name = "N")]
-    pub max_bridged_gap_samples: Option<u32>,
+    pub max_filled_gap_samples: Option<u32>,
 }
 
 impl TuningArgs {
@@ -80,8 +80,8 @@ impl TuningArgs {
         if let Some(d) = self.traditional_drift_arcsec_per_sqrt_s {
             c.traditional_drift_rad_per_sqrt_s = arcsec_to_rad(d) as Real;
         }
-        if let Some(n) = self.max_bridged_gap_samples {
-            c.max_bridged_gap_samples = n;
+        if let Some(n) = self.max_filled_gap_samples {
+            c.max_filled_gap_samples = n;
         }
         c
     }

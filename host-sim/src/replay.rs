@@ -3,11 +3,11 @@
 use crate::estimates_csv::EstimatesWriter;
 use crate::log_csv::{LogError, LogLine};
 use crate::scenario::Row;
-use estimator_core::{Config, ConfigError, Estimator, Output, RejectCounts, Sample, SampleError};
+use estimator_core::{Config, ConfigError, Counters, Estimator, Holdup, Output, RejectCounts, RotationSummary, Sample, SampleError};
 use std::io::Write;
 
 /// The estimator type the host runs: the firmware's default capacity.
-pub type HostEstimator = Estimator<480>;
+pub type HostEstimator = Estimator;
 
 /// The result of one input row.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -22,12 +22,15 @@ pub struct Step {
 pub struct Replay {
     pub steps: Vec<Step>,
     pub rejected: RejectCounts,
-    /// Samples accepted, samples bridged by interpolation, restarts of the moving average.
-    pub accepted: u32,
-    pub bridged: u32,
-    pub window_restarts: u32,
+    /// Samples accepted, lost samples filled, restarts of the moving average, clock steps.
+    pub counters: Counters,
     /// The estimate at the end of the log.
     pub final_estimate: Option<estimator_core::Estimate>,
+    /// The sample interval learned (or pinned), s, and the rotation pattern, at the end.
+    pub sample_interval_s: Option<f64>,
+    pub rotation: RotationSummary,
+    /// What held the estimate back at the end, if anything.
+    pub holdup: Option<Holdup>,
 }
 
 /// Why a replay stopped.
@@ -98,8 +101,15 @@ where
             est = restart(est, line.row.time_s)?;
         }
     }
-    let (accepted, bridged, window_restarts) = est.counters();
-    Ok(Replay { steps, rejected: est.rejected(), accepted, bridged, window_restarts, final_estimate: est.estimate() })
+    Ok(Replay {
+        steps,
+        rejected: est.rejected(),
+        counters: est.counters(),
+        final_estimate: est.estimate(),
+        sample_interval_s: est.sample_interval_s(),
+        rotation: est.rotation(),
+        holdup: est.progress(),
+    })
 }
 
 /// Replays generated rows (no file) and keeps only the outputs: the fast path of Monte Carlo runs.

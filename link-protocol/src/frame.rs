@@ -167,7 +167,7 @@ mod tests {
             method: 0,
             counters: Counters::default(),
             accepted: u32::MAX,
-            bridged: 1,
+            filled: 1,
             window_restarts: 2,
             estimate: step_reply().estimate,
             cost_counter_hz: 25_000_000,

@@ -257,9 +257,10 @@ pub struct StatusReply {
     /// [`estimator_core::Method::code`] of the running configuration.
     pub method: u8,
     pub counters: Counters,
-    /// The estimator's counters: samples accepted, bridged by interpolation, window restarts.
+    /// The estimator's counters: samples accepted, lost samples filled from their neighbours,
+    /// window restarts.
     pub accepted: u32,
-    pub bridged: u32,
+    pub filled: u32,
     pub window_restarts: u32,
     pub estimate: Option<EstimateMsg>,
     /// Frequency of the cost counter behind `step_cost_ticks` (the core clock, for SysTick).
