@@ -6,9 +6,10 @@
 //! - each row is dropped independently with probability `drop_fraction`;
 //! - rows whose instant falls inside an outage `[start, start + outage_duration_s)` are missing;
 //! - the stamp is `t_k + time_offset_s + j_k`, `j_k` uniform in `[-time_jitter_s,
-//!   time_jitter_s]`: the data are those of the true instant `t_k`, only the stamp is loose. With an
-//!   offset or a jitter the stamp is rounded to the microsecond (a recorder's resolution), so it
-//!   is written as a short decimal (`1700000123.02`, not `1700000123.0200002`); the jitter is kept
+//!   time_jitter_s]`: the data are those of the true instant `t_k`, only the stamp is loose. The
+//!   stamp is rounded to the microsecond (a recorder's resolution), so it is written as a short
+//!   decimal (`1700000123.02`, not `1700000123.0200002`; `0.3`, not `0.30000000000000004`; whole
+//!   seconds, as at the default 1 s interval, are left exactly as they were); the jitter is kept
 //!   below half an interval, so the stamps stay in order and each names its instant unambiguously
 //!   ([`Recording::sample_time_s`]).
 //!
@@ -45,16 +46,6 @@ pub struct Recording {
 }
 
 impl Recording {
-    /// Whether the recorder changes anything.
-    pub fn is_lossless(&self) -> bool {
-        self.drop_fraction == 0.0 && self.outage_starts_s.is_empty() && !self.changes_stamps()
-    }
-
-    /// Whether stamps differ from the sample instants.
-    pub fn changes_stamps(&self) -> bool {
-        self.time_offset_s != 0.0 || self.time_jitter_s != 0.0
-    }
-
     /// Checks the settings for rows every `interval_s`.
     pub fn check(&self, interval_s: f64) -> Result<(), String> {
         if !(self.drop_fraction.is_finite() && (0.0..1.0).contains(&self.drop_fraction)) {
@@ -89,6 +80,32 @@ impl Recording {
     }
 }
 
+/// What the recorder is asked to do, before the outages are placed.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RecorderSettings {
+    pub drop_fraction: f64,
+    /// Number of outages of [`OUTAGE_S`].
+    pub outages: usize,
+    pub time_offset_s: f64,
+    pub time_jitter_s: f64,
+}
+
+impl RecorderSettings {
+    /// The recording of a log of `duration_s` with rows every `interval_s`, outage start times
+    /// drawn from `seed`; checked.
+    pub fn recording(&self, seed: u64, duration_s: f64, interval_s: f64) -> Result<Recording, String> {
+        let r = Recording {
+            drop_fraction: self.drop_fraction,
+            outage_starts_s: draw_outage_starts_s(seed, self.outages, duration_s, interval_s).map_err(|e| format!("--outages: {e}"))?,
+            outage_duration_s: if self.outages > 0 { OUTAGE_S } else { 0.0 },
+            time_offset_s: self.time_offset_s,
+            time_jitter_s: self.time_jitter_s,
+        };
+        r.check(interval_s)?;
+        Ok(r)
+    }
+}
+
 /// Rounds a time to the microsecond.
 fn round_to_us(t_s: f64) -> f64 {
     (t_s * 1e6).round() / 1e6
@@ -114,9 +131,6 @@ impl<'a> Recorder<'a> {
         if drop_draw < r.drop_fraction || r.in_outage(row.time_s) {
             return None;
         }
-        if !r.changes_stamps() {
-            return Some(*row);
-        }
         let jitter_s = r.time_jitter_s * (2.0 * jitter_draw - 1.0);
         Some(Row { time_s: round_to_us(row.time_s + r.time_offset_s + jitter_s), ..*row })
     }
@@ -140,12 +154,12 @@ pub fn draw_outage_starts_s(seed: u64, count: usize, duration_s: f64, interval_s
     if free_s.is_nan() || free_s < 0.0 {
         return Err(format!("{count} outages of {OUTAGE_S} s (and {gap_s} s between them) do not fit in {duration_s} s"));
     }
-    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xA24B_AED4_963E_E407) ^ 0x07A6_E5);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xA24B_AED4_963E_E407) ^ 0x0007_A6E5);
     // Uniform non-overlapping placement: sorted uniform points in the free time, each then
     // pushed right by the outages (and gaps) before it.
     let mut points: Vec<f64> = (0..count).map(|_| rng.gen::<f64>() * free_s).collect();
     points.sort_by(f64::total_cmp);
-    Ok(points.iter().enumerate().map(|(i, p)| (((p + i as f64 * (OUTAGE_S + gap_s)) * 1e3).floor() / 1e3)).collect())
+    Ok(points.iter().enumerate().map(|(i, p)| ((p + i as f64 * (OUTAGE_S + gap_s)) * 1e3).floor() / 1e3).collect())
 }
 
 #[cfg(test)]
@@ -157,11 +171,19 @@ mod tests {
     }
 
     #[test]
-    fn lossless_recording_passes_rows_through() {
+    fn default_recording_keeps_every_row_at_its_instant() {
         let rec = Recording::default();
-        assert!(rec.is_lossless());
-        let rows: Vec<Row> = (0..100).map(|k| row(k as f64 * 0.1)).collect();
+        let rows: Vec<Row> = (0..100).map(|k| row(k as f64)).collect();
         assert_eq!(recorded_rows(&rec, 5, &rows), rows);
+        // At 0.1 s, stamps are short decimals that name their instant exactly.
+        let rows: Vec<Row> = (0..100).map(|k| row(k as f64 * 0.1)).collect();
+        let out = recorded_rows(&rec, 5, &rows);
+        assert_eq!(out[3].time_s.to_string(), "0.3");
+        for (a, b) in out.iter().zip(&rows) {
+            assert!((a.time_s - b.time_s).abs() < 1e-12);
+            assert_eq!(rec.sample_time_s(a.time_s, 0.1), Some(b.time_s));
+            assert_eq!(Row { time_s: b.time_s, ..*a }, *b);
+        }
     }
 
     #[test]
