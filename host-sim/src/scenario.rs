@@ -456,4 +456,29 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn period_error_and_angle_jitter_apply_to_every_scheme() {
+        let mut p = ScenarioParams::new(ScenarioKind::Paper, 8);
+        p.duration_s = 1000.0;
+        for scheme in RotationScheme::ALL {
+            p.scheme = scheme;
+            p.mismatch = Mismatch { rotation_period_error: 0.01, ..Mismatch::default() };
+            let true_period_s = 480.0 * 1.01;
+            for (row, _) in Samples::new(&p) {
+                let expected = (p.rotation_phase_deg + scheme.rho_rad(row.time_s, true_period_s).to_degrees()).rem_euclid(360.0);
+                let d = (row.rotation_deg - expected + 180.0).rem_euclid(360.0) - 180.0;
+                assert!(d.abs() < 1e-9, "{} at {}", scheme.name(), row.time_s);
+            }
+            p.mismatch = Mismatch { rotation_jitter_deg: 0.05, ..Mismatch::default() };
+            let dev: Vec<f64> = Samples::new(&p)
+                .map(|(row, _)| {
+                    let expected = (p.rotation_phase_deg + scheme.rho_rad(row.time_s, 480.0).to_degrees()).rem_euclid(360.0);
+                    (row.rotation_deg - expected + 180.0).rem_euclid(360.0) - 180.0
+                })
+                .collect();
+            let rms = (dev.iter().map(|d| d * d).sum::<f64>() / dev.len() as f64).sqrt();
+            assert!((rms - 0.05).abs() < 0.005, "{}: {rms}", scheme.name());
+        }
+    }
 }
