@@ -1,5 +1,7 @@
 //! Command-line argument groups shared by several subcommands.
 
+use crate::recorder::RecorderSettings;
+use crate::rotation_scheme::RotationScheme;
 use crate::scenario::{ScenarioKind, ScenarioParams};
 use estimator_core::units::{arcsec_to_rad, RAD_PER_DEG};
 use estimator_core::{Config, Method, Real};
@@ -155,5 +157,197 @@ impl ScenarioOverrides {
             p.low_frequency_deg = a;
         }
         Ok(p)
+    }
+}
+
+/// `--scheme`: how the RINS turns (see [`RotationScheme`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum SchemeArg {
+    /// One way at a constant rate, +360 deg per period (the paper's).
+    #[default]
+    Continuous,
+    /// One way at a constant rate, -360 deg per period.
+    Reversed,
+    /// +360 deg in half a period, back -360 deg in the other half, at a constant rate.
+    Reciprocating,
+    /// Stop and go: four 90 deg moves of 15 s, each followed by a dwell of period/4 - 15 s.
+    FourPosition,
+    /// Stop and go: four 90 deg moves forward then four back, 15 s each, dwells of period/8 - 15 s.
+    EightPosition,
+}
+
+impl From<SchemeArg> for RotationScheme {
+    fn from(s: SchemeArg) -> RotationScheme {
+        match s {
+            SchemeArg::Continuous => RotationScheme::Continuous,
+            SchemeArg::Reversed => RotationScheme::Reversed,
+            SchemeArg::Reciprocating => RotationScheme::Reciprocating,
+            SchemeArg::FourPosition => RotationScheme::FourPosition,
+            SchemeArg::EightPosition => RotationScheme::EightPosition,
+        }
+    }
+}
+
+/// A comma-separated list of schemes, or `all`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SchemeList(pub Vec<RotationScheme>);
+
+/// Parses `--schemes`: scheme names separated by commas, or `all`.
+pub fn parse_schemes(text: &str) -> Result<SchemeList, String> {
+    if text.trim() == "all" {
+        return Ok(SchemeList(RotationScheme::ALL.to_vec()));
+    }
+    let names: Vec<&str> = RotationScheme::ALL.iter().map(|s| s.name()).collect();
+    text.split(',')
+        .map(|n| RotationScheme::parse(n.trim()).ok_or_else(|| format!("unknown scheme {:?}: expected `all` or some of {}", n.trim(), names.join(", "))))
+        .collect::<Result<Vec<_>, _>>()
+        .map(SchemeList)
+}
+
+/// Accepted rotation periods, s.
+pub const ROTATION_PERIOD_RANGE_S: (f64, f64) = (60.0, 3600.0);
+/// Accepted sample intervals, s.
+pub const SAMPLE_INTERVAL_RANGE_S: (f64, f64) = (0.1, 10.0);
+
+/// Rotation period and sample interval. They shape a generated log, and they pin the estimator's
+/// configuration; this group is the one place where the command line sets the core's timing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, clap::Args)]
+pub struct TimingArgs {
+    /// Rotation period of the RINS, s (60-3600; default 480): of the generated log, and the
+    /// estimator's configured period.
+    #[arg(long, value_name = "S")]
+    pub rotation_period: Option<f64>,
+    /// Interval between the log's rows, s (0.1-10; default 1): of the generated log, and the
+    /// estimator's configured interval.
+    #[arg(long, value_name = "S")]
+    pub sample_interval: Option<f64>,
+}
+
+impl TimingArgs {
+    /// Checks the ranges.
+    pub fn check(&self) -> anyhow::Result<()> {
+        if let Some(t) = self.rotation_period {
+            let (lo, hi) = ROTATION_PERIOD_RANGE_S;
+            anyhow::ensure!(t.is_finite() && (lo..=hi).contains(&t), "--rotation-period must be between {lo} and {hi} s, got {t}");
+        }
+        if let Some(d) = self.sample_interval {
+            let (lo, hi) = SAMPLE_INTERVAL_RANGE_S;
+            anyhow::ensure!(d.is_finite() && (lo..=hi).contains(&d), "--sample-interval must be between {lo} and {hi} s, got {d}");
+        }
+        Ok(())
+    }
+
+    /// `config` with the rotation period and sample interval given pinned: today
+    /// `rotation_period_samples = round(period / interval)` and `sample_interval_s`; what is not
+    /// given keeps the configuration's value.
+    pub fn pin(&self, mut config: Config) -> Config {
+        let period_s = self.rotation_period.unwrap_or(config.rotation_period_samples as f64 * config.sample_interval_s);
+        if let Some(d) = self.sample_interval {
+            config.sample_interval_s = d;
+        }
+        if self.rotation_period.is_some() || self.sample_interval.is_some() {
+            config.rotation_period_samples = (period_s / config.sample_interval_s).round() as usize;
+        }
+        config
+    }
+}
+
+/// The recorder's effects on a generated log (see [`crate::recorder`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, clap::Args)]
+pub struct RecorderArgs {
+    /// Recorder: drop each row independently with this probability (0 <= F < 1).
+    #[arg(long, value_name = "F", default_value_t = 0.0)]
+    pub drop_fraction: f64,
+    /// Recorder: this many outages of 60 s (rows missing) at random times, not overlapping.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub outages: usize,
+    /// Recorder: added to every time stamp, s (e.g. 1.7e9 for Unix time); recorded in the truth file.
+    #[arg(long, value_name = "S", default_value_t = 0.0, allow_negative_numbers = true)]
+    pub time_offset: f64,
+    /// Recorder: each time stamp is the sample instant plus a uniform jitter in [-S, S] (below half
+    /// the sample interval); the data stay those of the true instant.
+    #[arg(long, value_name = "S", default_value_t = 0.0)]
+    pub time_jitter: f64,
+}
+
+impl RecorderArgs {
+    pub fn settings(&self) -> RecorderSettings {
+        RecorderSettings { drop_fraction: self.drop_fraction, outages: self.outages, time_offset_s: self.time_offset, time_jitter_s: self.time_jitter }
+    }
+}
+
+/// How a generated log is rotated, sampled and recorded (`generate`, `run`).
+#[derive(Clone, Copy, Debug, Default, clap::Args)]
+pub struct LogShapeArgs {
+    /// Rotation scheme of the RINS.
+    #[arg(long, value_enum, default_value_t)]
+    pub scheme: SchemeArg,
+    #[command(flatten)]
+    pub timing: TimingArgs,
+    #[command(flatten)]
+    pub recorder: RecorderArgs,
+}
+
+impl LogShapeArgs {
+    /// Applies scheme, timing and recorder to `p` (after its duration is set): outage start times
+    /// are drawn from the scenario's seed.
+    pub fn apply(&self, p: &mut ScenarioParams) -> anyhow::Result<()> {
+        apply_shape(p, self.scheme.into(), &self.timing, &self.recorder.settings(), p.seed)
+    }
+}
+
+/// Sets a scenario's scheme, timing and recording (outages drawn from `outage_seed`), checked.
+pub fn apply_shape(p: &mut ScenarioParams, scheme: RotationScheme, timing: &TimingArgs, recorder: &RecorderSettings, outage_seed: u64) -> anyhow::Result<()> {
+    timing.check()?;
+    p.scheme = scheme;
+    if let Some(t) = timing.rotation_period {
+        p.rotation_period_s = t;
+    }
+    if let Some(d) = timing.sample_interval {
+        p.sample_interval_s = d;
+    }
+    anyhow::ensure!(
+        p.rotation_period_s >= scheme.min_period_s(),
+        "the {} scheme needs a rotation period of at least {} s for its 15 s moves, got {}",
+        scheme.name(),
+        scheme.min_period_s(),
+        p.rotation_period_s
+    );
+    anyhow::ensure!(p.duration_s >= p.sample_interval_s, "--duration ({} s) is shorter than one sample interval ({} s)", p.duration_s, p.sample_interval_s);
+    p.recording = recorder.recording(outage_seed, p.duration_s, p.sample_interval_s).map_err(anyhow::Error::msg)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schemes_parse_as_list_or_all() {
+        assert_eq!(parse_schemes("all").unwrap().0, RotationScheme::ALL.to_vec());
+        assert_eq!(parse_schemes("reversed, eight-position").unwrap().0, vec![RotationScheme::Reversed, RotationScheme::EightPosition]);
+        assert!(parse_schemes("continuous,spiral").unwrap_err().contains("spiral"));
+    }
+
+    #[test]
+    fn timing_pins_period_in_samples_and_interval() {
+        let c = Config::default();
+        assert_eq!(TimingArgs::default().pin(c), c);
+        let pinned = TimingArgs { rotation_period: Some(360.0), sample_interval: Some(2.0) }.pin(c);
+        assert_eq!((pinned.rotation_period_samples, pinned.sample_interval_s), (180, 2.0));
+        let interval_only = TimingArgs { rotation_period: None, sample_interval: Some(0.5) }.pin(c);
+        assert_eq!((interval_only.rotation_period_samples, interval_only.sample_interval_s), (960, 0.5));
+        assert!(TimingArgs { rotation_period: Some(59.0), sample_interval: None }.check().is_err());
+        assert!(TimingArgs { rotation_period: None, sample_interval: Some(0.05) }.check().is_err());
+    }
+
+    #[test]
+    fn shape_rejects_a_period_too_short_for_the_moves() {
+        let mut p = ScenarioParams::new(ScenarioKind::Paper, 1);
+        let timing = TimingArgs { rotation_period: Some(100.0), sample_interval: None };
+        let err = apply_shape(&mut p, RotationScheme::EightPosition, &timing, &RecorderSettings::default(), 1).unwrap_err();
+        assert!(err.to_string().contains("at least 120 s"), "{err}");
+        apply_shape(&mut p, RotationScheme::FourPosition, &timing, &RecorderSettings::default(), 1).unwrap();
+        assert_eq!((p.scheme, p.rotation_period_s), (RotationScheme::FourPosition, 100.0));
     }
 }

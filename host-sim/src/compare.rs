@@ -1,7 +1,9 @@
-//! `compare`: every method on every scenario over several seeds, as a markdown table for the README.
+//! `compare`: every method on every scenario over several seeds, as a markdown table for the README;
+//! one table per rotation scheme, headed by how its logs are made ([`describe`]).
 
 use crate::cli_args::method_label;
 use crate::monte_carlo::{quantile, run_all, sorted, Draw};
+use crate::replay::HostEstimator;
 use crate::report::Accuracy;
 use crate::scenario::ScenarioKind;
 use estimator_core::{Config, Method};
@@ -23,8 +25,9 @@ pub struct CompareRow {
     /// median and 95th percentile, arcsec.
     pub error_at_arcsec: Vec<(f64, f64)>,
     pub duration_s: f64,
-    /// Status at the end of each run, with how many runs ended in it (most frequent first).
-    pub final_status: Vec<(&'static str, usize)>,
+    /// Status at the end of each run, with how many runs ended in it (most frequent first); a
+    /// configuration the estimator rejects counts every run under `configuration rejected (...)`.
+    pub final_status: Vec<(String, usize)>,
 }
 
 fn stats(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
@@ -32,11 +35,24 @@ fn stats(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
     (quantile(&v, 0.5), quantile(&v, 0.95))
 }
 
-/// Runs `seeds` draws of a scenario with a method.
+/// Runs `seeds` draws of a scenario with a method. A configuration the estimator rejects (e.g. a
+/// rotation period longer than its window holds) gives a line without estimates that says so.
 pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<CompareRow> {
-    let results: Vec<Accuracy> = run_all(draw, config, seeds, &COMPARE_TIMES_S, &|| {})?;
     let inf = f64::INFINITY;
     let duration_s = draw.params(0).duration_s;
+    if let Err(e) = HostEstimator::new(config) {
+        return Ok(CompareRow {
+            scenario: draw.kind,
+            method: config.method,
+            runs: seeds,
+            to_percent_s: (inf, inf),
+            to_arcsec_s: (inf, inf),
+            error_at_arcsec: COMPARE_TIMES_S.iter().map(|t| if *t > duration_s { (f64::NAN, f64::NAN) } else { (inf, inf) }).collect(),
+            duration_s,
+            final_status: vec![(format!("configuration rejected ({e:?}, {} samples per period)", config.rotation_period_samples), seeds)],
+        });
+    }
+    let results: Vec<Accuracy> = run_all(draw, config, seeds, &COMPARE_TIMES_S, &|| {})?;
     let error_at_arcsec = COMPARE_TIMES_S
         .iter()
         .enumerate()
@@ -49,14 +65,14 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
             }))
         })
         .collect();
-    let mut final_status: Vec<(&'static str, usize)> = Vec::new();
+    let mut final_status: Vec<(String, usize)> = Vec::new();
     for name in results.iter().map(|r| r.final_status.map_or("none", |s| s.name())) {
-        match final_status.iter_mut().find(|(n, _)| *n == name) {
+        match final_status.iter_mut().find(|(n, _)| n == name) {
             Some((_, count)) => *count += 1,
-            None => final_status.push((name, 1)),
+            None => final_status.push((name.to_string(), 1)),
         }
     }
-    final_status.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+    final_status.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
     Ok(CompareRow {
         scenario: draw.kind,
         final_status,
@@ -109,6 +125,32 @@ pub fn format_table(rows: &[CompareRow]) -> String {
             fmt_err(r.error_at_arcsec[1].1),
             r.final_status.iter().map(|(n, c)| format!("{n} ({c})")).collect::<Vec<_>>().join(", "),
         ));
+    }
+    s
+}
+
+/// How the logs of a draw are made, one line: scheme, period, interval and the recorder.
+pub fn describe(draw: &Draw) -> String {
+    let p = draw.params(0);
+    let mut s = format!("scheme {}, rotation period {} s, a row every {} s", p.scheme.name(), p.rotation_period_s, p.sample_interval_s);
+    let r = &draw.recorder;
+    let mut rec = Vec::new();
+    if r.drop_fraction > 0.0 {
+        rec.push(format!("{} % of rows dropped at random", 100.0 * r.drop_fraction));
+    }
+    if r.outages > 0 {
+        rec.push(format!("{} outages of {} s", r.outages, crate::recorder::OUTAGE_S));
+    }
+    if r.time_offset_s != 0.0 {
+        rec.push(format!("time stamps offset by {} s", r.time_offset_s));
+    }
+    if r.time_jitter_s > 0.0 {
+        rec.push(format!("time stamps jittered by up to {} s", r.time_jitter_s));
+    }
+    if rec.is_empty() {
+        s.push_str(", every row, exact time stamps");
+    } else {
+        s.push_str(&format!("; recorder: {}", rec.join(", ")));
     }
     s
 }

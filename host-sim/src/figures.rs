@@ -51,12 +51,14 @@ pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interva
 /// Fig. 3: for the roll as logged, and split with the truth into the true roll, the oscillatory
 /// roll and the rest (low-frequency errors + noise), the
 /// cumulative correlation with sin(rho) of eq (8) and its moving average over one rotation period
-/// (`window` samples) of eq (11), arcsec. Uses the core's correlation products.
-pub fn correlation_panels(rows: &[Row], truth: &[RowTruth], window: usize) -> Vec<CorrelationPanel> {
+/// (`window` samples) of eq (11), arcsec. Uses the core's correlation products. `rows` are the
+/// logged rows (lost rows missing); each takes its truth by its time (`interval_s` apart).
+pub fn correlation_panels(rows: &[Row], truth: &[RowTruth], interval_s: f64, window: usize) -> Vec<CorrelationPanel> {
     let names = ["roll as logged (sum of the three below)", "true roll", "oscillatory roll (installation errors)", "low-frequency errors + noise"];
     let mut sums = [0.0f64; 4];
     let mut corr: [Curve; 4] = Default::default();
-    for (n, (row, tr)) in rows.iter().zip(truth).enumerate() {
+    let with_truth = rows.iter().filter_map(|row| truth_index(row.time_s, interval_s, truth.len()).map(|k| (row, &truth[k])));
+    for (n, (row, tr)) in with_truth.enumerate() {
         let rad = |deg: f64| (deg * RAD_PER_DEG) as Real;
         let lat = row.latitude_deg * RAD_PER_DEG;
         let angles = Angles::new(
@@ -122,7 +124,7 @@ pub fn write_figures(
     // The first 20000 s: the stage where eq (11)'s averaging matters.
     let n3 = rows.iter().take_while(|r| r.time_s <= FIG3_SPAN_S).count();
     let path = dir.join("fig3_correlation.png");
-    plots::correlation_figure(&path, &correlation_panels(&rows[..n3], &truth[..n3.min(truth.len())], window), x_arcsec[2] * lat.cos() / 2.0)?;
+    plots::correlation_figure(&path, &correlation_panels(&rows[..n3], truth, interval_s, window), x_arcsec[2] * lat.cos() / 2.0)?;
     written.push(path);
     if let Some((name, steps)) = replays.first() {
         let (before, after) = attitude_curves(rows, steps, truth, interval_s);

@@ -155,10 +155,15 @@ pub fn read_log(path: &Path) -> Result<Vec<LogLine>, LogError> {
     LogReader::open(path)?.collect()
 }
 
-/// Writes rows as an attitude log (lossless, see the module doc).
-pub fn write_log_to<W: Write>(mut w: W, rows: &[Row]) -> std::io::Result<()> {
+/// Writes rows (a slice, or an iterator: streamed) as an attitude log (lossless, see the module doc).
+pub fn write_log_to<W: Write, I>(mut w: W, rows: I) -> std::io::Result<()>
+where
+    I: IntoIterator,
+    I::Item: std::borrow::Borrow<Row>,
+{
     writeln!(w, "{HEADER}")?;
     for r in rows {
+        let r: &Row = std::borrow::Borrow::borrow(&r);
         writeln!(
             w,
             "{},{},{},{},{},{},{}",
@@ -169,7 +174,11 @@ pub fn write_log_to<W: Write>(mut w: W, rows: &[Row]) -> std::io::Result<()> {
 }
 
 /// Writes rows as an attitude log file.
-pub fn write_log(path: &Path, rows: &[Row]) -> Result<(), LogError> {
+pub fn write_log<I>(path: &Path, rows: I) -> Result<(), LogError>
+where
+    I: IntoIterator,
+    I::Item: std::borrow::Borrow<Row>,
+{
     let file = File::create(path).map_err(|e| LogError::new(path, 0, format!("cannot create: {e}")))?;
     write_log_to(BufWriter::new(file), rows).map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))
 }

@@ -4,13 +4,15 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Method, SampleError};
-use host_sim::cli_args::{method_label, MethodArg, ScenarioArg, ScenarioOverrides, TuningArgs};
+use host_sim::cli_args::{method_label, LogShapeArgs, MethodArg, RecorderArgs, ScenarioArg, ScenarioOverrides, SchemeArg, SchemeList, TimingArgs, TuningArgs};
 use host_sim::log_csv::{self, Truth};
-use host_sim::pipeline::{default_estimates_path, estimate_file, estimate_file_with_restarts, load_truth, report, Estimated};
+use host_sim::pipeline::{default_estimates_path, estimate_file, estimate_file_with_restarts, load_truth, on_sample_grid, report, Estimated};
+use host_sim::recorder::{recorded_rows, Recorder};
 use host_sim::replay::Replay;
 use host_sim::report::{format_accuracy, format_rms, Report};
 use host_sim::monte_carlo::{format_summary, run_all, summarize, Draw, MC_TIMES_S};
-use host_sim::scenario::{generate, Mismatch, ScenarioKind};
+use host_sim::rotation_scheme::RotationScheme;
+use host_sim::scenario::{generate, Mismatch, Samples, ScenarioKind};
 use std::path::PathBuf;
 
 #[derive(Parser, Debug)]
@@ -47,6 +49,8 @@ struct GenerateArgs {
     seed: u64,
     #[command(flatten)]
     overrides: ScenarioOverrides,
+    #[command(flatten)]
+    shape: LogShapeArgs,
     /// Output attitude log (CSV).
     #[arg(long, value_name = "FILE.csv")]
     out: PathBuf,
@@ -64,6 +68,8 @@ struct EstimateArgs {
     method: MethodArg,
     #[command(flatten)]
     tuning: TuningArgs,
+    #[command(flatten)]
+    timing: TimingArgs,
     /// Checkpoint the estimator after the rows at these times, drop it and restore a fresh one
     /// from the bytes (the estimates must not change).
     #[arg(long, value_name = "T1,T2,...", value_delimiter = ',')]
@@ -80,6 +86,8 @@ struct RunArgs {
     seed: u64,
     #[command(flatten)]
     overrides: ScenarioOverrides,
+    #[command(flatten)]
+    shape: LogShapeArgs,
     #[command(flatten)]
     tuning: TuningArgs,
     /// Output directory (default: out/SCENARIO-SEED).
@@ -104,6 +112,9 @@ struct MonteCarloArgs {
     /// Identification method.
     #[arg(long, value_enum, default_value_t = MethodArg::Windowed)]
     method: MethodArg,
+    /// Rotation scheme of the RINS.
+    #[arg(long, value_enum, default_value_t)]
+    scheme: SchemeArg,
     #[command(flatten)]
     tuning: TuningArgs,
     #[command(flatten)]
@@ -143,11 +154,20 @@ struct SpreadArgs {
     /// Model mismatch: coloured (Gauss-Markov, 60 s) attitude noise, 1-sigma arcsec.
     #[arg(long, value_name = "ARCSEC", default_value_t = 0.0)]
     coloured_noise_arcsec: f64,
+    #[command(flatten)]
+    timing: TimingArgs,
+    #[command(flatten)]
+    recorder: RecorderArgs,
 }
 
 impl SpreadArgs {
-    fn draw(&self, kind: ScenarioKind, seed: u64) -> anyhow::Result<Draw> {
+    fn draw(&self, kind: ScenarioKind, scheme: RotationScheme, seed: u64) -> anyhow::Result<Draw> {
+        self.timing.check()?;
         let mut d = Draw::new(kind, seed);
+        d.scheme = scheme;
+        d.rotation_period_s = self.timing.rotation_period;
+        d.sample_interval_s = self.timing.sample_interval;
+        d.recorder = self.recorder.settings();
         if let Some(v) = self.lat_range {
             anyhow::ensure!(v[0] <= v[1] && v[0] > -90.0 && v[1] < 90.0, "--lat-range needs MIN,MAX inside (-90, 90) with MIN <= MAX");
             d.lat_range_deg = Some((v[0], v[1]));
@@ -170,6 +190,7 @@ impl SpreadArgs {
             low_frequency_rate_error: self.lowfreq_rate_error,
             coloured_noise_arcsec: self.coloured_noise_arcsec,
         };
+        d.check().map_err(anyhow::Error::msg)?;
         Ok(d)
     }
 }
@@ -188,6 +209,10 @@ struct CompareArgs {
     /// Methods (default: all).
     #[arg(long, value_enum, value_delimiter = ',')]
     methods: Vec<MethodArg>,
+    /// Rotation schemes, one table each: comma-separated names (continuous, reversed,
+    /// reciprocating, four-position, eight-position) or `all` (default: continuous).
+    #[arg(long, visible_alias = "scheme", value_name = "LIST", value_parser = host_sim::cli_args::parse_schemes)]
+    schemes: Option<SchemeList>,
     #[command(flatten)]
     tuning: TuningArgs,
     #[command(flatten)]
@@ -211,12 +236,16 @@ fn main() {
 }
 
 fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
-    let params = a.overrides.params(a.scenario.into(), a.seed)?;
-    let g = generate(&params);
-    log_csv::write_log(&a.out, &g.rows)?;
+    let mut params = a.overrides.params(a.scenario.into(), a.seed)?;
+    a.shape.apply(&mut params)?;
+    // Row by row from the generator through the recorder into the file: nothing held in memory.
+    let mut recorder = Recorder::new(&params.recording, params.seed);
+    let mut written = 0usize;
+    let rows = Samples::new(&params).filter_map(|(row, _)| recorder.record(&row)).inspect(|_| written += 1);
+    log_csv::write_log(&a.out, rows)?;
     let truth_path = log_csv::truth_path(&a.out);
     log_csv::write_truth(&truth_path, &Truth::new(&params))?;
-    println!("wrote {} ({} rows) and {}", a.out.display(), g.rows.len(), truth_path.display());
+    println!("wrote {} ({written} rows) and {}", a.out.display(), truth_path.display());
     Ok(())
 }
 
@@ -226,7 +255,8 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     let mut restart_at = a.restart_at.clone();
     anyhow::ensure!(restart_at.iter().all(|t| t.is_finite()), "--restart-at needs finite times");
     restart_at.sort_by(f64::total_cmp);
-    let est = estimate_file_with_restarts(&a.log, &out, a.tuning.config(method), &restart_at)?;
+    a.timing.check()?;
+    let est = estimate_file_with_restarts(&a.log, &out, a.timing.pin(a.tuning.config(method)), &restart_at)?;
     if !restart_at.is_empty() {
         println!("restarted from a checkpoint after the rows at {restart_at:?} s");
     }
@@ -268,20 +298,22 @@ fn print_report(method: Method, rep: &Report) {
 }
 
 fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
-    let params = a.overrides.params(a.scenario.into(), a.seed)?;
+    let mut params = a.overrides.params(a.scenario.into(), a.seed)?;
+    a.shape.apply(&mut params)?;
     let dir = a.out_dir.clone().unwrap_or_else(|| PathBuf::from(format!("out/{}-{}", params.scenario.name(), params.seed)));
     std::fs::create_dir_all(&dir).with_context(|| format!("{}:0: cannot create directory", dir.display()))?;
     let log = dir.join(format!("{}.csv", params.scenario.name()));
     let generated = generate(&params);
-    log_csv::write_log(&log, &generated.rows)?;
+    let logged = recorded_rows(&params.recording, params.seed, &generated.rows);
+    log_csv::write_log(&log, &logged)?;
     let truth = Truth::new(&params);
     log_csv::write_truth(&log_csv::truth_path(&log), &truth)?;
-    println!("wrote {} ({} rows) and its truth file", log.display(), generated.rows.len());
+    println!("wrote {} ({} rows) and its truth file", log.display(), logged.len());
     let mut runs: Vec<(Method, Estimated)> = Vec::new();
     let mut reports: Vec<(Method, Report)> = Vec::new();
     for method in [Method::Windowed, Method::Paper, Method::Traditional] {
         let out = dir.join(format!("{}.estimates.{}.csv", params.scenario.name(), method.name()));
-        let est = estimate_file(&log, &out, a.tuning.config(method))?;
+        let est = estimate_file(&log, &out, a.shape.timing.pin(a.tuning.config(method)))?;
         print_summary(&log.display().to_string(), method, &est.replay, &out.display().to_string());
         let rep = report(&est, &truth, &generated);
         print_report(method, &rep);
@@ -293,9 +325,12 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     let side: Vec<(&str, &Report)> = reports.iter().map(|(m, r)| (method_label(*m), r)).collect();
     print!("{}", host_sim::report::format_side_by_side(&side));
     if !a.no_plots {
-        let steps: Vec<(&str, &[host_sim::replay::Step])> = runs.iter().map(|(m, e)| (m.name(), e.replay.steps.as_slice())).collect();
+        // The figures index the truth by sample instant: stamps moved back onto it.
+        let on_grid: Vec<(Method, Estimated)> = runs.iter().map(|(m, e)| (*m, on_sample_grid(e, &params))).collect();
+        let steps: Vec<(&str, &[host_sim::replay::Step])> = on_grid.iter().map(|(m, e)| (m.name(), e.replay.steps.as_slice())).collect();
         let window = (params.rotation_period_s / params.sample_interval_s).round() as usize;
-        let files = host_sim::figures::write_figures(&dir, &generated.rows, &generated.truth, &params.errors_arcsec, params.sample_interval_s, window, &steps)?;
+        let rows = on_grid.first().map_or(&[][..], |(_, e)| e.rows.as_slice());
+        let files = host_sim::figures::write_figures(&dir, rows, &generated.truth, &params.errors_arcsec, params.sample_interval_s, window, &steps)?;
         println!("plots:");
         for f in files {
             println!("  {}", f.display());
@@ -315,9 +350,9 @@ fn thread_pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
 
 fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.runs >= 1, "--runs must be at least 1");
-    let draw = a.spread.draw(a.scenario.into(), a.seed)?;
+    let draw = a.spread.draw(a.scenario.into(), a.scheme.into(), a.seed)?;
     let method: Method = a.method.into();
-    let config = a.tuning.config(method);
+    let config = a.spread.timing.pin(a.tuning.config(method));
     let bar = indicatif::ProgressBar::new(a.runs as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, eta {eta}").map_err(|e| anyhow::anyhow!("{e}"))?,
@@ -329,8 +364,9 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
     let elapsed = start.elapsed().as_secs_f64();
     let summary = summarize(&results);
     println!(
-        "monte carlo: scenario {}, method {}, {} runs of {:.0} s in {:.1} s ({} threads)",
+        "monte carlo: scenario {} ({}), method {}, {} runs of {:.0} s in {:.1} s ({} threads)",
         draw.kind.name(),
+        host_sim::compare::describe(&draw),
         method.name(),
         a.runs,
         draw.params(0).duration_s,
@@ -359,20 +395,29 @@ fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
     } else {
         a.methods.iter().map(|m| (*m).into()).collect()
     };
+    let schemes = a.schemes.as_ref().map_or(vec![RotationScheme::Continuous], |l| l.0.clone());
     let start = std::time::Instant::now();
-    let mut rows = Vec::new();
-    for kind in scenarios {
-        let draw = a.spread.draw(kind, a.seed)?;
-        for &method in &methods {
-            rows.push(host_sim::compare::compare_one(&draw, a.tuning.config(method), a.seeds)?);
+    for (i, &scheme) in schemes.iter().enumerate() {
+        let mut rows = Vec::new();
+        let mut heading = String::new();
+        for &kind in &scenarios {
+            let draw = a.spread.draw(kind, scheme, a.seed)?;
+            heading = host_sim::compare::describe(&draw);
+            for &method in &methods {
+                rows.push(host_sim::compare::compare_one(&draw, a.spread.timing.pin(a.tuning.config(method)), a.seeds)?);
+            }
         }
+        if i > 0 {
+            println!();
+        }
+        println!("{heading}\n");
+        print!("{}", host_sim::compare::format_table(&rows));
     }
-    print!("{}", host_sim::compare::format_table(&rows));
+    let command: Vec<String> = std::env::args().skip(1).collect();
     println!(
-        "\n{} seeds per line; errors of a few hundred arcsec drawn per seed; `host-sim compare --seeds {} --seed {}` ({:.0} s)",
+        "\n{} seeds per line; errors of a few hundred arcsec drawn per seed; `host-sim {}` ({:.0} s)",
         a.seeds,
-        a.seeds,
-        a.seed,
+        command.join(" "),
         start.elapsed().as_secs_f64()
     );
     Ok(())

@@ -1,10 +1,13 @@
 //! Monte Carlo runs: many independent scenarios (random errors, phases, sea states, optional
-//! latitude spread, rougher sway and model mismatch), each generated and replayed in memory, in
-//! parallel (rayon), with the error statistics per report time.
+//! latitude spread, rougher sway and model mismatch; any rotation scheme, sample interval and
+//! recorder), each generated, recorded and replayed row by row in memory, in parallel (rayon), with
+//! the error statistics per report time.
 
 use crate::replay::{sample_of, HostEstimator};
 use crate::report::{Accuracy, Tracker};
-use crate::scenario::{generate, Mismatch, ScenarioKind, ScenarioParams, SwayComponent};
+use crate::recorder::{Recorder, RecorderSettings, Recording};
+use crate::rotation_scheme::RotationScheme;
+use crate::scenario::{Mismatch, Samples, ScenarioKind, ScenarioParams, SwayComponent};
 use estimator_core::Config;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -28,6 +31,12 @@ pub struct Draw {
     pub mismatch: Mismatch,
     /// Log length override, s.
     pub duration_s: Option<f64>,
+    pub scheme: RotationScheme,
+    /// Rotation period and sample interval overrides, s.
+    pub rotation_period_s: Option<f64>,
+    pub sample_interval_s: Option<f64>,
+    /// The recorder; outages are placed per run, from the run's seed.
+    pub recorder: RecorderSettings,
 }
 
 impl Draw {
@@ -40,7 +49,24 @@ impl Draw {
             max_roll_deg: None,
             mismatch: Mismatch::default(),
             duration_s: None,
+            scheme: RotationScheme::Continuous,
+            rotation_period_s: None,
+            sample_interval_s: None,
+            recorder: RecorderSettings::default(),
         }
+    }
+
+    /// Checks that every run's scenario can be made: the scheme fits in its period, the recorder's
+    /// settings are valid and its outages fit in the log.
+    pub fn check(&self) -> Result<(), String> {
+        let p = self.params(0);
+        if p.rotation_period_s < p.scheme.min_period_s() {
+            return Err(format!("the {} scheme needs a rotation period of at least {} s", p.scheme.name(), p.scheme.min_period_s()));
+        }
+        if p.duration_s < p.sample_interval_s {
+            return Err(format!("the log ({} s) is shorter than one sample interval ({} s)", p.duration_s, p.sample_interval_s));
+        }
+        self.recorder.recording(self.run_seed(0), p.duration_s, p.sample_interval_s).map(|_| ())
     }
 
     /// Seed of run `i` (distinct runs, reproducible).
@@ -84,6 +110,15 @@ impl Draw {
         if let Some(d) = self.duration_s {
             p.duration_s = d;
         }
+        p.scheme = self.scheme;
+        if let Some(t) = self.rotation_period_s {
+            p.rotation_period_s = t;
+        }
+        if let Some(d) = self.sample_interval_s {
+            p.sample_interval_s = d;
+        }
+        // Outages fit in every run alike (checked once by `check`).
+        p.recording = self.recorder.recording(seed, p.duration_s, p.sample_interval_s).unwrap_or_else(|_| Recording::default());
         p
     }
 }
@@ -93,15 +128,17 @@ pub fn sway_amplitude_deg(comps: &[SwayComponent]) -> f64 {
     comps.iter().map(|c| c.amplitude_deg * c.amplitude_deg).sum::<f64>().sqrt()
 }
 
-/// Generates and replays one scenario, tracking accuracy at `times_s`.
+/// Generates, records and replays one scenario, tracking accuracy at `times_s` (at the logged
+/// rows' sample instants, from the log's start).
 pub fn track_run(params: &ScenarioParams, config: Config, times_s: &[f64]) -> anyhow::Result<Accuracy> {
-    let g = generate(params);
     let mut est = HostEstimator::new(config).map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
+    let mut recorder = Recorder::new(&params.recording, params.seed);
     let mut tracker = Tracker::new(times_s);
     let mut held = None;
     let mut status = None;
-    for (row, truth) in g.rows.iter().zip(&g.truth) {
-        if let Ok(out) = est.step(&sample_of(row)) {
+    for (row, truth) in Samples::new(params) {
+        let Some(logged) = recorder.record(&row) else { continue };
+        if let Ok(out) = est.step(&sample_of(&logged)) {
             held = out.estimate;
             status = Some(out.status);
         }

@@ -4,7 +4,7 @@ use crate::estimates_csv::EstimatesWriter;
 use crate::log_csv::{self, LogError, LogLine, Truth};
 use crate::replay::{replay_with_restarts, Replay};
 use crate::report::{evaluate, Report};
-use crate::scenario::{generate, Generated, Row};
+use crate::scenario::{generate, Generated, Row, ScenarioParams};
 use anyhow::Context;
 use estimator_core::Config;
 use std::fs::File;
@@ -46,7 +46,29 @@ pub fn load_truth(log: &Path) -> anyhow::Result<Option<(Truth, Generated)>> {
     Ok(Some((truth, generated)))
 }
 
-/// The report of a replay against a regenerated truth.
+/// The report of a replay against a regenerated truth (time stamps moved back onto the sample
+/// instants the truth is indexed by, see [`on_sample_grid`]).
 pub fn report(est: &Estimated, truth: &Truth, generated: &Generated) -> Report {
-    evaluate(&est.rows, &est.replay.steps, &generated.truth, truth.params.sample_interval_s)
+    let grid = on_sample_grid(est, &truth.params);
+    evaluate(&grid.rows, &grid.replay.steps, &generated.truth, truth.params.sample_interval_s)
+}
+
+/// A replay of a generated log with every time (rows, steps, outputs) moved from the recorder's
+/// stamp to the sample instant it was taken at, s from the log's start; a stamp that is no
+/// instant's becomes NaN (and is left out of reports). Whole-second stamps at a whole-second
+/// interval without offset or jitter map to themselves.
+pub fn on_sample_grid(est: &Estimated, params: &ScenarioParams) -> Estimated {
+    let rec = &params.recording;
+    let grid = |t: f64| rec.sample_time_s(t, params.sample_interval_s).unwrap_or(f64::NAN);
+    let mut out = Estimated { rows: est.rows.clone(), replay: est.replay.clone() };
+    for r in &mut out.rows {
+        r.time_s = grid(r.time_s);
+    }
+    for step in &mut out.replay.steps {
+        step.time_s = grid(step.time_s);
+        if let Ok(o) = &mut step.result {
+            o.time_s = grid(o.time_s);
+        }
+    }
+    out
 }

@@ -13,7 +13,19 @@
 //!   latitude drifts, low latitude, 47340 s.
 //!
 //! Effects eq (2) does not contain ([`Mismatch`]) can be switched on for robustness studies.
+//!
+//! The rotation angle `rho(t)` follows a [`RotationScheme`] (one way at a constant rate by
+//! default, as in the paper; also reversed, reciprocating and stop-and-go), and eq (2) is
+//! evaluated at the angle actually applied (scheme, period error and angle jitter included), the
+//! angle the log's `rotation_deg` reports.
+//!
+//! The generator makes one row per sample instant; what reaches the log (lost rows, outages,
+//! loose time stamps) is the [`crate::recorder`]'s business, described by
+//! [`ScenarioParams::recording`]. [`Samples`] yields the rows one at a time, so a log of millions
+//! of rows can be written without holding it.
 
+use crate::recorder::Recording;
+use crate::rotation_scheme::RotationScheme;
 use estimator_core::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -62,7 +74,8 @@ pub struct SwayComponent {
 /// Effects outside eq (2), all off by default.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Mismatch {
-    /// Relative error of the true rotation period against the nominal 480 s (0.005 = 0.5 % slower).
+    /// Relative error of the true rotation period against the nominal one (0.005 = 0.5 % slower).
+    /// Stop-and-go schemes keep their moves and lengthen their dwells.
     pub rotation_period_error: f64,
     /// 1-sigma of white jitter on the rotation angle, deg.
     pub rotation_jitter_deg: f64,
@@ -93,6 +106,9 @@ pub struct ScenarioParams {
     pub course_deg: f64,
     /// Rotation period of the RINS, s (nominal).
     pub rotation_period_s: f64,
+    /// How the RINS turns within a period (truth files without it: one way, the paper's).
+    #[serde(default)]
+    pub scheme: RotationScheme,
     /// Rotation angle at t = 0, deg.
     pub rotation_phase_deg: f64,
     /// Platform angle s at t = 0, deg; it then turns at the Earth rate.
@@ -111,6 +127,9 @@ pub struct ScenarioParams {
     /// 1-sigma of white attitude noise, arcsec.
     pub noise_arcsec: f64,
     pub mismatch: Mismatch,
+    /// What the data recorder loses and how it stamps time (default: nothing lost, exact stamps).
+    #[serde(flatten)]
+    pub recording: Recording,
 }
 
 /// One generated row, degrees (the log format's units).
@@ -194,6 +213,7 @@ impl ScenarioParams {
             speed_m_s: 0.0,
             course_deg: 0.0,
             rotation_period_s: 480.0,
+            scheme: RotationScheme::Continuous,
             rotation_phase_deg,
             platform_phase_deg,
             roll_sway: Vec::new(),
@@ -204,6 +224,7 @@ impl ScenarioParams {
             low_frequency_deg: 0.05,
             noise_arcsec: 5.0,
             mismatch: Mismatch::default(),
+            recording: Recording::default(),
         };
         match kind {
             ScenarioKind::Paper => ScenarioParams {
@@ -249,52 +270,118 @@ fn sway(comps: &[SwayComponent], t: f64) -> f64 {
     comps.iter().map(|c| c.amplitude_deg * (2.0 * PI * t / c.period_s + c.phase_rad).sin()).sum()
 }
 
-/// A generated log: rows and their truth.
+/// A generated log: one row per sample instant (before the recorder) and its truth.
 pub struct Generated {
     pub rows: Vec<Row>,
     pub truth: Vec<RowTruth>,
 }
 
-/// Generates the log of `p`. Deterministic for a given `p`.
+/// Generates the log of `p`, every sample instant. Deterministic for a given `p`.
 pub fn generate(p: &ScenarioParams) -> Generated {
-    let mut rng = ChaCha8Rng::seed_from_u64(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xA77_17D3);
-    let white = Normal::new(0.0, arcsec_to_rad(p.noise_arcsec).max(0.0)).unwrap_or(Normal::new(0.0, 0.0).unwrap());
-    let jitter = Normal::new(0.0, (p.mismatch.rotation_jitter_deg * RAD_PER_DEG).max(0.0)).unwrap();
-    // Eq (5) coefficients per axis (heading, roll, pitch): random directions with norm = amplitude.
-    let lf_amp = p.low_frequency_deg * RAD_PER_DEG;
-    let lf: Vec<[f64; 5]> = (0..3)
-        .map(|_| {
-            let v: [f64; 5] = core::array::from_fn(|_| rng.gen_range(-1.0..1.0));
-            let norm = v.iter().map(|a| a * a).sum::<f64>().sqrt().max(1e-9);
-            core::array::from_fn(|i| v[i] / norm * lf_amp)
-        })
-        .collect();
-    let w_lf = EARTH_RATE_RAD_PER_S * (1.0 + p.mismatch.low_frequency_rate_error);
-    let gm_tau = 60.0;
-    let gm_sigma = arcsec_to_rad(p.mismatch.coloured_noise_arcsec);
-    let gm_a = (-p.sample_interval_s / gm_tau).exp();
-    let gm_drive = Normal::new(0.0, (gm_sigma * (1.0 - gm_a * gm_a).sqrt()).max(0.0)).unwrap();
-    let mut gm = [0.0f64; 3];
-    if gm_sigma > 0.0 {
-        let init = Normal::new(0.0, gm_sigma).unwrap();
-        for g in &mut gm {
-            *g = init.sample(&mut rng);
-        }
-    }
-    let n = (p.duration_s / p.sample_interval_s).floor() as usize;
+    let samples = Samples::new(p);
+    let n = samples.len();
     let mut rows = Vec::with_capacity(n);
     let mut truth = Vec::with_capacity(n);
-    let rot_rate = 2.0 * PI / (p.rotation_period_s * (1.0 + p.mismatch.rotation_period_error));
-    let north_rate_rad_s = p.speed_m_s * (p.course_deg * RAD_PER_DEG).cos() / EARTH_RADIUS_M;
-    let weave_period_s = 600.0;
-    for k in 0..n {
-        let t = k as f64 * p.sample_interval_s;
+    for (row, tr) in samples {
+        rows.push(row);
+        truth.push(tr);
+    }
+    Generated { rows, truth }
+}
+
+/// The rows of a scenario and their truth, one sample instant at a time (`k * sample_interval_s`,
+/// `k = 0, 1, ...` while below `duration_s`).
+pub struct Samples<'a> {
+    p: &'a ScenarioParams,
+    rng: ChaCha8Rng,
+    white: Normal<f64>,
+    jitter: Normal<f64>,
+    lf: Vec<[f64; 5]>,
+    w_lf: f64,
+    gm_sigma: f64,
+    gm_a: f64,
+    gm_drive: Normal<f64>,
+    gm: [f64; 3],
+    /// True rotation period (nominal with the period error), s.
+    period_s: f64,
+    north_rate_rad_s: f64,
+    k: usize,
+    n: usize,
+}
+
+impl<'a> Samples<'a> {
+    pub fn new(p: &'a ScenarioParams) -> Samples<'a> {
+        let mut rng = ChaCha8Rng::seed_from_u64(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xA77_17D3);
+        let white = Normal::new(0.0, arcsec_to_rad(p.noise_arcsec).max(0.0)).unwrap_or(Normal::new(0.0, 0.0).unwrap());
+        let jitter = Normal::new(0.0, (p.mismatch.rotation_jitter_deg * RAD_PER_DEG).max(0.0)).unwrap_or(Normal::new(0.0, 0.0).unwrap());
+        // Eq (5) coefficients per axis (heading, roll, pitch): random directions with norm = amplitude.
+        let lf_amp = p.low_frequency_deg * RAD_PER_DEG;
+        let lf: Vec<[f64; 5]> = (0..3)
+            .map(|_| {
+                let v: [f64; 5] = core::array::from_fn(|_| rng.gen_range(-1.0..1.0));
+                let norm = v.iter().map(|a| a * a).sum::<f64>().sqrt().max(1e-9);
+                core::array::from_fn(|i| v[i] / norm * lf_amp)
+            })
+            .collect();
+        let w_lf = EARTH_RATE_RAD_PER_S * (1.0 + p.mismatch.low_frequency_rate_error);
+        let gm_tau = 60.0;
+        let gm_sigma = arcsec_to_rad(p.mismatch.coloured_noise_arcsec);
+        let gm_a = (-p.sample_interval_s / gm_tau).exp();
+        let gm_drive = Normal::new(0.0, (gm_sigma * (1.0 - gm_a * gm_a).sqrt()).max(0.0)).unwrap_or(Normal::new(0.0, 0.0).unwrap());
+        let mut gm = [0.0f64; 3];
+        if gm_sigma > 0.0 {
+            let init = Normal::new(0.0, gm_sigma).unwrap_or(Normal::new(0.0, 0.0).unwrap());
+            for g in &mut gm {
+                *g = init.sample(&mut rng);
+            }
+        }
+        Samples {
+            p,
+            rng,
+            white,
+            jitter,
+            lf,
+            w_lf,
+            gm_sigma,
+            gm_a,
+            gm_drive,
+            gm,
+            period_s: p.rotation_period_s * (1.0 + p.mismatch.rotation_period_error),
+            north_rate_rad_s: p.speed_m_s * (p.course_deg * RAD_PER_DEG).cos() / EARTH_RADIUS_M,
+            k: 0,
+            n: (p.duration_s / p.sample_interval_s).floor() as usize,
+        }
+    }
+
+    /// Number of rows still to come.
+    pub fn len(&self) -> usize {
+        self.n - self.k
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+impl Iterator for Samples<'_> {
+    type Item = (Row, RowTruth);
+
+    fn next(&mut self) -> Option<(Row, RowTruth)> {
+        if self.k >= self.n {
+            return None;
+        }
+        let p = self.p;
+        let weave_period_s = 600.0;
+        let t = self.k as f64 * p.sample_interval_s;
+        self.k += 1;
         let drift = p.mismatch.error_drift_arcsec_per_day * t / 86_400.0;
         let x_arcsec: [f64; 4] = core::array::from_fn(|i| p.errors_arcsec[i] + drift);
         let x: [f64; 4] = core::array::from_fn(|i| arcsec_to_rad(x_arcsec[i]));
-        let rho = p.rotation_phase_deg * RAD_PER_DEG + rot_rate * t + jitter.sample(&mut rng);
+        // The angle actually applied: the scheme at the true period, plus the angle jitter. Eq (2)
+        // is evaluated at it and the log reports it.
+        let rho = p.rotation_phase_deg * RAD_PER_DEG + p.scheme.rho_rad(t, self.period_s) + self.jitter.sample(&mut self.rng);
         let s = p.platform_phase_deg * RAD_PER_DEG + EARTH_RATE_RAD_PER_S * t;
-        let lat = p.latitude_deg * RAD_PER_DEG + north_rate_rad_s * t;
+        let lat = p.latitude_deg * RAD_PER_DEG + self.north_rate_rad_s * t;
         let weave = if p.heading_weave_rate_deg_s > 0.0 {
             p.heading_weave_rate_deg_s * weave_period_s / (2.0 * PI) * (2.0 * PI * t / weave_period_s).sin()
         } else {
@@ -302,18 +389,18 @@ pub fn generate(p: &ScenarioParams) -> Generated {
         };
         let true_att = [p.heading_deg + weave + sway(&p.heading_sway, t), sway(&p.roll_sway, t), sway(&p.pitch_sway, t)];
         let osc = oscillation_rad(&x, rho, s, lat);
-        let we = w_lf * t;
+        let we = self.w_lf * t;
         let mut out = [0.0; 3];
         for axis in 0..3 {
-            let a = &lf[axis];
+            let a = &self.lf[axis];
             let low = a[0] + a[1] * we.sin() + a[2] * we.cos() + a[3] * (2.0 * we).sin() + a[4] * (2.0 * we).cos();
-            if gm_sigma > 0.0 {
-                gm[axis] = gm_a * gm[axis] + gm_drive.sample(&mut rng);
+            if self.gm_sigma > 0.0 {
+                self.gm[axis] = self.gm_a * self.gm[axis] + self.gm_drive.sample(&mut self.rng);
             }
-            let err_rad = osc[axis] + low + white.sample(&mut rng) + gm[axis];
+            let err_rad = osc[axis] + low + self.white.sample(&mut self.rng) + self.gm[axis];
             out[axis] = true_att[axis] + err_rad / RAD_PER_DEG;
         }
-        rows.push(Row {
+        let row = Row {
             time_s: t,
             rotation_deg: (rho / RAD_PER_DEG).rem_euclid(360.0),
             platform_deg: (s / RAD_PER_DEG).rem_euclid(360.0),
@@ -321,12 +408,77 @@ pub fn generate(p: &ScenarioParams) -> Generated {
             heading_deg: out[0].rem_euclid(360.0),
             roll_deg: out[1],
             pitch_deg: out[2],
-        });
-        truth.push(RowTruth {
+        };
+        let truth = RowTruth {
             true_attitude_deg: true_att,
             oscillation_deg: [osc[0] / RAD_PER_DEG, osc[1] / RAD_PER_DEG, osc[2] / RAD_PER_DEG],
             errors_arcsec: x_arcsec,
-        });
+        };
+        Some((row, truth))
     }
-    Generated { rows, truth }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.len(), Some(self.len()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameters_without_scheme_or_recording_read_as_one_way_and_lossless() {
+        let p = ScenarioParams::new(ScenarioKind::Paper, 2);
+        let mut v = serde_json::to_value(&p).unwrap();
+        for key in ["scheme", "drop_fraction", "outage_starts_s", "outage_duration_s", "time_offset_s", "time_jitter_s"] {
+            assert!(v.as_object_mut().unwrap().remove(key).is_some(), "{key} written");
+        }
+        let back: ScenarioParams = serde_json::from_value(v).unwrap();
+        assert_eq!(back, p);
+    }
+
+    #[test]
+    fn eq_2_follows_the_rotation_angle_applied() {
+        let mut p = ScenarioParams::new(ScenarioKind::Turntable, 4);
+        p.duration_s = 600.0;
+        p.noise_arcsec = 0.0;
+        p.low_frequency_deg = 0.0;
+        for scheme in RotationScheme::ALL {
+            p.scheme = scheme;
+            let x = p.errors_arcsec.map(arcsec_to_rad);
+            for (row, tr) in Samples::new(&p) {
+                let rho = (p.rotation_phase_deg + scheme.rho_rad(row.time_s, p.rotation_period_s).to_degrees()).rem_euclid(360.0);
+                assert!((row.rotation_deg - rho).abs() < 1e-9 || (row.rotation_deg - rho).abs() > 360.0 - 1e-9, "{} at {}", scheme.name(), row.time_s);
+                let osc = oscillation_rad(&x, row.rotation_deg * RAD_PER_DEG, row.platform_deg * RAD_PER_DEG, row.latitude_deg * RAD_PER_DEG);
+                for a in 0..3 {
+                    assert!((tr.oscillation_deg[a] - osc[a] / RAD_PER_DEG).abs() < 1e-12, "{} at {}", scheme.name(), row.time_s);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn period_error_and_angle_jitter_apply_to_every_scheme() {
+        let mut p = ScenarioParams::new(ScenarioKind::Paper, 8);
+        p.duration_s = 1000.0;
+        for scheme in RotationScheme::ALL {
+            p.scheme = scheme;
+            p.mismatch = Mismatch { rotation_period_error: 0.01, ..Mismatch::default() };
+            let true_period_s = 480.0 * 1.01;
+            for (row, _) in Samples::new(&p) {
+                let expected = (p.rotation_phase_deg + scheme.rho_rad(row.time_s, true_period_s).to_degrees()).rem_euclid(360.0);
+                let d = (row.rotation_deg - expected + 180.0).rem_euclid(360.0) - 180.0;
+                assert!(d.abs() < 1e-9, "{} at {}", scheme.name(), row.time_s);
+            }
+            p.mismatch = Mismatch { rotation_jitter_deg: 0.05, ..Mismatch::default() };
+            let dev: Vec<f64> = Samples::new(&p)
+                .map(|(row, _)| {
+                    let expected = (p.rotation_phase_deg + scheme.rho_rad(row.time_s, 480.0).to_degrees()).rem_euclid(360.0);
+                    (row.rotation_deg - expected + 180.0).rem_euclid(360.0) - 180.0
+                })
+                .collect();
+            let rms = (dev.iter().map(|d| d * d).sum::<f64>() / dev.len() as f64).sqrt();
+            assert!((rms - 0.05).abs() < 0.005, "{}: {rms}", scheme.name());
+        }
+    }
 }

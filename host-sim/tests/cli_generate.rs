@@ -1,0 +1,281 @@
+//! `generate`'s log, read back: rotation schemes, sample interval, lost rows, outages, time
+//! stamps, and the default scenarios unchanged.
+
+mod common;
+
+use common::{host_sim_ok, path_str, temp_dir};
+use std::path::Path;
+
+/// CRC-64 (ECMA-182) and length of a file.
+fn checksum(path: &Path) -> (u64, usize) {
+    let bytes = std::fs::read(path).unwrap();
+    (crc::Crc::<u64>::new(&crc::CRC_64_ECMA_182).checksum(&bytes), bytes.len())
+}
+
+/// The three scenarios' logs, without any of the rotation-scheme or recorder options, are
+/// byte for byte those of the generator before those options existed (checksums of the logs it
+/// wrote): logs, results and figures quoted in the README stay reproducible.
+#[test]
+fn default_scenarios_unchanged() {
+    let dir = temp_dir("gen-golden");
+    let expected: [(&str, &str, u64, usize); 3] = [
+        ("paper", "2000", 1_676_693_016_960_452_731, 203_234),
+        ("turntable", "1500", 14_224_204_780_103_870_363, 152_109),
+        ("sea", "1500", 1_519_086_973_725_290_067, 174_608),
+    ];
+    for (scenario, duration, crc, len) in expected {
+        let log = dir.join(format!("{scenario}.csv"));
+        host_sim_ok(&["generate", "--scenario", scenario, "--seed", "3", "--duration", duration, "--out", path_str(&log)]);
+        assert_eq!(checksum(&log), (crc, len), "{scenario}");
+    }
+}
+
+/// The same for the model-mismatch switches of `monte-carlo` and `compare` (rotation period
+/// error, rotation-angle jitter, coloured noise, drifting errors) on the rough sea.
+#[test]
+fn mismatch_logs_unchanged() {
+    use host_sim::scenario::{generate, Mismatch, ScenarioKind, ScenarioParams};
+    let mut p = ScenarioParams::new(ScenarioKind::Sea, 11);
+    p.duration_s = 1200.0;
+    p.mismatch = Mismatch {
+        rotation_period_error: 0.005,
+        rotation_jitter_deg: 0.05,
+        error_drift_arcsec_per_day: 20.0,
+        low_frequency_rate_error: 0.2,
+        coloured_noise_arcsec: 2.0,
+    };
+    let mut bytes = Vec::new();
+    host_sim::log_csv::write_log_to(&mut bytes, &generate(&p).rows).unwrap();
+    let crc = crc::Crc::<u64>::new(&crc::CRC_64_ECMA_182).checksum(&bytes);
+    assert_eq!((crc, bytes.len()), (8_036_464_345_581_861_486, 139_024));
+}
+
+use host_sim::estimates_csv::read_estimates;
+use host_sim::log_csv::{read_log, read_truth, truth_path, Truth};
+use host_sim::scenario::Row;
+
+/// Generates a paper-scenario log with `extra` options; returns its rows and truth.
+fn generate(dir: &Path, name: &str, extra: &[&str]) -> (Vec<Row>, Truth) {
+    let log = dir.join(format!("{name}.csv"));
+    let mut args = vec!["generate", "--scenario", "paper", "--seed", "5", "--out", path_str(&log)];
+    args.extend_from_slice(extra);
+    host_sim_ok(&args);
+    let rows = read_log(&log).unwrap().into_iter().map(|l| l.row).collect();
+    (rows, read_truth(&truth_path(&log)).unwrap().expect("truth file"))
+}
+
+/// Change of the logged rotation angle from one row to the next, deg, in (-180, 180].
+fn angle_steps_deg(rows: &[Row]) -> Vec<f64> {
+    rows.windows(2).map(|w| -(w[0].rotation_deg - w[1].rotation_deg + 180.0).rem_euclid(360.0) + 180.0).collect()
+}
+
+/// Runs of rows where the angle stands still: (first time, duration s, angle from the start deg).
+fn dwells(rows: &[Row], phase_deg: f64) -> Vec<(f64, f64, f64)> {
+    let mut runs: Vec<(f64, f64, f64)> = Vec::new();
+    for (w, d) in rows.windows(2).zip(angle_steps_deg(rows)) {
+        if d.abs() > 1e-9 {
+            continue;
+        }
+        match runs.last_mut() {
+            Some(r) if r.0 + r.1 == w[0].time_s => r.1 += w[1].time_s - w[0].time_s,
+            _ => runs.push((w[0].time_s, w[1].time_s - w[0].time_s, (w[0].rotation_deg - phase_deg).rem_euclid(360.0))),
+        }
+    }
+    runs
+}
+
+#[test]
+fn one_way_and_reciprocating_schemes_turn_as_stated() {
+    let dir = temp_dir("gen-schemes-rate");
+    // (scheme, period s, rate deg/s in the first half of a period, in the second half)
+    for (scheme, period, first, second) in
+        [("continuous", 480.0, 0.75, 0.75), ("reversed", 480.0, -0.75, -0.75), ("reciprocating", 480.0, 1.5, -1.5), ("reciprocating", 720.0, 1.0, -1.0)]
+    {
+        let (rows, truth) = generate(&dir, scheme, &["--scheme", scheme, "--rotation-period", &period.to_string(), "--duration", "1500"]);
+        assert_eq!(rows.len(), 1500);
+        assert_eq!((truth.params.scheme.name(), truth.params.rotation_period_s), (scheme, period));
+        assert!((rows[0].rotation_deg - truth.params.rotation_phase_deg).abs() < 1e-9);
+        for (k, d) in angle_steps_deg(&rows).into_iter().enumerate() {
+            let u = (k as f64).rem_euclid(period);
+            // The row after the turnaround moves partly each way.
+            if u == period / 2.0 - 1.0 || u == period - 1.0 && first != second {
+                continue;
+            }
+            let expected = if u < period / 2.0 { first } else { second };
+            assert!((d - expected).abs() < 1e-9, "{scheme} {period} s: step after {k} s is {d} deg, expected {expected}");
+        }
+    }
+}
+
+#[test]
+fn stop_and_go_schemes_dwell_at_their_positions() {
+    let dir = temp_dir("gen-schemes-dwell");
+    // (scheme, period s, dwell s, angles of the positions of one period, deg from the start)
+    let cases: [(&str, f64, f64, &[f64]); 3] = [
+        ("four-position", 480.0, 105.0, &[90.0, 180.0, 270.0, 0.0]),
+        ("four-position", 360.0, 75.0, &[90.0, 180.0, 270.0, 0.0]),
+        ("eight-position", 480.0, 45.0, &[90.0, 180.0, 270.0, 0.0, 270.0, 180.0, 90.0, 0.0]),
+    ];
+    for (scheme, period, dwell, positions) in cases {
+        let (rows, truth) = generate(&dir, scheme, &["--scheme", scheme, "--rotation-period", &period.to_string(), "--duration", &(2.0 * period + 1.0).to_string()]);
+        let runs = dwells(&rows, truth.params.rotation_phase_deg);
+        assert_eq!(runs.len(), 2 * positions.len(), "{scheme} {period}: {runs:?}");
+        let step = period / positions.len() as f64;
+        for (i, (start, len, angle)) in runs.iter().enumerate() {
+            assert_eq!(*start, i as f64 * step + 15.0, "{scheme} {period}: move of 15 s before dwell {i}: {runs:?}");
+            assert_eq!(*len, dwell, "{scheme} {period}: dwell {i}: {runs:?}");
+            let expected = positions[i % positions.len()];
+            let off = (angle - expected + 180.0).rem_euclid(360.0) - 180.0;
+            assert!(off.abs() < 1e-9, "{scheme} {period}: dwell {i} at {angle} deg, expected {expected}");
+        }
+        // Moves go forward (+) or back (-) by up to 12 deg/s in the middle, never more.
+        let steps = angle_steps_deg(&rows);
+        assert!(steps.iter().all(|d| d.abs() <= 12.0 + 1e-9));
+        if scheme == "eight-position" {
+            assert!(steps[5] > 0.0 && steps[period as usize / 2 + 5] < 0.0);
+        } else {
+            assert!(steps.iter().all(|d| *d >= 0.0));
+        }
+    }
+}
+
+#[test]
+fn scheme_needs_room_for_its_moves_and_ranges_are_checked() {
+    let dir = temp_dir("gen-ranges");
+    let log = dir.join("x.csv");
+    for (args, message) in [
+        (&["--scheme", "eight-position", "--rotation-period", "100"][..], "at least 120 s"),
+        (&["--rotation-period", "4000"][..], "--rotation-period must be between 60 and 3600"),
+        (&["--sample-interval", "0.05"][..], "--sample-interval must be between 0.1 and 10"),
+        (&["--drop-fraction", "1"][..], "--drop-fraction must be in [0, 1)"),
+        (&["--time-jitter", "0.5"][..], "below half the sample interval"),
+        (&["--outages", "17"][..], "do not fit"),
+    ] {
+        let mut a = vec!["generate", "--scenario", "paper", "--duration", "1000", "--out", path_str(&log)];
+        a.extend_from_slice(args);
+        let out = common::host_sim(&a);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(message), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn dropped_rows_follow_the_drop_fraction_and_leave_the_rest_unchanged() {
+    let dir = temp_dir("gen-drop");
+    let (all, _) = generate(&dir, "all", &["--duration", "4000"]);
+    let (kept, truth) = generate(&dir, "kept", &["--duration", "4000", "--drop-fraction", "0.05"]);
+    assert_eq!(truth.params.recording.drop_fraction, 0.05);
+    // Binomial(4000, 0.05): mean 200, sigma 13.8; 4.5 sigma either side.
+    let dropped = all.len() - kept.len();
+    assert!((138..=262).contains(&dropped), "{dropped} of 4000 dropped");
+    // Every kept row is the lossless log's row at that instant: loss does not change the data.
+    for r in &kept {
+        assert_eq!(*r, all[r.time_s as usize]);
+    }
+    // Spread over the log, not bunched: each quarter loses between 20 and 80 rows.
+    for q in 0..4 {
+        let lost = 1000 - kept.iter().filter(|r| (r.time_s / 1000.0).floor() as usize == q).count();
+        assert!((20..=80).contains(&lost), "quarter {q}: {lost}");
+    }
+}
+
+#[test]
+fn outages_are_60_s_of_missing_rows_at_the_recorded_times() {
+    let dir = temp_dir("gen-outages");
+    let (rows, truth) = generate(&dir, "out", &["--duration", "3000", "--outages", "3"]);
+    let starts = &truth.params.recording.outage_starts_s;
+    assert_eq!(starts.len(), 3);
+    assert_eq!(truth.params.recording.outage_duration_s, 60.0);
+    assert_eq!(rows.len(), 3000 - 3 * 60, "each outage removes 60 one-second rows");
+    let present: std::collections::HashSet<u64> = rows.iter().map(|r| r.time_s as u64).collect();
+    for t in 0..3000u64 {
+        let inside = starts.iter().any(|s| (t as f64) >= *s && (t as f64) < s + 60.0);
+        assert_eq!(present.contains(&t), !inside, "row at {t} s (outages from {starts:?})");
+    }
+    // Seen from the log: three jumps of 61 s, every other step 1 s.
+    let mut gaps: Vec<f64> = rows.windows(2).map(|w| w[1].time_s - w[0].time_s).filter(|d| *d != 1.0).collect();
+    gaps.sort_by(f64::total_cmp);
+    assert_eq!(gaps, vec![61.0; 3], "{starts:?}");
+}
+
+#[test]
+fn stamps_carry_the_offset_and_jitter_within_bounds_and_full_precision() {
+    let dir = temp_dir("gen-stamps");
+    let (rows, truth) = generate(&dir, "stamps", &["--duration", "3000", "--time-offset", "1.7e9", "--time-jitter", "0.02"]);
+    assert_eq!((truth.params.recording.time_offset_s, truth.params.recording.time_jitter_s), (1.7e9, 0.02));
+    assert_eq!(rows.len(), 3000);
+    let jitter: Vec<f64> = rows.iter().enumerate().map(|(k, r)| r.time_s - 1.7e9 - k as f64).collect();
+    assert!(jitter.iter().all(|j| j.abs() <= 0.02 + 1e-6), "{:?}", jitter.iter().fold(0.0f64, |m, j| m.max(j.abs())));
+    // Uniform in [-0.02, 0.02]: spans the range, mean near 0 (sigma of the mean 0.0002).
+    let (lo, hi) = jitter.iter().fold((0.0f64, 0.0f64), |(lo, hi), j| (lo.min(*j), hi.max(*j)));
+    assert!(lo < -0.019 && hi > 0.019, "{lo} {hi}");
+    assert!((jitter.iter().sum::<f64>() / 3000.0).abs() < 0.001);
+    // Written as decimals to the microsecond, which read back as the stamps.
+    let text = std::fs::read_to_string(dir.join("stamps.csv")).unwrap();
+    for (k, line) in text.lines().skip(1).enumerate() {
+        let field = line.split(',').next().unwrap();
+        let decimals = field.split('.').nth(1).map_or(0, str::len);
+        assert!(decimals <= 6 && !field.contains('e'), "{field}");
+        let whole: i64 = field.split('.').next().unwrap().parse().unwrap();
+        assert!((whole - 1_700_000_000 - k as i64).abs() <= 1, "{field} at row {k}");
+    }
+    // The data are those of the true instants: the exact-stamp log's rows.
+    let (exact, _) = generate(&dir, "exact", &["--duration", "3000"]);
+    for (a, b) in rows.iter().zip(&exact) {
+        assert_eq!(Row { time_s: b.time_s, ..*a }, *b);
+    }
+}
+
+#[test]
+fn sample_interval_sets_the_row_spacing() {
+    let dir = temp_dir("gen-interval");
+    let (rows, truth) = generate(&dir, "fast", &["--duration", "200", "--sample-interval", "0.1"]);
+    assert_eq!(truth.params.sample_interval_s, 0.1);
+    assert_eq!(rows.len(), 2000);
+    assert!(rows.windows(2).all(|w| (w[1].time_s - w[0].time_s - 0.1).abs() < 1e-9));
+    let text = std::fs::read_to_string(dir.join("fast.csv")).unwrap();
+    assert!(text.lines().nth(4).unwrap().starts_with("0.3,"), "{}", text.lines().nth(4).unwrap());
+    // The rotation at 0.1 s: 0.075 deg per row (480 s period).
+    let d = angle_steps_deg(&rows);
+    assert!(d.iter().all(|x| (x - 0.075).abs() < 1e-9));
+    let (slow, _) = generate(&dir, "slow", &["--duration", "200", "--sample-interval", "2"]);
+    assert_eq!(slow.len(), 100);
+    assert_eq!(slow[99].time_s, 198.0);
+}
+
+#[test]
+fn estimator_period_and_interval_are_pinned_from_the_command_line() {
+    let dir = temp_dir("gen-pin");
+    let log = dir.join("two.csv");
+    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "6000", "--sample-interval", "2", "--out", path_str(&log)]);
+    let x = read_truth(&truth_path(&log)).unwrap().unwrap().x_arcsec;
+    // Configured for 1 s, the estimator restarts its window at every 2 s step: no estimate.
+    let unpinned = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("u.csv"))]);
+    assert!(unpinned.contains("no estimate"), "{unpinned}");
+    // Pinned to 2 s and 480 s (240 samples): estimates within 2 arcsec by 6000 s.
+    host_sim_ok(&["estimate", path_str(&log), "--sample-interval", "2", "--rotation-period", "480", "--out", path_str(&dir.join("p.csv"))]);
+    let e = read_estimates(&dir.join("p.csv")).unwrap().last().unwrap().x_arcsec.expect("an estimate");
+    for i in 0..4 {
+        assert!((e[i] - x[i]).abs() < 2.0, "x{}: {} vs {}", i + 1, e[i], x[i]);
+    }
+}
+
+#[test]
+fn an_offset_log_estimates_and_reports_as_the_plain_one() {
+    let dir = temp_dir("gen-offset");
+    let (plain, offset) = (dir.join("plain.csv"), dir.join("offset.csv"));
+    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "3000", "--out", path_str(&plain)]);
+    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "3000", "--time-offset", "1.7e9", "--out", path_str(&offset)]);
+    let report = |log: &Path, est: &str| {
+        let out = host_sim_ok(&["estimate", path_str(log), "--out", path_str(&dir.join(est))]);
+        out[out.find("accuracy against the truth").expect("report")..].to_string()
+    };
+    // The accuracy table maps the stamps back to the sample instants: same settling times.
+    assert_eq!(report(&offset, "o.csv"), report(&plain, "p.csv"));
+    let (a, b) = (read_estimates(&dir.join("o.csv")).unwrap(), read_estimates(&dir.join("p.csv")).unwrap());
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.time_s, y.time_s + 1.7e9);
+        assert_eq!(x.x_arcsec, y.x_arcsec);
+    }
+}
