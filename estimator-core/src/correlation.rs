@@ -54,6 +54,20 @@
 //! one-way rotation over a whole window `mean c = 0` and the rows are the slow parts derived above
 //! (the test `rows_of_a_uniform_rotation_are_the_derived_slow_parts` checks this).
 //!
+//! # A smoothed reference: no sway through a stop-and-go pattern
+//! With a one-way rotation at a constant rate the references are pure sinusoids at the rotation
+//! frequency, and the sway (periods of 4-20 s) has nothing to correlate with. A stop-and-go or
+//! reciprocating pattern makes them steps and kinks, with harmonics of the rotation frequency all
+//! the way up: a sway component near one of them correlates with the reference and does not
+//! average out (measured: with 90 deg moves every 90 s, a 1 deg, 9 s pitch sway left x1 10 arcsec
+//! off, because 360 s / 9 s is a whole number; a sea spectrum leaves tens of arcsec of slowly
+//! varying error). So the reference `c` is low-passed ([`ReferenceFilter`]: three one-pole
+//! filters of [`REFERENCE_TIME_CONSTANT_S`], which keep the rotation frequency (gain 0.96 at
+//! 360 s) and divide a 9 s sway by 250 and a 5 s sway by 2000), while `y` and eq (2)'s rows `h`
+//! stay as measured. Nothing else changes: `z` and its row use the same `c`, so
+//! `z = row . x` still holds exactly, whatever reference is used; the reference only decides
+//! what else correlates with it (an instrumental-variable regression).
+//!
 //! # Exact running sums
 //! Everything above is a mean of products of the sample's quantities, so the window keeps their
 //! sums ([`CorrelationSums`]): counts, the references, the attitudes, the channel products, and the
@@ -88,12 +102,51 @@ pub fn products(attitude: &Attitude, angles: &Angles) -> [Real; 4] {
     ]
 }
 
+/// Time constant of each of the reference's three low-pass stages, s.
+pub const REFERENCE_TIME_CONSTANT_S: f64 = 10.0;
+
+/// The low-passed references `(sin(rho-s), cos(rho-s), sin rho, cos rho)` in channel order: three
+/// one-pole stages in series (see the module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ReferenceFilter {
+    /// Each stage's output per channel; meaningless until `started`.
+    pub stages: [[Real; 4]; 3],
+    pub started: bool,
+}
+
+impl ReferenceFilter {
+    /// The stage gain for a sample interval: `1 - exp(-dt / tau)`.
+    pub fn alpha(interval_s: f64) -> Real {
+        (1.0 - libm::exp(-interval_s / REFERENCE_TIME_CONSTANT_S)) as Real
+    }
+
+    /// Filters one sample's references with stage gain `alpha`; the first sample starts every
+    /// stage at its value.
+    pub fn filter(&mut self, angles: &Angles, alpha: Real) -> [Real; 4] {
+        let c = [angles.sin_rho_s, angles.cos_rho_s, angles.sin_rho, angles.cos_rho];
+        if !self.started {
+            self.stages = [c; 3];
+            self.started = true;
+            return c;
+        }
+        let mut input = c;
+        for stage in &mut self.stages {
+            for ch in 0..4 {
+                stage[ch] += alpha * (input[ch] - stage[ch]);
+            }
+            input = *stage;
+        }
+        input
+    }
+}
+
 /// Fixed-point counts per rad of roll and pitch.
 pub const ATTITUDE_COUNTS: f64 = (1u64 << 30) as f64;
 /// Fixed-point counts per unit of a sine or cosine.
 pub const TRIG_COUNTS: f64 = (1u64 << 14) as f64;
 
-/// One sample's inputs to the sums, in fixed point.
+/// One sample's inputs to the sums, in fixed point: the attitude, the angles' sines and cosines
+/// (for eq (2)'s rows) and the low-passed references.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct QuantizedSample {
     pub roll: i32,
@@ -104,14 +157,16 @@ pub struct QuantizedSample {
     pub cos_rho_s: i16,
     pub sin_lat: i16,
     pub cos_lat: i16,
+    /// The references of the four channels, low-passed ([`ReferenceFilter`]), in channel order.
+    pub reference: [i16; 4],
 }
 
 /// Largest attitude magnitude stored, rad (roll and pitch are checked to within 90 deg).
 const MAX_ATTITUDE_RAD: Real = 1.999;
 
 impl QuantizedSample {
-    /// Rounds a sample's roll, pitch and trigonometry to fixed point.
-    pub fn new(roll_rad: Real, pitch_rad: Real, angles: &Angles) -> QuantizedSample {
+    /// Rounds a sample's roll, pitch, trigonometry and references to fixed point.
+    pub fn new(roll_rad: Real, pitch_rad: Real, angles: &Angles, reference: &[Real; 4]) -> QuantizedSample {
         let att = |v: Real| {
             let v = if v.is_nan() { 0.0 } else { v.clamp(-MAX_ATTITUDE_RAD, MAX_ATTITUDE_RAD) };
             round(v * ATTITUDE_COUNTS as Real) as i32
@@ -129,6 +184,7 @@ impl QuantizedSample {
             cos_rho_s: trig(angles.cos_rho_s),
             sin_lat: trig(angles.sin_lat),
             cos_lat: trig(angles.cos_lat),
+            reference: reference.map(trig),
         }
     }
 
@@ -136,52 +192,57 @@ impl QuantizedSample {
     pub fn terms(&self) -> [i64; SUMS] {
         let (sr, cr, ss, cs) = (i32::from(self.sin_rho), i32::from(self.cos_rho), i32::from(self.sin_rho_s), i32::from(self.cos_rho_s));
         let (sl, cl) = (i32::from(self.sin_lat), i32::from(self.cos_lat));
+        let [c0, c1, c2, c3] = self.reference.map(i32::from);
         let (r, p) = (i64::from(self.roll), i64::from(self.pitch));
         // eq (2)'s roll row without its signs: sinL cos(rho-s), sinL sin(rho-s), cosL sin rho, cosL cos rho.
         let (h0, h1, h2, h3) = (sl * cs, sl * ss, cl * sr, cl * cr);
         let w = |a: i32, b: i32| i64::from(a) * i64::from(b);
         [
-            i64::from(sr),
-            i64::from(cr),
+            i64::from(c0),
+            i64::from(c1),
+            i64::from(c2),
+            i64::from(c3),
             i64::from(ss),
             i64::from(cs),
             r,
             p,
-            p * i64::from(ss),
-            p * i64::from(cs),
-            r * i64::from(sr),
-            r * i64::from(cr),
-            w(ss, ss),
-            w(ss, cs),
-            w(cs, cs),
+            p * i64::from(c0),
+            p * i64::from(c1),
+            r * i64::from(c2),
+            r * i64::from(c3),
+            w(c0, ss),
+            w(c0, cs),
+            w(c1, ss),
+            w(c1, cs),
             i64::from(h0),
             i64::from(h1),
             i64::from(h2),
             i64::from(h3),
-            w(sr, h0),
-            w(sr, h1),
-            w(sr, h2),
-            w(sr, h3),
-            w(cr, h0),
-            w(cr, h1),
-            w(cr, h3),
+            w(c2, h0),
+            w(c2, h1),
+            w(c2, h2),
+            w(c2, h3),
+            w(c3, h0),
+            w(c3, h1),
+            w(c3, h2),
+            w(c3, h3),
         ]
     }
 }
 
 /// Number of running sums.
-pub const SUMS: usize = 24;
+pub const SUMS: usize = 28;
 
 /// The window's exact running sums.
 ///
-/// `sums`, in fixed-point counts (T = 2^14 per unit of a sine or cosine, A = 2^30 per rad):
-/// 0-3 `sin rho, cos rho, sin(rho-s), cos(rho-s)` (T); 4-5 roll, pitch (A); 6-9 the channel
-/// products pitch `sin(rho-s)`, pitch `cos(rho-s)`, roll `sin rho`, roll `cos rho` (A T);
-/// 10-12 `sin^2(rho-s)`, `sin(rho-s) cos(rho-s)`, `cos^2(rho-s)` (T^2); 13-16 the roll row's
-/// terms `sinL cos(rho-s)`, `sinL sin(rho-s)`, `cosL sin rho`, `cosL cos rho` (T^2); 17-20
-/// `sin rho` times each of those, 21-23 `cos rho` times the first, second and fourth (the third,
-/// `cos rho cosL sin rho`, is 20) (T^3). Magnitudes: at most 2^46 per sample, so `i64` holds
-/// more than 2^16 samples.
+/// `sums`, in fixed-point counts (T = 2^14 per unit of a sine or cosine, A = 2^30 per rad), with
+/// `c0..c3` the channels' low-passed references (of `sin(rho-s)`, `cos(rho-s)`, `sin rho`,
+/// `cos rho`): 0-3 `c0..c3` (T); 4-5 `sin(rho-s)`, `cos(rho-s)` (T); 6-7 roll, pitch (A); 8-11
+/// the channel products pitch `c0`, pitch `c1`, roll `c2`, roll `c3` (A T); 12-15 `c0 sin(rho-s)`,
+/// `c0 cos(rho-s)`, `c1 sin(rho-s)`, `c1 cos(rho-s)` (T^2); 16-19 the roll row's terms
+/// `sinL cos(rho-s)`, `sinL sin(rho-s)`, `cosL sin rho`, `cosL cos rho` (T^2); 20-23 `c2` times
+/// each of those, 24-27 `c3` times each (T^3). Magnitudes: at most 2^46 per sample, so `i64`
+/// holds more than 2^16 samples.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CorrelationSums {
     /// Samples (window entries) summed.
@@ -231,17 +292,17 @@ impl CorrelationSums {
         let ttt = tt / TRIG_COUNTS as Real;
         let a = inv_n / ATTITUDE_COUNTS as Real;
         let at = a / TRIG_COUNTS as Real;
-        let scale = [t, t, t, t, a, a, at, at, at, at, tt, tt, tt, tt, tt, tt, tt, ttt, ttt, ttt, ttt, ttt, ttt, ttt];
+        let scale = [t, t, t, t, t, t, a, a, at, at, at, at, tt, tt, tt, tt, tt, tt, tt, tt, ttt, ttt, ttt, ttt, ttt, ttt, ttt, ttt];
         let m: [Real; SUMS] = core::array::from_fn(|i| self.sums[i] as Real * scale[i]);
-        let (sr, cr, ss, cs, roll, pitch) = (m[0], m[1], m[2], m[3], m[4], m[5]);
+        let (c, ss, cs, roll, pitch) = ([m[0], m[1], m[2], m[3]], m[4], m[5], m[6], m[7]);
         let cov = |mean_product: Real, a: Real, b: Real| mean_product - a * b;
-        let z = [cov(m[6], pitch, ss), cov(m[7], pitch, cs), cov(m[8], roll, sr), cov(m[9], roll, cr)];
-        let (h0, h1, h2, h3) = (m[13], m[14], m[15], m[16]);
+        let z = [cov(m[8], pitch, c[0]), cov(m[9], pitch, c[1]), cov(m[10], roll, c[2]), cov(m[11], roll, c[3])];
+        let h = [m[16], m[17], m[18], m[19]];
         let rows = [
-            [cov(m[10], ss, ss), -cov(m[11], ss, cs), 0.0, 0.0],
-            [cov(m[11], cs, ss), -cov(m[12], cs, cs), 0.0, 0.0],
-            [-cov(m[17], sr, h0), -cov(m[18], sr, h1), cov(m[19], sr, h2), -cov(m[20], sr, h3)],
-            [-cov(m[21], cr, h0), -cov(m[22], cr, h1), cov(m[20], cr, h2), -cov(m[23], cr, h3)],
+            [cov(m[12], c[0], ss), -cov(m[13], c[0], cs), 0.0, 0.0],
+            [cov(m[14], c[1], ss), -cov(m[15], c[1], cs), 0.0, 0.0],
+            [-cov(m[20], c[2], h[0]), -cov(m[21], c[2], h[1]), cov(m[22], c[2], h[2]), -cov(m[23], c[2], h[3])],
+            [-cov(m[24], c[3], h[0]), -cov(m[25], c[3], h[1]), cov(m[26], c[3], h[2]), -cov(m[27], c[3], h[3])],
         ];
         Some(Measurement { z, rows })
     }
@@ -256,13 +317,18 @@ mod tests {
         Angles::new(rho as Real, s as Real, sin_cos(lat as Real))
     }
 
+    /// A sample whose references are the unfiltered sines and cosines.
+    fn quantized(roll: Real, pitch: Real, a: &Angles) -> QuantizedSample {
+        QuantizedSample::new(roll, pitch, a, &[a.sin_rho_s, a.cos_rho_s, a.sin_rho, a.cos_rho])
+    }
+
     #[test]
     fn rows_of_a_uniform_rotation_are_the_derived_slow_parts() {
         let (lat, s) = (0.7f64, 1.3f64);
         let mut sums = CorrelationSums::default();
         for k in 0..480 {
             let rho = 0.2 + 2.0 * core::f64::consts::PI * k as f64 / 480.0;
-            sums.add(&QuantizedSample::new(0.0, 0.0, &angles(rho, s, lat)), 0);
+            sums.add(&quantized(0.0, 0.0, &angles(rho, s, lat)), 0);
         }
         let rows = sums.measurement().unwrap().rows;
         let (sl, cl) = (lat.sin() as Real, lat.cos() as Real);
@@ -284,7 +350,7 @@ mod tests {
     fn subtracting_every_sample_added_returns_exactly_to_zero() {
         let mut sums = CorrelationSums::default();
         let qs: std::vec::Vec<QuantizedSample> = (0..300)
-            .map(|k| QuantizedSample::new(0.05 * (k as Real).sin(), -0.02, &angles(k as f64 * 0.7, 0.1, 0.5)))
+            .map(|k| quantized(0.05 * (k as Real).sin(), -0.02, &angles(k as f64 * 0.7, 0.1, 0.5)))
             .collect();
         for q in &qs {
             sums.add(q, 1);
@@ -302,7 +368,7 @@ mod tests {
         let mut sums = CorrelationSums::default();
         for k in 0..480 {
             let rho = [0.0, 1.5708, 3.1416, 4.7124][(k * 7 / 480) % 4];
-            sums.add(&QuantizedSample::new(heel, -heel, &angles(rho, 0.4, 0.6)), 0);
+            sums.add(&quantized(heel, -heel, &angles(rho, 0.4, 0.6)), 0);
         }
         let z = sums.measurement().unwrap().z;
         for (ch, v) in z.iter().enumerate() {

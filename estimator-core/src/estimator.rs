@@ -38,9 +38,10 @@ use crate::sample::{Attitude, Sample, SampleError};
 use crate::time_grid::{Placement, TimeGrid};
 use crate::Real;
 
-/// The ring capacity of the default estimator, in window entries: one period of up to 960 samples
-/// without bins (960 s at 1 Hz); longer periods are binned.
-pub const DEFAULT_CAPACITY: usize = 960;
+/// The ring capacity of the default estimator, in window entries: one period of up to 720 samples
+/// without bins (720 s at 1 Hz); longer periods are binned. 30 bytes an entry (the inputs and a
+/// fill weight): the estimator's state stays within 24 KiB.
+pub const DEFAULT_CAPACITY: usize = 720;
 
 /// What the estimator is doing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -188,6 +189,25 @@ pub enum Holdup {
     RotationFault { fault: RotationFault, since_s: f64 },
     /// The window is filling: `filled` of `len` entries.
     WindowFilling { filled: u32, len: u32 },
+}
+
+impl core::fmt::Display for Holdup {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Holdup::WaitingForSway => write!(f, "waiting for the roll sway to exceed the start gate"),
+            Holdup::SampleIntervalNotKnown => write!(f, "sample interval not yet learned from the time stamps"),
+            Holdup::RotationPeriodNotDetected => write!(f, "rotation period not yet detected"),
+            Holdup::RotationFault { fault, since_s } => {
+                let what = match fault {
+                    RotationFault::Stopped => "rotation stopped",
+                    RotationFault::Reversed => "rotation reversed",
+                    RotationFault::RateMismatch => "rotation no longer repeats its pattern",
+                };
+                write!(f, "{what} since {since_s} s")
+            }
+            Holdup::WindowFilling { filled, len } => write!(f, "moving average filling ({filled} of {len} entries)"),
+        }
+    }
 }
 
 /// Roll sway amplitude for the start gate.
@@ -391,7 +411,7 @@ impl<const CAP: usize> Estimator<CAP> {
             self.gate_open = true;
         }
         let status = match self.grid.interval_s {
-            Some(interval_s) if self.gate_open => self.feed(sample, &angles, placement, interval_s),
+            Some(interval_s) if self.gate_open => self.feed(sample, &angles, placement, interval_s, sample.time_s),
             _ if !self.gate_open => Status::WaitingForSway,
             _ => Status::DetectingPattern,
         };
@@ -421,7 +441,7 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// Places an accepted sample on the grid, passes it through the gap filler and the window
     /// takes what comes out; returns the status of the newest sample the window took.
-    fn feed(&mut self, sample: &Sample, angles: &Angles, placement: Placement, interval_s: f64) -> Status {
+    fn feed(&mut self, sample: &Sample, angles: &Angles, placement: Placement, interval_s: f64, stamp_s: f64) -> Status {
         let mut out: heapless::Vec<GridSample, SLOTS> = heapless::Vec::new();
         if !self.feeding {
             self.start_feeding(interval_s);
@@ -435,7 +455,7 @@ impl<const CAP: usize> Estimator<CAP> {
                 self.filler.flush(&mut |s| {
                     let _ = out.push(*s);
                 });
-                self.take(&out, interval_s);
+                self.take(&out, interval_s, stamp_s);
                 out.clear();
                 self.restart_window();
                 self.rotation.restart();
@@ -454,7 +474,7 @@ impl<const CAP: usize> Estimator<CAP> {
         self.filler.push(grid_sample, &mut |s| {
             let _ = out.push(*s);
         });
-        self.take(&out, interval_s);
+        self.take(&out, interval_s, stamp_s);
         self.window_status
     }
 
@@ -471,8 +491,9 @@ impl<const CAP: usize> Estimator<CAP> {
         self.window_status = Status::DetectingPattern;
     }
 
-    /// The window takes the samples the filler passed on, then the filter updates once.
-    fn take(&mut self, samples: &[GridSample], interval_s: f64) {
+    /// The window takes the samples the filler passed on, then the filter updates once. `stamp_s`
+    /// is the time stamp of the newest sample received (at grid index `self.index`).
+    fn take(&mut self, samples: &[GridSample], interval_s: f64, stamp_s: f64) {
         if samples.is_empty() {
             return;
         }
@@ -488,7 +509,8 @@ impl<const CAP: usize> Estimator<CAP> {
             match self.rotation.observe(s.index, s.rotation_rad, &limits) {
                 Err(fault) => {
                     if !matches!(self.window_status, Status::RotationFault(_)) {
-                        self.fault = Some((fault, f64::from(s.index) * interval_s));
+                        let behind = f64::from(self.index.wrapping_sub(s.index));
+                        self.fault = Some((fault, stamp_s - behind * interval_s));
                     }
                     self.restart_window();
                     if fault != RotationFault::RateMismatch {

@@ -134,14 +134,14 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 /// The moving average of the windowed method: the last `len` entries of exactly one rotation
 /// period, as the exact [`CorrelationSums`] of their fixed-point inputs.
 ///
-/// The ring holds each entry's inputs ([`QuantizedSample`], 20 bytes: roll, pitch, and the sines
-/// and cosines) rather than its 24 products; the products of the entry that leaves the window are
+/// The ring holds each entry's inputs ([`QuantizedSample`], 28 bytes: roll, pitch, the sines and
+/// cosines, and the low-passed references) rather than its 28 products; the products of the entry that leaves the window are
 /// formed again from them, exactly as they were when it came in, and subtracted.
 ///
 /// # Bins
 /// When one period holds more samples than the ring's capacity (a 10 Hz log, a long period),
-/// consecutive samples are averaged into bins of `bin` samples (roll, pitch, latitude, and the
-/// angles as offsets from the bin's first sample), and each bin is one entry: the window still
+/// consecutive samples are averaged into bins of `bin` samples (roll, pitch, latitude, the
+/// references, and the angles as offsets from the bin's first sample), and each bin is one entry: the window still
 /// spans one period (exactly, when `bin` divides the period; the nearest whole number of bins
 /// otherwise). Averaging within a bin slightly low-passes the sway (it helps) and the oscillation
 /// of eq (2) (a relative error of about `(w_r b dt)^2 / 24`, 1e-5 for 5 samples of 0.1 s at 480 s).
@@ -166,6 +166,8 @@ pub struct Bin {
     pub roll_rad: Real,
     pub pitch_rad: Real,
     pub latitude_rad: Real,
+    /// Sum of the low-passed references.
+    pub reference: [Real; 4],
     /// The first sample's rotation and rotation-minus-platform angles, and the sums of the offsets
     /// from them.
     pub rotation0_rad: Real,
@@ -269,10 +271,11 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         })
     }
 
-    /// Adds one sample; returns true when it completed an entry (every sample, without bins).
-    pub fn push(&mut self, s: &GridSample) -> bool {
+    /// Adds one sample with its low-passed references; returns true when it completed an entry
+    /// (every sample, without bins).
+    pub fn push(&mut self, s: &GridSample, reference: &[Real; 4]) -> bool {
         if self.bin <= 1 {
-            self.push_entry(QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles), s.fill_weight);
+            self.push_entry(QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference), s.fill_weight);
             return true;
         }
         let b = &mut self.partial;
@@ -283,6 +286,9 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         b.roll_rad += s.roll_rad;
         b.pitch_rad += s.pitch_rad;
         b.latitude_rad += s.latitude_rad;
+        for ch in 0..4 {
+            b.reference[ch] += reference[ch];
+        }
         b.rotation_offset_rad += wrap_pi(s.rotation_rad - b.rotation0_rad);
         b.rotation_minus_platform_offset_rad += wrap_pi(s.rotation_minus_platform_rad - b.rotation_minus_platform0_rad);
         b.fill_weight += u32::from(s.fill_weight);
@@ -293,7 +299,7 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         let rotation = wrap_pi(b.rotation0_rad + b.rotation_offset_rad / n);
         let rotation_minus_platform = wrap_pi(b.rotation_minus_platform0_rad + b.rotation_minus_platform_offset_rad / n);
         let angles = Angles::from_rotation(rotation, rotation_minus_platform, sin_cos(b.latitude_rad / n));
-        let q = QuantizedSample::new(b.roll_rad / n, b.pitch_rad / n, &angles);
+        let q = QuantizedSample::new(b.roll_rad / n, b.pitch_rad / n, &angles, &b.reference.map(|r| r / n));
         let weight = b.fill_weight.min(u32::from(u16::MAX)) as u16;
         self.partial = Bin::default();
         self.push_entry(q, weight);

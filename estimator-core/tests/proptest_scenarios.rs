@@ -239,32 +239,43 @@ fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator) {
     (last.unwrap(), converged, est)
 }
 
-/// The scalar filter x1 would have if it were observed by the pitch channel alone
-/// (gain 1/2, the default measurement noise and random walk): its variance after `updates`.
-fn pitch_only_variance(updates: u64) -> f64 {
+/// The scalar filter x1 would have if it were observed by the pitch channel alone (its gain
+/// `gain`, 1/2 times the low-pass of the reference, and the default measurement noise and random
+/// walk): its variance after `updates`.
+fn pitch_only_variance(updates: u64, gain: f64) -> f64 {
     let c = Config::default();
     let (r, q) = ((c.measurement_sigma_rad as f64).powi(2), (c.drift_rad_per_sqrt_s as f64).powi(2));
     let mut p = (c.prior_sigma_rad as f64).powi(2);
     for _ in 0..updates {
         p += q;
-        p = p * r / (0.25 * p + r);
+        p = p * r / (gain * gain * p + r);
     }
     p
 }
 
 const LATITUDE_STEPS: u64 = 8 * 3600;
 
+/// The pitch channels' gain for x1 in the current window (constant for a uniform rotation): the
+/// low-passed reference lags, so both pitch channels see x1 (with gains `g cos(lag)` and
+/// `g sin(lag)`); together they inform it as one channel of gain `g`.
+fn pitch_gain(est: &Estimator) -> f64 {
+    let rows = est.windowed().unwrap().window.sums().measurement().unwrap().rows;
+    (rows[0][0] as f64).hypot(rows[1][0] as f64)
+}
+
 /// At the equator roll carries no x1, x2 (sin L = 0): they come from pitch alone. The filter's
-/// x1 and x2 variances equal those of a pitch-only scalar filter (within f32 rounding), the errors
-/// are within 3 sigma, and everything converges.
+/// x1 and x2 variances equal those of a pitch-only scalar filter, the errors are within 3 sigma,
+/// and everything converges.
 #[test]
 fn equator_x1_x2_come_from_pitch_alone() {
     let (out, converged, est) = run_latitude(0.0, LATITUDE_STEPS);
     let s = internals(&est);
     let p = s.p;
-    let pitch_only = pitch_only_variance(u64::from(s.updates));
+    let pitch_only = pitch_only_variance(u64::from(s.updates), pitch_gain(&est));
     for i in 0..2 {
-        assert!((p[i][i] / pitch_only - 1.0).abs() < 1e-3, "x{}: variance {} vs pitch-only {}", i + 1, p[i][i], pitch_only);
+        // Within 1 %: the scalar filter uses the gain of the last window, while the first windows,
+        // filled as the reference's low-pass settled, had slightly other gains.
+        assert!((p[i][i] / pitch_only - 1.0).abs() < 1e-2, "x{}: variance {} vs pitch-only {}", i + 1, p[i][i], pitch_only);
         assert_eq!(p[i][2], 0.0);
         assert_eq!(p[i][3], 0.0);
     }
@@ -280,7 +291,7 @@ fn equator_x1_x2_come_from_pitch_alone() {
 fn mid_latitude_converges_honestly() {
     let (out, converged, est) = run_latitude(45.0, LATITUDE_STEPS);
     let s = internals(&est);
-    assert!(s.p[0][0] < pitch_only_variance(u64::from(s.updates)));
+    assert!(s.p[0][0] < pitch_only_variance(u64::from(s.updates), pitch_gain(&est)));
     assert!(converged && out.status == Status::Converged, "{:?}", out.status);
     let e = errors_arcsec(&out);
     assert!(e.iter().all(|v| v.abs() < 1.0), "errors {e:?}");

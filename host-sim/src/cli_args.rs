@@ -213,12 +213,13 @@ pub const SAMPLE_INTERVAL_RANGE_S: (f64, f64) = (0.1, 10.0);
 /// configuration; this group is the one place where the command line sets the core's timing.
 #[derive(Clone, Copy, Debug, Default, PartialEq, clap::Args)]
 pub struct TimingArgs {
-    /// Rotation period of the RINS, s (60-3600; default 480): of the generated log, and the
-    /// estimator's configured period.
+    /// Rotation period of the RINS, s (60-3600). Generating: the log's (default 480). Estimating
+    /// a log (`estimate`): pins the estimator's period instead of detecting it from the rotation
+    /// angle.
     #[arg(long, value_name = "S")]
     pub rotation_period: Option<f64>,
-    /// Interval between the log's rows, s (0.1-10; default 1): of the generated log, and the
-    /// estimator's configured interval.
+    /// Interval between the log's rows, s (0.1-10). Generating: the log's (default 1). Estimating
+    /// a log (`estimate`): pins the estimator's interval instead of learning it from the stamps.
     #[arg(long, value_name = "S")]
     pub sample_interval: Option<f64>,
 }
@@ -237,16 +238,14 @@ impl TimingArgs {
         Ok(())
     }
 
-    /// `config` with the rotation period and sample interval given pinned: today
-    /// `rotation_period_samples = round(period / interval)` and `sample_interval_s`; what is not
-    /// given keeps the configuration's value.
+    /// `config` with the rotation period and sample interval given pinned; what is not given keeps
+    /// the configuration's value (by default: learned from the data).
     pub fn pin(&self, mut config: Config) -> Config {
-        let period_s = self.rotation_period.unwrap_or(config.rotation_period_samples as f64 * config.sample_interval_s);
-        if let Some(d) = self.sample_interval {
-            config.sample_interval_s = d;
+        if let Some(t) = self.rotation_period {
+            config.rotation_period_s = Some(t);
         }
-        if self.rotation_period.is_some() || self.sample_interval.is_some() {
-            config.rotation_period_samples = (period_s / config.sample_interval_s).round() as usize;
+        if let Some(d) = self.sample_interval {
+            config.sample_interval_s = Some(d);
         }
         config
     }
@@ -330,13 +329,13 @@ mod tests {
     }
 
     #[test]
-    fn timing_pins_period_in_samples_and_interval() {
+    fn timing_pins_period_and_interval() {
         let c = Config::default();
         assert_eq!(TimingArgs::default().pin(c), c);
         let pinned = TimingArgs { rotation_period: Some(360.0), sample_interval: Some(2.0) }.pin(c);
-        assert_eq!((pinned.rotation_period_samples, pinned.sample_interval_s), (180, 2.0));
+        assert_eq!((pinned.rotation_period_s, pinned.sample_interval_s), (Some(360.0), Some(2.0)));
         let interval_only = TimingArgs { rotation_period: None, sample_interval: Some(0.5) }.pin(c);
-        assert_eq!((interval_only.rotation_period_samples, interval_only.sample_interval_s), (960, 0.5));
+        assert_eq!((interval_only.rotation_period_s, interval_only.sample_interval_s), (None, Some(0.5)));
         assert!(TimingArgs { rotation_period: Some(59.0), sample_interval: None }.check().is_err());
         assert!(TimingArgs { rotation_period: None, sample_interval: Some(0.05) }.check().is_err());
     }

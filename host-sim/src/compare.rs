@@ -49,7 +49,7 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
             to_arcsec_s: (inf, inf),
             error_at_arcsec: COMPARE_TIMES_S.iter().map(|t| if *t > duration_s { (f64::NAN, f64::NAN) } else { (inf, inf) }).collect(),
             duration_s,
-            final_status: vec![(format!("configuration rejected ({e:?}, {} samples per period)", config.rotation_period_samples), seeds)],
+            final_status: vec![(format!("configuration rejected ({e:?})"), seeds)],
         });
     }
     let results: Vec<Accuracy> = run_all(draw, config, seeds, &COMPARE_TIMES_S, &|| {})?;

@@ -268,21 +268,30 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
 }
 
 fn print_summary(log: &str, method: Method, r: &Replay, out: &str) {
+    let c = &r.counters;
     println!(
-        "{log}: method {}: {} rows, {} accepted, {} bridged (gap samples interpolated), {} window restarts; estimates in {out}",
+        "{log}: method {}: {} rows, {} accepted, {} filled (lost samples interpolated), {} window restarts, {} clock steps; estimates in {out}",
         method.name(),
         r.steps.len(),
-        r.accepted,
-        r.bridged,
-        r.window_restarts
+        c.accepted,
+        c.filled,
+        c.window_restarts,
+        c.clock_steps
     );
-    match r.final_estimate {
-        Some(e) => {
+    println!("  {}", host_sim::replay::pattern_summary(r));
+    let final_status = r.steps.iter().rev().find_map(|s| s.result.ok()).map_or("none (no row accepted)", |o| o.status.name());
+    println!("  final status: {final_status}");
+    match (r.final_estimate, r.holdup) {
+        (Some(e), holdup) => {
             for i in 0..4 {
                 println!("  x{} = {:+.3} arcsec (1-sigma {:.3})", i + 1, rad_to_arcsec(e.x_rad[i] as f64), rad_to_arcsec(e.sigma_rad[i] as f64));
             }
+            if let Some(h) = holdup {
+                println!("  estimates frozen: {h}");
+            }
         }
-        None => println!("  no estimate (log too short or no sample accepted)"),
+        (None, Some(h)) => println!("  no estimate: {h}"),
+        (None, None) => println!("  no estimate: no row accepted"),
     }
     let reasons: Vec<String> = (0..SampleError::COUNT).map(|i| format!("{} {}", SampleError::reason_name(i), r.rejected.0[i])).collect();
     println!("  rejected rows: {} ({})", r.rejected.total(), reasons.join(", "));
@@ -313,7 +322,7 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     let mut reports: Vec<(Method, Report)> = Vec::new();
     for method in [Method::Windowed, Method::Paper, Method::Traditional] {
         let out = dir.join(format!("{}.estimates.{}.csv", params.scenario.name(), method.name()));
-        let est = estimate_file(&log, &out, a.shape.timing.pin(a.tuning.config(method)))?;
+        let est = estimate_file(&log, &out, a.tuning.config(method))?;
         print_summary(&log.display().to_string(), method, &est.replay, &out.display().to_string());
         let rep = report(&est, &truth, &generated);
         print_report(method, &rep);
@@ -352,7 +361,7 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.runs >= 1, "--runs must be at least 1");
     let draw = a.spread.draw(a.scenario.into(), a.scheme.into(), a.seed)?;
     let method: Method = a.method.into();
-    let config = a.spread.timing.pin(a.tuning.config(method));
+    let config = a.tuning.config(method);
     let bar = indicatif::ProgressBar::new(a.runs as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, eta {eta}").map_err(|e| anyhow::anyhow!("{e}"))?,
@@ -404,7 +413,7 @@ fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
             let draw = a.spread.draw(kind, scheme, a.seed)?;
             heading = host_sim::compare::describe(&draw);
             for &method in &methods {
-                rows.push(host_sim::compare::compare_one(&draw, a.spread.timing.pin(a.tuning.config(method)), a.seeds)?);
+                rows.push(host_sim::compare::compare_one(&draw, a.tuning.config(method), a.seeds)?);
             }
         }
         if i > 0 {

@@ -283,8 +283,8 @@ fn print_summary(log: &Path, out: &Path, what: &str, s: &StreamSummary, target: 
         out.display()
     );
     println!(
-        "  firmware: {} accepted, {} bridged, {} window restarts",
-        st.accepted, st.bridged, st.window_restarts
+        "  firmware: {} accepted, {} filled, {} window restarts",
+        st.accepted, st.filled, st.window_restarts
     );
     let frames: Vec<String> = (0..FrameError::COUNT)
         .map(|i| format!("{} {}", FrameError::name(i), st.counters.bad_frames[i]))

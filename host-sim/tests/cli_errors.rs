@@ -45,14 +45,14 @@ fn missing_file_is_an_error_not_a_panic() {
 }
 
 #[test]
-fn nan_rows_are_rejected_and_gaps_bridged_the_rest_processed() {
+fn nan_rows_are_rejected_and_short_gaps_filled_the_rest_processed() {
     let dir = temp_dir("cli-nan-gap");
     let log = dir.join("p.csv");
     host_sim_ok(&["generate", "--scenario", "paper", "--duration", "4000", "--out", path_str(&log)]);
     let text = std::fs::read_to_string(&log).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     // Line index = 1 + time. NaN roll at t = 1000, inf pitch at t = 1001 (counted as non-finite);
-    // drop t = 2000..=2001 (a 2-sample gap: bridged) and t = 3000..=3009 (a long gap: window restart).
+    // drop t = 2000..=2001 (a 2-sample gap: filled) and t = 3000..=3009 (a long gap: window restart).
     let set = |l: &mut String, col: usize, v: &str| {
         let mut f: Vec<&str> = l.split(',').collect();
         f[col] = v;
@@ -69,16 +69,18 @@ fn nan_rows_are_rejected_and_gaps_bridged_the_rest_processed() {
         })
         .collect();
     std::fs::write(&log, kept.join("\n") + "\n").unwrap();
-    // Default: no bridging; the NaN pair and both gaps restart the moving average.
+    // Default: gaps of up to 3 lost samples are filled: the rejected NaN pair and the short gap
+    // are interpolated, the long gap restarts the moving average.
     let est = dir.join("e.csv");
     let stdout = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&est)]);
-    assert!(stdout.contains("3988 rows, 3986 accepted, 0 bridged"), "{stdout}");
-    assert!(stdout.contains("3 window restarts"), "{stdout}");
+    assert!(stdout.contains("3988 rows, 3986 accepted, 4 filled"), "{stdout}");
+    assert!(stdout.contains("1 window restarts"), "{stdout}");
     assert!(stdout.contains("rejected rows: 2 (non_finite 2,"), "{stdout}");
-    // Bridging up to 2 samples: the NaN pair and the short gap are interpolated, the long gap restarts.
-    let bridged = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("b.csv")), "--max-bridged-gap-samples", "2"]);
-    assert!(bridged.contains("3988 rows, 3986 accepted, 4 bridged"), "{bridged}");
-    assert!(bridged.contains("1 window restarts"), "{bridged}");
+    assert!(stdout.contains("rotation: one-way, period 480 s; sample interval 1 s"), "{stdout}");
+    // No filling: the NaN pair and both gaps restart the moving average.
+    let unfilled = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("b.csv")), "--max-filled-gap-samples", "0"]);
+    assert!(unfilled.contains("3988 rows, 3986 accepted, 0 filled"), "{unfilled}");
+    assert!(unfilled.contains("3 window restarts"), "{unfilled}");
     let rows = read_estimates(&est).unwrap();
     assert_eq!(rows.len(), 3988, "one estimates row per input row");
     let r1000 = rows.iter().find(|r| r.time_s == 1000.0).unwrap();

@@ -78,7 +78,7 @@ impl<const CAP: usize> MethodState<CAP> {
     pub fn push(&mut self, config: &Config, interval_s: f64, sample: &GridSample) -> bool {
         match self {
             MethodState::Windowed(m) => {
-                m.push(sample);
+                m.push(sample, interval_s);
                 false
             }
             #[cfg(feature = "paper-method")]

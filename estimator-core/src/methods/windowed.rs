@@ -56,6 +56,7 @@
 //! 20 arcsec/day it raises the 1-sigma to the size of the lag (tested in `host-sim`).
 
 use crate::config::Config;
+use crate::correlation::ReferenceFilter;
 use crate::gap_fill::GridSample;
 use crate::kalman::ConstantStateKalman;
 use crate::math::sqrt;
@@ -70,6 +71,8 @@ pub const RESIDUAL_PERIODS: usize = 4;
 pub struct Windowed<const CAP: usize> {
     /// The moving window of the correlation sums.
     pub window: CorrelationWindow<CAP>,
+    /// The low-pass of the correlation references.
+    pub reference: ReferenceFilter,
     /// The 4-state filter of x1..x4.
     pub kf: ConstantStateKalman<Real, 4>,
     /// Measurement steps applied so far.
@@ -108,6 +111,7 @@ impl<const CAP: usize> Windowed<CAP> {
     pub fn new(config: &Config) -> Self {
         Windowed {
             window: CorrelationWindow::new(),
+            reference: ReferenceFilter::default(),
             kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
             updates: 0,
             entries_since_update: 0,
@@ -121,6 +125,7 @@ impl<const CAP: usize> Windowed<CAP> {
     /// Back to the state of [`Windowed::new`], in place.
     pub fn reset(&mut self, config: &Config) {
         self.window.reset();
+        self.reference = ReferenceFilter::default();
         self.kf = ConstantStateKalman::new([config.prior_sigma_rad; 4]);
         self.updates = 0;
         self.entries_since_update = 0;
@@ -136,9 +141,10 @@ impl<const CAP: usize> Windowed<CAP> {
         self.entries_since_update = 0;
     }
 
-    /// Adds one sample to the window.
-    pub fn push(&mut self, sample: &GridSample) {
-        if self.window.push(sample) {
+    /// Adds one sample to the window (its references low-passed on the way).
+    pub fn push(&mut self, sample: &GridSample, interval_s: f64) {
+        let reference = self.reference.filter(&sample.angles, ReferenceFilter::alpha(interval_s));
+        if self.window.push(sample, &reference) {
             self.entries_since_update = self.entries_since_update.saturating_add(1);
         }
     }
