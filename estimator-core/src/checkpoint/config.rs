@@ -1,10 +1,5 @@
 //! The configuration part (the method code is in the header).
 //!
-//! Fields, in order: `rotation_period_s` (optional f64), `sample_interval_s` (optional f64),
-//! `prior_sigma_rad`, `measurement_sigma_rad`, `drift_rad_per_sqrt_s`, `traditional_sigma_rad`,
-//! `traditional_drift_rad_per_sqrt_s`, `sway_gate_rad`, `converged_sigma_rad`,
-//! `rotation_period_tolerance` (`R` each), `max_filled_gap_samples` (u32).
-//!
 //! Checked: [`Config::check`] for this capacity, which bounds every value (ranges of the pinned
 //! period and interval, sigmas, random walks, the gap that may be filled).
 

@@ -1,12 +1,6 @@
 //! The gap filler part ([`GapFiller`]): the delay line of received samples waiting for their
 //! neighbours, and the fill-error estimate.
 //!
-//! Fields, in order: the newest index (optional u32), the next index to pass on (u32), the mean
-//! square prediction error of roll and of pitch (`R` each), samples averaged (u32), then the
-//! [`SLOTS`] slots (each an optional [`GridSample`]: index u32, roll, pitch, rotation, rotation
-//! minus platform, latitude, then the trigonometry sin rho, cos rho, sin(rho - s), cos(rho - s),
-//! sin L, cos L, all `R`, and the fill weight u16).
-//!
 //! Checked: a sample in slot `k` has an index `k` modulo [`SLOTS`] and lies within the
 //! [`SLOTS`] indices up to the newest; the newest index's slot holds it; fewer than
 //! [`NEIGHBOURS`] samples wait between the next index and the newest (so the delay line moves on

@@ -50,9 +50,11 @@ impl<const CAP: usize> Estimator<CAP> {
     /// Works in place, in two passes over the image: the first checks every field and keeps only
     /// what it must compare (the running sums, one small part at a time); the second, once
     /// everything has passed, resets the estimator in place ([`Estimator::reset`]'s way) and reads
-    /// the same bytes straight into it, part by part and the rings entry by entry. No second
-    /// estimator is built, so restoring needs a few hundred bytes of stack beyond the estimator
-    /// itself, which is what lets the firmware restore at boot on a microcontroller's stack.
+    /// the same bytes straight into it, part by part, the delay line slot by slot and the rings
+    /// entry by entry. No second estimator, ring or delay line passes through the stack, which is
+    /// what lets the firmware restore at boot on a microcontroller's stack. (Resetting to another
+    /// method than the running one builds that method's state by value: see
+    /// [`crate::methods::MethodState::reset`].)
     pub fn restore(&mut self, buf: &[u8]) -> Result<(), CheckpointError> {
         let (image, method) = verified_image::<CAP>(buf)?;
         read_state::<CAP>(image, method, None)?;

@@ -1,12 +1,5 @@
 //! The method part: the state of whichever method the header names, zero-padded to the longest.
 //!
-//! - **windowed**: updates u32, entries since the last update u32, Kalman filter (`x` 4 `R`, `P`
-//!   16 `R` row-major), residual means 4 `R`, residuals averaged u32, channel gains 4 `R`, the
-//!   correlation window ([`super::windows`]).
-//! - **paper**: updates u32, samples u32, start time f64, integrals 4 x i64, four Kalman filters
-//!   (`x` 3 f64, `P` 9 f64 each), the plain window of 4 channels.
-//! - **traditional**: updates u32, Kalman filter (`x` 4 `R`, `P` 16 `R`).
-//!
 //! Checked: Kalman states within [`MAX_STATE`], variances within `max(`[`MAX_VARIANCE`]`, 4
 //! prior^2)`, every covariance exactly symmetric and positive definite; residual means within
 //! [`MAX_RESIDUAL`]; gains within `[0, 4]` (a gain is the magnitude of a window mean of
@@ -14,10 +7,9 @@
 //! finite and its integrals within the fixed-point range times the samples integrated; the window.
 
 use super::wire::{Float, Reader, Writer};
-use super::windows::{
-    correlation_window_len, expected_correlation, read_average, read_correlation, window_average_len, write_average,
-    write_correlation,
-};
+#[cfg(feature = "paper-method")]
+use super::windows::{read_average, write_average};
+use super::windows::{correlation_window_len, expected_correlation, read_correlation, window_average_len, write_correlation};
 use super::{ensure, within, within_non_negative, CheckpointError, Part, MAX_RESIDUAL, MAX_STATE, MAX_VARIANCE, R};
 use crate::config::{Config, Method};
 use crate::kalman::ConstantStateKalman;

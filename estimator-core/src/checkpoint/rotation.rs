@@ -1,14 +1,6 @@
 //! The rotation monitor part ([`RotationMonitor`]): the period, the learned features and
 //! everything the monitor times passes and learns a cycle with.
 //!
-//! Fields, in order: period (optional u32, samples), pinned (flag), features (optional: direction
-//! i8, reverses flag, longest dwell u32), reference angles (optional `R`), side of each reference
-//! angle ([`LEVELS`] x i8), last pass of each reference angle and direction ([`LEVELS`] x 2
-//! optional u32), the timing pass (optional: reference angle u8, direction u8), previous sample
-//! (optional: index u32, rotation angle `R`), short mean increment `R`, its steps u32, the cycle
-//! being learned (start: optional u32, net rotation `R`), dwell run u32, longest dwell u32, first
-//! direction i8, reversed flag.
-//!
 //! Checked: a period between 2 and [`MAX_PERIOD_SAMPLES`] samples; pinned only with a period the
 //! configuration pins; directions and sides -1, 0 or 1; the timing pass naming one of the
 //! [`LEVELS`] reference angles and one of two directions; the angles within the range
@@ -30,7 +22,7 @@ pub(super) const LEN: usize =
 /// Longest period accepted, samples: 2^24, above any period of the allowed range (at most 3600 s)
 /// at any sample rate a RINS logs at (4.6 kHz), and small enough that no count derived from it
 /// overflows.
-pub const MAX_PERIOD_SAMPLES: u32 = 1 << 24;
+pub(super) const MAX_PERIOD_SAMPLES: u32 = 1 << 24;
 
 pub(super) fn write(w: &mut Writer<'_>, m: &RotationMonitor) {
     w.option(m.period_samples, 0, |w, v| w.u32(v));

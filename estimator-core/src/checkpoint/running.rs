@@ -1,13 +1,6 @@
 //! The estimator's own running state: the grid index, whether samples are being fed, the gate,
 //! the cached latitude, the status, the last fault, the sway monitor and the counters.
 //!
-//! Fields, in order: grid index (u32), feeding (flag), gate open (flag), latitude (`R`; its sine
-//! and cosine are recomputed), status of the newest sample the window took ([`Status::code`], u8),
-//! the last rotation fault (u8: 0 none, else the [`Status::code`] of that fault) and the sample
-//! time it began at (f64, zero without a fault), sway monitor (mean `R`, mean square `R`, samples
-//! u32), rejected counts ([`SampleError::COUNT`] x u32), counters (accepted, filled, window
-//! restarts, clock steps: u32 each).
-//!
 //! Checked: flags and codes; the latitude below 90 deg (it is a sample's, which
 //! [`crate::Sample::check`] bounds); the fault's time finite and not negative (a grid index times
 //! the interval); the sway mean within 2 rad and its mean square within `[0, 4]` rad^2 (averages

@@ -1,10 +1,6 @@
 //! The sample grid part ([`TimeGrid`]): the interval as pinned or learned, and what it is learned
 //! and refined from.
 //!
-//! Fields, in order: interval (optional f64), pinned (flag), the previous accepted stamp
-//! (optional f64), the learning steps ([`LEARNING_STEPS`] x f64), steps learned (u32), mean
-//! one-interval step (f64), steps in that mean (u32), clock steps (u32).
-//!
 //! Checked: the interval positive and finite; pinned exactly when the configuration pins the
 //! interval, and then equal to it; the stamp finite; every learning step and the mean step finite
 //! and not negative (they are positive time steps, or 0 before the first); at most

@@ -1,16 +1,6 @@
 //! The moving-average windows: the windowed method's [`CorrelationWindow`] and the paper
 //! method's [`WindowAverage`].
 //!
-//! A correlation window is: length, head, fill count, samples per bin (u32 each); the running sums
-//! (count u32, [`SUMS`] x i64, fill weight u32); the bin being filled (samples u32, sums of roll,
-//! pitch and latitude, the first sample's rotation angle and the sum of the offsets from it, the
-//! same for rotation minus platform, all `R`, fill weight u32); then the `CAP` ring entries, each
-//! roll and pitch (i32), sin rho, cos rho, sin(rho - s), cos(rho - s), sin L, cos L (i16) and its
-//! fill weight (u16). Stale entries beyond the fill count are kept as they are.
-//!
-//! A plain window is: length, head, fill count (u32 each), the running sums (`CH` x i64), then the
-//! ring, `CAP` x `CH` x i32 (slot-major).
-//!
 //! Checked: the length between 1 and `CAP` and, once the period is known, equal to what it gives
 //! ([`bins_for_period`] for the correlation window, the period up to `CAP` for the plain one); the
 //! fill count at most the length; the head equal to the fill count while the window fills, below
@@ -26,7 +16,9 @@ use super::{ensure, within, CheckpointError, Part, R};
 use crate::correlation::{CorrelationSums, QuantizedSample, SUMS};
 use crate::gap_fill::GAP_VARIANCE_FACTOR;
 use crate::installation::Angles;
-use crate::moving_average::{bins_for_period, Bin, CorrelationWindow, WindowAverage, MAX_MAGNITUDE};
+use crate::moving_average::{bins_for_period, Bin, CorrelationWindow};
+#[cfg(feature = "paper-method")]
+use crate::moving_average::{WindowAverage, MAX_MAGNITUDE};
 use crate::sample::{MAX_TILT_RAD, MAX_WRAPPED_ANGLE_RAD};
 use crate::Real;
 
@@ -186,6 +178,7 @@ fn read_bin(r: &mut Reader<'_>, bin: u32) -> Result<Bin, CheckpointError> {
     Ok(b)
 }
 
+#[cfg(feature = "paper-method")]
 pub(super) fn write_average<const CH: usize, const CAP: usize>(w: &mut Writer<'_>, win: &WindowAverage<CH, CAP>) {
     w.usize(win.len);
     w.usize(win.head);
@@ -200,6 +193,7 @@ pub(super) fn write_average<const CH: usize, const CAP: usize>(w: &mut Writer<'_
     }
 }
 
+#[cfg(feature = "paper-method")]
 /// Reads and checks a plain window; `expected_len`: the length the known period gives. With `dst`,
 /// also writes it there.
 pub(super) fn read_average<const CH: usize, const CAP: usize>(
