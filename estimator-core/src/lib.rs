@@ -41,7 +41,6 @@ pub type Real = f32;
 #[cfg(feature = "f64")]
 pub type Real = f64;
 
-#[cfg(any())]
 pub mod checkpoint;
 pub mod config;
 pub mod correlation;

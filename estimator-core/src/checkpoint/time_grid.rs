@@ -1,0 +1,56 @@
+//! The sample grid part ([`TimeGrid`]): the interval as pinned or learned, and what it is learned
+//! and refined from.
+//!
+//! Checked: the interval positive and finite; pinned exactly when the configuration pins the
+//! interval, and then equal to it; the stamp finite; every learning step and the mean step finite
+//! and not negative (they are positive time steps, or 0 before the first); at most
+//! [`LEARNING_STEPS`] steps learned and at most 2^16 in the mean (the grid's own bounds).
+
+use super::wire::{Reader, Writer};
+use super::{ensure, CheckpointError, Part};
+use crate::config::Config;
+use crate::time_grid::{TimeGrid, LEARNING_STEPS};
+
+/// Bytes of the part.
+pub(super) const LEN: usize = 9 + 1 + 9 + LEARNING_STEPS * 8 + 4 + 8 + 4 + 4;
+
+/// Most steps in the refining mean ([`TimeGrid::accept`] caps it).
+const MAX_MEAN_STEPS: u32 = 1 << 16;
+
+pub(super) fn write(w: &mut Writer<'_>, g: &TimeGrid) {
+    w.option(g.interval_s, 0.0, |w, v| w.f64(v));
+    w.flag(g.pinned);
+    w.option(g.last_stamp_s, 0.0, |w, v| w.f64(v));
+    for v in g.learning_steps {
+        w.f64(v);
+    }
+    w.u32(g.learned);
+    w.f64(g.mean_step_s);
+    w.u32(g.mean_steps);
+    w.u32(g.clock_steps);
+}
+
+pub(super) fn read(r: &mut Reader<'_>, config: &Config) -> Result<TimeGrid, CheckpointError> {
+    let invalid = CheckpointError::InvalidValue(Part::TimeGrid);
+    let g = TimeGrid {
+        interval_s: r.option(Part::TimeGrid, |r| Ok(r.f64()))?,
+        pinned: r.flag(Part::TimeGrid)?,
+        last_stamp_s: r.option(Part::TimeGrid, |r| Ok(r.f64()))?,
+        learning_steps: core::array::from_fn(|_| r.f64()),
+        learned: r.u32(),
+        mean_step_s: r.f64(),
+        mean_steps: r.u32(),
+        clock_steps: r.u32(),
+    };
+    let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+    ensure(g.interval_s.is_none_or(|v| v.is_finite() && v > 0.0), invalid)?;
+    ensure(g.last_stamp_s.is_none_or(f64::is_finite), invalid)?;
+    ensure(g.learning_steps.iter().all(|v| non_negative(*v)) && non_negative(g.mean_step_s), invalid)?;
+    ensure(g.learned as usize <= LEARNING_STEPS && g.mean_steps <= MAX_MEAN_STEPS, invalid)?;
+    let pinned_ok = match config.sample_interval_s {
+        Some(pinned) => g.pinned && g.interval_s.map(f64::to_bits) == Some(pinned.to_bits()),
+        None => !g.pinned,
+    };
+    ensure(pinned_ok, CheckpointError::Inconsistent(Part::TimeGrid))?;
+    Ok(g)
+}

@@ -1,0 +1,243 @@
+//! The moving-average windows: the windowed method's [`CorrelationWindow`] and the paper
+//! method's [`WindowAverage`].
+//!
+//! Checked: the length between 1 and `CAP` and, once the period is known, equal to what it gives
+//! ([`bins_for_period`] for the correlation window, the period up to `CAP` for the plain one); the
+//! fill count at most the length; the head equal to the fill count while the window fills, below
+//! the length once it is full; every stored value within the fixed-point range; the running sums
+//! equal to the exact sums of the entries in the window (the first `filled` slots). For the bin
+//! being filled: fewer samples than a bin, all zero when empty, and each sum within its samples'
+//! ranges.
+
+use super::gap_fill::MAX_FILLED_TILT_RAD;
+use super::rotation::MAX_PERIOD_SAMPLES;
+use super::wire::{Reader, Writer};
+use super::{ensure, within, CheckpointError, Part, R};
+use crate::correlation::{CorrelationSums, QuantizedSample, SUMS};
+use crate::gap_fill::GAP_VARIANCE_FACTOR;
+use crate::installation::Angles;
+use crate::moving_average::{bins_for_period, Bin, CorrelationWindow};
+#[cfg(feature = "paper-method")]
+use crate::moving_average::{WindowAverage, MAX_MAGNITUDE};
+use crate::sample::{MAX_TILT_RAD, MAX_WRAPPED_ANGLE_RAD};
+use crate::Real;
+
+/// Bytes of one ring entry of a correlation window.
+const ENTRY_LEN: usize = 2 * 4 + 6 * 2 + 2;
+/// Bytes of the bin being filled.
+const BIN_LEN: usize = 4 + 7 * R + 4;
+
+/// Bytes of a correlation window of `cap` entries.
+pub(super) const fn correlation_window_len(cap: usize) -> usize {
+    4 * 4 + (4 + SUMS * 8 + 4) + BIN_LEN + cap * ENTRY_LEN
+}
+
+/// Bytes of a plain window of `ch` channels and `cap` entries.
+pub(super) const fn window_average_len(ch: usize, cap: usize) -> usize {
+    3 * 4 + ch * 8 + cap * ch * 4
+}
+
+pub(super) fn write_correlation<const CAP: usize>(w: &mut Writer<'_>, win: &CorrelationWindow<CAP>) {
+    w.usize(win.len);
+    w.usize(win.head);
+    w.usize(win.filled);
+    w.u32(win.bin);
+    w.u32(win.sums.count);
+    for s in win.sums.sums {
+        w.i64(s);
+    }
+    w.u32(win.sums.fill_weight);
+    let b = &win.partial;
+    w.u32(b.count);
+    for v in [
+        b.roll_rad,
+        b.pitch_rad,
+        b.latitude_rad,
+        b.rotation0_rad,
+        b.rotation_offset_rad,
+        b.rotation_minus_platform0_rad,
+        b.rotation_minus_platform_offset_rad,
+    ] {
+        w.real(v);
+    }
+    w.u32(b.fill_weight);
+    for (q, weight) in win.ring.iter().zip(win.weights) {
+        w.i32(q.roll);
+        w.i32(q.pitch);
+        for v in [q.sin_rho, q.cos_rho, q.sin_rho_s, q.cos_rho_s, q.sin_lat, q.cos_lat] {
+            w.i16(v);
+        }
+        w.u16(weight);
+    }
+}
+
+/// Whether the length, head and fill count of a window of `CAP` entries agree.
+fn indices_ok(len: usize, head: usize, filled: usize, cap: usize) -> bool {
+    (1..=cap).contains(&len) && filled <= len && if filled < len { head == filled } else { head < len }
+}
+
+/// The largest fixed-point counts of an attitude and of a sine or cosine.
+fn quantized_bounds() -> (i32, i16) {
+    let ones = Angles { sin_rho: 2.0, cos_rho: 2.0, sin_rho_s: 2.0, cos_rho_s: 2.0, sin_lat: 2.0, cos_lat: 2.0 };
+    let q = QuantizedSample::new(Real::MAX, Real::MAX, &ones);
+    (q.roll, q.sin_rho)
+}
+
+/// Reads and checks a correlation window; `expected`: `(bin, len)` the known period gives. With
+/// `dst`, also writes it there, entry by entry.
+pub(super) fn read_correlation<const CAP: usize>(
+    r: &mut Reader<'_>,
+    mut dst: Option<&mut CorrelationWindow<CAP>>,
+    expected: Option<(u32, usize)>,
+) -> Result<(), CheckpointError> {
+    let len = r.u32() as usize;
+    let head = r.u32() as usize;
+    let filled = r.u32() as usize;
+    let bin = r.u32();
+    let consistent = indices_ok(len, head, filled, CAP)
+        && (1..=MAX_PERIOD_SAMPLES).contains(&bin)
+        && expected.is_none_or(|e| e == (bin, len));
+    ensure(consistent, CheckpointError::Inconsistent(Part::WindowIndices))?;
+    let mut sums = CorrelationSums { count: r.u32(), sums: [0; SUMS], fill_weight: 0 };
+    for s in sums.sums.iter_mut() {
+        *s = r.i64();
+    }
+    sums.fill_weight = r.u32();
+    let partial = read_bin(r, bin)?;
+
+    let (max_attitude, max_trig) = quantized_bounds();
+    let mut direct = CorrelationSums::default();
+    for k in 0..CAP {
+        let q = QuantizedSample {
+            roll: r.i32(),
+            pitch: r.i32(),
+            sin_rho: r.i16(),
+            cos_rho: r.i16(),
+            sin_rho_s: r.i16(),
+            cos_rho_s: r.i16(),
+            sin_lat: r.i16(),
+            cos_lat: r.i16(),
+        };
+        let weight = r.u16();
+        let trig = [q.sin_rho, q.cos_rho, q.sin_rho_s, q.cos_rho_s, q.sin_lat, q.cos_lat];
+        let in_range = q.roll.unsigned_abs() <= max_attitude.unsigned_abs()
+            && q.pitch.unsigned_abs() <= max_attitude.unsigned_abs()
+            && trig.iter().all(|v| v.unsigned_abs() <= max_trig.unsigned_abs());
+        ensure(in_range, CheckpointError::InvalidValue(Part::WindowEntries))?;
+        if k < filled {
+            direct.add(&q, weight);
+        }
+        if let Some(win) = dst.as_deref_mut() {
+            win.ring[k] = q;
+            win.weights[k] = weight;
+        }
+    }
+    ensure(direct == sums, CheckpointError::Inconsistent(Part::WindowSums))?;
+    if let Some(win) = dst {
+        win.len = len;
+        win.head = head;
+        win.filled = filled;
+        win.bin = bin;
+        win.sums = sums;
+        win.partial = partial;
+    }
+    Ok(())
+}
+
+/// Reads and checks the bin being filled of a window of `bin` samples per entry.
+fn read_bin(r: &mut Reader<'_>, bin: u32) -> Result<Bin, CheckpointError> {
+    let start = r.pos();
+    let b = Bin {
+        count: r.u32(),
+        roll_rad: r.real(),
+        pitch_rad: r.real(),
+        latitude_rad: r.real(),
+        rotation0_rad: r.real(),
+        rotation_offset_rad: r.real(),
+        rotation_minus_platform0_rad: r.real(),
+        rotation_minus_platform_offset_rad: r.real(),
+        fill_weight: r.u32(),
+    };
+    ensure(b.count < bin, CheckpointError::Inconsistent(Part::Bin))?;
+    if b.count == 0 {
+        r.zeros_since(start, Part::Bin)?;
+        return Ok(b);
+    }
+    // Sums of `count` samples, each within its range; one more sample's worth covers rounding.
+    let n = (b.count + 1) as Real;
+    let max_weight = GAP_VARIANCE_FACTOR.iter().copied().max().unwrap_or(0);
+    let in_range = within(b.roll_rad, n * MAX_FILLED_TILT_RAD)
+        && within(b.pitch_rad, n * MAX_FILLED_TILT_RAD)
+        && within(b.latitude_rad, n * MAX_TILT_RAD)
+        && within(b.rotation0_rad, MAX_WRAPPED_ANGLE_RAD)
+        && within(b.rotation_offset_rad, n * MAX_WRAPPED_ANGLE_RAD)
+        && within(b.rotation_minus_platform0_rad, MAX_WRAPPED_ANGLE_RAD)
+        && within(b.rotation_minus_platform_offset_rad, n * MAX_WRAPPED_ANGLE_RAD)
+        && u64::from(b.fill_weight) <= u64::from(b.count) * u64::from(max_weight);
+    ensure(in_range, CheckpointError::InvalidValue(Part::Bin))?;
+    Ok(b)
+}
+
+#[cfg(feature = "paper-method")]
+pub(super) fn write_average<const CH: usize, const CAP: usize>(w: &mut Writer<'_>, win: &WindowAverage<CH, CAP>) {
+    w.usize(win.len);
+    w.usize(win.head);
+    w.usize(win.filled);
+    for s in win.sums {
+        w.i64(s);
+    }
+    for slot in &win.ring {
+        for v in slot {
+            w.i32(*v);
+        }
+    }
+}
+
+#[cfg(feature = "paper-method")]
+/// Reads and checks a plain window; `expected_len`: the length the known period gives. With `dst`,
+/// also writes it there.
+pub(super) fn read_average<const CH: usize, const CAP: usize>(
+    r: &mut Reader<'_>,
+    mut dst: Option<&mut WindowAverage<CH, CAP>>,
+    expected_len: Option<usize>,
+) -> Result<(), CheckpointError> {
+    let len = r.u32() as usize;
+    let head = r.u32() as usize;
+    let filled = r.u32() as usize;
+    let consistent = indices_ok(len, head, filled, CAP) && expected_len.is_none_or(|e| e == len);
+    ensure(consistent, CheckpointError::Inconsistent(Part::WindowIndices))?;
+    let mut sums = [0i64; CH];
+    for s in sums.iter_mut() {
+        *s = r.i64();
+    }
+    let bound = WindowAverage::<CH, CAP>::quantize(MAX_MAGNITUDE);
+    let mut direct = [0i64; CH];
+    for k in 0..CAP {
+        for ch in 0..CH {
+            let v = r.i32();
+            ensure((-bound..=bound).contains(&v), CheckpointError::InvalidValue(Part::WindowEntries))?;
+            if k < filled {
+                direct[ch] += i64::from(v);
+            }
+            if let Some(win) = dst.as_deref_mut() {
+                win.ring[k][ch] = v;
+            }
+        }
+    }
+    ensure(direct == sums, CheckpointError::Inconsistent(Part::WindowSums))?;
+    if let Some(win) = dst {
+        win.sums = sums;
+        win.len = len;
+        win.head = head;
+        win.filled = filled;
+    }
+    Ok(())
+}
+
+/// `(bin, len)` of a correlation window for a known period.
+pub(super) fn expected_correlation<const CAP: usize>(period_samples: Option<u32>) -> Option<(u32, usize)> {
+    period_samples.map(|p| {
+        let (bin, len) = bins_for_period(p, CAP);
+        (bin, len.clamp(1, CAP.max(1)))
+    })
+}
