@@ -146,11 +146,14 @@ fn corrected_attitude_removes_the_oscillation() {
     assert!(after < 1.0, "oscillation RMS after {after:.3} arcsec");
 }
 
-/// The state budget: 24 KiB for the default capacity (960 window entries: one period of up to
-/// 960 samples without bins), so that the firmware's RAM holds it and a checkpoint buffer.
+/// The state budget: 24 KiB for the default capacity (720 window entries: one period of up to
+/// 720 samples without bins) in the firmware's f32, so that its RAM holds it and a checkpoint
+/// buffer. (The f64 build, a precision comparison on the host, stores the same integer ring and
+/// wider floats elsewhere: 25 KiB.)
 #[test]
 fn estimator_fits_in_24_kib() {
     let size = core::mem::size_of::<Estimator>();
     println!("size_of::<Estimator>() = {size} bytes; Real = {}", core::any::type_name::<Real>());
-    assert!(size <= 24 * 1024, "{size} bytes");
+    let budget = if cfg!(feature = "f64") { 25 * 1024 } else { 24 * 1024 };
+    assert!(size <= budget, "{size} bytes");
 }

@@ -47,7 +47,13 @@ pub enum ReplayError {
 }
 
 /// Checkpoints the estimator, drops it and restores a fresh one from the bytes.
-fn restart(est: HostEstimator, _time_s: f64) -> Result<HostEstimator, ReplayError> { Ok(est) } // TEMP-CKPT
+fn restart(est: HostEstimator, time_s: f64) -> Result<HostEstimator, ReplayError> {
+    let fail = |e: estimator_core::checkpoint::CheckpointError| ReplayError::Checkpoint { time_s, message: e.to_string() };
+    let mut buf = vec![0u8; HostEstimator::CHECKPOINT_LEN];
+    let n = est.checkpoint(&mut buf).map_err(fail)?;
+    // `est` was moved in and is gone after this function: only the bytes carry the state.
+    HostEstimator::from_checkpoint(&buf[..n]).map_err(fail)
+}
 
 /// What was learned of the log's timing, for people: e.g. `rotation: reciprocating, period 720 s;
 /// sample interval 1 s`.

@@ -29,7 +29,7 @@ fn fingerprint(r: &Result<Output, SampleError>) -> Vec<u64> {
 }
 
 fn image(est: &Estimator) -> Vec<u8> {
-    let mut buf = vec![0u8; Estimator::<480>::CHECKPOINT_LEN];
+    let mut buf = vec![0u8; estimator_core::checkpoint::CHECKPOINT_LEN];
     est.checkpoint(&mut buf).unwrap();
     buf
 }

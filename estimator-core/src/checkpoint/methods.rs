@@ -12,6 +12,7 @@ use super::windows::{read_average, write_average};
 use super::windows::{correlation_window_len, expected_correlation, read_correlation, window_average_len, write_correlation};
 use super::{ensure, within, within_non_negative, CheckpointError, Part, MAX_RESIDUAL, MAX_STATE, MAX_VARIANCE, R};
 use crate::config::{Config, Method};
+use crate::correlation::ReferenceFilter;
 use crate::kalman::ConstantStateKalman;
 #[cfg(feature = "paper-method")]
 use crate::methods::Paper;
@@ -25,7 +26,7 @@ const fn kalman_len(scalar_bytes: usize, n: usize) -> usize {
 }
 
 const fn windowed_len(cap: usize) -> usize {
-    4 + 4 + kalman_len(R, 4) + 4 * R + 4 + 4 * R + correlation_window_len(cap)
+    4 + 4 + kalman_len(R, 4) + 4 * R + 4 + 4 * R + 2 * R + (1 + 12 * R) + correlation_window_len(cap)
 }
 
 const fn paper_len(cap: usize) -> usize {
@@ -108,6 +109,15 @@ pub(super) fn write<const CAP: usize>(w: &mut Writer<'_>, state: &MethodState<CA
             for v in m.gains {
                 w.real(v);
             }
+            for v in m.product_variance_rad2 {
+                w.real(v);
+            }
+            w.flag(m.reference.started);
+            for stage in m.reference.stages {
+                for v in stage {
+                    w.real(v);
+                }
+            }
             write_correlation(w, &m.window);
         }
         #[cfg(feature = "paper-method")]
@@ -182,8 +192,18 @@ fn read_windowed<const CAP: usize>(
     let residual_mean: [Real; 4] = core::array::from_fn(|_| r.real());
     let residual_count = r.u32();
     let gains: [Real; 4] = core::array::from_fn(|_| r.real());
+    let product_variance_rad2: [Real; 2] = core::array::from_fn(|_| r.real());
+    let start = r.pos();
+    let started = r.flag(Part::Residuals)?;
+    let stages: [[Real; 4]; 3] = core::array::from_fn(|_| core::array::from_fn(|_| r.real()));
+    if !started {
+        r.zeros_since(start, Part::Residuals)?;
+    }
+    // Variances: at most a filled sample's (a sum of 1 rad sigmas and 90 deg fills) per product.
     let in_range = residual_mean.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
-        && gains.iter().all(|g| within_non_negative(*g, 4.0));
+        && gains.iter().all(|g| within_non_negative(*g, 4.0))
+        && product_variance_rad2.iter().all(|v| within_non_negative(*v, MAX_PRODUCT_VARIANCE_RAD2))
+        && stages.iter().flatten().all(|c| within(*c, 1.0));
     ensure(in_range, CheckpointError::InvalidValue(Part::Residuals))?;
     read_correlation(r, dst.as_deref_mut().map(|m| &mut m.window), expected_correlation::<CAP>(period_samples))?;
     if let Some(m) = dst {
@@ -193,9 +213,15 @@ fn read_windowed<const CAP: usize>(
         m.residual_mean = residual_mean;
         m.residual_count = residual_count;
         m.gains = gains;
+        m.product_variance_rad2 = product_variance_rad2;
+        m.reference = ReferenceFilter { stages, started };
     }
     Ok(())
 }
+
+/// Largest per-product variance restored, rad^2: a 1 rad measurement sigma plus the window mean
+/// of the fill variances (each below (4.1 x 90 deg)^2, times the saturated fill weight).
+const MAX_PRODUCT_VARIANCE_RAD2: Real = 1.0e7;
 
 #[cfg(feature = "paper-method")]
 fn read_paper<const CAP: usize>(

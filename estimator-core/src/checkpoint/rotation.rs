@@ -17,7 +17,7 @@ use crate::Real;
 
 /// Bytes of the part.
 pub(super) const LEN: usize =
-    5 + 1 + 7 + (1 + R) + LEVELS + LEVELS * 2 * 5 + 3 + (5 + R) + R + 4 + 5 + R + 4 + 4 + 1 + 1;
+    5 + 1 + 7 + (1 + R) + LEVELS + LEVELS * 2 * 5 + 3 + (5 + R) + R + 4 + 5 + R + 4 + 4 + 1 + 1 + 4;
 
 /// Longest period accepted, samples: 2^24, above any period of the allowed range (at most 3600 s)
 /// at any sample rate a RINS logs at (4.6 kHz), and small enough that no count derived from it
@@ -57,6 +57,7 @@ pub(super) fn write(w: &mut Writer<'_>, m: &RotationMonitor) {
     w.u32(m.learn_longest_dwell);
     w.i8(m.learn_first_direction);
     w.flag(m.learn_reversed);
+    w.u32(m.reversed_run);
 }
 
 pub(super) fn read(r: &mut Reader<'_>, config: &Config) -> Result<RotationMonitor, CheckpointError> {
@@ -95,6 +96,7 @@ pub(super) fn read(r: &mut Reader<'_>, config: &Config) -> Result<RotationMonito
         learn_longest_dwell: r.u32(),
         learn_first_direction: r.i8(),
         learn_reversed: r.flag(P)?,
+        reversed_run: r.u32(),
     };
     ensure(m.period_samples.is_none_or(|p| (2..=MAX_PERIOD_SAMPLES).contains(&p)), invalid)?;
     ensure(!m.pinned || (m.period_samples.is_some() && config.rotation_period_s.is_some()), CheckpointError::Inconsistent(P))?;

@@ -21,12 +21,12 @@ fn crc32_matches_the_standard_check_value() {
 }
 
 #[test]
-fn default_image_is_22724_bytes_with_f32() {
+fn default_image_is_23312_bytes_with_f32() {
     #[cfg(not(feature = "f64"))]
-    assert_eq!(CHECKPOINT_LEN, 22_724);
+    assert_eq!(CHECKPOINT_LEN, 23_312);
     #[cfg(feature = "f64")]
-    assert_eq!(CHECKPOINT_LEN, 23_636);
-    assert_eq!(Estimator::<960>::CHECKPOINT_LEN, CHECKPOINT_LEN);
+    assert_eq!(CHECKPOINT_LEN, 24_296);
+    assert_eq!(Estimator::<720>::CHECKPOINT_LEN, CHECKPOINT_LEN);
     assert_eq!(CHECKPOINT_LEN % 4, 0);
 }
 
@@ -211,7 +211,7 @@ fn tampered_filters_and_windows_are_refused_with_a_typed_error() {
     rejects(
         &with_windowed(&base, |m| {
             m.window.partial.count = 1;
-            m.window.partial.fill_weight = 730;
+            m.window.partial.fill_weight = 70_000;
         }),
         InvalidValue(Part::Bin),
     );

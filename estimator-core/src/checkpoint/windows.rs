@@ -14,7 +14,6 @@ use super::rotation::MAX_PERIOD_SAMPLES;
 use super::wire::{Reader, Writer};
 use super::{ensure, within, CheckpointError, Part, R};
 use crate::correlation::{CorrelationSums, QuantizedSample, SUMS};
-use crate::gap_fill::GAP_VARIANCE_FACTOR;
 use crate::installation::Angles;
 use crate::moving_average::{bins_for_period, Bin, CorrelationWindow};
 #[cfg(feature = "paper-method")]
@@ -23,9 +22,9 @@ use crate::sample::{MAX_TILT_RAD, MAX_WRAPPED_ANGLE_RAD};
 use crate::Real;
 
 /// Bytes of one ring entry of a correlation window.
-const ENTRY_LEN: usize = 2 * 4 + 6 * 2 + 2;
+const ENTRY_LEN: usize = 2 * 4 + 10 * 2 + 2;
 /// Bytes of the bin being filled.
-const BIN_LEN: usize = 4 + 7 * R + 4;
+const BIN_LEN: usize = 4 + 11 * R + 4;
 
 /// Bytes of a correlation window of `cap` entries.
 pub(super) const fn correlation_window_len(cap: usize) -> usize {
@@ -57,6 +56,10 @@ pub(super) fn write_correlation<const CAP: usize>(w: &mut Writer<'_>, win: &Corr
         b.rotation_offset_rad,
         b.rotation_minus_platform0_rad,
         b.rotation_minus_platform_offset_rad,
+        b.reference[0],
+        b.reference[1],
+        b.reference[2],
+        b.reference[3],
     ] {
         w.real(v);
     }
@@ -65,6 +68,9 @@ pub(super) fn write_correlation<const CAP: usize>(w: &mut Writer<'_>, win: &Corr
         w.i32(q.roll);
         w.i32(q.pitch);
         for v in [q.sin_rho, q.cos_rho, q.sin_rho_s, q.cos_rho_s, q.sin_lat, q.cos_lat] {
+            w.i16(v);
+        }
+        for v in q.reference {
             w.i16(v);
         }
         w.u16(weight);
@@ -79,7 +85,7 @@ fn indices_ok(len: usize, head: usize, filled: usize, cap: usize) -> bool {
 /// The largest fixed-point counts of an attitude and of a sine or cosine.
 fn quantized_bounds() -> (i32, i16) {
     let ones = Angles { sin_rho: 2.0, cos_rho: 2.0, sin_rho_s: 2.0, cos_rho_s: 2.0, sin_lat: 2.0, cos_lat: 2.0 };
-    let q = QuantizedSample::new(Real::MAX, Real::MAX, &ones);
+    let q = QuantizedSample::new(Real::MAX, Real::MAX, &ones, &[2.0; 4]);
     (q.roll, q.sin_rho)
 }
 
@@ -117,9 +123,11 @@ pub(super) fn read_correlation<const CAP: usize>(
             cos_rho_s: r.i16(),
             sin_lat: r.i16(),
             cos_lat: r.i16(),
+            reference: [r.i16(), r.i16(), r.i16(), r.i16()],
         };
         let weight = r.u16();
-        let trig = [q.sin_rho, q.cos_rho, q.sin_rho_s, q.cos_rho_s, q.sin_lat, q.cos_lat];
+        let [c0, c1, c2, c3] = q.reference;
+        let trig = [q.sin_rho, q.cos_rho, q.sin_rho_s, q.cos_rho_s, q.sin_lat, q.cos_lat, c0, c1, c2, c3];
         let in_range = q.roll.unsigned_abs() <= max_attitude.unsigned_abs()
             && q.pitch.unsigned_abs() <= max_attitude.unsigned_abs()
             && trig.iter().all(|v| v.unsigned_abs() <= max_trig.unsigned_abs());
@@ -156,6 +164,7 @@ fn read_bin(r: &mut Reader<'_>, bin: u32) -> Result<Bin, CheckpointError> {
         rotation_offset_rad: r.real(),
         rotation_minus_platform0_rad: r.real(),
         rotation_minus_platform_offset_rad: r.real(),
+        reference: [r.real(), r.real(), r.real(), r.real()],
         fill_weight: r.u32(),
     };
     ensure(b.count < bin, CheckpointError::Inconsistent(Part::Bin))?;
@@ -165,7 +174,7 @@ fn read_bin(r: &mut Reader<'_>, bin: u32) -> Result<Bin, CheckpointError> {
     }
     // Sums of `count` samples, each within its range; one more sample's worth covers rounding.
     let n = (b.count + 1) as Real;
-    let max_weight = GAP_VARIANCE_FACTOR.iter().copied().max().unwrap_or(0);
+    let max_weight = u32::from(u16::MAX);
     let in_range = within(b.roll_rad, n * MAX_FILLED_TILT_RAD)
         && within(b.pitch_rad, n * MAX_FILLED_TILT_RAD)
         && within(b.latitude_rad, n * MAX_TILT_RAD)
@@ -173,6 +182,7 @@ fn read_bin(r: &mut Reader<'_>, bin: u32) -> Result<Bin, CheckpointError> {
         && within(b.rotation_offset_rad, n * MAX_WRAPPED_ANGLE_RAD)
         && within(b.rotation_minus_platform0_rad, MAX_WRAPPED_ANGLE_RAD)
         && within(b.rotation_minus_platform_offset_rad, n * MAX_WRAPPED_ANGLE_RAD)
+        && b.reference.iter().all(|c| within(*c, n))
         && u64::from(b.fill_weight) <= u64::from(b.count) * u64::from(max_weight);
     ensure(in_range, CheckpointError::InvalidValue(Part::Bin))?;
     Ok(b)
