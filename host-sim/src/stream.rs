@@ -41,9 +41,9 @@ pub struct StreamArgs {
         conflicts_with = "port"
     )]
     pub qemu: Option<PathBuf>,
-    /// QEMU machine of --qemu: the board the firmware was built for (mps2-an386: feature
-    /// board-mps2-an386, UART0; netduinoplus2: feature board-stm32f405, USART1).
-    #[arg(long, value_enum, default_value_t = Machine::Mps2An386, requires = "qemu")]
+    /// QEMU machine of --qemu (not used with --port): the board the firmware was built for
+    /// (mps2-an386: feature board-mps2-an386, UART0; netduinoplus2: feature board-stm32f405, USART1).
+    #[arg(long, value_enum, default_value_t = Machine::Mps2An386)]
     pub machine: Machine,
     /// Attitude log (CSV, see shared/log-format.md).
     #[arg(value_name = "FILE.csv")]
