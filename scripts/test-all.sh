@@ -2,11 +2,12 @@
 # Runs every test of the project on a fresh machine, installing what is missing first:
 #   1. the thumbv7em-none-eabihf Rust target and qemu-system-arm (apt), if absent;
 #   2. `cargo test --workspace --release`: estimator-core, link-protocol, host-sim (including the
-#      QEMU end-to-end tests, which build the firmware for the target themselves);
+#      QEMU end-to-end tests, which build the firmware for both boards themselves: mps2-an386 and
+#      the STM32F405 on QEMU's netduinoplus2);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
-#   4. the firmware build for the target, with and without its checkpoint feature (its budgets are
-#      checked by host-sim's qemu_budgets test);
-#   5. clippy on the firmware and the link code, which deny every panicking construct.
+#   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
+#      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
+#   5. clippy on the firmware (each board) and the link code, which deny every panicking construct.
 # Usage: bash scripts/test-all.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,11 +36,13 @@ cargo test --workspace --release
 log "estimator-core with f64"
 cargo test --release -p estimator-core --features f64
 
-log "firmware build for thumbv7em-none-eabihf (default, and without its checkpoint feature)"
-cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features
+log "firmware build for thumbv7em-none-eabihf (mps2-an386 default, without its checkpoint feature; STM32F405)"
+cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-mps2-an386
+cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
 
 log "no panicking path on the link: clippy's deny(unwrap_used, expect_used, indexing_slicing, panic)"
 # The firmware, link-protocol and estimator-core deny these lints in their sources; only clippy
 # enforces them, so it runs here (warnings of other lints do not fail the run).
 cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware
+cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405

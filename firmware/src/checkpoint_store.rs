@@ -44,7 +44,11 @@ pub struct CheckpointStore<F> {
 }
 
 impl<F: NorFlash> CheckpointStore<F> {
+    #[allow(clippy::manual_is_multiple_of)] // is_multiple_of needs Rust 1.87; the workspace says 1.85
     pub fn new(flash: F) -> Self {
+        // Erasing one slot must not touch the other: a flash whose erase block is larger than a
+        // slot cannot hold the two-slot store (fails the build).
+        const { assert!(SLOT_BYTES % F::ERASE_SIZE == 0, "the flash's erase block does not divide a checkpoint slot") };
         CheckpointStore {
             flash,
             newest: None,

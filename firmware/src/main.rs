@@ -1,13 +1,15 @@
 //! RINS installation-error estimator firmware (Cortex-M4F).
 //!
 //! Thin layers, one file each:
-//! - [`board`]: the hardware (UART as `embedded_io`, the cost counter, logging, fatal exit);
+//! - [`board`]: the hardware (UART as `embedded_io`, the cost counter, logging, fatal exit), one
+//!   module per board, chosen by a cargo feature (`board-mps2-an386`, `board-stm32f405`);
 //! - [`link`]: frames in and out (the codec itself is the `link-protocol` crate);
 //! - [`service`]: request in, `estimator-core` step, response out;
 //! - [`checkpoint_store`]: the estimator's checkpoint in two alternating flash slots;
 //! - [`stack`]: stack painting for the high-water mark; [`fault`]: panic and hard-fault handlers.
 //!
-//! This file wires them together and runs the loop. The protocol is in the README's *Link protocol* section.
+//! This file wires them together, announces `Ready` on the link and runs the loop. The protocol is
+//! in the README's *Link protocol* section.
 //!
 //! Built for any other target (as `cargo test --workspace` does on the host), the crate is an
 //! empty program that says where it runs; nothing of the firmware is compiled.
@@ -36,7 +38,7 @@ use cortex_m_rt::entry;
 #[cfg(target_os = "none")]
 use estimator_core::{Config, ConfigError, Estimator};
 #[cfg(target_os = "none")]
-use link_protocol::FrameError;
+use link_protocol::{FrameError, Response};
 
 /// On the host: the firmware is not built; say how to build it.
 #[cfg(not(target_os = "none"))]
@@ -111,6 +113,13 @@ fn main() -> ! {
         boot_stack_peak_bytes
     );
     let mut link = link::Link::new(board.uart);
+    // The host sends nothing before this: a serial port drops bytes that arrive before it is
+    // enabled (QEMU's STM32 USART does), and the start-up above can take a while.
+    if !link.send(&Response::Ready {
+        protocol_version: link_protocol::PROTOCOL_VERSION,
+    }) {
+        defmt::error!("Ready could not be sent");
+    }
     let mut service = service::Service::new(estimator, board.cost, boot_stack_peak_bytes, persistence);
     loop {
         match link.receive() {

@@ -109,7 +109,7 @@ impl<'a> Service<'a> {
             filled: counters.filled,
             window_restarts: counters.window_restarts,
             estimate: self.estimator.estimate().as_ref().map(EstimateMsg::from),
-            cost_counter_hz: CostCounter::HZ,
+            cost_counter_hz: self.cost.hz(),
             boot_stack_peak_bytes: self.boot_stack_peak_bytes,
             stack_peak_bytes: stack::peak_bytes(),
             stack_size_bytes: stack::size_bytes(),

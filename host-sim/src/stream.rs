@@ -2,7 +2,9 @@
 //! sample per request, as fast as the firmware answers, and writes the estimates CSV from the
 //! firmware's answers with the same writer as `host-sim estimate` (so the two files can be compared
 //! byte for byte). With `--qemu FIRMWARE.elf` it boots the firmware in QEMU first
-//! ([`qemu`]); with `--port DEVICE --baud N` it talks to a board over a serial port.
+//! ([`qemu`]; `--machine` names the board the image was built for) and waits for the firmware's
+//! `Ready` announcement before its first request; with `--port DEVICE --baud N` it talks to a board
+//! over a serial port.
 //!
 //! At the end it prints `step cost: max N instructions, mean M instructions` (QEMU; cycles on a
 //! board): the firmware times every `Estimator::step` with its cost counter ([`cost`]).
@@ -21,7 +23,7 @@ use estimator_core::{Output, SampleError};
 use link::FirmwareLink;
 use link_protocol::frame::FrameError;
 use link_protocol::{Counters, Request, Response, SampleMsg, StatusReply, PROTOCOL_VERSION};
-use qemu::Qemu;
+use qemu::{Machine, Qemu};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -30,8 +32,8 @@ use std::time::{Duration, Instant};
 /// `host-sim stream`.
 #[derive(clap::Args, Debug)]
 pub struct StreamArgs {
-    /// Boot this firmware ELF in QEMU (mps2-an386, `qemu-system-arm` or $QEMU_SYSTEM_ARM) and
-    /// stream through its UART0.
+    /// Boot this firmware ELF in QEMU (`qemu-system-arm` or $QEMU_SYSTEM_ARM) on --machine and
+    /// stream through its link serial port.
     #[arg(
         long,
         value_name = "FIRMWARE.elf",
@@ -39,6 +41,10 @@ pub struct StreamArgs {
         conflicts_with = "port"
     )]
     pub qemu: Option<PathBuf>,
+    /// QEMU machine of --qemu (not used with --port): the board the firmware was built for
+    /// (mps2-an386: feature board-mps2-an386, UART0; netduinoplus2: feature board-stm32f405, USART1).
+    #[arg(long, value_enum, default_value_t = Machine::Mps2An386)]
+    pub machine: Machine,
     /// Attitude log (CSV, see shared/log-format.md).
     #[arg(value_name = "FILE.csv")]
     pub log: PathBuf,
@@ -76,17 +82,26 @@ pub struct Target {
 }
 
 impl Target {
-    /// Boots `elf` in QEMU and checks that the firmware answers.
+    /// Boots `elf` in QEMU on `machine`, waits for the firmware's `Ready` and checks that it answers.
     pub fn boot_qemu(
         elf: &Path,
+        machine: Machine,
         defmt_log: Option<&Path>,
         flash_dir: Option<&Path>,
         timeout: Duration,
     ) -> anyhow::Result<Target> {
-        let (qemu, stream) = Qemu::boot(elf, defmt_log, flash_dir)?;
+        let (qemu, stream) = Qemu::boot(elf, machine, defmt_log, flash_dir)?;
         stream.set_read_timeout(Some(timeout))?;
-        let link = FirmwareLink::new(Box::new(stream));
-        Target::hello(link, Some(qemu), |hz| CostUnit::QemuInstructions {
+        let mut link = FirmwareLink::new(Box::new(stream));
+        let mut qemu = Some(qemu);
+        // A serial port drops what arrives before the firmware has enabled it (QEMU's STM32 USART
+        // does): nothing is sent before the firmware says it is ready.
+        match link.receive() {
+            Ok(Response::Ready { protocol_version }) => check_protocol(protocol_version)?,
+            Ok(other) => bail!("the firmware's first frame is {other:?}, not Ready"),
+            Err(e) => return Err(e.context(describe_exit(&mut qemu))),
+        }
+        Target::hello(link, qemu, |hz| CostUnit::QemuInstructions {
             icount_shift: qemu::ICOUNT_SHIFT,
             counter_hz: hz,
         })
@@ -102,18 +117,20 @@ impl Target {
         Target::hello(link, None, |hz| CostUnit::BoardCycles { counter_hz: hz })
     }
 
+    /// `ReadStatus`; a `Ready` before the answer (a board that has just booted) is passed over.
     fn hello(mut link: FirmwareLink, mut qemu: Option<Qemu>, unit: impl Fn(u32) -> CostUnit) -> anyhow::Result<Target> {
-        let status = match link.request(&Request::ReadStatus) {
-            Ok(Response::Status(s)) => s,
-            Ok(other) => bail!("the firmware answered ReadStatus with {other:?}"),
-            Err(e) => return Err(e.context(describe_exit(&mut qemu))),
-        };
-        if status.protocol_version != PROTOCOL_VERSION {
-            bail!(
-                "firmware speaks protocol {}, host-sim speaks {PROTOCOL_VERSION}",
-                status.protocol_version
-            );
+        if let Err(e) = link.send(&Request::ReadStatus) {
+            return Err(e.context(describe_exit(&mut qemu)));
         }
+        let status = loop {
+            match link.receive() {
+                Ok(Response::Status(s)) => break s,
+                Ok(Response::Ready { .. }) => continue,
+                Ok(other) => bail!("the firmware answered ReadStatus with {other:?}"),
+                Err(e) => return Err(e.context(describe_exit(&mut qemu))),
+            }
+        };
+        check_protocol(status.protocol_version)?;
         Ok(Target {
             link,
             qemu,
@@ -136,6 +153,13 @@ impl Target {
             other => bail!("the firmware answered ReadStatus with {other:?}"),
         }
     }
+}
+
+fn check_protocol(firmware: u8) -> anyhow::Result<()> {
+    if firmware != PROTOCOL_VERSION {
+        bail!("firmware speaks protocol {firmware}, host-sim speaks {PROTOCOL_VERSION}");
+    }
+    Ok(())
 }
 
 fn describe_exit(qemu: &mut Option<Qemu>) -> String {
@@ -189,6 +213,7 @@ pub fn step_remote(target: &mut Target, msg: &SampleMsg) -> anyhow::Result<Answe
             })
         }
         Response::Status(_) => bail!("the firmware answered a sample with a status"),
+        Response::Ready { .. } => bail!("the firmware restarted (it announced Ready instead of answering)"),
     }
 }
 
@@ -239,8 +264,14 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let lines = LogReader::open(&args.log)?;
     let (mut target, what) = match (&args.qemu, &args.port) {
         (Some(elf), _) => (
-            Target::boot_qemu(elf, args.defmt_log.as_deref(), args.flash_dir.as_deref(), timeout)?,
-            format!("QEMU mps2-an386 ({})", elf.display()),
+            Target::boot_qemu(
+                elf,
+                args.machine,
+                args.defmt_log.as_deref(),
+                args.flash_dir.as_deref(),
+                timeout,
+            )?,
+            format!("QEMU {} ({})", args.machine, elf.display()),
         ),
         (None, Some(device)) => (
             Target::open_port(device, args.baud, timeout)?,

@@ -8,6 +8,7 @@ mod qemu_support;
 
 use host_sim::log_csv::read_log;
 use host_sim::replay::sample_of;
+use host_sim::stream::qemu::Machine;
 use host_sim::stream::{step_remote, Target};
 use link_protocol::SampleMsg;
 use qemu_support::*;
@@ -22,7 +23,7 @@ fn checkpoint_interval_is_set_at_build_time() {
     let flash_dir = dir.join("flash");
     std::fs::create_dir_all(&flash_dir).unwrap();
 
-    let mut target = Target::boot_qemu(&elf, None, Some(&flash_dir), Duration::from_secs(10)).unwrap();
+    let mut target = Target::boot_qemu(&elf, Machine::Mps2An386, None, Some(&flash_dir), Duration::from_secs(10)).unwrap();
     assert_eq!(target.boot_status.checkpoint_time_s, None, "a fresh flash holds no checkpoint");
     let t0 = lines[0].row.time_s;
     for line in &lines[..200] {
@@ -34,7 +35,7 @@ fn checkpoint_interval_is_set_at_build_time() {
     drop(target);
 
     // A restart restores the newest image and saves every 20 s from there.
-    let mut target = Target::boot_qemu(&elf, None, Some(&flash_dir), Duration::from_secs(10)).unwrap();
+    let mut target = Target::boot_qemu(&elf, Machine::Mps2An386, None, Some(&flash_dir), Duration::from_secs(10)).unwrap();
     assert_eq!(target.boot_status.checkpoint_time_s, Some(t0 + 180.0));
     for line in lines.iter().filter(|l| l.row.time_s > t0 + 180.0) {
         step_remote(&mut target, &SampleMsg::from(&sample_of(&line.row))).unwrap();

@@ -1,6 +1,7 @@
-//! End to end through QEMU: a 50000 s scenario streamed through the firmware by
-//! `host-sim stream --qemu` gives an estimates CSV byte-identical to `host-sim estimate` on the
-//! same log, and final estimates within 10 arcsec of the truth.
+//! End to end through QEMU, on both boards: a scenario streamed through the firmware by
+//! `host-sim stream --qemu ELF --machine M` gives an estimates CSV byte-identical to
+//! `host-sim estimate` on the same log, and final estimates within 10 arcsec of the truth:
+//! 50000 s through the mps2-an386 image, 20000 s through the STM32F405 image on netduinoplus2.
 
 mod qemu_support;
 
@@ -10,10 +11,19 @@ use qemu_support::*;
 use std::time::Instant;
 
 #[test]
-fn stream_of_50000_s_through_qemu_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth() {
-    let elf = firmware_elf();
-    let dir = scratch("e2e");
-    let log = paper_log(&dir, 50000);
+fn stream_of_50000_s_through_mps2_an386_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth() {
+    stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(Board::Mps2An386, 50_000);
+}
+
+#[test]
+fn stream_of_20000_s_through_stm32f405_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth() {
+    stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(Board::Stm32f405, 20_000);
+}
+
+fn stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(board: Board, duration_s: u32) {
+    let elf = firmware_elf(board);
+    let dir = scratch(&format!("e2e-{}", board.name()));
+    let log = paper_log(&dir, duration_s);
     let (log_s, est_s, stream_s) = (log.to_str().unwrap(), dir.join("estimate.csv"), dir.join("stream.csv"));
     host_sim(&["estimate", log_s, "--out", est_s.to_str().unwrap()]);
     let start = Instant::now();
@@ -21,18 +31,20 @@ fn stream_of_50000_s_through_qemu_is_byte_identical_to_estimate_and_within_10_ar
         "stream",
         "--qemu",
         elf.to_str().unwrap(),
+        "--machine",
+        board.machine().name(),
         log_s,
         "--out",
         stream_s.to_str().unwrap(),
     ]);
     let wall = start.elapsed();
-    println!("{out}e2e wall time {:.1} s", wall.as_secs_f64());
+    println!("{out}e2e {} wall time {:.1} s", board.name(), wall.as_secs_f64());
 
     let expected = std::fs::read(&est_s).unwrap();
     let streamed = std::fs::read(&stream_s).unwrap();
     assert_eq!(
         expected.iter().filter(|b| **b == b'\n').count(),
-        50_001,
+        duration_s as usize + 1,
         "header + one row per second"
     );
     if let Some(i) = (0..expected.len().min(streamed.len())).find(|&i| expected[i] != streamed[i]) {

@@ -2,7 +2,7 @@
 //! bytes, truncated frames, corrupted CRCs, oversized frames, CRC-valid frames that are no message,
 //! NaN samples and duplicated times. The firmware must resynchronise, count each fault by kind,
 //! and answer every valid sample exactly as the host's own estimator does on the clean stream.
-//! Then a burst of random bytes: the firmware must still be up and answering.
+//! Then a burst of random bytes: the firmware must still be up and answering. On both boards.
 
 mod qemu_support;
 
@@ -92,9 +92,18 @@ fn key(o: &Result<Output, SampleError>) -> String {
 }
 
 #[test]
-fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
-    let elf = firmware_elf();
-    let dir = scratch("faults");
+fn mps2_an386_firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
+    firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(Board::Mps2An386);
+}
+
+#[test]
+fn stm32f405_firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
+    firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(Board::Stm32f405);
+}
+
+fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board: Board) {
+    let elf = firmware_elf(board);
+    let dir = scratch(&format!("faults-{}", board.name()));
     let log = paper_log(&dir, 2400);
     let lines = read_log(&log).unwrap();
 
@@ -102,7 +111,14 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged() {
     let mut host = HostEstimator::new(Config::default()).unwrap();
     let expected: Vec<String> = lines.iter().map(|l| key(&host.step(&sample_of(&l.row)))).collect();
 
-    let mut target = Target::boot_qemu(&elf, Some(&dir.join("defmt.bin")), None, Duration::from_secs(10)).unwrap();
+    let mut target = Target::boot_qemu(
+        &elf,
+        board.machine(),
+        Some(&dir.join("defmt.bin")),
+        None,
+        Duration::from_secs(10),
+    )
+    .unwrap();
     // A shadow of the firmware's receiver, fed every byte sent, predicts its bad-frame counters.
     let mut shadow = FrameAccumulator::<MAX_REQUEST_ENCODED>::new();
     let mut predicted = [0u32; FrameError::COUNT];

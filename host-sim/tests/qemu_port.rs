@@ -19,7 +19,7 @@ impl Drop for Guard {
 
 #[test]
 fn stream_over_a_serial_port_matches_estimate() {
-    let elf = firmware_elf();
+    let elf = firmware_elf(Board::Mps2An386);
     let dir = scratch("port");
     let log = paper_log(&dir, 1200);
     let (est, streamed) = (dir.join("estimate.csv"), dir.join("stream.csv"));
@@ -49,6 +49,8 @@ fn stream_over_a_serial_port_matches_estimate() {
             "-kernel",
         ])
         .arg(&elf)
+        // The firmware keeps its checkpoint flash, rins-flash.bin, in QEMU's working directory.
+        .current_dir(&dir)
         .stdin(Stdio::null())
         .stdout(std::fs::File::create(&stdout_path).unwrap())
         .stderr(Stdio::null())

@@ -1,4 +1,4 @@
-//! Power cuts: the firmware (its default build) saves a checkpoint every 60 s of
+//! Power cuts, on both boards: the firmware (each board's build) saves a checkpoint every 60 s of
 //! sample time into two alternating flash slots (a host file under QEMU). QEMU is killed at random
 //! points, once provably in the middle of a save; each time it is restarted on the same flash, the
 //! host resumes streaming after the checkpoint the firmware restored, and at the end the estimates
@@ -45,9 +45,18 @@ impl Rng {
 }
 
 #[test]
-fn power_cuts_at_random_points_and_mid_write_lose_nothing() {
-    let elf = firmware_elf();
-    let dir = scratch("power-cut");
+fn mps2_an386_power_cuts_at_random_points_and_mid_write_lose_nothing() {
+    power_cuts_at_random_points_and_mid_write_lose_nothing(Board::Mps2An386);
+}
+
+#[test]
+fn stm32f405_power_cuts_at_random_points_and_mid_write_lose_nothing() {
+    power_cuts_at_random_points_and_mid_write_lose_nothing(Board::Stm32f405);
+}
+
+fn power_cuts_at_random_points_and_mid_write_lose_nothing(board: Board) {
+    let elf = firmware_elf(board);
+    let dir = scratch(&format!("power-cut-{}", board.name()));
     let log = paper_log(&dir, 6000);
     let lines = read_log(&log).unwrap();
     let mut host = HostEstimator::new(Config::default()).unwrap();
@@ -64,7 +73,8 @@ fn power_cuts_at_random_points_and_mid_write_lose_nothing() {
     // The last sample sent whose step may have run (answered, or sent just before a cut).
     let mut last_sent_s: Option<f64> = None;
     let final_estimate = loop {
-        let mut target = Target::boot_qemu(&elf, None, Some(&flash_dir), Duration::from_secs(10)).unwrap();
+        let mut target =
+            Target::boot_qemu(&elf, board.machine(), None, Some(&flash_dir), Duration::from_secs(10)).unwrap();
         let resume = target.boot_status.checkpoint_time_s;
         if let (Some(r), Some(done)) = (resume, last_sent_s) {
             assert!(

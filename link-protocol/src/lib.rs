@@ -16,7 +16,9 @@
 //! - [`cobs`]: strict COBS encoding and decoding (a truncated group is an error);
 //! - [`frame`]: one message to one frame and back, with every way a frame can be bad;
 //! - [`accumulator`]: the bounded streaming receiver: splits the byte stream at 0x00, detects
-//!   oversized frames, resynchronises on the next 0x00.
+//!   oversized frames, resynchronises on the next 0x00;
+//! - [`blocking_writer`]: a serial transmitter wrapper that never returns `Ok(0)`, so that
+//!   `embedded_io::Write::write_all` of a frame cannot panic on a busy USART.
 #![no_std]
 #![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
 
@@ -24,17 +26,19 @@
 extern crate std;
 
 pub mod accumulator;
+pub mod blocking_writer;
 pub mod cobs;
 pub mod crc;
 pub mod frame;
 pub mod message;
 
 pub use accumulator::FrameAccumulator;
+pub use blocking_writer::BlockingWriter;
 pub use frame::{decode_frame, encode_frame, EncodeError, FrameError};
 pub use message::{Counters, EstimateMsg, RejectedReply, Request, Response, SampleMsg, StatusReply, StepReply};
 
 /// Version of this protocol, reported in [`StatusReply::protocol_version`].
-pub const PROTOCOL_VERSION: u8 = 2;
+pub const PROTOCOL_VERSION: u8 = 3;
 
 /// Largest COBS-encoded request the firmware accepts (without the two 0x00 delimiters). The largest
 /// request, a sample, encodes to 36 bytes; anything longer than this is counted as oversized.

@@ -34,6 +34,13 @@ pub enum Response {
     Rejected(RejectedReply),
     /// (2) Answer to `ReadStatus` and `Reset`.
     Status(StatusReply),
+    /// (3) Sent once, unasked, at boot, as soon as the serial port can receive: the host sends its
+    /// first request only after it. (A serial port drops what arrives before it is enabled; QEMU's
+    /// STM32 USART does.) A host that sees it in the middle of a stream knows the firmware restarted.
+    Ready {
+        /// [`crate::PROTOCOL_VERSION`] of the firmware.
+        protocol_version: u8,
+    },
 }
 
 /// [`estimator_core::Sample`], field for field.

@@ -1,17 +1,20 @@
-//! Boots a firmware ELF on QEMU's mps2-an386 with UART0 on a unix socket, and stops it when dropped.
+//! Boots a firmware ELF on one of QEMU's Cortex-M4F machines ([`Machine`]) with the firmware's
+//! link serial port (the machine's first `-serial`) on a unix socket, and stops it when dropped.
 //!
-//! The command line (also in README.md (Firmware)):
+//! The command line (also in docs/firmware.md):
 //!
 //! ```text
-//! qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -icount shift=0 -display none -monitor none
+//! qemu-system-arm -machine mps2-an386 -cpu cortex-m4     (or: -machine netduinoplus2)
+//!     -icount shift=0 -display none -monitor none
 //!     -semihosting-config enable=on,target=native
-//!     -chardev socket,id=uart0,path=DIR/uart0.sock,server=on,wait=on -serial chardev:uart0
+//!     -chardev socket,id=link,path=DIR/link.sock,server=on,wait=on -serial chardev:link
 //!     -kernel FIRMWARE.elf
 //! ```
 //!
 //! `-icount shift=0` makes every guest instruction take exactly 1 ns of virtual time, so the
-//! firmware's SysTick cost counter (25 MHz) counts one tick per 40 instructions. QEMU's stdout is the
-//! firmware's defmt log (semihosting); its stderr goes to a file, quoted when QEMU fails.
+//! firmware's SysTick cost counter (25 MHz on mps2-an386, 168 MHz on netduinoplus2) counts a fixed
+//! number of instructions per tick. QEMU's stdout is the firmware's defmt log (semihosting); its
+//! stderr goes to a file, quoted when QEMU fails.
 
 use anyhow::{bail, Context};
 use std::fs::File;
@@ -32,6 +35,50 @@ pub fn extra_args() -> Vec<String> {
         .unwrap_or_default()
 }
 
+/// The QEMU machine a firmware image is built for (the firmware's board feature).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Machine {
+    /// ARM MPS2+ AN386 (Cortex-M4F, 25 MHz): firmware feature `board-mps2-an386`; UART0.
+    #[default]
+    #[value(name = "mps2-an386")]
+    Mps2An386,
+    /// Netduino Plus 2 (STM32F405, Cortex-M4F): firmware feature `board-stm32f405`; USART1.
+    #[value(name = "netduinoplus2")]
+    Netduinoplus2,
+}
+
+impl Machine {
+    /// QEMU's name of the machine.
+    pub fn name(self) -> &'static str {
+        match self {
+            Machine::Mps2An386 => "mps2-an386",
+            Machine::Netduinoplus2 => "netduinoplus2",
+        }
+    }
+
+    /// `-machine NAME` and, where the machine has a choice, `-cpu`.
+    pub fn args(self) -> &'static [&'static str] {
+        match self {
+            Machine::Mps2An386 => &["-machine", "mps2-an386", "-cpu", "cortex-m4"],
+            Machine::Netduinoplus2 => &["-machine", "netduinoplus2"],
+        }
+    }
+
+    /// The serial port the firmware's link is on (QEMU's first `-serial`).
+    pub fn link_port(self) -> &'static str {
+        match self {
+            Machine::Mps2An386 => "UART0",
+            Machine::Netduinoplus2 => "USART1",
+        }
+    }
+}
+
+impl std::fmt::Display for Machine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// A running QEMU.
 pub struct Qemu {
     child: Child,
@@ -47,11 +94,16 @@ pub fn qemu_binary() -> String {
 }
 
 impl Qemu {
-    /// Boots `elf`; the firmware's defmt log goes to `defmt_log` (or is discarded). Returns once the
-    /// UART socket is connected.
+    /// Boots `elf` on `machine`; the firmware's defmt log goes to `defmt_log` (or is discarded).
+    /// Returns once the link's socket is connected (the guest starts then: `wait=on`).
     /// QEMU runs in `flash_dir` (where a firmware built with its `checkpoint` feature keeps its
     /// flash, `rins-flash.bin`), or in a fresh scratch directory.
-    pub fn boot(elf: &Path, defmt_log: Option<&Path>, flash_dir: Option<&Path>) -> anyhow::Result<(Qemu, UnixStream)> {
+    pub fn boot(
+        elf: &Path,
+        machine: Machine,
+        defmt_log: Option<&Path>,
+        flash_dir: Option<&Path>,
+    ) -> anyhow::Result<(Qemu, UnixStream)> {
         if !elf.is_file() {
             bail!("{}: no such firmware ELF", elf.display());
         }
@@ -62,7 +114,7 @@ impl Qemu {
             RUNS.fetch_add(1, Ordering::Relaxed)
         ));
         std::fs::create_dir_all(&dir).with_context(|| format!("{}: cannot create", dir.display()))?;
-        let socket = dir.join("uart0.sock");
+        let socket = dir.join("link.sock");
         let stderr_path = dir.join("qemu.stderr");
         let stdout = match defmt_log {
             Some(p) => Stdio::from(File::create(p).with_context(|| format!("{}: cannot create", p.display()))?),
@@ -71,13 +123,13 @@ impl Qemu {
         let binary = qemu_binary();
         let mut command = Command::new(&binary);
         command
-            .args(["-machine", "mps2-an386", "-cpu", "cortex-m4"])
+            .args(machine.args())
             .args(["-icount", &format!("shift={ICOUNT_SHIFT}")])
             .args(["-display", "none", "-monitor", "none"])
             .args(["-semihosting-config", "enable=on,target=native"])
             .arg("-chardev")
-            .arg(format!("socket,id=uart0,path={},server=on,wait=on", socket.display()))
-            .args(["-serial", "chardev:uart0", "-kernel"])
+            .arg(format!("socket,id=link,path={},server=on,wait=on", socket.display()))
+            .args(["-serial", "chardev:link", "-kernel"])
             .arg(elf)
             .args(extra_args())
             .current_dir(flash_dir.unwrap_or(&dir))
@@ -102,7 +154,7 @@ impl Qemu {
         loop {
             if let Some(status) = qemu.child.try_wait()? {
                 bail!(
-                    "QEMU exited ({status}) before the UART connected: {}",
+                    "QEMU exited ({status}) before the link's socket connected: {}",
                     qemu.stderr_tail()
                 );
             }
@@ -111,7 +163,7 @@ impl Qemu {
             }
             if Instant::now() > deadline {
                 bail!(
-                    "QEMU's UART socket {} did not open within 20 s: {}",
+                    "QEMU's link socket {} did not open within 20 s: {}",
                     socket.display(),
                     qemu.stderr_tail()
                 );

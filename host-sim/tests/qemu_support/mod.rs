@@ -1,11 +1,46 @@
-//! Shared by the `qemu_*` tests: builds the firmware ELF with the workspace's `firmware` profile,
-//! insists that QEMU is installed (a missing QEMU fails the test, it is never skipped), and makes
-//! scratch directories.
+//! Shared by the `qemu_*` tests: builds the firmware ELF for a [`Board`] with the workspace's
+//! `firmware` profile, insists that QEMU is installed (a missing QEMU fails the test, it is never
+//! skipped), and makes scratch directories (in the system's temporary directory, removed when the
+//! test passes).
 #![allow(dead_code)]
 
+use host_sim::stream::qemu::Machine;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
+
+/// The boards the firmware is tested on, each an image of its own booted on its QEMU machine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Board {
+    /// The default build (`board-mps2-an386`), on `-machine mps2-an386`.
+    Mps2An386,
+    /// `--no-default-features --features board-stm32f405`, on `-machine netduinoplus2`.
+    Stm32f405,
+}
+
+impl Board {
+    pub fn name(self) -> &'static str {
+        match self {
+            Board::Mps2An386 => "mps2-an386",
+            Board::Stm32f405 => "stm32f405",
+        }
+    }
+
+    /// The cargo arguments that select the board.
+    fn cargo_features(self) -> &'static [&'static str] {
+        match self {
+            Board::Mps2An386 => &[],
+            Board::Stm32f405 => &["--no-default-features", "--features", "board-stm32f405"],
+        }
+    }
+
+    pub fn machine(self) -> Machine {
+        match self {
+            Board::Mps2An386 => Machine::Mps2An386,
+            Board::Stm32f405 => Machine::Netduinoplus2,
+        }
+    }
+}
 
 pub fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -14,14 +49,13 @@ pub fn workspace_root() -> PathBuf {
         .to_path_buf()
 }
 
-/// Builds `firmware` for thumbv7em-none-eabihf with `--profile firmware` and `features` (on top
-/// of its defaults), and returns the path cargo wrote the ELF to.
-fn build_firmware(features: &[&str]) -> PathBuf {
-    build_firmware_with_env(features, &[])
-}
-
-/// [`build_firmware`] with build-time environment variables (e.g. `RINS_CHECKPOINT_INTERVAL_S`).
-fn build_firmware_with_env(features: &[&str], env: &[(&str, &str)]) -> PathBuf {
+/// Builds `firmware` for `board` (thumbv7em-none-eabihf, `--profile firmware`) with build-time
+/// environment variables `env` (e.g. `RINS_CHECKPOINT_INTERVAL_S`) and copies the ELF to
+/// `target/qemu-tests/NAME.elf`, where no later build overwrites it. Builds one at a time: every
+/// build writes the same cargo output path.
+fn build_firmware(board: Board, env: &[(&str, &str)], name: &str) -> PathBuf {
+    static BUILDING: Mutex<()> = Mutex::new(());
+    let _one_at_a_time = BUILDING.lock().unwrap_or_else(|e| e.into_inner());
     require_qemu();
     let root = workspace_root();
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
@@ -29,36 +63,35 @@ fn build_firmware_with_env(features: &[&str], env: &[(&str, &str)]) -> PathBuf {
     command
         .current_dir(&root)
         .args(["build", "-p", "firmware", "--target", "thumbv7em-none-eabihf", "--profile", "firmware"]);
-    if !features.is_empty() {
-        command.args(["--features", &features.join(",")]);
-    }
+    command.args(board.cargo_features());
     command.envs(env.iter().copied());
     let status = command.status().expect("cannot run cargo to build the firmware");
     assert!(
         status.success(),
-        "building the firmware with features {features:?} failed ({status}): see cargo's output above (a missing target needs `rustup target add thumbv7em-none-eabihf`)"
+        "building the firmware for {board:?} failed ({status}): see cargo's output above (a missing target needs `rustup target add thumbv7em-none-eabihf`)"
     );
     let target_dir = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root.join("target"));
     let target_dir = if target_dir.is_absolute() { target_dir } else { root.join(target_dir) };
     let elf = target_dir.join("thumbv7em-none-eabihf").join("firmware").join("firmware");
     assert!(elf.is_file(), "{} missing after the build", elf.display());
-    elf
-}
-
-/// The default firmware ELF (checkpoints in flash included), built once per test binary.
-pub fn firmware_elf() -> PathBuf {
-    static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| build_firmware(&[])).clone()
-}
-
-/// The default firmware built with build-time environment `env`, copied to
-/// `target/qemu-tests/NAME.elf`, where no later build overwrites it.
-pub fn firmware_elf_with_env(name: &str, env: &[(&str, &str)]) -> PathBuf {
-    let built = build_firmware_with_env(&[], env);
-    let copy = workspace_root().join("target").join("qemu-tests").join(format!("{name}.elf"));
+    let copy = target_dir.join("qemu-tests").join(format!("{name}.elf"));
     std::fs::create_dir_all(copy.parent().expect("a parent")).expect("create target/qemu-tests");
-    std::fs::copy(&built, &copy).expect("copy the firmware ELF");
+    std::fs::copy(&elf, &copy).expect("copy the firmware ELF");
     copy
+}
+
+/// The board's firmware ELF as the board's build makes it (checkpoints in flash included),
+/// built once per test binary.
+pub fn firmware_elf(board: Board) -> PathBuf {
+    static ELFS: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
+    ELFS[board as usize]
+        .get_or_init(|| build_firmware(board, &[], &format!("firmware-{}", board.name())))
+        .clone()
+}
+
+/// The default board's firmware built with build-time environment `env`, as `NAME.elf`.
+pub fn firmware_elf_with_env(name: &str, env: &[(&str, &str)]) -> PathBuf {
+    build_firmware(Board::Mps2An386, env, name)
 }
 
 /// Generates the paper scenario (default seed) for `duration_s` into `dir/paper.csv` and its truth
@@ -78,15 +111,39 @@ pub fn require_qemu() {
     }
 }
 
-/// A fresh scratch directory under the target directory.
-pub fn scratch(name: &str) -> PathBuf {
-    let dir = workspace_root()
-        .join("target")
-        .join("qemu-tests")
-        .join(format!("{name}-{}", std::process::id()));
+/// A scratch directory in the system's temporary directory, removed when dropped unless the test
+/// is failing (then its path is printed, to look at what QEMU and host-sim left there).
+pub struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("scratch directory kept: {}", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// A fresh scratch directory.
+pub fn scratch(name: &str) -> Scratch {
+    let dir = std::env::temp_dir().join(format!("rins-qemu-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir
+    Scratch(dir)
 }
 
 /// Runs the host-sim binary; returns stdout; panics with its stderr if it fails.

@@ -1,0 +1,124 @@
+//! A NOR flash emulated by the host file `rins-flash.bin` in QEMU's working directory
+//! (semihosting), behind the `embedded_storage` NOR flash traits: where the checkpoints go under
+//! QEMU, whose boards have no flash controller to program (mps2-an386 has none; netduinoplus2's is
+//! a stub). 64 KiB, 4 KiB erase blocks, 4-byte writes; bytes past the end of the file read as
+//! erased (0xFF). Writes overwrite (the checkpoint store always erases first).
+
+use embedded_storage::nor_flash::{NorFlash, NorFlashErrorKind, ReadNorFlash};
+
+pub struct SemihostedFlash {
+    file: semihosting::fs::File,
+    page_program_cycles: u32,
+}
+
+impl SemihostedFlash {
+    const CAPACITY: usize = 64 * 1024;
+    const PATH: &'static core::ffi::CStr = c"rins-flash.bin";
+
+    /// Opens (or creates) the file. Every 256-byte page written then takes `page_program_cycles`
+    /// of core clock (a NOR flash's program time), so that a save lasts about as long as on a real
+    /// part and a power cut can land between any two pages.
+    pub fn open(page_program_cycles: u32) -> Option<SemihostedFlash> {
+        use semihosting::fs::File;
+        let file = File::options()
+            .read(true)
+            .write(true)
+            .open(Self::PATH)
+            .ok()
+            .or_else(|| {
+                File::options()
+                    .read(true)
+                    .write(true)
+                    .create(true)
+                    .truncate(true)
+                    .open(Self::PATH)
+                    .ok()
+            })?;
+        Some(SemihostedFlash {
+            file,
+            page_program_cycles,
+        })
+    }
+
+    #[allow(clippy::manual_is_multiple_of)] // is_multiple_of needs Rust 1.87; the workspace says 1.85
+    fn check(offset: u32, len: usize, align: usize) -> Result<(), NorFlashErrorKind> {
+        let end = offset as usize + len;
+        if offset as usize % align != 0 || len % align != 0 {
+            return Err(NorFlashErrorKind::NotAligned);
+        }
+        if end > Self::CAPACITY {
+            return Err(NorFlashErrorKind::OutOfBounds);
+        }
+        Ok(())
+    }
+
+    /// Writes page by page (256 bytes, a NOR flash's program page), each taking the page time.
+    fn write_at(&mut self, offset: u32, bytes: &[u8]) -> Result<(), NorFlashErrorKind> {
+        use semihosting::io::{Seek, SeekFrom, Write};
+        self.file
+            .seek(SeekFrom::Start(offset as u64))
+            .map_err(|_| NorFlashErrorKind::Other)?;
+        for page in bytes.chunks(256) {
+            self.file.write_all(page).map_err(|_| NorFlashErrorKind::Other)?;
+            cortex_m::asm::delay(self.page_program_cycles);
+        }
+        Ok(())
+    }
+}
+
+impl embedded_storage::nor_flash::ErrorType for SemihostedFlash {
+    type Error = NorFlashErrorKind;
+}
+
+impl ReadNorFlash for SemihostedFlash {
+    const READ_SIZE: usize = 1;
+
+    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), NorFlashErrorKind> {
+        use semihosting::io::{Read, Seek, SeekFrom};
+        Self::check(offset, bytes.len(), 1)?;
+        bytes.fill(0xFF);
+        self.file
+            .seek(SeekFrom::Start(offset as u64))
+            .map_err(|_| NorFlashErrorKind::Other)?;
+        let mut done = 0;
+        while let Some(rest) = bytes.get_mut(done..) {
+            if rest.is_empty() {
+                break;
+            }
+            match self.file.read(rest) {
+                Ok(0) => break,
+                Ok(n) => done += n,
+                Err(_) => return Err(NorFlashErrorKind::Other),
+            }
+        }
+        Ok(())
+    }
+
+    fn capacity(&self) -> usize {
+        Self::CAPACITY
+    }
+}
+
+impl NorFlash for SemihostedFlash {
+    const WRITE_SIZE: usize = 4;
+    const ERASE_SIZE: usize = 4096;
+
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), NorFlashErrorKind> {
+        if to < from {
+            return Err(NorFlashErrorKind::OutOfBounds);
+        }
+        Self::check(from, (to - from) as usize, Self::ERASE_SIZE)?;
+        let erased = [0xFFu8; 256];
+        let mut at = from;
+        while at < to {
+            self.write_at(at, &erased)?;
+            at += erased.len() as u32;
+        }
+        Ok(())
+    }
+
+    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), NorFlashErrorKind> {
+        Self::check(offset, bytes.len(), Self::WRITE_SIZE)?;
+        self.write_at(offset, bytes)
+    }
+}
