@@ -1,6 +1,7 @@
 //! The estimator's checkpoint in two alternating flash slots (any `embedded_storage` NOR flash).
 //!
-//! Slot `i` starts at `i * SLOT_BYTES`: a 16-byte header (magic `RCKP`, sequence number u32 LE,
+//! Slot `i` starts at `i * slot_bytes(ERASE_SIZE)` (header and image rounded up to whole erase
+//! blocks, so that erasing one slot never touches the other): a 16-byte header (magic `RCKP`, sequence number u32 LE,
 //! the checkpointed sample's `time_s` f64 LE), then the core's checkpoint image
 //! (`Estimator::CHECKPOINT_LEN` bytes, with its own magic, version and CRC-32). A save erases the
 //! slot that does not hold the newest image, writes the image, and writes the header last. A power
@@ -15,8 +16,10 @@ const MAGIC: [u8; 4] = *b"RCKP";
 const HEADER_BYTES: usize = 16;
 /// Bytes of one checkpoint image.
 pub const IMAGE_BYTES: usize = <Estimator>::CHECKPOINT_LEN;
-/// One slot: header and image, rounded up to 4 KiB erase blocks.
-pub const SLOT_BYTES: usize = (HEADER_BYTES + IMAGE_BYTES).div_ceil(4096) * 4096;
+/// One slot on a flash of `erase_size` erase blocks: header and image, rounded up to whole blocks.
+pub const fn slot_bytes(erase_size: usize) -> usize {
+    (HEADER_BYTES + IMAGE_BYTES).div_ceil(erase_size) * erase_size
+}
 
 /// A slot's header.
 #[derive(Clone, Copy)]
@@ -44,11 +47,10 @@ pub struct CheckpointStore<F> {
 }
 
 impl<F: NorFlash> CheckpointStore<F> {
-    #[allow(clippy::manual_is_multiple_of)] // is_multiple_of needs Rust 1.87; the workspace says 1.85
+    /// Bytes of one slot on this flash.
+    const SLOT_BYTES: usize = slot_bytes(F::ERASE_SIZE);
+
     pub fn new(flash: F) -> Self {
-        // Erasing one slot must not touch the other: a flash whose erase block is larger than a
-        // slot cannot hold the two-slot store (fails the build).
-        const { assert!(SLOT_BYTES % F::ERASE_SIZE == 0, "the flash's erase block does not divide a checkpoint slot") };
         CheckpointStore {
             flash,
             newest: None,
@@ -59,7 +61,7 @@ impl<F: NorFlash> CheckpointStore<F> {
 
     fn header(&mut self, slot: usize) -> Option<Header> {
         let mut bytes = [0u8; HEADER_BYTES];
-        self.flash.read((slot * SLOT_BYTES) as u32, &mut bytes).ok()?;
+        self.flash.read((slot * Self::SLOT_BYTES) as u32, &mut bytes).ok()?;
         let (magic, rest) = bytes.split_first_chunk::<4>()?;
         let (sequence, rest) = rest.split_first_chunk::<4>()?;
         let (time, _) = rest.split_first_chunk::<8>()?;
@@ -81,7 +83,7 @@ impl<F: NorFlash> CheckpointStore<F> {
             let Some(header) = header else { continue };
             if self
                 .flash
-                .read((slot * SLOT_BYTES + HEADER_BYTES) as u32, image)
+                .read((slot * Self::SLOT_BYTES + HEADER_BYTES) as u32, image)
                 .is_err()
             {
                 continue;
@@ -107,9 +109,9 @@ impl<F: NorFlash> CheckpointStore<F> {
             Some((s, slot)) => (s.wrapping_add(1), 1 - slot),
             None => (1, 0),
         };
-        let base = (slot * SLOT_BYTES) as u32;
+        let base = (slot * Self::SLOT_BYTES) as u32;
         self.flash
-            .erase(base, base + SLOT_BYTES as u32)
+            .erase(base, base + Self::SLOT_BYTES as u32)
             .map_err(|_| StoreError::Flash)?;
         self.flash
             .write(base + HEADER_BYTES as u32, image)

@@ -16,18 +16,29 @@ use qemu_support::*;
 use std::path::Path;
 use std::time::Duration;
 
-const SLOT_BYTES: usize = 16 * 1024;
 const INTERVAL_S: f64 = 60.0;
 
+/// Bytes of a checkpoint slot in the board's flash: the 16-byte header and the core's image,
+/// rounded up to the flash's erase blocks (4 KiB on mps2-an386; on the STM32F405 one 128 KiB
+/// sector, which its QEMU flash file keeps too).
+fn slot_bytes(board: Board) -> usize {
+    let erase = match board {
+        Board::Mps2An386 => 4096,
+        Board::Stm32f405 => 128 * 1024,
+    };
+    (16 + estimator_core::checkpoint::CHECKPOINT_LEN).div_ceil(erase) * erase
+}
+
 /// Whether each of the two slots starts with the store's magic.
-fn slots_valid(flash: &Path) -> [bool; 2] {
+fn slots_valid(flash: &Path, board: Board) -> [bool; 2] {
+    let slot_bytes = slot_bytes(board);
     use std::io::{Read, Seek, SeekFrom};
     let Ok(mut file) = std::fs::File::open(flash) else {
         return [false, false];
     };
     let mut valid = |slot: usize| {
         let mut magic = [0u8; 4];
-        file.seek(SeekFrom::Start((slot * SLOT_BYTES) as u64)).is_ok()
+        file.seek(SeekFrom::Start((slot * slot_bytes) as u64)).is_ok()
             && file.read_exact(&mut magic).is_ok()
             && &magic == b"RCKP"
     };
@@ -111,7 +122,7 @@ fn power_cuts_at_random_points_and_mid_write_lose_nothing(board: Board) {
                 _ => {}
             }
             if let Some(n) = stop_after {
-                if sent >= n && (!want_mid_write || (saves && slots_valid(&flash) == [true, true])) {
+                if sent >= n && (!want_mid_write || (saves && slots_valid(&flash, board) == [true, true])) {
                     if want_mid_write {
                         // Send the sample whose step saves, and cut the power while it writes.
                         attempts += 1;
@@ -120,7 +131,7 @@ fn power_cuts_at_random_points_and_mid_write_lose_nothing(board: Board) {
                         // Watch the flash file: once a slot's header is erased the save is under way;
                         // cut the power a random 0..3 ms into it (a save takes about 60 ms of core time).
                         let deadline = std::time::Instant::now() + Duration::from_millis(50);
-                        while slots_valid(&flash) == [true, true] && std::time::Instant::now() < deadline {}
+                        while slots_valid(&flash, board) == [true, true] && std::time::Instant::now() < deadline {}
                         std::thread::sleep(Duration::from_micros(rng.below(3000) as u64));
                     }
                     drop(target);
@@ -134,9 +145,9 @@ fn power_cuts_at_random_points_and_mid_write_lose_nothing(board: Board) {
         }
         if cut {
             cuts += 1;
-            if want_mid_write && slots_valid(&flash) != [true, true] {
+            if want_mid_write && slots_valid(&flash, board) != [true, true] {
                 mid_write_cuts += 1;
-                println!("cut {cuts}: in the middle of a save (slots {:?})", slots_valid(&flash));
+                println!("cut {cuts}: in the middle of a save (slots {:?})", slots_valid(&flash, board));
             } else {
                 println!("cut {cuts}: after {sent} rows from {resume:?} s");
             }

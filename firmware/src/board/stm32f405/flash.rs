@@ -1,13 +1,17 @@
-//! Where the checkpoints go: on silicon, flash sectors 1 and 2 (16 KiB each, one checkpoint slot
-//! per sector, erased and programmed through stm32f4xx-hal's `embedded_storage` NOR flash); under
-//! QEMU, whose flash interface is a stub that never programs anything, the host file
-//! `rins-flash.bin` ([`SemihostedFlash`], as on mps2-an386). `boards/stm32f405/memory.x` starts
-//! the code at sector 3 (`_stext`), so the two sectors hold nothing else.
+//! Where the checkpoints go: on silicon, flash sectors 10 and 11 (the last two, 128 KiB each, one
+//! checkpoint slot per sector, erased and programmed through stm32f4xx-hal's `embedded_storage` NOR
+//! flash); under QEMU, whose flash interface is a stub that never programs anything, the host file
+//! `rins-flash.bin` ([`SemihostedFlash`], as on mps2-an386). `boards/stm32f405/memory.x` ends the
+//! code's FLASH region before sector 10, so the linker never puts code there.
 //!
-//! Timing on silicon, from the STM32F405 datasheet (not measured): a 16 KiB sector erase takes
-//! 0.25-0.5 s at 3.3 V, byte programming 16 us a byte, so a save (one erase, 13.8 KB) takes about
-//! 0.5 s, once per checkpoint interval. The core stalls on instruction fetches from flash meanwhile;
-//! the host is waiting for the answer to the sample that triggered the save, so no byte arrives.
+//! Why those sectors: an image is 23.3 KB, more than one of the 16 KiB sectors 1-3, and a slot
+//! must be whole erase blocks that the other slot does not share.
+//!
+//! Timing on silicon, from the STM32F405 datasheet (not measured): a 128 KiB sector erase takes
+//! 1-2 s at 3.3 V (x32 parallelism), byte programming 16 us a byte, so a save (one erase, 23.3 KB)
+//! takes 1.4-2.4 s, once per checkpoint interval (60 s by default). The core stalls on instruction
+//! fetches from flash meanwhile; the host is waiting for the answer to the sample that triggered
+//! the save, so no byte arrives (the host's link timeout is 10 s).
 
 use core::ptr::addr_of;
 
@@ -20,17 +24,17 @@ use stm32f4xx_hal::pac;
 use super::super::semihosted_flash::SemihostedFlash;
 use super::Environment;
 
-/// Checkpoint region: flash sectors 1 and 2, as offsets from the start of flash (0x0800_0000).
-const REGION_OFFSET: u32 = 0x4000;
+/// Checkpoint region: flash sectors 10 and 11, as offsets from the start of flash (0x0800_0000).
+const REGION_OFFSET: u32 = 0xC_0000;
 const REGION_BYTES: usize = 2 * SECTOR_BYTES;
-const SECTOR_BYTES: usize = 16 * 1024;
+const SECTOR_BYTES: usize = 128 * 1024;
 /// Under QEMU: core cycles (instructions) per 256-byte page written, the same as on mps2-an386,
 /// so that a save lasts as many instructions there and a power cut lands inside one as often.
 const QEMU_PAGE_PROGRAM_CYCLES: u32 = 12_500;
 
 extern "C" {
-    /// Start of the code, from cortex-m-rt's `link.x` (`_stext` in memory.x).
-    static __stext: u32;
+    /// End of the read-only data in flash, from cortex-m-rt's `link.x`.
+    static __erodata: u32;
 }
 
 /// The checkpoint store's flash on this board.
@@ -73,7 +77,7 @@ impl ReadNorFlash for Flash {
 impl NorFlash for Flash {
     /// A multiple of both: 1 byte (internal) and 4 (semihosted).
     const WRITE_SIZE: usize = 4;
-    /// A multiple of both: one 16 KiB sector (internal) and 4 KiB (semihosted).
+    /// A multiple of both: one 128 KiB sector (internal) and 4 KiB (semihosted).
     const ERASE_SIZE: usize = SECTOR_BYTES;
 
     fn erase(&mut self, from: u32, to: u32) -> Result<(), NorFlashErrorKind> {
@@ -91,21 +95,23 @@ impl NorFlash for Flash {
     }
 }
 
-/// Flash sectors 1 and 2 as a 32 KiB NOR flash with 16 KiB erase blocks (offset 0 = 0x0800_4000).
+/// Flash sectors 10 and 11 as a 256 KiB NOR flash with 128 KiB erase blocks (offset 0 =
+/// 0x080C_0000).
 /// Unlocked only for the length of one erase or write.
 pub struct InternalFlash {
     flash: pac::FLASH,
 }
 
 impl InternalFlash {
-    /// `None` (and an error log) if the code was linked into the region.
+    /// `None` (and an error log) if the code was linked into the region (a memory.x whose FLASH
+    /// reaches sector 10).
     fn new(flash: pac::FLASH) -> Option<InternalFlash> {
-        let code_start = addr_of!(__stext) as usize;
-        let region_end = flash.address() + REGION_OFFSET as usize + REGION_BYTES;
-        if code_start < region_end {
+        let code_end = addr_of!(__erodata) as usize;
+        let region_start = flash.address() + REGION_OFFSET as usize;
+        if code_end > region_start {
             defmt::error!(
-                "code starts at {=usize:#x}, inside the checkpoint sectors: checkpoints off",
-                code_start
+                "code ends at {=usize:#x}, inside the checkpoint sectors: checkpoints off",
+                code_end
             );
             return None;
         }
