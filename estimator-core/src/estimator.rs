@@ -28,6 +28,7 @@
 //! When there is no estimate, [`Estimator::progress`] says what holds it back.
 
 use crate::config::{Config, ConfigError, ROTATION_PERIOD_RANGE_S};
+use crate::correlation::ReferenceFilter;
 use crate::gap_fill::{GapFiller, GridSample, SLOTS};
 use crate::installation::Angles;
 use crate::math::{sin_cos, sqrt, wrap_pi};
@@ -210,6 +211,37 @@ impl core::fmt::Display for Holdup {
     }
 }
 
+/// The constants of the sample grid, fixed when samples start to be fed (from the interval known
+/// then; a learned interval refined later does not change them, so a run is the same whether or
+/// not it was restored from a checkpoint in between).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Feed {
+    /// The sample interval, s.
+    pub interval_s: f64,
+    /// The same, in the step's float type.
+    pub interval: Real,
+    /// Shortest and longest rotation period and the period tolerance, for the rotation monitor.
+    pub limits: Limits,
+    /// The stage gain of the correlation reference's low-pass.
+    pub reference_alpha: Real,
+}
+
+impl Feed {
+    /// The constants for `interval_s`.
+    pub fn new(interval_s: f64, config: &Config) -> Feed {
+        Feed {
+            interval_s,
+            interval: interval_s as Real,
+            limits: Limits {
+                min_period_samples: libm::ceil(ROTATION_PERIOD_RANGE_S.0 / interval_s).max(2.0) as u32,
+                max_period_samples: libm::floor(ROTATION_PERIOD_RANGE_S.1 / interval_s).max(2.0) as u32,
+                period_tolerance: config.rotation_period_tolerance,
+            },
+            reference_alpha: ReferenceFilter::alpha(interval_s),
+        }
+    }
+}
+
 /// Roll sway amplitude for the start gate.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SwayMonitor {
@@ -243,8 +275,8 @@ pub struct Estimator<const CAP: usize = DEFAULT_CAPACITY> {
     pub(crate) grid: TimeGrid,
     /// Grid index of the last accepted sample, once the grid is known.
     pub(crate) index: u32,
-    /// Whether samples are being fed to the filler (interval known, gate open).
-    pub(crate) feeding: bool,
+    /// Once samples are fed to the filler (interval known, gate open): the constants of the grid.
+    pub(crate) feed: Option<Feed>,
     pub(crate) filler: GapFiller,
     pub(crate) rotation: RotationMonitor,
     /// Cached `(L, sin L, cos L)`.
@@ -269,7 +301,7 @@ impl<const CAP: usize> Estimator<CAP> {
             method: MethodState::new(&config),
             grid: TimeGrid::new(config.sample_interval_s),
             index: 0,
-            feeding: false,
+            feed: None,
             filler: GapFiller::default(),
             rotation: RotationMonitor::new(None),
             latitude_trig: (0.0, s, c),
@@ -302,7 +334,7 @@ impl<const CAP: usize> Estimator<CAP> {
         self.config = config;
         self.grid = TimeGrid::new(config.sample_interval_s);
         self.index = 0;
-        self.feeding = false;
+        self.feed = None;
         self.filler = GapFiller::default();
         self.rotation = RotationMonitor::new(None);
         self.latitude_trig = (0.0, s, c);
@@ -338,7 +370,7 @@ impl<const CAP: usize> Estimator<CAP> {
     /// The rotation pattern as far as it is known.
     pub fn rotation(&self) -> RotationSummary {
         let period_s = match (self.rotation.period_samples, self.grid.interval_s) {
-            (Some(p), Some(dt)) if self.feeding => Some(f64::from(p) * dt),
+            (Some(p), Some(dt)) if self.feed.is_some() => Some(f64::from(p) * dt),
             _ => None,
         };
         RotationSummary {
@@ -443,24 +475,26 @@ impl<const CAP: usize> Estimator<CAP> {
     /// takes what comes out; returns the status of the newest sample the window took.
     fn feed(&mut self, sample: &Sample, angles: &Angles, placement: Placement, interval_s: f64, stamp_s: f64) -> Status {
         let mut out: heapless::Vec<GridSample, SLOTS> = heapless::Vec::new();
-        if !self.feeding {
-            self.start_feeding(interval_s);
-        } else {
-            let (step, restart) = match placement {
-                Placement::OnGrid { intervals } => (intervals, intervals.saturating_sub(1) > self.config.max_filled_gap_samples),
-                Placement::Learning | Placement::ClockStep => (1, true),
-            };
-            self.index = self.index.wrapping_add(step);
-            if restart {
-                self.filler.flush(&mut |s| {
-                    let _ = out.push(*s);
-                });
-                self.take(&out, interval_s, stamp_s);
-                out.clear();
-                self.restart_window();
-                self.rotation.restart();
+        let feed = match self.feed {
+            None => self.start_feeding(interval_s),
+            Some(feed) => {
+                let (step, restart) = match placement {
+                    Placement::OnGrid { intervals } => (intervals, intervals.saturating_sub(1) > self.config.max_filled_gap_samples),
+                    Placement::Learning | Placement::ClockStep => (1, true),
+                };
+                self.index = self.index.wrapping_add(step);
+                if restart {
+                    self.filler.flush(&mut |s| {
+                        let _ = out.push(*s);
+                    });
+                    self.take(&out, &feed, stamp_s);
+                    out.clear();
+                    self.restart_window();
+                    self.rotation.restart();
+                }
+                feed
             }
-        }
+        };
         let grid_sample = GridSample {
             index: self.index,
             roll_rad: sample.attitude.roll_rad,
@@ -474,14 +508,15 @@ impl<const CAP: usize> Estimator<CAP> {
         self.filler.push(grid_sample, &mut |s| {
             let _ = out.push(*s);
         });
-        self.take(&out, interval_s, stamp_s);
+        self.take(&out, &feed, stamp_s);
         self.window_status
     }
 
-    /// The first sample on a known grid: the rotation monitor starts (with the pinned period in
-    /// samples, if any, and the window set to it).
-    fn start_feeding(&mut self, interval_s: f64) {
-        self.feeding = true;
+    /// The first sample on a known grid: the grid's constants are fixed, the rotation monitor
+    /// starts (with the pinned period in samples, if any, and the window set to it).
+    fn start_feeding(&mut self, interval_s: f64) -> Feed {
+        let feed = Feed::new(interval_s, &self.config);
+        self.feed = Some(feed);
         self.index = 0;
         let pinned = self.config.rotation_period_s.map(|t| libm::round(t / interval_s).max(2.0) as u32);
         self.rotation = RotationMonitor::new(pinned);
@@ -489,28 +524,24 @@ impl<const CAP: usize> Estimator<CAP> {
             self.method.configure(p);
         }
         self.window_status = Status::DetectingPattern;
+        feed
     }
 
     /// The window takes the samples the filler passed on, then the filter updates once. `stamp_s`
     /// is the time stamp of the newest sample received (at grid index `self.index`).
-    fn take(&mut self, samples: &[GridSample], interval_s: f64, stamp_s: f64) {
+    fn take(&mut self, samples: &[GridSample], feed: &Feed, stamp_s: f64) {
         if samples.is_empty() {
             return;
         }
-        let limits = Limits {
-            min_period_samples: libm::ceil(ROTATION_PERIOD_RANGE_S.0 / interval_s).max(2.0) as u32,
-            max_period_samples: libm::floor(ROTATION_PERIOD_RANGE_S.1 / interval_s).max(2.0) as u32,
-            period_tolerance: self.config.rotation_period_tolerance,
-        };
         for s in samples {
             if s.fill_weight > 0 {
                 self.counters.filled = self.counters.filled.saturating_add(1);
             }
-            match self.rotation.observe(s.index, s.rotation_rad, &limits) {
+            match self.rotation.observe(s.index, s.rotation_rad, &feed.limits) {
                 Err(fault) => {
                     if !matches!(self.window_status, Status::RotationFault(_)) {
                         let behind = f64::from(self.index.wrapping_sub(s.index));
-                        self.fault = Some((fault, stamp_s - behind * interval_s));
+                        self.fault = Some((fault, stamp_s - behind * feed.interval_s));
                     }
                     self.restart_window();
                     if fault != RotationFault::RateMismatch {
@@ -526,10 +557,10 @@ impl<const CAP: usize> Estimator<CAP> {
                 self.window_status = Status::DetectingPattern;
                 continue;
             }
-            self.method.push(&self.config, interval_s, s);
+            self.method.push(&self.config, feed, s);
             self.window_status = if self.method.window_full() { Status::Estimating } else { Status::WarmingUp };
         }
-        self.method.update(&self.config, interval_s, self.filler.single_fill_variance_rad2());
+        self.method.update(&self.config, feed, self.filler.single_fill_variance_rad2());
     }
 
     fn restart_window(&mut self) {

@@ -24,6 +24,14 @@ pub fn wrap_pi(angle_rad: Real) -> Real {
     angle_rad - two_pi * round(angle_rad / two_pi)
 }
 
+/// To the nearest integer, halves away from zero, saturating (NaN gives 0): an add and the FPU's
+/// truncating conversion, a few instructions (against a library call for `round`). Within one
+/// unit of the exact rounding (`0.49999997 + 0.5` rounds up in f32); IEEE operations only, so every
+/// target gives the same integer.
+pub fn round_to_i32(x: Real) -> i32 {
+    (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i32
+}
+
 /// Round to nearest, ties to even.
 #[cfg(not(feature = "f64"))]
 pub fn round(x: f32) -> f32 {

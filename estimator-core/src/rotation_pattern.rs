@@ -45,6 +45,9 @@ use crate::Real;
 pub const LEVELS: usize = 8;
 /// Samples in the short mean of the rotation increment.
 pub const SHORT_STEPS: u32 = 4;
+const PI: Real = core::f64::consts::PI as Real;
+const QUARTER_PI: Real = core::f64::consts::FRAC_PI_4 as Real;
+
 /// Hysteresis of a pass, rad (1 deg).
 pub const PASS_HYSTERESIS_RAD: Real = 0.017_453_292;
 
@@ -231,7 +234,7 @@ impl RotationMonitor {
 
     /// Watches one sample (index on the sample grid, rotation angle).
     pub fn observe(&mut self, index: u32, rotation_rad: Real, limits: &Limits) -> Result<PatternEvent, RotationFault> {
-        let base = *self.levels_rad.get_or_insert(wrap_pi(rotation_rad + 0.392_699_08));
+        let base = *self.levels_rad.get_or_insert(wrap_pi(rotation_rad + 0.5 * QUARTER_PI));
         let previous = self.previous.replace((index, rotation_rad));
         let increment = match previous {
             Some((k, rho)) if index.wrapping_sub(k) == 1 => Some(wrap_pi(rotation_rad - rho)),
@@ -243,11 +246,21 @@ impl RotationMonitor {
         }
         let mut event = PatternEvent::None;
         // Passes of the reference angles.
-        for m in 0..LEVELS {
-            let level = wrap_pi(base + m as Real * 0.785_398_2);
-            let d = wrap_pi(rotation_rad - level);
+        // The angle from the first reference, once wrapped; from the others by subtracting 45 deg
+        // steps and wrapping with one comparison (no division on the step's path).
+        let d0 = wrap_pi(rotation_rad - base);
+        // Once the period is known, only the reference that times it needs watching.
+        let watched = match (self.period_samples, self.timing_pass) {
+            (Some(_), Some((level, _))) => usize::from(level)..usize::from(level) + 1,
+            _ => 0..LEVELS,
+        };
+        for m in watched {
+            let mut d = d0 - m as Real * QUARTER_PI;
+            if d < -PI {
+                d += 2.0 * PI;
+            }
             let old = self.level_side[m];
-            let side = if d.abs() > 1.570_796_4 {
+            let side = if d.abs() > 0.5 * PI {
                 0
             } else if d < -PASS_HYSTERESIS_RAD {
                 -1
@@ -352,7 +365,7 @@ impl RotationMonitor {
         }
         if index.wrapping_sub(start) >= period {
             let net = self.learn_rotation_rad;
-            let direction = if self.learn_reversed && net.abs() < 0.5 * core::f32::consts::PI as Real {
+            let direction = if self.learn_reversed && net.abs() < 0.5 * PI {
                 0
             } else if net >= 0.0 {
                 1

@@ -8,9 +8,11 @@
 //! # The interval
 //! Pinned by [`crate::Config::sample_interval_s`], or learned: the median of the first
 //! [`LEARNING_STEPS`] positive time steps (a median, so that lost rows, which double a step, do not
-//! move it while fewer than half the rows are lost), then refined by the running mean of every step
-//! that was one interval long, so that a recorder whose clock runs 0.1 % fast stays on the grid
-//! across long gaps. The samples used to learn it are accepted but not estimated from.
+//! move it while fewer than half the rows are lost), then refined to the mean of the last
+//! [`REFINEMENT_STEPS`] steps that were one interval long, so that a recorder whose clock runs
+//! 0.1 % fast stays on the grid across long gaps. The samples used to learn it are accepted but not
+//! estimated from. (Only the grid's snapping uses the refined interval; what the estimator derives
+//! from the interval is fixed when estimation starts, see [`crate::estimator::Feed`].)
 //!
 //! # Placing a stamp
 //! With `dt` the step since the previous accepted stamp and `n = round(dt / interval)`:
@@ -27,6 +29,9 @@ use crate::sample::SampleError;
 
 /// Positive time steps whose median gives the learned interval.
 pub const LEARNING_STEPS: usize = 8;
+/// One-interval steps averaged for each refinement of a learned interval (a power of two: the
+/// mean is a multiplication, no division on the step's path).
+pub const REFINEMENT_STEPS: u32 = 1024;
 
 /// Largest distance of a step from a whole number of intervals that still snaps, in intervals.
 pub const SNAP_TOLERANCE: f64 = 0.25;
@@ -57,9 +62,9 @@ pub struct TimeGrid {
     /// Positive steps seen while learning.
     pub learning_steps: [f64; LEARNING_STEPS],
     pub learned: u32,
-    /// Mean of the one-interval steps since the interval was learned (refinement), and their count.
-    pub mean_step_s: f64,
-    pub mean_steps: u32,
+    /// Sum and count of the one-interval steps of the refinement block being collected.
+    pub step_sum_s: f64,
+    pub steps: u32,
     /// Clock jumps and steps backwards seen.
     pub clock_steps: u32,
 }
@@ -73,8 +78,8 @@ impl TimeGrid {
             last_stamp_s: None,
             learning_steps: [0.0; LEARNING_STEPS],
             learned: 0,
-            mean_step_s: 0.0,
-            mean_steps: 0,
+            step_sum_s: 0.0,
+            steps: 0,
             clock_steps: 0,
         }
     }
@@ -88,7 +93,7 @@ impl TimeGrid {
         let Some(interval) = self.interval_s else {
             return if dt > 0.0 { Ok(Placement::Learning) } else { Err(SampleError::TimeNotIncreasing) };
         };
-        if dt == interval {
+        if (dt - interval).abs() <= SNAP_TOLERANCE * interval {
             // The usual case, without the (software, on the M4F) f64 division below.
             return Ok(Placement::OnGrid { intervals: 1 });
         }
@@ -126,12 +131,12 @@ impl TimeGrid {
             }
             Placement::OnGrid { intervals: 1 } => {
                 if let (false, Some(last)) = (self.pinned, previous) {
-                    // Refine the learned interval with the mean one-interval step (bounded memory:
-                    // the mean over the last 2^16 steps at most).
-                    self.mean_steps = (self.mean_steps + 1).min(1 << 16);
-                    self.mean_step_s += (time_s - last - self.mean_step_s) / f64::from(self.mean_steps);
-                    if self.mean_steps >= LEARNING_STEPS as u32 {
-                        self.interval_s = Some(self.mean_step_s);
+                    self.step_sum_s += time_s - last;
+                    self.steps += 1;
+                    if self.steps == REFINEMENT_STEPS {
+                        self.interval_s = Some(self.step_sum_s * (1.0 / f64::from(REFINEMENT_STEPS)));
+                        self.step_sum_s = 0.0;
+                        self.steps = 0;
                     }
                 }
             }

@@ -26,7 +26,7 @@ const fn kalman_len(scalar_bytes: usize, n: usize) -> usize {
 }
 
 const fn windowed_len(cap: usize) -> usize {
-    4 + 4 + kalman_len(R, 4) + 4 * R + 4 + 4 * R + 2 * R + (1 + 12 * R) + correlation_window_len(cap)
+    4 + 4 + kalman_len(R, 4) + 4 * R + (1 + 8) + 4 * R + 2 * R + (1 + 12 * R) + correlation_window_len(cap)
 }
 
 const fn paper_len(cap: usize) -> usize {
@@ -105,7 +105,10 @@ pub(super) fn write<const CAP: usize>(w: &mut Writer<'_>, state: &MethodState<CA
             for v in m.residual_mean {
                 w.real(v);
             }
-            w.u32(m.residual_count);
+            w.u8(m.next_pair);
+            for c in m.residual_count {
+                w.u32(c);
+            }
             for v in m.gains {
                 w.real(v);
             }
@@ -190,7 +193,9 @@ fn read_windowed<const CAP: usize>(
     let mut kf = ConstantStateKalman::new([0.0; 4]);
     read_kalman(r, &mut kf, max_variance)?;
     let residual_mean: [Real; 4] = core::array::from_fn(|_| r.real());
-    let residual_count = r.u32();
+    let next_pair = r.u8();
+    ensure(next_pair <= 1, CheckpointError::InvalidValue(Part::Residuals))?;
+    let residual_count = [r.u32(), r.u32()];
     let gains: [Real; 4] = core::array::from_fn(|_| r.real());
     let product_variance_rad2: [Real; 2] = core::array::from_fn(|_| r.real());
     let start = r.pos();
@@ -211,6 +216,7 @@ fn read_windowed<const CAP: usize>(
         m.entries_since_update = entries_since_update;
         m.kf = kf;
         m.residual_mean = residual_mean;
+        m.next_pair = next_pair;
         m.residual_count = residual_count;
         m.gains = gains;
         m.product_variance_rad2 = product_variance_rad2;

@@ -3,7 +3,7 @@
 //!
 //! [`Estimator::checkpoint`] writes the image into a caller-provided buffer of at least
 //! [`Estimator::CHECKPOINT_LEN`] bytes ([`CHECKPOINT_LEN`] for the default capacity of
-//! [`DEFAULT_CAPACITY`] = 720 entries: **23 312 bytes** with `f32`, 24 296 with the `f64`
+//! [`DEFAULT_CAPACITY`] = 720 entries: **23 328 bytes** with `f32`, 24 312 with the `f64`
 //! feature; a multiple of 4, so that a NOR flash with 4-byte writes takes it as it is).
 //! [`Estimator::restore`] reads one back. Restoring an image into a fresh estimator and continuing
 //! gives outputs bit-identical to the uninterrupted run, whatever the phase of the cut: the sample
@@ -67,7 +67,8 @@
 //!   `drift_rad_per_sqrt_s`, `traditional_sigma_rad`, `traditional_drift_rad_per_sqrt_s`,
 //!   `sway_gate_rad`, `converged_sigma_rad`, `rotation_period_tolerance` (`R` each),
 //!   `max_filled_gap_samples` (u32).
-//! - **Estimator** (56 + 3 `R` bytes): grid index (u32), feeding (flag), gate open (flag), latitude
+//! - **Estimator** (64 + 3 `R` bytes): grid index (u32), the interval the grid's constants were
+//!   fixed from (optional f64: absent until samples are fed), gate open (flag), latitude
 //!   (`R`; its sine and cosine are recomputed), status of the newest sample the window took
 //!   ([`Status::code`](crate::Status::code), u8), the last rotation fault (u8: 0 none, else the
 //!   [`Status::code`](crate::Status::code) of that fault) and the sample time it began at (f64, zero
@@ -93,10 +94,13 @@
 //!   platform, latitude, then the trigonometry sin rho, cos rho, sin(rho - s), cos(rho - s), sin L,
 //!   cos L, all `R`, and the fill weight u16).
 //! - **Method part**, by method (`method_len(CAP)` is the longest: the windowed method's for any
-//!   ring of more than 16 entries, 236 + 35 `R` + 22 `CAP` bytes):
+//!   ring of more than 16 entries; `checkpoint::methods` has its exact length):
 //!   - windowed: updates u32, window entries since the last update u32, Kalman filter (`x` 4 `R`,
-//!     `P` 16 `R` row-major), residual means 4 `R`, residuals averaged u32, channel gains 4 `R`, a
-//!     correlation window;
+//!     `P` 16 `R` row-major), residual means 4 `R`, the pair the next update takes (u8: 0 pitch,
+//!     1 roll), residuals averaged per pair 2 x u32, channel gains 4 `R`, the per-product variances
+//!     of the pitch and roll channels 2 `R`, the reference's low-pass (started flag, then three
+//!     stages of 4 `R`, all zero before it starts), a correlation window (entries of 30 bytes:
+//!     roll, pitch i32, six sines and cosines, four low-passed references i16, fill weight u16);
 //!   - paper: updates u32, samples u32, start time f64, integrals 4 x i64, four Kalman filters (`x`
 //!     3 f64, `P` 9 f64 each), a plain window of 4 channels;
 //!   - traditional: updates u32, Kalman filter (`x` 4 `R`, `P` 16 `R`).
@@ -171,7 +175,7 @@ pub const fn checkpoint_len(cap: usize) -> usize {
     (METHOD_OFFSET + method_len(cap)).div_ceil(4) * 4 + CRC_LEN
 }
 
-/// Image length for the default capacity ([`DEFAULT_CAPACITY`]): 23 312 bytes with `f32`.
+/// Image length for the default capacity ([`DEFAULT_CAPACITY`]): 23 328 bytes with `f32`.
 pub const CHECKPOINT_LEN: usize = checkpoint_len(DEFAULT_CAPACITY);
 
 /// The CRC-32/ISO-HDLC without a table (see [`crc32`]).
@@ -196,7 +200,7 @@ pub fn crc32(bytes: &[u8]) -> u32 {
 pub enum Part {
     /// The configuration.
     Config,
-    /// The grid index, the feeding and gate flags.
+    /// The grid index, the feed interval and the gate flag.
     Estimator,
     /// The cached latitude.
     Latitude,

@@ -1,26 +1,28 @@
 //! The estimator's own running state: the grid index, whether samples are being fed, the gate,
 //! the cached latitude, the status, the last fault, the sway monitor and the counters.
+//! Of the grid's constants ([`Feed`]) only the interval they were fixed from is stored; restore
+//! derives them from it again.
 //!
 //! Checked: flags and codes; the latitude below 90 deg (it is a sample's, which
-//! [`crate::Sample::check`] bounds); the fault's time finite and not negative (a grid index times
-//! the interval); the sway mean within 2 rad and its mean square within `[0, 4]` rad^2 (averages
+//! [`crate::Sample::check`] bounds); the feed interval positive and finite; the fault's time finite
+//! (a time stamp); the sway mean within 2 rad and its mean square within `[0, 4]` rad^2 (averages
 //! of roll within 90 deg).
 
 use super::wire::{Reader, Writer};
 use super::{ensure, within, within_non_negative, CheckpointError, Part, R};
-use crate::estimator::{Counters, Estimator, RejectCounts, RotationFault, Status, SwayMonitor};
+use crate::estimator::{Counters, Estimator, Feed, RejectCounts, RotationFault, Status, SwayMonitor};
 use crate::math::sin_cos;
 use crate::sample::{SampleError, MAX_TILT_RAD};
 use crate::Real;
 
 /// Bytes of the part.
-pub(super) const LEN: usize = 4 + 1 + 1 + R + 1 + 1 + 8 + (2 * R + 4) + SampleError::COUNT * 4 + 4 * 4;
+pub(super) const LEN: usize = 4 + (1 + 8) + 1 + R + 1 + 1 + 8 + (2 * R + 4) + SampleError::COUNT * 4 + 4 * 4;
 
 /// The part, read and checked.
 #[derive(Clone, Copy)]
 pub(super) struct Running {
     index: u32,
-    feeding: bool,
+    feed_interval_s: Option<f64>,
     gate_open: bool,
     latitude_rad: Real,
     window_status: Status,
@@ -32,7 +34,7 @@ pub(super) struct Running {
 
 pub(super) fn write<const CAP: usize>(w: &mut Writer<'_>, e: &Estimator<CAP>) {
     w.u32(e.index);
-    w.flag(e.feeding);
+    w.option(e.feed.map(|f| f.interval_s), 0.0, |w, v| w.f64(v));
     w.flag(e.gate_open);
     w.real(e.latitude_trig.0);
     w.u8(e.window_status.code());
@@ -60,7 +62,9 @@ pub(super) fn write<const CAP: usize>(w: &mut Writer<'_>, e: &Estimator<CAP>) {
 
 pub(super) fn read(r: &mut Reader<'_>) -> Result<Running, CheckpointError> {
     let index = r.u32();
-    let feeding = r.flag(Part::Estimator)?;
+    let feed_interval_s = r.option(Part::Estimator, |r| Ok(r.f64()))?;
+    // The interval the grid's constants were fixed from: positive and finite.
+    ensure(feed_interval_s.is_none_or(|d| d.is_finite() && d > 0.0), CheckpointError::InvalidValue(Part::Estimator))?;
     let gate_open = r.flag(Part::Estimator)?;
     let latitude_rad = r.real();
     ensure(latitude_rad.is_finite() && latitude_rad.abs() < MAX_TILT_RAD, CheckpointError::InvalidValue(Part::Latitude))?;
@@ -74,7 +78,7 @@ pub(super) fn read(r: &mut Reader<'_>) -> Result<Running, CheckpointError> {
             None
         }
         (_, Some(Status::RotationFault(fault))) => {
-            ensure(since_s.is_finite() && since_s >= 0.0, CheckpointError::InvalidValue(Part::Fault))?;
+            ensure(since_s.is_finite(), CheckpointError::InvalidValue(Part::Fault))?;
             Some((fault, since_s))
         }
         _ => return Err(CheckpointError::InvalidValue(Part::Fault)),
@@ -86,14 +90,15 @@ pub(super) fn read(r: &mut Reader<'_>) -> Result<Running, CheckpointError> {
     )?;
     let rejected = RejectCounts(core::array::from_fn(|_| r.u32()));
     let counters = Counters { accepted: r.u32(), filled: r.u32(), window_restarts: r.u32(), clock_steps: r.u32() };
-    Ok(Running { index, feeding, gate_open, latitude_rad, window_status, fault, sway, rejected, counters })
+    Ok(Running { index, feed_interval_s, gate_open, latitude_rad, window_status, fault, sway, rejected, counters })
 }
 
 impl Running {
     /// Writes the part into an estimator (after it has been reset to the image's configuration).
     pub(super) fn apply<const CAP: usize>(&self, e: &mut Estimator<CAP>) {
         e.index = self.index;
-        e.feeding = self.feeding;
+        // The constants are derived from the interval alone, exactly as when they were fixed.
+        e.feed = self.feed_interval_s.map(|d| Feed::new(d, &e.config));
         e.gate_open = self.gate_open;
         let (sin_lat, cos_lat) = sin_cos(self.latitude_rad);
         e.latitude_trig = (self.latitude_rad, sin_lat, cos_lat);

@@ -21,11 +21,11 @@ fn crc32_matches_the_standard_check_value() {
 }
 
 #[test]
-fn default_image_is_23312_bytes_with_f32() {
+fn default_image_is_23328_bytes_with_f32() {
     #[cfg(not(feature = "f64"))]
-    assert_eq!(CHECKPOINT_LEN, 23_312);
+    assert_eq!(CHECKPOINT_LEN, 23_328);
     #[cfg(feature = "f64")]
-    assert_eq!(CHECKPOINT_LEN, 24_296);
+    assert_eq!(CHECKPOINT_LEN, 24_312);
     assert_eq!(Estimator::<720>::CHECKPOINT_LEN, CHECKPOINT_LEN);
     assert_eq!(CHECKPOINT_LEN % 4, 0);
 }
@@ -273,7 +273,8 @@ fn tampered_configuration_grid_and_estimator_are_refused_with_a_typed_error() {
     rejects(&with(&|e| e.latitude_trig.0 = 1.6), InvalidValue(Part::Latitude));
     rejects(&with(&|e| e.sway.mean_square_rad2 = Real::NAN), InvalidValue(Part::SwayMonitor));
     rejects(&with(&|e| e.sway.mean_square_rad2 = -1e-3), InvalidValue(Part::SwayMonitor));
-    rejects(&with(&|e| e.fault = Some((RotationFault::Stopped, -1.0))), InvalidValue(Part::Fault));
+    rejects(&with(&|e| e.fault = Some((RotationFault::Stopped, f64::NAN))), InvalidValue(Part::Fault));
+    accepts(&with(&|e| e.fault = Some((RotationFault::Stopped, -1.0))));
     accepts(&with(&|e| e.fault = Some((RotationFault::Reversed, 12.0))));
 }
 
@@ -366,14 +367,14 @@ fn bad_flags_codes_unused_bytes_and_padding_are_refused() {
     // An absent pinned period with a non-zero value.
     assert_eq!(good[HEADER_LEN], 0);
     refused(&edit(HEADER_LEN + 3, 1), UnusedNotZero(Part::Config));
-    // The feeding flag (after the grid index) set to 2.
+    // The feed interval's presence flag (after the grid index) set to 2.
     refused(&edit(running_at + 4, 2), InvalidValue(Part::Estimator));
     // Status and fault codes.
-    refused(&edit(running_at + 6 + R, 10), InvalidValue(Part::Status));
-    refused(&edit(running_at + 7 + R, 4), InvalidValue(Part::Fault));
-    refused(&edit(running_at + 7 + R, 0x10), InvalidValue(Part::Fault));
+    refused(&edit(running_at + 14 + R, 10), InvalidValue(Part::Status));
+    refused(&edit(running_at + 15 + R, 4), InvalidValue(Part::Fault));
+    refused(&edit(running_at + 15 + R, 0x10), InvalidValue(Part::Fault));
     // No fault, but a time for it.
-    refused(&edit(running_at + 8 + R, 1), UnusedNotZero(Part::Fault));
+    refused(&edit(running_at + 16 + R, 1), UnusedNotZero(Part::Fault));
     // Unknown method code.
     refused(&edit(7, 9), UnknownMethod(9));
 

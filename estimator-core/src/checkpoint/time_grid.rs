@@ -2,20 +2,18 @@
 //! and refined from.
 //!
 //! Checked: the interval positive and finite; pinned exactly when the configuration pins the
-//! interval, and then equal to it; the stamp finite; every learning step and the mean step finite
-//! and not negative (they are positive time steps, or 0 before the first); at most
-//! [`LEARNING_STEPS`] steps learned and at most 2^16 in the mean (the grid's own bounds).
+//! interval, and then equal to it; the stamp finite; every learning step and the refinement's sum
+//! finite and not negative (they are positive time steps, or 0 before the first); at most
+//! [`LEARNING_STEPS`] steps learned and fewer than [`REFINEMENT_STEPS`] in the refinement block
+//! being collected (the grid's own bounds).
 
 use super::wire::{Reader, Writer};
 use super::{ensure, CheckpointError, Part};
 use crate::config::Config;
-use crate::time_grid::{TimeGrid, LEARNING_STEPS};
+use crate::time_grid::{TimeGrid, LEARNING_STEPS, REFINEMENT_STEPS};
 
 /// Bytes of the part.
 pub(super) const LEN: usize = 9 + 1 + 9 + LEARNING_STEPS * 8 + 4 + 8 + 4 + 4;
-
-/// Most steps in the refining mean ([`TimeGrid::accept`] caps it).
-const MAX_MEAN_STEPS: u32 = 1 << 16;
 
 pub(super) fn write(w: &mut Writer<'_>, g: &TimeGrid) {
     w.option(g.interval_s, 0.0, |w, v| w.f64(v));
@@ -25,8 +23,8 @@ pub(super) fn write(w: &mut Writer<'_>, g: &TimeGrid) {
         w.f64(v);
     }
     w.u32(g.learned);
-    w.f64(g.mean_step_s);
-    w.u32(g.mean_steps);
+    w.f64(g.step_sum_s);
+    w.u32(g.steps);
     w.u32(g.clock_steps);
 }
 
@@ -38,15 +36,15 @@ pub(super) fn read(r: &mut Reader<'_>, config: &Config) -> Result<TimeGrid, Chec
         last_stamp_s: r.option(Part::TimeGrid, |r| Ok(r.f64()))?,
         learning_steps: core::array::from_fn(|_| r.f64()),
         learned: r.u32(),
-        mean_step_s: r.f64(),
-        mean_steps: r.u32(),
+        step_sum_s: r.f64(),
+        steps: r.u32(),
         clock_steps: r.u32(),
     };
     let non_negative = |v: f64| v.is_finite() && v >= 0.0;
     ensure(g.interval_s.is_none_or(|v| v.is_finite() && v > 0.0), invalid)?;
     ensure(g.last_stamp_s.is_none_or(f64::is_finite), invalid)?;
-    ensure(g.learning_steps.iter().all(|v| non_negative(*v)) && non_negative(g.mean_step_s), invalid)?;
-    ensure(g.learned as usize <= LEARNING_STEPS && g.mean_steps <= MAX_MEAN_STEPS, invalid)?;
+    ensure(g.learning_steps.iter().all(|v| non_negative(*v)) && non_negative(g.step_sum_s), invalid)?;
+    ensure(g.learned as usize <= LEARNING_STEPS && g.steps < REFINEMENT_STEPS, invalid)?;
     let pinned_ok = match config.sample_interval_s {
         Some(pinned) => g.pinned && g.interval_s.map(f64::to_bits) == Some(pinned.to_bits()),
         None => !g.pinned,

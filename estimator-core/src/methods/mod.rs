@@ -10,6 +10,7 @@ pub mod traditional;
 pub mod windowed;
 
 use crate::config::{Config, Method};
+use crate::estimator::Feed;
 use crate::gap_fill::GridSample;
 use crate::Real;
 
@@ -75,23 +76,23 @@ impl<const CAP: usize> MethodState<CAP> {
 
     /// Feeds one sample (received or filled); true if the filter was updated (the windowed method
     /// updates in [`MethodState::update`], once per step).
-    pub fn push(&mut self, config: &Config, interval_s: f64, sample: &GridSample) -> bool {
+    pub fn push(&mut self, config: &Config, feed: &Feed, sample: &GridSample) -> bool {
         match self {
             MethodState::Windowed(m) => {
-                m.push(sample, interval_s);
+                m.push(sample, feed.reference_alpha);
                 false
             }
             #[cfg(feature = "paper-method")]
-            MethodState::Paper(m) => m.step(config, interval_s, sample),
-            MethodState::Traditional(m) => m.step(config, interval_s, sample),
+            MethodState::Paper(m) => m.step(config, feed.interval_s, sample),
+            MethodState::Traditional(m) => m.step(config, feed.interval, sample),
         }
     }
 
     /// The windowed method's one update per step (see [`Windowed::update`]); the others update
     /// in [`MethodState::push`].
-    pub fn update(&mut self, config: &Config, interval_s: f64, fill_variance_rad2: (Real, Real)) -> bool {
+    pub fn update(&mut self, config: &Config, feed: &Feed, fill_variance_rad2: (Real, Real)) -> bool {
         match self {
-            MethodState::Windowed(m) => m.update(config, interval_s, fill_variance_rad2),
+            MethodState::Windowed(m) => m.update(config, feed.interval, fill_variance_rad2),
             #[cfg(feature = "paper-method")]
             MethodState::Paper(_) => false,
             MethodState::Traditional(_) => false,

@@ -28,9 +28,9 @@ impl Traditional {
     }
 
     /// Updates with this sample's roll and pitch.
-    pub fn step(&mut self, config: &Config, interval_s: f64, sample: &GridSample) -> bool {
+    pub fn step(&mut self, config: &Config, interval: Real, sample: &GridSample) -> bool {
         let angles = &sample.angles;
-        let q = config.traditional_drift_rad_per_sqrt_s * config.traditional_drift_rad_per_sqrt_s * interval_s as Real;
+        let q = config.traditional_drift_rad_per_sqrt_s * config.traditional_drift_rad_per_sqrt_s * interval;
         self.kf.predict(&[q; 4]);
         let r = config.traditional_sigma_rad * config.traditional_sigma_rad;
         let roll = self.kf.update(&angles.roll_row(), sample.roll_rad, r).is_ok();

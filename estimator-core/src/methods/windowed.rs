@@ -20,6 +20,13 @@
 //! coefficients are averaged over the same window as the products, so the row belongs to the same
 //! moment as the measurement: the middle of the window, `t - (W-1)/2` samples.
 //!
+//! # Pitch and roll in turn
+//! The two pitch channels (x1, x2) and the two roll channels (x3, x4 and the leakage of x1, x2)
+//! update the filter in turn, each pair every other window, each update with half the per-product
+//! variance. By the argument above the information is the same (a pair's window moved by two
+//! samples since its last update), and a step costs two scalar Kalman updates instead of four:
+//! what keeps the Cortex-M4F's step within its budget.
+//!
 //! # Filled samples and bins
 //! A window with filled samples ([`crate::gap_fill`]) carries their interpolation error: the
 //! per-product variance `r` is raised by the window's mean fill variance times 1/2 (the mean square
@@ -79,10 +86,12 @@ pub struct Windowed<const CAP: usize> {
     pub updates: u32,
     /// Window entries added since the last update.
     pub entries_since_update: u32,
+    /// The channel pair the next update takes: 0 pitch (x1, x2), 1 roll (x3, x4).
+    pub next_pair: u8,
     /// Exponential mean of each channel's post-fit residual, rad (see the module doc).
     pub residual_mean: [Real; 4],
-    /// Residuals averaged so far (saturates at the averaging time).
-    pub residual_count: u32,
+    /// Residuals averaged so far per channel pair (saturates at the averaging time).
+    pub residual_count: [u32; 2],
     /// Channel gains (diagonal of the rows, about `(1/2, 1/2, cosL/2, cosL/2)`) of the last update,
     /// for mapping residuals to x.
     pub gains: [Real; 4],
@@ -115,8 +124,9 @@ impl<const CAP: usize> Windowed<CAP> {
             kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
             updates: 0,
             entries_since_update: 0,
+            next_pair: 0,
             residual_mean: [0.0; 4],
-            residual_count: 0,
+            residual_count: [0; 2],
             gains: [0.5; 4],
             product_variance_rad2: [0.0; 2],
         }
@@ -129,8 +139,9 @@ impl<const CAP: usize> Windowed<CAP> {
         self.kf = ConstantStateKalman::new([config.prior_sigma_rad; 4]);
         self.updates = 0;
         self.entries_since_update = 0;
+        self.next_pair = 0;
         self.residual_mean = [0.0; 4];
-        self.residual_count = 0;
+        self.residual_count = [0; 2];
         self.gains = [0.5; 4];
         self.product_variance_rad2 = [0.0; 2];
     }
@@ -141,26 +152,29 @@ impl<const CAP: usize> Windowed<CAP> {
         self.entries_since_update = 0;
     }
 
-    /// Adds one sample to the window (its references low-passed on the way).
-    pub fn push(&mut self, sample: &GridSample, interval_s: f64) {
-        let reference = self.reference.filter(&sample.angles, ReferenceFilter::alpha(interval_s));
+    /// Adds one sample to the window (its references low-passed on the way, with stage gain
+    /// `reference_alpha`: [`ReferenceFilter::alpha`]).
+    pub fn push(&mut self, sample: &GridSample, reference_alpha: Real) {
+        let reference = self.reference.filter(&sample.angles, reference_alpha);
         if self.window.push(sample, &reference) {
             self.entries_since_update = self.entries_since_update.saturating_add(1);
         }
     }
 
     /// Updates the filter with the window's measurement, if the window is full and has new
-    /// entries. `interval_s` is the sample interval, `fill_variance_rad2` a filled single sample's
+    /// entries. `interval` is the sample interval, s, `fill_variance_rad2` a filled single sample's
     /// error variance of roll and of pitch ([`crate::gap_fill::GapFiller::single_fill_variance_rad2`]).
-    pub fn update(&mut self, config: &Config, interval_s: f64, fill_variance_rad2: (Real, Real)) -> bool {
+    pub fn update(&mut self, config: &Config, interval: Real, fill_variance_rad2: (Real, Real)) -> bool {
         if !self.window.is_full() || self.entries_since_update == 0 {
             return false;
         }
+        let pair = usize::from(self.next_pair.min(1));
         let Some(m) = self.window.sums().measurement() else {
             return false;
         };
+        self.next_pair = 1 - pair as u8;
         let bin = self.window.bin() as Real;
-        let elapsed_s = interval_s as Real * bin * self.entries_since_update as Real;
+        let elapsed_s = interval * bin * self.entries_since_update as Real;
         self.entries_since_update = 0;
         let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
         self.kf.predict(&[q; 4]);
@@ -170,23 +184,25 @@ impl<const CAP: usize> Windowed<CAP> {
         let r_pitch = r0 + 0.5 * filled * fill_variance_rad2.1;
         let r_roll = r0 + 0.5 * filled * fill_variance_rad2.0;
         self.product_variance_rad2 = [r_pitch, r_roll];
+        // Each pair takes every other window, so each of its updates carries two entries' worth.
+        let r = 0.5 * self.product_variance_rad2[pair];
         let mut applied = false;
-        for (ch, row) in m.rows.iter().enumerate() {
-            let r = if ch < 2 { r_pitch } else { r_roll };
-            applied |= self.kf.update(row, m.z[ch], r).is_ok();
+        for ch in 2 * pair..2 * pair + 2 {
+            applied |= self.kf.update(&m.rows[ch], m.z[ch], r).is_ok();
         }
         if applied {
             self.updates = self.updates.saturating_add(1);
-            self.average_residuals(&m.rows, &m.z);
+            self.average_residuals(pair, &m.rows, &m.z);
         }
         applied
     }
 
-    fn average_residuals(&mut self, rows: &[[Real; 4]; 4], z: &[Real; 4]) {
-        let horizon = (RESIDUAL_PERIODS * self.window.len()) as u32;
-        self.residual_count = self.residual_count.saturating_add(1).min(horizon);
-        let alpha = 1.0 / self.residual_count as Real;
-        for ch in 0..4 {
+    fn average_residuals(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) {
+        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
+        let count = &mut self.residual_count[pair];
+        *count = count.saturating_add(1).min(horizon.max(1));
+        let alpha = 1.0 / *count as Real;
+        for ch in 2 * pair..2 * pair + 2 {
             let fit: Real = (0..4).map(|i| rows[ch][i] * self.kf.x[i]).sum();
             let residual = z[ch] - fit;
             self.residual_mean[ch] += alpha * (residual - self.residual_mean[ch]);
@@ -196,14 +212,19 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// The residual check (see the module doc).
     pub fn consistency(&self, config: &Config) -> Consistency {
-        // The residual mean averages `n` entries of per-entry variance `r` (filled samples
-        // included); without an update yet, the configured sigma.
-        let n = (self.residual_count as usize).max(self.window.len()) as Real;
+        // The residual mean of a pair averages `count` updates of two entries each, of per-entry
+        // variance `r` (filled samples included); without an update yet, the configured sigma.
         let sigma2 = config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
         let mut out = Consistency { model_sigma_rad: [0.0; 4], mismatch: false };
         for ch in 0..4 {
+            let n = (2 * self.residual_count[ch / 2] as usize).max(self.window.len()) as Real;
             let r = self.product_variance_rad2[ch / 2].max(sigma2);
-            let s_e = sqrt(r / n);
+            let (mean, s_e2) = (self.residual_mean[ch], r / n);
+            if mean * mean <= 4.0 * s_e2 {
+                // Within 2 sigma: nothing to add, no mismatch (the usual case, without a root).
+                continue;
+            }
+            let s_e = sqrt(s_e2);
             let excess = (self.residual_mean[ch].abs() - 2.0 * s_e).max(0.0);
             // A bias b on a channel of gain g means an error of about b/g, but never more than the
             // prior says we could not know anyway: near the pole the gain of x3, x4 is cos L / 2,
@@ -220,7 +241,8 @@ impl<const CAP: usize> Windowed<CAP> {
         // Flag only with a full horizon of residuals: the first windows carry sway residuals of
         // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
         // stays: it is conservative).
-        out.mismatch &= self.residual_count as usize >= RESIDUAL_PERIODS * self.window.len();
+        let horizon = RESIDUAL_PERIODS * self.window.len() / 2;
+        out.mismatch &= self.residual_count.iter().all(|c| *c as usize >= horizon);
         out
     }
 
