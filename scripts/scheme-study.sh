@@ -4,9 +4,8 @@
 # under recorder effects (2 % random loss + three 60 s outages + 20 ms stamp jitter on Unix-time
 # stamps; 5 % loss on the reciprocating scheme; a row every 2 s; 10 Hz). Writes one markdown section
 # per condition, each holding `host-sim compare`'s table per scheme with the command that made it.
-# The estimator's rotation period and sample interval are pinned to the scenario's (see
-# `--rotation-period` / `--sample-interval`); a configuration the estimator cannot hold is reported
-# in the status column.
+# The estimator learns the rotation period and the sample interval from each log (nothing is
+# pinned): what the tables show includes the detection.
 #
 # Usage: bash scripts/scheme-study.sh [SEEDS] [DURATION_S] [OUT.md]
 #   SEEDS       seeds per line (default 5)

@@ -3,7 +3,7 @@
 //! recorder), each generated, recorded and replayed row by row in memory, in parallel (rayon), with
 //! the error statistics per report time.
 
-use crate::replay::{sample_of, HostEstimator};
+use crate::replay::sample_of;
 use crate::report::{Accuracy, Tracker};
 use crate::recorder::{Recorder, RecorderSettings, Recording};
 use crate::rotation_scheme::RotationScheme;
@@ -131,7 +131,12 @@ pub fn sway_amplitude_deg(comps: &[SwayComponent]) -> f64 {
 /// Generates, records and replays one scenario, tracking accuracy at `times_s` (at the logged
 /// rows' sample instants, from the log's start).
 pub fn track_run(params: &ScenarioParams, config: Config, times_s: &[f64]) -> anyhow::Result<Accuracy> {
-    let mut est = HostEstimator::new(config).map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
+    track_run_with_capacity::<{ estimator_core::estimator::DEFAULT_CAPACITY }>(params, config, times_s)
+}
+
+/// As [`track_run`], with an estimator of another ring capacity (to measure what binning costs).
+pub fn track_run_with_capacity<const CAP: usize>(params: &ScenarioParams, config: Config, times_s: &[f64]) -> anyhow::Result<Accuracy> {
+    let mut est = estimator_core::Estimator::<CAP>::new(config).map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
     let mut recorder = Recorder::new(&params.recording, params.seed);
     let mut tracker = Tracker::new(times_s);
     let mut held = None;

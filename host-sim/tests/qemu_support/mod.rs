@@ -97,8 +97,16 @@ pub fn firmware_elf_with_env(name: &str, env: &[(&str, &str)]) -> PathBuf {
 /// Generates the paper scenario (default seed) for `duration_s` into `dir/paper.csv` and its truth
 /// file; returns the log's path.
 pub fn paper_log(dir: &Path, duration_s: u32) -> PathBuf {
-    let log = dir.join("paper.csv");
-    host_sim(&["generate", "--scenario", "paper", "--duration", &duration_s.to_string(), "--out", log.to_str().unwrap()]);
+    generated_log(dir, "paper.csv", &["--scenario", "paper", "--duration", &duration_s.to_string()])
+}
+
+/// `host-sim generate ARGS --out DIR/NAME` (and its truth file beside it).
+pub fn generated_log(dir: &Path, name: &str, args: &[&str]) -> PathBuf {
+    let log = dir.join(name);
+    let mut all = vec!["generate"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--out", log.to_str().unwrap()]);
+    host_sim(&all);
     log
 }
 
