@@ -1,7 +1,8 @@
 //! A NOR flash emulated by the host file `rins-flash.bin` in QEMU's working directory
 //! (semihosting), behind the `embedded_storage` NOR flash traits: where the checkpoints go under
 //! QEMU, whose boards have no flash controller to program (mps2-an386 has none; netduinoplus2's is
-//! a stub). 64 KiB, 4 KiB erase blocks, 4-byte writes; bytes past the end of the file read as
+//! a stub). 256 KiB (two STM32F405 sectors of 128 KiB, the largest layout a board maps onto it), 4 KiB
+//! erase blocks, 4-byte writes; bytes past the end of the file read as
 //! erased (0xFF). Writes overwrite (the checkpoint store always erases first).
 
 use embedded_storage::nor_flash::{NorFlash, NorFlashErrorKind, ReadNorFlash};
@@ -12,7 +13,7 @@ pub struct SemihostedFlash {
 }
 
 impl SemihostedFlash {
-    const CAPACITY: usize = 64 * 1024;
+    const CAPACITY: usize = 256 * 1024;
     const PATH: &'static core::ffi::CStr = c"rins-flash.bin";
 
     /// Opens (or creates) the file. Every 256-byte page written then takes `page_program_cycles`
