@@ -14,7 +14,7 @@ use link_protocol::frame::decode_frame;
 use link_protocol::message::{Request, Response};
 
 fuzz_target!(|data: &[u8]| {
-    let mut est = Estimator::<CAP>::new(Config { rotation_period_samples: 16, ..Config::default() }).expect("config");
+    let mut est = Estimator::<CAP>::new(Config { rotation_period_s: Some(60.0), sample_interval_s: Some(1.0), ..Config::default() }).expect("config");
     let mut rx = FrameAccumulator::<128>::new();
     for &b in data {
         if let Some(Ok(Request::Sample(msg))) = rx.push_decode::<Request>(b) {

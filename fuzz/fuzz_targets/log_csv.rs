@@ -12,7 +12,7 @@ use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
-    let mut est = Estimator::<CAP>::new(Config { rotation_period_samples: 16, ..Config::default() }).expect("config");
+    let mut est = Estimator::<CAP>::new(Config { rotation_period_s: Some(60.0), sample_interval_s: Some(1.0), ..Config::default() }).expect("config");
     let reader = LogReader::new(Path::new("fuzz.csv"), std::io::Cursor::new(data));
     let mut errors = 0;
     for line in reader.take(10_000) {
