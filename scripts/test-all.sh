@@ -6,12 +6,17 @@
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
 #   4. the firmware build for the target, with and without its checkpoint feature (its budgets are
 #      checked by host-sim's qemu_budgets test);
-#   5. clippy on the firmware and the link code, which deny every panicking construct.
+#   5. clippy on the firmware and the link code, which deny every panicking construct;
+#   6. that the tests left no trace: `git status --porcelain` at the end equals the one at the start.
 # Usage: bash scripts/test-all.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 log() { printf '\n== %s\n' "$*"; }
+
+# Tests leave no trace: what git sees now must be what it sees at the end.
+git_status() { git status --porcelain --untracked-files=all 2>/dev/null || true; }
+STATUS_BEFORE="$(git_status)"
 
 log "toolchain"
 if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
@@ -43,3 +48,12 @@ log "no panicking path on the link: clippy's deny(unwrap_used, expect_used, inde
 # The firmware, link-protocol and estimator-core deny these lints in their sources; only clippy
 # enforces them, so it runs here (warnings of other lints do not fail the run).
 cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware
+
+log "the tests left no trace in the checkout"
+STATUS_AFTER="$(git_status)"
+if [ "$STATUS_BEFORE" != "$STATUS_AFTER" ]; then
+    echo "git status changed during the tests:"
+    diff <(printf '%s\n' "$STATUS_BEFORE") <(printf '%s\n' "$STATUS_AFTER") || true
+    exit 1
+fi
+echo "git status unchanged"

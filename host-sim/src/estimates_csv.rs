@@ -1,4 +1,4 @@
-//! The estimates CSV (output), one row per input row; format in `shared/log-format.md`.
+//! The estimates CSV (output), one row per input row; format in `docs/log-format.md`.
 //!
 //! Header [`HEADER`]. Fixed, deterministic formatting so that the replay path and the firmware
 //! stream path write byte-identical files from the same [`Output`]s:

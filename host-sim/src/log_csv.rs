@@ -1,4 +1,4 @@
-//! The attitude log (input) and the truth file of generated logs; formats in `shared/log-format.md`.
+//! The attitude log (input) and the truth file of generated logs; formats in `docs/log-format.md`.
 //!
 //! # Reading
 //! Header exactly [`HEADER`] (surrounding whitespace and a trailing `\r` tolerated); blank lines and

@@ -54,7 +54,7 @@ struct GenerateArgs {
 
 #[derive(clap::Args, Debug)]
 struct EstimateArgs {
-    /// Attitude log (CSV, see shared/log-format.md).
+    /// Attitude log (CSV, plain or gzip, `-` for standard input; format: docs/log-format.md).
     log: PathBuf,
     /// Estimates CSV to write (default: LOG.estimates.csv beside the log).
     #[arg(long, value_name = "EST.csv")]

@@ -39,7 +39,7 @@ pub struct StreamArgs {
         conflicts_with = "port"
     )]
     pub qemu: Option<PathBuf>,
-    /// Attitude log (CSV, see shared/log-format.md).
+    /// Attitude log (CSV, plain or gzip, `-` for standard input; format: docs/log-format.md).
     #[arg(value_name = "FILE.csv")]
     pub log: PathBuf,
     /// Estimates CSV to write (default: LOG.estimates.csv beside the log, as `estimate`).

@@ -49,6 +49,9 @@ fn stream_over_a_serial_port_matches_estimate() {
             "-kernel",
         ])
         .arg(&elf)
+        // QEMU's working directory holds the firmware's flash file: the scratch directory, never
+        // the source tree (a flash left there would be restored by the next run).
+        .current_dir(&dir)
         .stdin(Stdio::null())
         .stdout(std::fs::File::create(&stdout_path).unwrap())
         .stderr(Stdio::null())

@@ -6,7 +6,8 @@
 //!   exists. Sleeping instead of spinning leaves the host's CPU to QEMU's I/O thread.
 //! - Cost counter: SysTick on the core clock, free-running over 24 bits. On real silicon a tick is a
 //!   core cycle (40 ns). Under QEMU with `-icount shift=0` each instruction takes 1 ns of virtual
-//!   time, so one tick is exactly 40 instructions (shared/notes/toolchain.md section 6).
+//!   time, so one tick (1/25 MHz = 40 ns) is exactly 40 instructions; the TCG plugin
+//!   `firmware/tools/stepcount.c` confirms it.
 //! - Logs: defmt over semihosting (QEMU's stdout). Fatal errors: semihosting exit with status 1.
 //! - Flash for checkpoints: the host file `rins-flash.bin` in QEMU's working directory
 //!   (semihosting), behind the `embedded_storage` NOR flash traits.
@@ -83,7 +84,7 @@ impl Uart {
             reg_write(UART_CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_INT_EN);
             reg_write(UART_INTSTATUS, 0xF);
             // One dummy read: QEMU wakes its chardev only when DATA is read, so without it the first
-            // input byte waits about a second (shared/notes/target-costs.md).
+            // input byte waits about a second (measured under QEMU).
             let _ = reg_read(UART_DATA);
         }
         Uart { nvic }

@@ -78,15 +78,40 @@ pub fn require_qemu() {
     }
 }
 
-/// A fresh scratch directory under the target directory.
-pub fn scratch(name: &str) -> PathBuf {
+/// A fresh scratch directory under the target directory, removed when dropped unless the test
+/// failed (then it is kept for a look).
+pub fn scratch(name: &str) -> Scratch {
     let dir = workspace_root()
         .join("target")
         .join("qemu-tests")
         .join(format!("{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create scratch dir");
-    dir
+    Scratch(dir)
+}
+
+/// See [`scratch`].
+pub struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = PathBuf;
+    fn deref(&self) -> &PathBuf {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
 }
 
 /// Runs the host-sim binary; returns stdout; panics with its stderr if it fails.
