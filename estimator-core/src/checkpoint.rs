@@ -863,7 +863,7 @@ fn read_traditional(r: &mut Reader<'_>, dst: Option<&mut Traditional>, max_varia
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::Method;
+    use crate::config::{Bound, Method};
     use crate::units::{arcsec_to_rad, RAD_PER_DEG};
     use std::vec;
     use std::vec::Vec;
@@ -989,26 +989,30 @@ mod tests {
 
         let mut e = base.clone();
         e.config.measurement_sigma_rad = -1.0;
-        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter));
+        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter { name: "measurement_sigma_rad", value: -1.0, bound: Bound::Positive }));
         // Regression, fuzz target `checkpoint_restore` (crash-76b5517c...): a flipped exponent made
         // the traditional random walk 1e26 rad/sqrt(s), whose square is infinite in f32.
         let mut e = base.clone();
         e.config.traditional_drift_rad_per_sqrt_s = 2.0 * Real::MAX.sqrt();
-        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter));
+        let value = e.config.traditional_drift_rad_per_sqrt_s as f64;
+        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter { name: "traditional_drift_rad_per_sqrt_s", value, bound: Bound::AtMost(1.0) }));
         let mut e = base.clone();
         e.config.measurement_sigma_rad = (if R == 4 { 1e-30 } else { 1e-200 }) as Real;
-        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter));
+        let value = e.config.measurement_sigma_rad as f64;
+        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter { name: "measurement_sigma_rad", value, bound: Bound::SquareUnderflows }));
         // Regression, fuzz target `checkpoint_restore` (slow-unit-4b0caebd..., slow-unit-91df4c6c...):
         // max_bridged_gap_samples with a flipped top byte (1.8e9) made one step bridge for minutes.
         let mut e = base.clone();
         e.config.max_bridged_gap_samples = 0x6c00_0000;
-        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter));
+        let value = e.config.max_bridged_gap_samples as f64;
+        let bound = Bound::AtMost(e.config.rotation_period_samples as f64);
+        rejects(&e, CheckpointError::InvalidConfig(ConfigError::Parameter { name: "max_bridged_gap_samples", value, bound }));
         let mut e = base.clone();
         e.config.max_bridged_gap_samples = 48;
         assert_eq!(Estimator::<64>::from_checkpoint(&image_of(&e)).map(|b| b == e), Ok(true));
         let mut e = base.clone();
         e.config.rotation_period_samples = 65;
-        rejects(&e, CheckpointError::InvalidConfig(ConfigError::RotationPeriod));
+        rejects(&e, CheckpointError::InvalidConfig(ConfigError::RotationPeriod { samples: 65, capacity: 64 }));
         let mut e = base.clone();
         if let Some(p) = &mut e.previous {
             p.attitude.roll_rad = Real::NAN;

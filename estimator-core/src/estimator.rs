@@ -677,7 +677,7 @@ mod tests {
         }
         let before = est.clone();
         let bad = Config { rotation_period_samples: 481, ..Config::default() };
-        assert_eq!(est.reinit(bad), Err(ConfigError::RotationPeriod));
+        assert_eq!(est.reinit(bad), Err(ConfigError::RotationPeriod { samples: 481, capacity: 480 }));
         assert!(est == before, "a refused configuration changed the estimator");
     }
 
