@@ -118,8 +118,8 @@ pub struct ScenarioOverrides {
     /// Log length, s (default: the scenario's).
     #[arg(long, value_name = "S")]
     pub duration: Option<f64>,
-    /// Latitude at the start, deg.
-    #[arg(long, value_name = "DEG")]
+    /// Latitude at the start, deg (south negative: `--latitude -35`).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub latitude: Option<f64>,
     /// Installation errors x1..x4, arcsec.
     #[arg(long, value_name = "X1,X2,X3,X4", allow_hyphen_values = true, value_parser = parse_list::<4>)]

@@ -11,7 +11,7 @@
 //! A rejected row carries the estimate held on board at that moment: a rejected sample leaves the
 //! estimator untouched, so that is the estimate of the last [`Output`], which the writer remembers.
 
-use crate::log_csv::{check_header, is_comment, LogError};
+use crate::log_csv::LogError;
 use estimator_core::units::{rad_to_arcsec, RAD_PER_DEG};
 use estimator_core::{Estimate, Output, SampleError};
 use std::fs::File;
@@ -24,10 +24,12 @@ const COLUMNS: usize = 13;
 /// Prefix of the status of a rejected row.
 pub const REJECTED_PREFIX: &str = "rejected_";
 
-/// Writes the estimates CSV.
+/// Writes the estimates CSV, one line per step, as the steps come (nothing is held but the last
+/// estimate and one line's buffer).
 pub struct EstimatesWriter<W: Write> {
     out: W,
     held: Option<Estimate>,
+    line: String,
 }
 
 fn push_estimate(line: &mut String, estimate: Option<&Estimate>) {
@@ -42,32 +44,36 @@ fn push_estimate(line: &mut String, estimate: Option<&Estimate>) {
     }
 }
 
-/// One row for a step's output (no newline).
-pub fn format_output(out: &Output) -> String {
+fn push_output(line: &mut String, out: &Output) {
     use std::fmt::Write as _;
-    let mut line = format!("{:.6}", out.time_s);
-    push_estimate(&mut line, out.estimate.as_ref());
+    let _ = write!(line, "{:.6}", out.time_s);
+    push_estimate(line, out.estimate.as_ref());
     let c = &out.corrected;
     let deg = |rad: estimator_core::Real| rad as f64 / RAD_PER_DEG;
-    let _ = write!(
-        line,
-        ",{},{:.9},{:.9},{:.9}",
-        out.status.name(),
-        deg(c.heading_rad),
-        deg(c.roll_rad),
-        deg(c.pitch_rad)
-    );
+    let _ = write!(line, ",{},{:.9},{:.9},{:.9}", out.status.name(), deg(c.heading_rad), deg(c.roll_rad), deg(c.pitch_rad));
+}
+
+fn push_rejected(line: &mut String, time_s: f64, reason: &SampleError, held: Option<&Estimate>) {
+    use std::fmt::Write as _;
+    let _ = write!(line, "{time_s:.6}");
+    push_estimate(line, held);
+    line.push(',');
+    line.push_str(REJECTED_PREFIX);
+    line.push_str(SampleError::reason_name(reason.reason_index()));
+    line.push_str(",,,");
+}
+
+/// One row for a step's output (no newline).
+pub fn format_output(out: &Output) -> String {
+    let mut line = String::new();
+    push_output(&mut line, out);
     line
 }
 
 /// One row for a rejected input row (no newline): its time, the held estimate, the reason.
 pub fn format_rejected(time_s: f64, reason: &SampleError, held: Option<&Estimate>) -> String {
-    let mut line = format!("{time_s:.6}");
-    push_estimate(&mut line, held);
-    line.push(',');
-    line.push_str(REJECTED_PREFIX);
-    line.push_str(SampleError::reason_name(reason.reason_index()));
-    line.push_str(",,,");
+    let mut line = String::new();
+    push_rejected(&mut line, time_s, reason, held);
     line
 }
 
@@ -75,7 +81,7 @@ impl<W: Write> EstimatesWriter<W> {
     /// Writes the header.
     pub fn new(mut out: W) -> std::io::Result<Self> {
         writeln!(out, "{HEADER}")?;
-        Ok(EstimatesWriter { out, held: None })
+        Ok(EstimatesWriter { out, held: None, line: String::with_capacity(256) })
     }
 
     /// Writes the row of one step: pass `step`'s result as it is, with the input row's time.
@@ -89,12 +95,18 @@ impl<W: Write> EstimatesWriter<W> {
     /// Writes the row of an accepted sample.
     pub fn write_output(&mut self, out: &Output) -> std::io::Result<()> {
         self.held = out.estimate;
-        writeln!(self.out, "{}", format_output(out))
+        self.line.clear();
+        push_output(&mut self.line, out);
+        self.line.push('\n');
+        self.out.write_all(self.line.as_bytes())
     }
 
     /// Writes the row of a rejected sample.
     pub fn write_rejected(&mut self, time_s: f64, reason: &SampleError) -> std::io::Result<()> {
-        writeln!(self.out, "{}", format_rejected(time_s, reason, self.held.as_ref()))
+        self.line.clear();
+        push_rejected(&mut self.line, time_s, reason, self.held.as_ref());
+        self.line.push('\n');
+        self.out.write_all(self.line.as_bytes())
     }
 
     /// Flushes and returns the inner writer.
@@ -150,6 +162,21 @@ fn parse_row(line: &str) -> Result<EstimateRow, String> {
     })
 }
 
+/// Whether a line carries no data: blank or a `#` comment.
+fn is_comment(line: &str) -> bool {
+    let t = line.trim();
+    t.is_empty() || t.starts_with('#')
+}
+
+/// Checks a header line (whitespace, a `\r` and a UTF-8 BOM around it ignored).
+fn check_header(path: &Path, line_no: usize, line: &str) -> Result<(), LogError> {
+    let got = line.trim_start_matches('\u{feff}').trim();
+    if got != HEADER {
+        return Err(LogError::new(path, line_no, format!("bad header {got:?}, expected {HEADER:?}")));
+    }
+    Ok(())
+}
+
 /// Reads an estimates CSV from a buffered reader; `path` names it in errors.
 pub fn read_estimates_from<R: BufRead>(path: &Path, reader: R) -> Result<Vec<EstimateRow>, LogError> {
     let mut rows = Vec::new();
@@ -162,7 +189,7 @@ pub fn read_estimates_from<R: BufRead>(path: &Path, reader: R) -> Result<Vec<Est
             continue;
         }
         if !header_seen {
-            check_header(path, line_no, &line, HEADER)?;
+            check_header(path, line_no, &line)?;
             header_seen = true;
             continue;
         }

@@ -5,13 +5,14 @@ use clap::{Parser, Subcommand};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Method, SampleError};
 use host_sim::cli_args::{method_label, MethodArg, ScenarioArg, ScenarioOverrides, TuningArgs};
-use host_sim::log_csv::{self, Truth};
-use host_sim::pipeline::{default_estimates_path, estimate_file, estimate_file_with_restarts, load_truth, report, Estimated};
-use host_sim::replay::Replay;
-use host_sim::report::{format_accuracy, format_rms, Report};
+use host_sim::log_csv::{self, LogError, Truth};
+use host_sim::pipeline::{default_estimates_path, estimate_log, load_truth, truth_rows, EstimateOptions};
+use host_sim::replay::{Replay, Step};
+use host_sim::report::{format_accuracy, format_rms, Report, TruthRows};
 use host_sim::monte_carlo::{format_summary, run_all, summarize, Draw, MC_TIMES_S};
 use host_sim::scenario::{generate, Mismatch, ScenarioKind};
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 #[derive(Parser, Debug)]
 #[command(name = "host-sim", version, about = "RINS installation-error estimator: scenarios, log replay, reports and plots")]
@@ -26,6 +27,7 @@ enum Command {
     Generate(GenerateArgs),
     /// Replay an attitude log through the estimator, write the estimates CSV, print the final
     /// estimates, the rejected rows and (with FILE.truth.json beside the log) the accuracy table.
+    /// Formats: docs/log-format.md.
     Estimate(EstimateArgs),
     /// Generate + estimate with every method + report + plots, in one go.
     Run(RunArgs),
@@ -56,9 +58,13 @@ struct GenerateArgs {
 struct EstimateArgs {
     /// Attitude log (CSV, plain or gzip, `-` for standard input; format: docs/log-format.md).
     log: PathBuf,
-    /// Estimates CSV to write (default: LOG.estimates.csv beside the log).
-    #[arg(long, value_name = "EST.csv")]
+    /// Estimates CSV to write (default: LOG.estimates.csv beside the log; `-`: standard output,
+    /// the summary then goes to standard error). Never the log itself.
+    #[arg(long, value_name = "EST.csv", allow_hyphen_values = true)]
     out: Option<PathBuf>,
+    /// Refuse the log at its first unreadable row (default: skip it, count it, report its line).
+    #[arg(long)]
+    strict: bool,
     /// Identification method.
     #[arg(long, value_enum, default_value_t = MethodArg::Windowed)]
     method: MethodArg,
@@ -194,6 +200,15 @@ struct CompareArgs {
     spread: SpreadArgs,
 }
 
+/// Whether an error is a closed pipe on the way out (`host-sim estimate ... | head`).
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            || c.downcast_ref::<host_sim::replay::ReplayError>()
+                .is_some_and(|r| matches!(r, host_sim::replay::ReplayError::Write(io) if io.kind() == std::io::ErrorKind::BrokenPipe))
+    })
+}
+
 fn main() {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -205,6 +220,10 @@ fn main() {
         Command::Stream(a) => host_sim::stream::run(a),
     };
     if let Err(e) = result {
+        // The reader went away: stop quietly, as command-line tools do.
+        if is_broken_pipe(&e) {
+            std::process::exit(0);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
@@ -220,51 +239,74 @@ fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Tells each unreadable row skipped (the first few) on standard error.
+fn warn_row(e: &LogError) {
+    eprintln!("warning: {e} (row skipped)");
+}
+
 fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     let out = a.out.clone().unwrap_or_else(|| default_estimates_path(&a.log));
     let method: Method = a.method.into();
     let mut restart_at = a.restart_at.clone();
     anyhow::ensure!(restart_at.iter().all(|t| t.is_finite()), "--restart-at needs finite times");
     restart_at.sort_by(f64::total_cmp);
-    let est = estimate_file_with_restarts(&a.log, &out, a.tuning.config(method), &restart_at)?;
+    let options = EstimateOptions { config: a.tuning.config(method), restart_at_s: restart_at.clone(), strict: a.strict };
+    let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
+    let rows = truth.as_ref().map(|(t, g)| truth_rows(t, g.as_ref()));
+    let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_, _| {})?;
+    // The summary goes where the estimates do not.
+    let mut info: Box<dyn Write> = if log_csv::is_stdio(&out) { Box::new(std::io::stderr()) } else { Box::new(std::io::stdout().lock()) };
     if !restart_at.is_empty() {
-        println!("restarted from a checkpoint after the rows at {restart_at:?} s");
+        writeln!(info, "restarted from a checkpoint after the rows at {restart_at:?} s")?;
     }
-    print_summary(&a.log.display().to_string(), method, &est.replay, &out.display().to_string());
-    if let Some((truth, generated)) = load_truth(&a.log)? {
-        print_report(method, &report(&est, &truth, &generated));
+    let out_name = if log_csv::is_stdio(&out) { "standard output".to_string() } else { out.display().to_string() };
+    print_summary(&mut info, &a.log, method, &est.replay, &out_name)?;
+    if let Some(rep) = &est.report {
+        print_report(&mut info, method, rep)?;
+    }
+    info.flush()?;
+    Ok(())
+}
+
+fn print_summary(w: &mut dyn Write, log: &Path, method: Method, r: &Replay, out: &str) -> std::io::Result<()> {
+    let log = if log_csv::is_stdio(log) { "standard input".to_string() } else { log.display().to_string() };
+    writeln!(
+        w,
+        "{log}: method {}: {} rows, {} accepted, {} bridged (gap samples interpolated), {} window restarts; estimates in {out}",
+        method.name(),
+        r.rows,
+        r.accepted,
+        r.bridged,
+        r.window_restarts
+    )?;
+    match r.final_estimate {
+        Some(e) => {
+            for i in 0..4 {
+                writeln!(w, "  x{} = {:+.3} arcsec (1-sigma {:.3})", i + 1, rad_to_arcsec(e.x_rad[i] as f64), rad_to_arcsec(e.sigma_rad[i] as f64))?;
+            }
+        }
+        None => writeln!(w, "  no estimate (log too short or no sample accepted)")?,
+    }
+    let reasons: Vec<String> = (0..SampleError::COUNT).map(|i| format!("{} {}", SampleError::reason_name(i), r.rejected.0[i])).collect();
+    writeln!(w, "  rejected rows: {} ({})", r.rejected.total(), reasons.join(", "))?;
+    if r.unreadable.skipped > 0 {
+        let lines: Vec<String> = r.unreadable.first.iter().map(|e| e.line.to_string()).collect();
+        let more = if r.unreadable.skipped as usize > lines.len() { ", ..." } else { "" };
+        writeln!(w, "  unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)", r.unreadable.skipped, lines.join(", "))?;
     }
     Ok(())
 }
 
-fn print_summary(log: &str, method: Method, r: &Replay, out: &str) {
-    println!(
-        "{log}: method {}: {} rows, {} accepted, {} bridged (gap samples interpolated), {} window restarts; estimates in {out}",
-        method.name(),
-        r.steps.len(),
-        r.accepted,
-        r.bridged,
-        r.window_restarts
-    );
-    match r.final_estimate {
-        Some(e) => {
-            for i in 0..4 {
-                println!("  x{} = {:+.3} arcsec (1-sigma {:.3})", i + 1, rad_to_arcsec(e.x_rad[i] as f64), rad_to_arcsec(e.sigma_rad[i] as f64));
-            }
-        }
-        None => println!("  no estimate (log too short or no sample accepted)"),
-    }
-    let reasons: Vec<String> = (0..SampleError::COUNT).map(|i| format!("{} {}", SampleError::reason_name(i), r.rejected.0[i])).collect();
-    println!("  rejected rows: {} ({})", r.rejected.total(), reasons.join(", "));
-}
-
-fn print_report(method: Method, rep: &Report) {
-    println!("\naccuracy against the truth, {}:", method_label(method));
-    print!("{}", format_accuracy(&rep.accuracy));
+fn print_report(w: &mut dyn Write, method: Method, rep: &Report) -> std::io::Result<()> {
+    writeln!(w, "\naccuracy against the truth, {}:", method_label(method))?;
+    write!(w, "{}", format_accuracy(&rep.accuracy))?;
     if let Some(r) = &rep.rms_from_first_estimate {
-        print!("{}", format_rms("from the first estimate", r));
+        write!(w, "{}", format_rms("from the first estimate", r))?;
     }
-    print!("{}", format_rms("last quarter of the run", &rep.rms_last_quarter));
+    if let Some(r) = &rep.rms_last_quarter {
+        write!(w, "{}", format_rms("last quarter of the run", r))?;
+    }
+    Ok(())
 }
 
 fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
@@ -277,23 +319,30 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     let truth = Truth::new(&params);
     log_csv::write_truth(&log_csv::truth_path(&log), &truth)?;
     println!("wrote {} ({} rows) and its truth file", log.display(), generated.rows.len());
-    let mut runs: Vec<(Method, Estimated)> = Vec::new();
+    let mut runs: Vec<(Method, Vec<Step>)> = Vec::new();
     let mut reports: Vec<(Method, Report)> = Vec::new();
+    let mut stdout = std::io::stdout().lock();
     for method in [Method::Windowed, Method::Paper, Method::Traditional] {
         let out = dir.join(format!("{}.estimates.{}.csv", params.scenario.name(), method.name()));
-        let est = estimate_file(&log, &out, a.tuning.config(method))?;
-        print_summary(&log.display().to_string(), method, &est.replay, &out.display().to_string());
-        let rep = report(&est, &truth, &generated);
-        print_report(method, &rep);
-        println!();
-        runs.push((method, est));
+        let options = EstimateOptions { config: a.tuning.config(method), restart_at_s: vec![], strict: true };
+        let mut steps = Vec::with_capacity(generated.rows.len());
+        let rows = TruthRows::Generated { rows: &generated.rows, truth: &generated.truth };
+        let est = estimate_log(&log, &out, &options, Some(rows), &mut warn_row, &mut |line, result| {
+            steps.push(Step { time_s: line.row.time_s, result: *result })
+        })?;
+        print_summary(&mut stdout, &log, method, &est.replay, &out.display().to_string())?;
+        let rep = est.report.context("a report against the generated truth")?;
+        print_report(&mut stdout, method, &rep)?;
+        writeln!(stdout)?;
+        runs.push((method, steps));
         reports.push((method, rep));
     }
+    drop(stdout);
     println!("side by side ({} scenario, seed {}):", params.scenario.name(), params.seed);
     let side: Vec<(&str, &Report)> = reports.iter().map(|(m, r)| (method_label(*m), r)).collect();
     print!("{}", host_sim::report::format_side_by_side(&side));
     if !a.no_plots {
-        let steps: Vec<(&str, &[host_sim::replay::Step])> = runs.iter().map(|(m, e)| (m.name(), e.replay.steps.as_slice())).collect();
+        let steps: Vec<(&str, &[Step])> = runs.iter().map(|(m, s)| (m.name(), s.as_slice())).collect();
         let window = (params.rotation_period_s / params.sample_interval_s).round() as usize;
         let files = host_sim::figures::write_figures(&dir, &generated.rows, &generated.truth, &params.errors_arcsec, params.sample_interval_s, window, &steps)?;
         println!("plots:");
