@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Runs every test of the project on a fresh machine, installing what is missing first:
-#   1. the thumbv7em-none-eabihf Rust target and qemu-system-arm (apt), if absent;
+#   1. the thumbv7em-none-eabihf Rust target, qemu-system-arm and GNU time (apt), if absent;
 #   2. `cargo test --workspace --release`: estimator-core, link-protocol, host-sim (including the
 #      QEMU end-to-end tests, which build the firmware for the target themselves);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
 #   4. the firmware build for the target, with and without its checkpoint feature (its budgets are
 #      checked by host-sim's qemu_budgets test);
 #   5. clippy on the firmware and the link code, which deny every panicking construct;
-#   6. that the tests left no trace: `git status --porcelain` at the end equals the one at the start.
+#   6. the 30-day replay's peak memory (scripts/memory-30day.sh: at most 64 MB, GNU time);
+#   7. that the tests left no trace: `git status --porcelain` at the end equals the one at the start.
 # Usage: bash scripts/test-all.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,11 +26,15 @@ fi
 if ! cargo clippy --version >/dev/null 2>&1; then
     rustup component add clippy
 fi
-if ! command -v qemu-system-arm >/dev/null 2>&1; then
+MISSING=""
+if ! command -v qemu-system-arm >/dev/null 2>&1; then MISSING="$MISSING qemu-system-arm"; fi
+if [ ! -x /usr/bin/time ]; then MISSING="$MISSING time"; fi
+if [ -n "$MISSING" ]; then
     SUDO=""
     if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
     $SUDO apt-get update -q
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q qemu-system-arm
+    # shellcheck disable=SC2086
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q $MISSING
 fi
 qemu-system-arm --version | head -n 1
 cargo --version
@@ -48,6 +53,9 @@ log "no panicking path on the link: clippy's deny(unwrap_used, expect_used, inde
 # The firmware, link-protocol and estimator-core deny these lints in their sources; only clippy
 # enforces them, so it runs here (warnings of other lints do not fail the run).
 cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware
+
+log "peak memory of a 30-day replay"
+bash scripts/memory-30day.sh
 
 log "the tests left no trace in the checkout"
 STATUS_AFTER="$(git_status)"
