@@ -85,6 +85,24 @@ impl TuningArgs {
         }
         c
     }
+
+    /// [`TuningArgs::config`], checked by the core; the error names the parameter, its value, its
+    /// bound and the option that set it.
+    pub fn checked_config(&self, method: Method) -> anyhow::Result<Config> {
+        let c = self.config(method);
+        if let Err(e) = crate::replay::HostEstimator::new(c) {
+            let option = match e {
+                estimator_core::ConfigError::Parameter { name: "traditional_sigma_rad", .. } => " (set by --traditional-sigma-deg, deg)",
+                estimator_core::ConfigError::Parameter { name: "traditional_drift_rad_per_sqrt_s", .. } => {
+                    " (set by --traditional-drift-arcsec-per-sqrt-s, arcsec/sqrt(s))"
+                }
+                estimator_core::ConfigError::Parameter { name: "max_bridged_gap_samples", .. } => " (set by --max-bridged-gap-samples)",
+                _ => "",
+            };
+            anyhow::bail!("invalid estimator configuration: {e}{option}");
+        }
+        Ok(c)
+    }
 }
 
 /// Longest log the generator is asked for, s (30 days: 2.6 million rows, about 200 MB of CSV).

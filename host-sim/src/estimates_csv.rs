@@ -58,14 +58,31 @@ fn push_fixed(line: &mut String, value: f64, decimals: usize) {
     if rem > half || (rem == half && q & 1 == 1) {
         q += 1;
     }
+    let Ok(q) = u64::try_from(q) else {
+        let _ = write!(line, "{value:.decimals$}");
+        return;
+    };
     if value.is_sign_negative() {
         line.push('-');
     }
-    let unit = POW10[decimals];
-    let _ = write!(line, "{}", q / unit);
+    let unit = POW10[decimals] as u64;
+    push_digits(line, q / unit, 1);
     if decimals > 0 {
-        let _ = write!(line, ".{:0width$}", q % unit, width = decimals);
+        line.push('.');
+        push_digits(line, q % unit, decimals);
     }
+}
+
+/// Appends `n` in decimal, zero-padded to at least `width` digits.
+fn push_digits(line: &mut String, mut n: u64, width: usize) {
+    let mut digits = [b'0'; 20];
+    let mut start = digits.len();
+    while n > 0 || digits.len() - start < width {
+        start -= 1;
+        digits[start] = b'0' + (n % 10) as u8;
+        n /= 10;
+    }
+    line.extend(digits[start..].iter().map(|&d| d as char));
 }
 
 fn push_estimate(line: &mut String, estimate: Option<&Estimate>) {
@@ -83,9 +100,12 @@ fn push_estimate(line: &mut String, estimate: Option<&Estimate>) {
 /// `{:.6}` of a time, byte for byte. Whole seconds (nearly every log row) are written as an
 /// integer and `.000000`.
 fn push_time(line: &mut String, time_s: f64) {
-    use std::fmt::Write as _;
     if time_s.fract() == 0.0 && time_s.abs() < 9.0e15 && !(time_s == 0.0 && time_s.is_sign_negative()) {
-        let _ = write!(line, "{}.000000", time_s as i64);
+        if time_s < 0.0 {
+            line.push('-');
+        }
+        push_digits(line, time_s.abs() as u64, 1);
+        line.push_str(".000000");
     } else {
         push_fixed(line, time_s, 6);
     }

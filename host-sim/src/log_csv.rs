@@ -80,13 +80,13 @@ pub fn is_stdio(path: &Path) -> bool {
 }
 
 /// Opens a log for reading: a file, or standard input for `-`; gzip is decompressed on the fly.
-pub fn open_input(path: &Path) -> Result<Box<dyn Read>, LogError> {
+pub fn open_input(path: &Path) -> Result<Box<dyn Read + Send>, LogError> {
     open_input_gz(path).map(|(r, _)| r)
 }
 
 /// [`open_input`], and whether the log is gzip.
-fn open_input_gz(path: &Path) -> Result<(Box<dyn Read>, bool), LogError> {
-    let raw: Box<dyn Read> = if is_stdio(path) {
+fn open_input_gz(path: &Path) -> Result<(Box<dyn Read + Send>, bool), LogError> {
+    let raw: Box<dyn Read + Send> = if is_stdio(path) {
         Box::new(std::io::stdin())
     } else {
         Box::new(File::open(path).map_err(|e| LogError::new(path, 0, format!("cannot open: {e}")))?)
@@ -113,11 +113,8 @@ struct LineCounter<R> {
 impl<R: Read> Read for LineCounter<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = self.inner.read(buf)?;
-        for (i, b) in buf[..n].iter().enumerate() {
-            if *b == b'\n' {
-                self.ahead.push_back(self.offset + i as u64);
-            }
-        }
+        let offset = self.offset;
+        self.ahead.extend(memchr::memchr_iter(b'\n', &buf[..n]).map(|i| offset + i as u64));
         self.offset += n as u64;
         Ok(n)
     }
@@ -145,7 +142,7 @@ pub struct LogReader<R: Read> {
     gzip: bool,
 }
 
-impl LogReader<Box<dyn Read>> {
+impl LogReader<Box<dyn Read + Send>> {
     /// Opens a log file (or standard input for `-`; gzip decompressed).
     pub fn open(path: &Path) -> Result<Self, LogError> {
         let (input, gzip) = open_input_gz(path)?;
@@ -296,6 +293,36 @@ impl<R: Read> Iterator for LogReader<R> {
             });
         }
     }
+}
+
+/// Rows parsed ahead by [`read_ahead`]'s thread, per batch.
+const READ_AHEAD_BATCH: usize = 4096;
+
+/// Runs `reader` on a thread of its own, a few batches of rows ahead of `consume`, which gets the
+/// same items in the same order: parsing the CSV and the work done with its rows then share two
+/// cores. At most 4 batches of [`READ_AHEAD_BATCH`] rows wait at any time, so memory does not grow
+/// with the log. If `consume` returns early, the reader stops at its next batch.
+pub fn read_ahead<R, T>(reader: LogReader<R>, consume: impl FnOnce(&mut dyn Iterator<Item = Result<LogLine, LogError>>) -> T) -> T
+where
+    R: Read + Send,
+{
+    let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Result<LogLine, LogError>>>(4);
+    std::thread::scope(|scope| {
+        scope.spawn(move || {
+            let mut reader = reader;
+            loop {
+                let batch: Vec<_> = reader.by_ref().take(READ_AHEAD_BATCH).collect();
+                if batch.is_empty() || tx.send(batch).is_err() {
+                    break;
+                }
+            }
+        });
+        let mut items = rx.iter().flatten();
+        let result = consume(&mut items);
+        // Hang up before the reader thread is joined, so that it stops if `consume` stopped early.
+        drop(items);
+        result
+    })
 }
 
 /// Reads a whole attitude log; any unreadable row is an error.

@@ -250,7 +250,7 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     let mut restart_at = a.restart_at.clone();
     anyhow::ensure!(restart_at.iter().all(|t| t.is_finite()), "--restart-at needs finite times");
     restart_at.sort_by(f64::total_cmp);
-    let options = EstimateOptions { config: a.tuning.config(method), restart_at_s: restart_at.clone(), strict: a.strict };
+    let options = EstimateOptions { config: a.tuning.checked_config(method)?, restart_at_s: restart_at.clone(), strict: a.strict };
     let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
     let rows = truth.as_ref().map(|(t, g)| truth_rows(t, g.as_ref()));
     let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_, _| {})?;

@@ -3,7 +3,7 @@
 //! parameters is the exception: its scenario is regenerated in memory).
 
 use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{self, is_stdio, LogError, LogLine, LogReader, RowFilter, TruthFile};
+use crate::log_csv::{self, is_stdio, read_ahead, LogError, LogLine, LogReader, RowFilter, TruthFile};
 use crate::replay::{replay_each, Replay, ReplayError};
 use crate::report::{Report, ReportBuilder, TruthRows};
 use crate::scenario::{generate, Generated};
@@ -114,13 +114,15 @@ pub fn estimate_log(
     let lines = LogReader::open(log)?;
     let mut writer = EstimatesWriter::new(open_output(out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
     let mut report = truth.map(ReportBuilder::new);
-    let replay = replay_each(lines, options.config, &options.restart_at_s, RowFilter::new(options.strict), warn, |line, result| {
-        writer.write_step(line.row.time_s, result).map_err(ReplayError::Write)?;
-        if let Some(r) = report.as_mut() {
-            r.observe(&line.row, result);
-        }
-        each(line, result);
-        Ok(())
+    let replay = read_ahead(lines, |lines| {
+        replay_each(lines, options.config, &options.restart_at_s, RowFilter::new(options.strict), warn, |line, result| {
+            writer.write_step(line.row.time_s, result).map_err(ReplayError::Write)?;
+            if let Some(r) = report.as_mut() {
+                r.observe(&line.row, result);
+            }
+            each(line, result);
+            Ok(())
+        })
     })?;
     writer.finish().with_context(|| format!("{}:0: cannot write", out.display()))?;
     Ok(Estimated { replay, report: report.map(|r| r.finish(options.config.sample_interval_s)) })

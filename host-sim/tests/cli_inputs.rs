@@ -175,7 +175,7 @@ fn a_configuration_error_names_the_parameter_its_value_and_its_bound() {
     let out = host_sim(&["estimate", path_str(&log), "--traditional-sigma-deg", "0"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("traditional_sigma_rad = 0 must be positive and finite"), "{stderr}");
+    assert!(stderr.contains("traditional_sigma_rad = 0 must be positive and finite (set by --traditional-sigma-deg, deg)"), "{stderr}");
     let out = host_sim(&["estimate", path_str(&log), "--max-bridged-gap-samples", "481"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("max_bridged_gap_samples = 481 must be at most 480"), "{stderr}");
