@@ -118,22 +118,85 @@ impl Default for Config {
     }
 }
 
-/// A configuration the estimator cannot run with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// A configuration the estimator cannot run with: which parameter, its value and the bound it
+/// breaks. Displayed on one line, e.g. `measurement_sigma_rad = -1 must be positive and finite`.
+/// Values compare bit for bit, so that equality is an equivalence (a NaN value equals itself).
+#[derive(Clone, Copy, Debug)]
 pub enum ConfigError {
-    /// A pinned `rotation_period_s` outside [`ROTATION_PERIOD_RANGE_S`], or a ring capacity
-    /// below 2.
-    RotationPeriod,
+    /// A pinned `rotation_period_s` outside [`ROTATION_PERIOD_RANGE_S`] (or a ring of fewer than
+    /// two entries: `value_s` is then the capacity).
+    RotationPeriod { value_s: f64 },
     /// A pinned `sample_interval_s` outside [`SAMPLE_INTERVAL_RANGE_S`].
-    SampleInterval,
-    /// A noise, tolerance or gate is negative or not finite, a sigma is zero (or its square
-    /// underflows) or above 1 rad, the prior is more than 1000 times a measurement sigma, one
-    /// step's random walk exceeds 1 rad, or gaps longer than
-    /// [`crate::gap_fill::MAX_FILLABLE_GAP`] would be filled.
-    Parameter,
+    SampleInterval { value_s: f64 },
+    /// A noise, tolerance, gate or filling limit out of its bound.
+    Parameter { name: &'static str, value: f64, bound: Bound },
     /// The method is not in this build (the paper's method needs the `paper-method` feature).
     MethodUnavailable,
 }
+
+/// The bound a [`ConfigError::Parameter`] breaks.
+#[derive(Clone, Copy, Debug)]
+pub enum Bound {
+    /// Must be positive and finite.
+    Positive,
+    /// Must be zero or positive, and finite.
+    NonNegative,
+    /// Must be at most this (1 rad for a sigma; one rotation period for bridging; 1000 times the
+    /// measurement sigma for the prior; 1 rad per step for a random walk, given per sqrt(s)).
+    AtMost(f64),
+    /// Its square underflows to 0 in the build's float type.
+    SquareUnderflows,
+}
+
+impl PartialEq for Bound {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (Bound::AtMost(a), Bound::AtMost(b)) => a.to_bits() == b.to_bits(),
+            (a, b) => core::mem::discriminant(a) == core::mem::discriminant(b),
+        }
+    }
+}
+impl Eq for Bound {}
+
+impl PartialEq for ConfigError {
+    fn eq(&self, other: &Self) -> bool {
+        use ConfigError::*;
+        match (self, other) {
+            (RotationPeriod { value_s: a }, RotationPeriod { value_s: b }) => a.to_bits() == b.to_bits(),
+            (SampleInterval { value_s: a }, SampleInterval { value_s: b }) => a.to_bits() == b.to_bits(),
+            (Parameter { name: a, value: b, bound: c }, Parameter { name: d, value: e, bound: f }) => {
+                a == d && b.to_bits() == e.to_bits() && c == f
+            }
+            (MethodUnavailable, MethodUnavailable) => true,
+            _ => false,
+        }
+    }
+}
+impl Eq for ConfigError {}
+
+impl core::fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ConfigError::RotationPeriod { value_s } => {
+                let (lo, hi) = ROTATION_PERIOD_RANGE_S;
+                write!(f, "rotation_period_s = {value_s} must be from {lo} to {hi} s (or the ring capacity is below 2)")
+            }
+            ConfigError::SampleInterval { value_s } => {
+                let (lo, hi) = SAMPLE_INTERVAL_RANGE_S;
+                write!(f, "sample_interval_s = {value_s} must be from {lo} to {hi} s")
+            }
+            ConfigError::Parameter { name, value, bound } => match bound {
+                Bound::Positive => write!(f, "{name} = {value} must be positive and finite"),
+                Bound::NonNegative => write!(f, "{name} = {value} must be zero or positive, and finite"),
+                Bound::AtMost(limit) => write!(f, "{name} = {value} must be at most {limit}"),
+                Bound::SquareUnderflows => write!(f, "{name} = {value} is too small: its square underflows to 0"),
+            },
+            ConfigError::MethodUnavailable => write!(f, "method unavailable: the paper's method needs the `paper-method` feature"),
+        }
+    }
+}
+
+impl core::error::Error for ConfigError {}
 
 impl Config {
     /// The default configuration with another method.
@@ -141,56 +204,84 @@ impl Config {
         Config { method, ..Config::default() }
     }
 
-    /// Checks the configuration against a ring capacity.
+    /// Checks the configuration against a ring capacity; the error names the first parameter
+    /// out of bounds.
     pub fn check(&self, capacity: usize) -> Result<(), ConfigError> {
+        use Bound::*;
+        let fail = |name: &'static str, value: Real, bound: Bound| Err(ConfigError::Parameter { name, value: value as f64, bound });
         if self.method == Method::Paper && !cfg!(feature = "paper-method") {
             return Err(ConfigError::MethodUnavailable);
         }
-        let within = |v: Option<f64>, (lo, hi): (f64, f64)| v.is_none_or(|v| v >= lo && v <= hi);
-        if capacity < 2 || !within(self.rotation_period_s, ROTATION_PERIOD_RANGE_S) {
-            return Err(ConfigError::RotationPeriod);
+        let within = |v: f64, (lo, hi): (f64, f64)| v >= lo && v <= hi;
+        if capacity < 2 {
+            return Err(ConfigError::RotationPeriod { value_s: capacity as f64 });
         }
-        if !within(self.sample_interval_s, SAMPLE_INTERVAL_RANGE_S) {
-            return Err(ConfigError::SampleInterval);
+        if let Some(t) = self.rotation_period_s.filter(|t| !within(*t, ROTATION_PERIOD_RANGE_S)) {
+            return Err(ConfigError::RotationPeriod { value_s: t });
+        }
+        if let Some(d) = self.sample_interval_s.filter(|d| !within(*d, SAMPLE_INTERVAL_RANGE_S)) {
+            return Err(ConfigError::SampleInterval { value_s: d });
         }
         let positive = [
-            self.prior_sigma_rad,
-            self.measurement_sigma_rad,
-            self.traditional_sigma_rad,
-            self.converged_sigma_rad,
-            self.rotation_period_tolerance,
+            ("prior_sigma_rad", self.prior_sigma_rad),
+            ("measurement_sigma_rad", self.measurement_sigma_rad),
+            ("traditional_sigma_rad", self.traditional_sigma_rad),
+            ("converged_sigma_rad", self.converged_sigma_rad),
+            ("rotation_period_tolerance", self.rotation_period_tolerance),
         ];
-        let non_negative =
-            [self.drift_rad_per_sqrt_s, self.traditional_drift_rad_per_sqrt_s, self.sway_gate_rad];
-        if positive.iter().any(|v| !(*v > 0.0 && v.is_finite()))
-            || non_negative.iter().any(|v| !(*v >= 0.0 && v.is_finite()))
-        {
-            return Err(ConfigError::Parameter);
+        let non_negative = [
+            ("drift_rad_per_sqrt_s", self.drift_rad_per_sqrt_s),
+            ("traditional_drift_rad_per_sqrt_s", self.traditional_drift_rad_per_sqrt_s),
+            ("sway_gate_rad", self.sway_gate_rad),
+        ];
+        if let Some((name, v)) = positive.iter().find(|(_, v)| !(*v > 0.0 && v.is_finite())) {
+            return fail(name, *v, Positive);
+        }
+        if let Some((name, v)) = non_negative.iter().find(|(_, v)| !(*v >= 0.0 && v.is_finite())) {
+            return fail(name, *v, NonNegative);
         }
         // Every sigma, and the random walk of one step, at most 1 rad: no installation error or
         // attitude noise comes near a radian, and with that bound no variance can overflow (the
         // prior plus 2^32 steps of random walk stays below 5e9 rad^2). Found by fuzzing the
         // checkpoint restore: a random walk of 9e18 rad/sqrt(s) passed a finiteness check and
         // overflowed the covariance two steps later; a sigma of 1e20 rad squared to infinity.
-        let dt = self.sample_interval_s.unwrap_or(SAMPLE_INTERVAL_RANGE_S.1) as Real;
-        let sigmas = [self.prior_sigma_rad, self.measurement_sigma_rad, self.traditional_sigma_rad, self.converged_sigma_rad];
-        let drifts = [self.drift_rad_per_sqrt_s, self.traditional_drift_rad_per_sqrt_s];
-        if sigmas.iter().any(|s| !(*s <= 1.0 && s * s > 0.0)) || drifts.iter().any(|d| !(d * d * dt <= 1.0)) {
-            return Err(ConfigError::Parameter);
+        // The longest interval there can be (a learned one is not known yet).
+        let interval_s = self.sample_interval_s.unwrap_or(SAMPLE_INTERVAL_RANGE_S.1);
+        let dt = interval_s as Real;
+        let sigmas = [positive[0], positive[1], positive[2], positive[3]];
+        let drifts = [non_negative[0], non_negative[1]];
+        for (name, s) in sigmas {
+            if !(s <= 1.0) {
+                return fail(name, s, AtMost(1.0));
+            }
+            if !(s * s > 0.0) {
+                return fail(name, s, SquareUnderflows);
+            }
+        }
+        for (name, d) in drifts {
+            if !(d * d * dt <= 1.0) {
+                return fail(name, d, AtMost(1.0 / libm::sqrt(interval_s)));
+            }
         }
         // In f32 a prior far wider than the measurement noise makes the first updates lose the
         // covariance's definiteness (`crate::kalman`: the variance ratio must stay well below
         // 1/eps). Prior at most 1000 times each measurement sigma (variance ratio 1e6; the
         // defaults' are 141 and 0.13).
-        if self.prior_sigma_rad > 1000.0 * self.measurement_sigma_rad
-            || self.prior_sigma_rad > 1000.0 * self.traditional_sigma_rad
-        {
-            return Err(ConfigError::Parameter);
+        let widest = 1000.0 * self.measurement_sigma_rad.min(self.traditional_sigma_rad);
+        if self.prior_sigma_rad > widest {
+            return fail("prior_sigma_rad", self.prior_sigma_rad, AtMost(widest as f64));
         }
         // A filled sample is interpolated from its neighbours, which a longer gap does not have;
         // at most 50 % off the period, or the pattern is not the one detected.
-        if self.max_filled_gap_samples > MAX_FILLABLE_GAP || !(self.rotation_period_tolerance <= 0.5) {
-            return Err(ConfigError::Parameter);
+        if self.max_filled_gap_samples > MAX_FILLABLE_GAP {
+            return Err(ConfigError::Parameter {
+                name: "max_filled_gap_samples",
+                value: f64::from(self.max_filled_gap_samples),
+                bound: AtMost(f64::from(MAX_FILLABLE_GAP)),
+            });
+        }
+        if !(self.rotation_period_tolerance <= 0.5) {
+            return fail("rotation_period_tolerance", self.rotation_period_tolerance, AtMost(0.5));
         }
         Ok(())
     }

@@ -794,7 +794,7 @@ mod tests {
         }
         let before = est.clone();
         let bad = Config { rotation_period_s: Some(4000.0), ..Config::default() };
-        assert_eq!(est.reinit(bad), Err(ConfigError::RotationPeriod));
+        assert_eq!(est.reinit(bad), Err(ConfigError::RotationPeriod { value_s: 4000.0 }));
         assert!(est == before, "a refused configuration changed the estimator");
     }
 

@@ -8,6 +8,11 @@
 //! cut at any point of a save leaves that slot without a valid header or with an image that fails
 //! the core's checks, and the other slot, untouched, still holds the last good image. At boot the
 //! slots are tried newest first; the first one the core restores wins.
+//!
+//! [`CheckpointStore::invalidate`] (the host's `Reset`) erases the header block of both slots, the
+//! older first: a power cut in between leaves at most the newest image, i.e. the state as it was
+//! before the reset was asked for (which was then not answered), never an older one. Once it
+//! returns, no image is left to restore: a later power cut cannot bring the forgotten state back.
 
 use embedded_storage::nor_flash::NorFlash;
 use estimator_core::Estimator;
@@ -95,6 +100,23 @@ impl<F: NorFlash> CheckpointStore<F> {
             }
         }
         None
+    }
+
+    /// Makes both slots invalid (their first erase block, which holds the header, erased), the
+    /// older slot first. On success nothing is left to restore and the next save starts afresh in
+    /// slot 0; on a flash error the store still describes what the flash may hold.
+    pub fn invalidate(&mut self) -> Result<(), StoreError> {
+        let newest_slot = self.newest.map_or(1, |(_, slot)| slot);
+        for slot in [1 - newest_slot, newest_slot] {
+            let base = (slot * SLOT_BYTES) as u32;
+            let header_block = F::ERASE_SIZE.max(HEADER_BYTES) as u32;
+            self.flash
+                .erase(base, base + header_block)
+                .map_err(|_| StoreError::Flash)?;
+        }
+        self.newest = None;
+        self.time_s = None;
+        Ok(())
     }
 
     /// Saves the estimator's state, taken at the sample of `time_s`, into the older slot.

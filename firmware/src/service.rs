@@ -86,6 +86,15 @@ impl<'a> Service<'a> {
             }
             Request::Reset => {
                 reset(self.estimator);
+                // Forgotten for good: a power cut must not restore the state the host asked to
+                // forget. If the flash fails, the Status still shows the checkpoint's time, which
+                // tells the host that the reset is incomplete.
+                if let Some(p) = self.persistence.as_mut() {
+                    p.last_s = None;
+                    if p.store.invalidate().is_err() {
+                        defmt::error!("checkpoints not invalidated by the reset");
+                    }
+                }
                 Response::Status(self.status())
             }
             Request::ReadStatus => Response::Status(self.status()),

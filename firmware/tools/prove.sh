@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Proves the firmware end to end (issue 4), on a machine with rustup's thumbv7em-none-eabihf
+# Proves the firmware end to end, on a machine with rustup's thumbv7em-none-eabihf
 # target, qemu-system-arm and gcc:
 #   1. builds the release ELF (`--profile firmware`) and prints its sizes;
 #   2. runs link-protocol's unit tests (round trips, every fault kind);

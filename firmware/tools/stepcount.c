@@ -1,5 +1,5 @@
 // QEMU TCG plugin: exact count of guest instructions executed from PC `start` to PC `end`, over
-// every such interval of the run (shared/notes/toolchain.md section 6, with a summary file).
+// every such interval of the run, with a summary file.
 // Build: gcc -O2 -shared -fPIC -fvisibility=hidden -DPLUGIN_API=1 -o libstepcount.so stepcount.c
 // (PLUGIN_API=1 for QEMU 7.2, 2 for QEMU 10). Run: qemu-system-arm ...
 //   -plugin ./libstepcount.so,start=0xADDR,end=0xADDR,out=FILE

@@ -87,6 +87,24 @@ impl TuningArgs {
         }
         c
     }
+
+    /// [`TuningArgs::config`], checked by the core; the error names the parameter, its value, its
+    /// bound and the option that set it.
+    pub fn checked_config(&self, method: Method) -> anyhow::Result<Config> {
+        let c = self.config(method);
+        if let Err(e) = crate::replay::HostEstimator::new(c) {
+            let option = match e {
+                estimator_core::ConfigError::Parameter { name: "traditional_sigma_rad", .. } => " (set by --traditional-sigma-deg, deg)",
+                estimator_core::ConfigError::Parameter { name: "traditional_drift_rad_per_sqrt_s", .. } => {
+                    " (set by --traditional-drift-arcsec-per-sqrt-s, arcsec/sqrt(s))"
+                }
+                estimator_core::ConfigError::Parameter { name: "max_filled_gap_samples", .. } => " (set by --max-filled-gap-samples)",
+                _ => "",
+            };
+            anyhow::bail!("invalid estimator configuration: {e}{option}");
+        }
+        Ok(c)
+    }
 }
 
 /// Longest log the generator is asked for, s (30 days: 2.6 million rows, about 200 MB of CSV).
@@ -120,8 +138,8 @@ pub struct ScenarioOverrides {
     /// Log length, s (default: the scenario's).
     #[arg(long, value_name = "S")]
     pub duration: Option<f64>,
-    /// Latitude at the start, deg.
-    #[arg(long, value_name = "DEG")]
+    /// Latitude at the start, deg (south negative: `--latitude -35`).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub latitude: Option<f64>,
     /// Installation errors x1..x4, arcsec.
     #[arg(long, value_name = "X1,X2,X3,X4", allow_hyphen_values = true, value_parser = parse_list::<4>)]

@@ -1,4 +1,4 @@
-//! The estimates CSV (output), one row per input row; format in `shared/log-format.md`.
+//! The estimates CSV (output), one row per input row; format in `docs/log-format.md`.
 //!
 //! Header [`HEADER`]. Fixed, deterministic formatting so that the replay path and the firmware
 //! stream path write byte-identical files from the same [`Output`]s:
@@ -11,7 +11,7 @@
 //! A rejected row carries the estimate held on board at that moment: a rejected sample leaves the
 //! estimator untouched, so that is the estimate of the last [`Output`], which the writer remembers.
 
-use crate::log_csv::{check_header, is_comment, LogError};
+use crate::log_csv::LogError;
 use estimator_core::units::{rad_to_arcsec, RAD_PER_DEG};
 use estimator_core::{Estimate, Output, SampleError};
 use std::fs::File;
@@ -24,50 +24,126 @@ const COLUMNS: usize = 13;
 /// Prefix of the status of a rejected row.
 pub const REJECTED_PREFIX: &str = "rejected_";
 
-/// Writes the estimates CSV.
+/// Writes the estimates CSV, one line per step, as the steps come (nothing is held but the last
+/// estimate and one line's buffer).
 pub struct EstimatesWriter<W: Write> {
     out: W,
     held: Option<Estimate>,
+    line: String,
+}
+
+/// Appends `format!("{value:.decimals}")`, byte for byte, for `decimals <= 9`.
+///
+/// The standard formatter's exact mode falls back to big-number arithmetic for most of the values
+/// this file holds, which made formatting most of the replay's time. Here: a finite `f64` is
+/// exactly `m * 2^e`; for `e < 0` the scaled value `m * 10^decimals / 2^-e` is computed exactly in
+/// `u128` (`m < 2^53`, `10^9 < 2^30`) and rounded half to even on the exact remainder, which is
+/// what the standard formatter does (pinned by `fixed_formatting_equals_the_standard_formatter`).
+/// Anything else (integers beyond 2^53, tiny, non-finite values) goes to the standard formatter.
+fn push_fixed(line: &mut String, value: f64, decimals: usize) {
+    use std::fmt::Write as _;
+    const POW10: [u128; 10] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000, 100_000_000, 1_000_000_000];
+    let bits = value.to_bits();
+    let exponent = ((bits >> 52) & 0x7ff) as i32;
+    let fraction = bits & ((1u64 << 52) - 1);
+    let (mantissa, shift) = if exponent == 0 { (fraction, 1074) } else { (fraction | (1u64 << 52), 1075 - exponent) };
+    if decimals > 9 || exponent == 0x7ff || !(1..=110).contains(&shift) {
+        let _ = write!(line, "{value:.decimals$}");
+        return;
+    }
+    let scaled = mantissa as u128 * POW10[decimals];
+    let mut q = scaled >> shift;
+    let rem = scaled - (q << shift);
+    let half = 1u128 << (shift - 1);
+    if rem > half || (rem == half && q & 1 == 1) {
+        q += 1;
+    }
+    let Ok(q) = u64::try_from(q) else {
+        let _ = write!(line, "{value:.decimals$}");
+        return;
+    };
+    if value.is_sign_negative() {
+        line.push('-');
+    }
+    let unit = POW10[decimals] as u64;
+    push_digits(line, q / unit, 1);
+    if decimals > 0 {
+        line.push('.');
+        push_digits(line, q % unit, decimals);
+    }
+}
+
+/// Appends `n` in decimal, zero-padded to at least `width` digits.
+fn push_digits(line: &mut String, mut n: u64, width: usize) {
+    let mut digits = [b'0'; 20];
+    let mut start = digits.len();
+    while n > 0 || digits.len() - start < width {
+        start -= 1;
+        digits[start] = b'0' + (n % 10) as u8;
+        n /= 10;
+    }
+    line.extend(digits[start..].iter().map(|&d| d as char));
 }
 
 fn push_estimate(line: &mut String, estimate: Option<&Estimate>) {
-    use std::fmt::Write as _;
     match estimate {
         Some(e) => {
             for v in e.x_rad.iter().chain(e.sigma_rad.iter()) {
-                let _ = write!(line, ",{:.4}", rad_to_arcsec(*v as f64));
+                line.push(',');
+                push_fixed(line, rad_to_arcsec(*v as f64), 4);
             }
         }
         None => line.push_str(",,,,,,,,"),
     }
 }
 
-/// One row for a step's output (no newline).
-pub fn format_output(out: &Output) -> String {
-    use std::fmt::Write as _;
-    let mut line = format!("{:.6}", out.time_s);
-    push_estimate(&mut line, out.estimate.as_ref());
+/// `{:.6}` of a time, byte for byte. Whole seconds (nearly every log row) are written as an
+/// integer and `.000000`.
+fn push_time(line: &mut String, time_s: f64) {
+    if time_s.fract() == 0.0 && time_s.abs() < 9.0e15 && !(time_s == 0.0 && time_s.is_sign_negative()) {
+        if time_s < 0.0 {
+            line.push('-');
+        }
+        push_digits(line, time_s.abs() as u64, 1);
+        line.push_str(".000000");
+    } else {
+        push_fixed(line, time_s, 6);
+    }
+}
+
+fn push_output(line: &mut String, out: &Output) {
+    push_time(line, out.time_s);
+    push_estimate(line, out.estimate.as_ref());
     let c = &out.corrected;
     let deg = |rad: estimator_core::Real| rad as f64 / RAD_PER_DEG;
-    let _ = write!(
-        line,
-        ",{},{:.9},{:.9},{:.9}",
-        out.status.name(),
-        deg(c.heading_rad),
-        deg(c.roll_rad),
-        deg(c.pitch_rad)
-    );
+    line.push(',');
+    line.push_str(out.status.name());
+    for v in [c.heading_rad, c.roll_rad, c.pitch_rad] {
+        line.push(',');
+        push_fixed(line, deg(v), 9);
+    }
+}
+
+fn push_rejected(line: &mut String, time_s: f64, reason: &SampleError, held: Option<&Estimate>) {
+    push_time(line, time_s);
+    push_estimate(line, held);
+    line.push(',');
+    line.push_str(REJECTED_PREFIX);
+    line.push_str(SampleError::reason_name(reason.reason_index()));
+    line.push_str(",,,");
+}
+
+/// One row for a step's output (no newline).
+pub fn format_output(out: &Output) -> String {
+    let mut line = String::new();
+    push_output(&mut line, out);
     line
 }
 
 /// One row for a rejected input row (no newline): its time, the held estimate, the reason.
 pub fn format_rejected(time_s: f64, reason: &SampleError, held: Option<&Estimate>) -> String {
-    let mut line = format!("{time_s:.6}");
-    push_estimate(&mut line, held);
-    line.push(',');
-    line.push_str(REJECTED_PREFIX);
-    line.push_str(SampleError::reason_name(reason.reason_index()));
-    line.push_str(",,,");
+    let mut line = String::new();
+    push_rejected(&mut line, time_s, reason, held);
     line
 }
 
@@ -75,7 +151,7 @@ impl<W: Write> EstimatesWriter<W> {
     /// Writes the header.
     pub fn new(mut out: W) -> std::io::Result<Self> {
         writeln!(out, "{HEADER}")?;
-        Ok(EstimatesWriter { out, held: None })
+        Ok(EstimatesWriter { out, held: None, line: String::with_capacity(256) })
     }
 
     /// Writes the row of one step: pass `step`'s result as it is, with the input row's time.
@@ -89,12 +165,18 @@ impl<W: Write> EstimatesWriter<W> {
     /// Writes the row of an accepted sample.
     pub fn write_output(&mut self, out: &Output) -> std::io::Result<()> {
         self.held = out.estimate;
-        writeln!(self.out, "{}", format_output(out))
+        self.line.clear();
+        push_output(&mut self.line, out);
+        self.line.push('\n');
+        self.out.write_all(self.line.as_bytes())
     }
 
     /// Writes the row of a rejected sample.
     pub fn write_rejected(&mut self, time_s: f64, reason: &SampleError) -> std::io::Result<()> {
-        writeln!(self.out, "{}", format_rejected(time_s, reason, self.held.as_ref()))
+        self.line.clear();
+        push_rejected(&mut self.line, time_s, reason, self.held.as_ref());
+        self.line.push('\n');
+        self.out.write_all(self.line.as_bytes())
     }
 
     /// Flushes and returns the inner writer.
@@ -150,6 +232,21 @@ fn parse_row(line: &str) -> Result<EstimateRow, String> {
     })
 }
 
+/// Whether a line carries no data: blank or a `#` comment.
+fn is_comment(line: &str) -> bool {
+    let t = line.trim();
+    t.is_empty() || t.starts_with('#')
+}
+
+/// Checks a header line (whitespace, a `\r` and a UTF-8 BOM around it ignored).
+fn check_header(path: &Path, line_no: usize, line: &str) -> Result<(), LogError> {
+    let got = line.trim_start_matches('\u{feff}').trim();
+    if got != HEADER {
+        return Err(LogError::new(path, line_no, format!("bad header {got:?}, expected {HEADER:?}")));
+    }
+    Ok(())
+}
+
 /// Reads an estimates CSV from a buffered reader; `path` names it in errors.
 pub fn read_estimates_from<R: BufRead>(path: &Path, reader: R) -> Result<Vec<EstimateRow>, LogError> {
     let mut rows = Vec::new();
@@ -162,7 +259,7 @@ pub fn read_estimates_from<R: BufRead>(path: &Path, reader: R) -> Result<Vec<Est
             continue;
         }
         if !header_seen {
-            check_header(path, line_no, &line, HEADER)?;
+            check_header(path, line_no, &line)?;
             header_seen = true;
             continue;
         }
@@ -220,6 +317,46 @@ mod tests {
         assert!(rows[2].is_rejected());
         assert_eq!(rows[2].corrected_deg, None);
         assert_eq!(rows[2].x_arcsec, rows[1].x_arcsec);
+    }
+
+    #[test]
+    fn times_are_written_as_the_float_formatter_writes_them() {
+        for t in [0.0, -0.0, 1.0, 172_799.0, -3.0, 0.5, 1e-7, 123_456.000_000_4, 8.9e15, 9.1e15, 1e300, f64::NAN, f64::INFINITY] {
+            let mut fast = String::new();
+            push_time(&mut fast, t);
+            assert_eq!(fast, format!("{t:.6}"), "{t}");
+        }
+    }
+
+    #[test]
+    fn fixed_formatting_equals_the_standard_formatter() {
+        // xorshift64*: the same values on every run.
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            state.wrapping_mul(0x2545_F491_4F6C_DD1D)
+        };
+        let mut values = vec![0.0, -0.0, 0.5, 1.5, 2.5, -2.5, 0.125, 0.375, 1e-5, -1e-5, 0.00005, 0.00015, 1e300, -1e-300, 5e-324, f64::NAN, f64::INFINITY, 9.007_199_254_740_993e15];
+        for _ in 0..100_000 {
+            let r = next();
+            // Random bit patterns between 2^-64 and 2^64, arcsec-like and degree-like values.
+            values.push(f64::from_bits((r & 0x800f_ffff_ffff_ffff) | ((1023 - 64 + (r >> 52) % 128) << 52)));
+            values.push(((r >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 2000.0);
+            values.push(((r >> 40) as f32 / (1u32 << 24) as f32 - 0.5) as f64 * 57.295_779_513_082_32);
+            // Exact ties at each number of decimals: k + 1/2 units of the last place.
+            let k = (r >> 44) as f64;
+            values.push((k + 0.5) / 16.0);
+        }
+        let mut fast = String::new();
+        for v in values {
+            for decimals in [0, 4, 6, 9] {
+                fast.clear();
+                push_fixed(&mut fast, v, decimals);
+                assert_eq!(fast, format!("{v:.decimals$}"), "{v:e} to {decimals} decimals");
+            }
+        }
     }
 
     #[test]

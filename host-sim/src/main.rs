@@ -5,15 +5,16 @@ use clap::{Parser, Subcommand};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Method, SampleError};
 use host_sim::cli_args::{method_label, LogShapeArgs, MethodArg, RecorderArgs, ScenarioArg, ScenarioOverrides, SchemeArg, SchemeList, TimingArgs, TuningArgs};
-use host_sim::log_csv::{self, Truth};
-use host_sim::pipeline::{default_estimates_path, estimate_file, estimate_file_with_restarts, load_truth, on_sample_grid, report, Estimated};
+use host_sim::log_csv::{self, LogError, Truth};
+use host_sim::pipeline::{default_estimates_path, estimate_log, load_truth, truth_rows, EstimateOptions};
 use host_sim::recorder::{recorded_rows, Recorder};
-use host_sim::replay::Replay;
-use host_sim::report::{format_accuracy, format_rms, Report};
+use host_sim::replay::{Replay, Step};
+use host_sim::report::{format_accuracy, format_rms, Report, TruthRows};
 use host_sim::monte_carlo::{format_summary, run_all, summarize, Draw, MC_TIMES_S};
 use host_sim::rotation_scheme::RotationScheme;
 use host_sim::scenario::{generate, Mismatch, Samples, ScenarioKind};
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 #[derive(Parser, Debug)]
 #[command(name = "host-sim", version, about = "RINS installation-error estimator: scenarios, log replay, reports and plots")]
@@ -28,6 +29,7 @@ enum Command {
     Generate(GenerateArgs),
     /// Replay an attitude log through the estimator, write the estimates CSV, print the final
     /// estimates, the rejected rows and (with FILE.truth.json beside the log) the accuracy table.
+    /// Formats: docs/log-format.md.
     Estimate(EstimateArgs),
     /// Generate + estimate with every method + report + plots, in one go.
     Run(RunArgs),
@@ -58,11 +60,15 @@ struct GenerateArgs {
 
 #[derive(clap::Args, Debug)]
 struct EstimateArgs {
-    /// Attitude log (CSV, see shared/log-format.md).
+    /// Attitude log (CSV, plain or gzip, `-` for standard input; format: docs/log-format.md).
     log: PathBuf,
-    /// Estimates CSV to write (default: LOG.estimates.csv beside the log).
-    #[arg(long, value_name = "EST.csv")]
+    /// Estimates CSV to write (default: LOG.estimates.csv beside the log; `-`: standard output,
+    /// the summary then goes to standard error). Never the log itself.
+    #[arg(long, value_name = "EST.csv", allow_hyphen_values = true)]
     out: Option<PathBuf>,
+    /// Refuse the log at its first unreadable row (default: skip it, count it, report its line).
+    #[arg(long)]
+    strict: bool,
     /// Identification method.
     #[arg(long, value_enum, default_value_t = MethodArg::Windowed)]
     method: MethodArg,
@@ -219,6 +225,15 @@ struct CompareArgs {
     spread: SpreadArgs,
 }
 
+/// Whether an error is a closed pipe on the way out (`host-sim estimate ... | head`).
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            || c.downcast_ref::<host_sim::replay::ReplayError>()
+                .is_some_and(|r| matches!(r, host_sim::replay::ReplayError::Write(io) if io.kind() == std::io::ErrorKind::BrokenPipe))
+    })
+}
+
 fn main() {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -230,6 +245,10 @@ fn main() {
         Command::Stream(a) => host_sim::stream::run(a),
     };
     if let Err(e) = result {
+        // The reader went away: stop quietly, as command-line tools do.
+        if is_broken_pipe(&e) {
+            std::process::exit(0);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
@@ -249,6 +268,11 @@ fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Tells each unreadable row skipped (the first few) on standard error.
+fn warn_row(e: &LogError) {
+    eprintln!("warning: {e} (row skipped)");
+}
+
 fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     let out = a.out.clone().unwrap_or_else(|| default_estimates_path(&a.log));
     let method: Method = a.method.into();
@@ -256,54 +280,71 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     anyhow::ensure!(restart_at.iter().all(|t| t.is_finite()), "--restart-at needs finite times");
     restart_at.sort_by(f64::total_cmp);
     a.timing.check()?;
-    let est = estimate_file_with_restarts(&a.log, &out, a.timing.pin(a.tuning.config(method)), &restart_at)?;
+    let options = EstimateOptions { config: a.timing.pin(a.tuning.checked_config(method)?), restart_at_s: restart_at.clone(), strict: a.strict };
+    let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
+    let rows = truth.as_ref().map(|(t, g)| truth_rows(t, g.as_ref()));
+    let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_, _| {})?;
+    // The summary goes where the estimates do not.
+    let mut info: Box<dyn Write> = if log_csv::is_stdio(&out) { Box::new(std::io::stderr()) } else { Box::new(std::io::stdout().lock()) };
     if !restart_at.is_empty() {
-        println!("restarted from a checkpoint after the rows at {restart_at:?} s");
+        writeln!(info, "restarted from a checkpoint after the rows at {restart_at:?} s")?;
     }
-    print_summary(&a.log.display().to_string(), method, &est.replay, &out.display().to_string());
-    if let Some((truth, generated)) = load_truth(&a.log)? {
-        print_report(method, &report(&est, &truth, &generated));
+    let out_name = if log_csv::is_stdio(&out) { "standard output".to_string() } else { out.display().to_string() };
+    print_summary(&mut info, &a.log, method, &est.replay, &out_name)?;
+    if let Some(rep) = &est.report {
+        print_report(&mut info, method, rep)?;
     }
+    info.flush()?;
     Ok(())
 }
 
-fn print_summary(log: &str, method: Method, r: &Replay, out: &str) {
+fn print_summary(w: &mut dyn Write, log: &Path, method: Method, r: &Replay, out: &str) -> std::io::Result<()> {
+    let log = if log_csv::is_stdio(log) { "standard input".to_string() } else { log.display().to_string() };
     let c = &r.counters;
-    println!(
+    writeln!(
+        w,
         "{log}: method {}: {} rows, {} accepted, {} filled (lost samples interpolated), {} window restarts, {} clock steps; estimates in {out}",
         method.name(),
-        r.steps.len(),
+        r.rows,
         c.accepted,
         c.filled,
         c.window_restarts,
         c.clock_steps
-    );
-    println!("  {}", host_sim::replay::pattern_summary(r));
-    let final_status = r.steps.iter().rev().find_map(|s| s.result.ok()).map_or("none (no row accepted)", |o| o.status.name());
-    println!("  final status: {final_status}");
+    )?;
+    writeln!(w, "  {}", host_sim::replay::pattern_summary(r))?;
+    writeln!(w, "  final status: {}", r.final_status.map_or("none (no row accepted)", |s| s.name()))?;
     match (r.final_estimate, r.holdup) {
         (Some(e), holdup) => {
             for i in 0..4 {
-                println!("  x{} = {:+.3} arcsec (1-sigma {:.3})", i + 1, rad_to_arcsec(e.x_rad[i] as f64), rad_to_arcsec(e.sigma_rad[i] as f64));
+                writeln!(w, "  x{} = {:+.3} arcsec (1-sigma {:.3})", i + 1, rad_to_arcsec(e.x_rad[i] as f64), rad_to_arcsec(e.sigma_rad[i] as f64))?;
             }
             if let Some(h) = holdup {
-                println!("  estimates frozen: {h}");
+                writeln!(w, "  estimates frozen: {h}")?;
             }
         }
-        (None, Some(h)) => println!("  no estimate: {h}"),
-        (None, None) => println!("  no estimate: no row accepted"),
+        (None, Some(h)) => writeln!(w, "  no estimate: {h}")?,
+        (None, None) => writeln!(w, "  no estimate: no row accepted")?,
     }
     let reasons: Vec<String> = (0..SampleError::COUNT).map(|i| format!("{} {}", SampleError::reason_name(i), r.rejected.0[i])).collect();
-    println!("  rejected rows: {} ({})", r.rejected.total(), reasons.join(", "));
+    writeln!(w, "  rejected rows: {} ({})", r.rejected.total(), reasons.join(", "))?;
+    if r.unreadable.skipped > 0 {
+        let lines: Vec<String> = r.unreadable.first.iter().map(|e| e.line.to_string()).collect();
+        let more = if r.unreadable.skipped as usize > lines.len() { ", ..." } else { "" };
+        writeln!(w, "  unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)", r.unreadable.skipped, lines.join(", "))?;
+    }
+    Ok(())
 }
 
-fn print_report(method: Method, rep: &Report) {
-    println!("\naccuracy against the truth, {}:", method_label(method));
-    print!("{}", format_accuracy(&rep.accuracy));
+fn print_report(w: &mut dyn Write, method: Method, rep: &Report) -> std::io::Result<()> {
+    writeln!(w, "\naccuracy against the truth, {}:", method_label(method))?;
+    write!(w, "{}", format_accuracy(&rep.accuracy))?;
     if let Some(r) = &rep.rms_from_first_estimate {
-        print!("{}", format_rms("from the first estimate", r));
+        write!(w, "{}", format_rms("from the first estimate", r))?;
     }
-    print!("{}", format_rms("last quarter of the run", &rep.rms_last_quarter));
+    if let Some(r) = &rep.rms_last_quarter {
+        write!(w, "{}", format_rms("last quarter of the run", r))?;
+    }
+    Ok(())
 }
 
 fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
@@ -318,28 +359,52 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     let truth = Truth::new(&params);
     log_csv::write_truth(&log_csv::truth_path(&log), &truth)?;
     println!("wrote {} ({} rows) and its truth file", log.display(), logged.len());
-    let mut runs: Vec<(Method, Estimated)> = Vec::new();
+    let mut runs: Vec<(Method, Vec<Step>)> = Vec::new();
     let mut reports: Vec<(Method, Report)> = Vec::new();
+    let mut stdout = std::io::stdout().lock();
     for method in [Method::Windowed, Method::Paper, Method::Traditional] {
         let out = dir.join(format!("{}.estimates.{}.csv", params.scenario.name(), method.name()));
-        let est = estimate_file(&log, &out, a.tuning.config(method))?;
-        print_summary(&log.display().to_string(), method, &est.replay, &out.display().to_string());
-        let rep = report(&est, &truth, &generated);
-        print_report(method, &rep);
-        println!();
-        runs.push((method, est));
+        let options = EstimateOptions { config: a.tuning.config(method), restart_at_s: vec![], strict: true };
+        let mut steps = Vec::with_capacity(generated.rows.len());
+        let rows = TruthRows::Generated { rows: &generated.rows, truth: &generated.truth, time_offset_s: params.recording.time_offset_s };
+        let est = estimate_log(&log, &out, &options, Some(rows), &mut warn_row, &mut |line, result| {
+            steps.push(Step { time_s: line.row.time_s, result: *result })
+        })?;
+        print_summary(&mut stdout, &log, method, &est.replay, &out.display().to_string())?;
+        let rep = est.report.context("a report against the generated truth")?;
+        print_report(&mut stdout, method, &rep)?;
+        writeln!(stdout)?;
+        runs.push((method, steps));
         reports.push((method, rep));
     }
+    drop(stdout);
     println!("side by side ({} scenario, seed {}):", params.scenario.name(), params.seed);
     let side: Vec<(&str, &Report)> = reports.iter().map(|(m, r)| (method_label(*m), r)).collect();
     print!("{}", host_sim::report::format_side_by_side(&side));
     if !a.no_plots {
         // The figures index the truth by sample instant: stamps moved back onto it.
-        let on_grid: Vec<(Method, Estimated)> = runs.iter().map(|(m, e)| (*m, on_sample_grid(e, &params))).collect();
-        let steps: Vec<(&str, &[host_sim::replay::Step])> = on_grid.iter().map(|(m, e)| (m.name(), e.replay.steps.as_slice())).collect();
+        let grid = |t: f64| params.recording.sample_time_s(t, params.sample_interval_s).unwrap_or(f64::NAN);
+        let on_grid: Vec<(Method, Vec<Step>)> = runs
+            .iter()
+            .map(|(m, steps)| {
+                let moved = steps
+                    .iter()
+                    .map(|s| {
+                        let mut s = *s;
+                        s.time_s = grid(s.time_s);
+                        if let Ok(o) = &mut s.result {
+                            o.time_s = grid(o.time_s);
+                        }
+                        s
+                    })
+                    .collect();
+                (*m, moved)
+            })
+            .collect();
+        let steps: Vec<(&str, &[Step])> = on_grid.iter().map(|(m, s)| (m.name(), s.as_slice())).collect();
         let window = (params.rotation_period_s / params.sample_interval_s).round() as usize;
-        let rows = on_grid.first().map_or(&[][..], |(_, e)| e.rows.as_slice());
-        let files = host_sim::figures::write_figures(&dir, rows, &generated.truth, &params.errors_arcsec, params.sample_interval_s, window, &steps)?;
+        let grid_rows: Vec<_> = logged.iter().map(|r| host_sim::scenario::Row { time_s: grid(r.time_s), ..*r }).collect();
+        let files = host_sim::figures::write_figures(&dir, &grid_rows, &generated.truth, &params.errors_arcsec, params.sample_interval_s, window, &steps)?;
         println!("plots:");
         for f in files {
             println!("  {}", f.display());

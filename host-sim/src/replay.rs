@@ -1,7 +1,7 @@
 //! Replays an attitude log through the core, row by row, writing the estimates CSV.
 
 use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{LogError, LogLine};
+use crate::log_csv::{LogError, LogLine, RowFilter};
 use crate::scenario::Row;
 use estimator_core::{Config, ConfigError, Counters, Estimator, Holdup, Output, RejectCounts, RotationSummary, Sample, SampleError};
 use std::io::Write;
@@ -17,20 +17,24 @@ pub struct Step {
     pub result: Result<Output, SampleError>,
 }
 
-/// Everything a replay produced.
+/// What a replay produced, besides the rows it handed on (nothing per row is kept).
 #[derive(Clone, Debug)]
 pub struct Replay {
-    pub steps: Vec<Step>,
+    /// Rows stepped (accepted or rejected by the core).
+    pub rows: u64,
     pub rejected: RejectCounts,
     /// Samples accepted, lost samples filled, restarts of the moving average, clock steps.
     pub counters: Counters,
-    /// The estimate at the end of the log.
+    /// The estimate at the end of the log, and the status of the last row accepted.
     pub final_estimate: Option<estimator_core::Estimate>,
+    pub final_status: Option<estimator_core::Status>,
     /// The sample interval learned (or pinned), s, and the rotation pattern, at the end.
     pub sample_interval_s: Option<f64>,
     pub rotation: RotationSummary,
     /// What held the estimate back at the end, if anything.
     pub holdup: Option<Holdup>,
+    /// Rows that could not be read and were skipped (with the first few, for the report).
+    pub unreadable: RowFilter,
 }
 
 /// Why a replay stopped.
@@ -38,7 +42,7 @@ pub struct Replay {
 pub enum ReplayError {
     #[error("{0}")]
     Log(#[from] LogError),
-    #[error("invalid estimator configuration: {0:?}")]
+    #[error("invalid estimator configuration: {0}")]
     Config(ConfigError),
     #[error("cannot write estimates: {0}")]
     Write(#[from] std::io::Error),
@@ -79,38 +83,51 @@ pub fn sample_of(row: &Row) -> Sample {
     Sample::from_degrees(row.time_s, row.rotation_deg, row.platform_deg, row.latitude_deg, row.heading_deg, row.roll_deg, row.pitch_deg)
 }
 
-/// Runs rows through a fresh estimator; writes one estimates row per input row when `writer` is given.
+/// Runs rows through a fresh estimator; writes one estimates row per input row when `writer` is
+/// given. Any unreadable row is an error.
 pub fn replay<I, W>(rows: I, config: Config, writer: Option<&mut EstimatesWriter<W>>) -> Result<Replay, ReplayError>
 where
     I: IntoIterator<Item = Result<LogLine, LogError>>,
     W: Write,
 {
-    replay_with_restarts(rows, config, writer, &[])
+    let mut writer = writer;
+    replay_each(rows, config, &[], RowFilter::new(true), &mut |_| {}, |line, result| {
+        if let Some(w) = writer.as_deref_mut() {
+            w.write_step(line.row.time_s, result)?;
+        }
+        Ok(())
+    })
 }
 
-/// As [`replay`], and after the first row at or after each of `restart_at_s` (ascending) the
-/// estimator is checkpointed, dropped and restored from the bytes: a power cycle with a saved
-/// state. The outputs must not change.
-pub fn replay_with_restarts<I, W>(
+/// Steps the estimator through `rows` as they come and hands each row and its result to `each`
+/// (which writes it, reports it...); nothing per row is kept. Unreadable rows go through `filter`
+/// (skipped and counted, `warn` told; or refused when strict). After the first row at or after
+/// each of `restart_at_s` (ascending) the estimator is checkpointed, dropped and restored from the
+/// bytes: a power cycle with a saved state. The outputs must not change.
+pub fn replay_each<I, F>(
     rows: I,
     config: Config,
-    mut writer: Option<&mut EstimatesWriter<W>>,
     restart_at_s: &[f64],
+    mut filter: RowFilter,
+    warn: &mut dyn FnMut(&LogError),
+    mut each: F,
 ) -> Result<Replay, ReplayError>
 where
     I: IntoIterator<Item = Result<LogLine, LogError>>,
-    W: Write,
+    F: FnMut(&LogLine, &Result<Output, SampleError>) -> Result<(), ReplayError>,
 {
     let mut est = HostEstimator::new(config).map_err(ReplayError::Config)?;
-    let mut steps = Vec::new();
     let mut next_restart = 0;
-    for line in rows {
-        let line = line?;
+    let mut count = 0u64;
+    let mut final_status = None;
+    for item in rows {
+        let Some(line) = filter.admit(item, warn)? else { continue };
         let result = est.step(&sample_of(&line.row));
-        if let Some(w) = writer.as_deref_mut() {
-            w.write_step(line.row.time_s, &result)?;
+        count += 1;
+        if let Ok(out) = &result {
+            final_status = Some(out.status);
         }
-        steps.push(Step { time_s: line.row.time_s, result });
+        each(&line, &result)?;
         let mut due = false;
         while next_restart < restart_at_s.len() && line.row.time_s >= restart_at_s[next_restart] {
             next_restart += 1;
@@ -121,18 +138,25 @@ where
         }
     }
     Ok(Replay {
-        steps,
+        rows: count,
         rejected: est.rejected(),
         counters: est.counters(),
         final_estimate: est.estimate(),
+        final_status,
         sample_interval_s: est.sample_interval_s(),
         rotation: est.rotation(),
         holdup: est.progress(),
+        unreadable: filter,
     })
 }
 
-/// Replays generated rows (no file) and keeps only the outputs: the fast path of Monte Carlo runs.
-pub fn replay_rows(rows: &[Row], config: Config) -> Result<Replay, ReplayError> {
+/// Replays generated rows (no file) and keeps every step: for plots and in-memory reports.
+pub fn replay_rows(rows: &[Row], config: Config) -> Result<(Replay, Vec<Step>), ReplayError> {
     let lines = rows.iter().enumerate().map(|(i, row)| Ok(LogLine { line: i + 2, row: *row }));
-    replay::<_, std::io::Sink>(lines, config, None)
+    let mut steps = Vec::with_capacity(rows.len());
+    let replay = replay_each(lines, config, &[], RowFilter::new(true), &mut |_| {}, |line, result| {
+        steps.push(Step { time_s: line.row.time_s, result: *result });
+        Ok(())
+    })?;
+    Ok((replay, steps))
 }

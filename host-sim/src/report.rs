@@ -4,7 +4,10 @@
 //!   at [`REPORT_TIMES_S`] (those inside the run; "at T" = the estimate on board at the last row
 //!   with `time_s <= T`).
 //! - Settling times: the first time after which an error stays within 0.5 % (resp. 10 arcsec) until
-//!   the end of the run; rows without an estimate count as outside.
+//!   the end of the run; rows without an estimate count as outside. A true error of 0 has no
+//!   percentage error: it is judged in arcsec only (its "within 0.5 %" is "within 10 arcsec").
+//! - Each log row is judged against the truth row nearest in time ([`ReportBuilder`]), so logs
+//!   starting at any time, shifted or jittered, are judged against the right truth.
 //! - Attitude error before and after compensation: the oscillation of eq (2) put into the log
 //!   (truth) versus what is left of it after the core's correction:
 //!   `residual = oscillation_in - (raw attitude - corrected attitude)`. The true attitude, the
@@ -13,7 +16,7 @@
 use crate::replay::Step;
 use crate::scenario::{Row, RowTruth};
 use estimator_core::units::rad_to_arcsec;
-use estimator_core::Estimate;
+use estimator_core::{Estimate, Output, SampleError};
 
 /// Times of the accuracy table, s.
 pub const REPORT_TIMES_S: [f64; 4] = [20_000.0, 45_000.0, 86_400.0, 172_800.0];
@@ -26,7 +29,13 @@ pub fn errors_arcsec(estimate: Option<&Estimate>, truth_arcsec: &[f64; 4]) -> Op
     estimate.map(|e| core::array::from_fn(|i| rad_to_arcsec(e.x_rad[i] as f64) - truth_arcsec[i]))
 }
 
-/// Eq (7): absolute percentage error; infinite for a true error of 0 and a non-zero estimate error.
+/// Eq (7): absolute percentage error; `None` for a true error of 0 (judged in arcsec only).
+pub fn percent_of(error_arcsec: f64, truth_arcsec: f64) -> Option<f64> {
+    (truth_arcsec != 0.0).then(|| percent_error(error_arcsec, truth_arcsec))
+}
+
+/// Eq (7): absolute percentage error; infinite for a true error of 0 and a non-zero estimate error
+/// (for plots; reports use [`percent_of`]).
 pub fn percent_error(error_arcsec: f64, truth_arcsec: f64) -> f64 {
     if error_arcsec == 0.0 {
         0.0
@@ -80,7 +89,10 @@ impl Tracker {
         self.last = err.map(|e| (e, *truth_arcsec));
         for i in 0..4 {
             let (in_pct, in_as) = match err {
-                Some(e) => (percent_error(e[i], truth_arcsec[i]) <= PERCENT_THRESHOLD, e[i].abs() <= ARCSEC_THRESHOLD),
+                Some(e) => {
+                    let in_as = e[i].abs() <= ARCSEC_THRESHOLD;
+                    (percent_of(e[i], truth_arcsec[i]).map_or(in_as, |p| p <= PERCENT_THRESHOLD), in_as)
+                }
                 None => (false, false),
             };
             let update = |since: &mut Option<f64>, inside: bool| {
@@ -111,7 +123,7 @@ impl Tracker {
             points.push(AccuracyAt {
                 time_s: t,
                 error_arcsec: state.map(|s| s.0),
-                percent: state.map(|(e, x)| core::array::from_fn(|i| percent_error(e[i], x[i]))),
+                percent: state.map(|(e, x)| core::array::from_fn(|i| percent_of(e[i], x[i]))),
             });
         }
         Accuracy {
@@ -129,14 +141,16 @@ pub struct AccuracyAt {
     pub time_s: f64,
     /// Estimate minus truth, arcsec; `None` without an estimate.
     pub error_arcsec: Option<[f64; 4]>,
-    pub percent: Option<[f64; 4]>,
+    /// Absolute percentage error; `None` inside for a true error of 0.
+    pub percent: Option<[Option<f64>; 4]>,
 }
 
 /// The accuracy table's numbers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Accuracy {
     pub points: Vec<AccuracyAt>,
-    /// Per error: first time after which it stays within 0.5 %; `None`: not within at the end.
+    /// Per error: first time after which it stays within 0.5 % (10 arcsec for a true error of 0);
+    /// `None`: not within at the end.
     pub within_percent_from_s: [Option<f64>; 4],
     /// Per error: first time after which it stays within 10 arcsec.
     pub within_arcsec_from_s: [Option<f64>; 4],
@@ -233,42 +247,118 @@ pub fn truth_index(time_s: f64, interval_s: f64, len: usize) -> Option<usize> {
     ((k - time_s / interval_s).abs() < 1e-6 && (k as usize) < len).then_some(k as usize)
 }
 
-/// The full report of one replay against a regenerated truth.
+/// The full report of one replay against the truth.
 #[derive(Clone, Debug)]
 pub struct Report {
     pub accuracy: Accuracy,
-    /// Over the rows from the first estimate to the end.
+    /// Over the rows from the first estimate to the end (a generated truth only).
     pub rms_from_first_estimate: Option<AttitudeRms>,
-    /// Over the last quarter of the run.
-    pub rms_last_quarter: AttitudeRms,
+    /// Over the last quarter of the truth's time span (a generated truth only).
+    pub rms_last_quarter: Option<AttitudeRms>,
 }
 
-/// Evaluates a replay of `rows` (the log as read) against the generator's truth rows.
-pub fn evaluate(rows: &[Row], steps: &[Step], truth: &[RowTruth], interval_s: f64) -> Report {
-    let mut tracker = Tracker::new(&REPORT_TIMES_S);
-    let first_estimate_s = steps.iter().find_map(|s| s.result.ok().and_then(|o| o.estimate.map(|_| o.time_s)));
-    let end_s = rows.iter().map(|r| r.time_s).filter(|t| t.is_finite()).fold(0.0, f64::max);
-    let mut rms_all = first_estimate_s.map(RmsAccumulator::new);
-    let mut rms_quarter = RmsAccumulator::new(0.75 * end_s);
-    let mut held: Option<Estimate> = None;
-    for (row, step) in rows.iter().zip(steps) {
-        let Some(k) = truth_index(step.time_s, interval_s, truth.len()) else { continue };
-        let tr = &truth[k];
-        if let Ok(out) = &step.result {
-            held = out.estimate;
-            let res = residual_arcsec(row, &out.corrected, tr);
-            if let Some(acc) = rms_all.as_mut() {
-                acc.add(step.time_s, &res, tr);
+/// What the rows are judged against.
+#[derive(Clone, Copy, Debug)]
+pub enum TruthRows<'a> {
+    /// Constant installation errors, arcsec (a truth file with `x_arcsec` only): accuracy only.
+    Constant([f64; 4]),
+    /// The generator's rows and their truth: accuracy against the errors in force, and the
+    /// attitude error of eq (2) before and after compensation. `time_offset_s`: what the recorder
+    /// added to the log's time stamps (its `--time-offset`), taken off before matching.
+    Generated { rows: &'a [Row], truth: &'a [RowTruth], time_offset_s: f64 },
+}
+
+/// Builds a [`Report`] row by row, as the replay goes: it holds no rows of its own.
+#[derive(Clone, Debug)]
+pub struct ReportBuilder<'a> {
+    truth: TruthRows<'a>,
+    tracker: Tracker,
+    rms_all: Option<RmsAccumulator>,
+    rms_quarter: Option<RmsAccumulator>,
+    held: Option<Estimate>,
+    /// Index of the generated row nearest the last row's time.
+    cursor: usize,
+}
+
+impl<'a> ReportBuilder<'a> {
+    pub fn new(truth: TruthRows<'a>) -> Self {
+        let rms_quarter = match truth {
+            TruthRows::Constant(_) => None,
+            TruthRows::Generated { rows, .. } => {
+                let end_s = rows.iter().map(|r| r.time_s).filter(|t| t.is_finite()).fold(0.0, f64::max);
+                Some(RmsAccumulator::new(0.75 * end_s))
             }
-            rms_quarter.add(step.time_s, &res, tr);
+        };
+        ReportBuilder { truth, tracker: Tracker::new(&REPORT_TIMES_S), rms_all: None, rms_quarter, held: None, cursor: 0 }
+    }
+
+    /// Index of the generated row nearest in time to `time_s` (moves from the last one found).
+    fn nearest(&mut self, rows: &[Row], time_s: f64) -> Option<usize> {
+        if rows.is_empty() || !time_s.is_finite() {
+            return None;
         }
-        tracker.observe(step.time_s, held.as_ref(), &tr.errors_arcsec);
+        let d = |k: usize| (rows[k].time_s - time_s).abs();
+        let mut k = self.cursor.min(rows.len() - 1);
+        while k + 1 < rows.len() && d(k + 1) <= d(k) {
+            k += 1;
+        }
+        while k > 0 && d(k - 1) < d(k) {
+            k -= 1;
+        }
+        self.cursor = k;
+        Some(k)
     }
-    Report {
-        accuracy: tracker.finish(interval_s),
-        rms_from_first_estimate: rms_all.map(|a| a.finish()),
-        rms_last_quarter: rms_quarter.finish(),
+
+    /// One log row and the estimator's result for it.
+    pub fn observe(&mut self, row: &Row, result: &Result<Output, SampleError>) {
+        if let Ok(out) = result {
+            self.held = out.estimate;
+        }
+        let truth_errors = match self.truth {
+            TruthRows::Constant(x) => x,
+            TruthRows::Generated { rows, truth, time_offset_s } => {
+                let t = row.time_s - time_offset_s;
+                let Some(k) = self.nearest(rows, t) else { return };
+                let Some(tr) = truth.get(k) else { return };
+                if let Ok(out) = result {
+                    if out.estimate.is_some() && self.rms_all.is_none() {
+                        self.rms_all = Some(RmsAccumulator::new(t));
+                    }
+                    let res = residual_arcsec(row, &out.corrected, tr);
+                    if let Some(acc) = self.rms_all.as_mut() {
+                        acc.add(t, &res, tr);
+                    }
+                    if let Some(acc) = self.rms_quarter.as_mut() {
+                        acc.add(t, &res, tr);
+                    }
+                }
+                tr.errors_arcsec
+            }
+        };
+        let offset_s = match self.truth {
+            TruthRows::Generated { time_offset_s, .. } => time_offset_s,
+            TruthRows::Constant(_) => 0.0,
+        };
+        self.tracker.observe(row.time_s - offset_s, self.held.as_ref(), &truth_errors);
     }
+
+    /// The report; `interval_s` is the log's sample interval.
+    pub fn finish(&self, interval_s: f64) -> Report {
+        Report {
+            accuracy: self.tracker.finish(interval_s),
+            rms_from_first_estimate: self.rms_all.as_ref().map(RmsAccumulator::finish),
+            rms_last_quarter: self.rms_quarter.as_ref().map(RmsAccumulator::finish),
+        }
+    }
+}
+
+/// Evaluates a replay of `rows` (the log as read) against the generator's rows and truth.
+pub fn evaluate(rows: &[Row], steps: &[Step], generated_rows: &[Row], truth: &[RowTruth], interval_s: f64) -> Report {
+    let mut builder = ReportBuilder::new(TruthRows::Generated { rows: generated_rows, truth, time_offset_s: 0.0 });
+    for (row, step) in rows.iter().zip(steps) {
+        builder.observe(row, &step.result);
+    }
+    builder.finish(interval_s)
 }
 
 fn fmt_time(t: Option<f64>) -> String {
@@ -291,7 +381,10 @@ pub fn format_accuracy(a: &Accuracy) -> String {
         s.push_str(&format!("| x{} | ", i + 1));
         for p in &a.points {
             match (p.percent, p.error_arcsec) {
-                (Some(pc), Some(e)) => s.push_str(&format!("{:.3} % / {:.2} | ", pc[i], e[i].abs())),
+                (Some(pc), Some(e)) => match pc[i] {
+                    Some(p) => s.push_str(&format!("{p:.3} % / {:.2} | ", e[i].abs())),
+                    None => s.push_str(&format!("- / {:.2} | ", e[i].abs())),
+                },
                 _ => s.push_str("no estimate | "),
             }
         }
@@ -325,18 +418,18 @@ pub fn format_side_by_side(reports: &[(&str, &Report)]) -> String {
         s.push_str(&format!("| {name} | "));
         for p in &r.accuracy.points {
             match p.percent {
-                Some(pc) => s.push_str(&format!("{:.3} | ", pc.iter().fold(0.0f64, |m, v| m.max(*v)))),
+                Some(pc) => s.push_str(&format!("{:.3} | ", pc.iter().flatten().fold(0.0f64, |m, v| m.max(*v)))),
                 None => s.push_str("no estimate | "),
             }
         }
-        let q = &r.rms_last_quarter.after_arcsec;
+        let rms = r.rms_last_quarter.map_or("-".to_string(), |q| {
+            let q = q.after_arcsec;
+            format!("{:.2} / {:.2} / {:.2}", q[0], q[1], q[2])
+        });
         s.push_str(&format!(
-            "{} | {} | {:.2} / {:.2} / {:.2} |\n",
+            "{} | {} | {rms} |\n",
             fmt_time(r.accuracy.all_within_percent_from_s()),
             fmt_time(r.accuracy.all_within_arcsec_from_s()),
-            q[0],
-            q[1],
-            q[2]
         ));
     }
     s
@@ -384,6 +477,63 @@ mod tests {
         let a = t.finish(1.0);
         assert_eq!(a.within_arcsec_from_s, [Some(0.0), Some(0.0), Some(0.0), None]);
         assert_eq!(a.all_within_arcsec_from_s(), None);
+    }
+
+    #[test]
+    fn a_true_error_of_zero_is_judged_in_arcsec_only() {
+        let truth = [100.0, 0.0, 200.0, 0.0];
+        let mut t = Tracker::new(&[1.0]);
+        t.observe(0.0, Some(&est([100.0, 0.0, 200.0, 3.0])), &truth);
+        t.observe(1.0, Some(&est([100.0, 0.0, 200.0, 3.0])), &truth);
+        let a = t.finish(1.0);
+        let pc = a.points[0].percent.unwrap();
+        assert!(pc[0].unwrap() < 1e-5 && pc[2].unwrap() < 1e-5 && pc[1].is_none() && pc[3].is_none(), "{pc:?}");
+        assert_eq!(a.within_percent_from_s, [Some(0.0); 4], "x4 is 3 arcsec off a true 0: within 10 arcsec");
+        let text = format_accuracy(&a);
+        assert!(!text.contains("inf") && !text.contains("NaN"), "{text}");
+        assert!(text.contains("| x4 | - / 3.00 |"), "{text}");
+    }
+
+    fn output(time_s: f64, x: [f64; 4]) -> Result<Output, SampleError> {
+        Ok(Output {
+            time_s,
+            status: estimator_core::Status::Estimating,
+            estimate: Some(est(x)),
+            corrected: estimator_core::Attitude { heading_rad: 0.0, roll_rad: 0.0, pitch_rad: 0.0 },
+        })
+    }
+
+    fn row(time_s: f64) -> Row {
+        Row { time_s, rotation_deg: 0.0, platform_deg: 0.0, latitude_deg: 40.0, heading_deg: 0.0, roll_deg: 0.0, pitch_deg: 0.0 }
+    }
+
+    #[test]
+    fn rows_are_matched_to_the_truth_nearest_in_time() {
+        // A truth whose errors change at 10 s; a log starting at 1000.5 s would find no row on the
+        // truth's grid, and a jittered one neither.
+        let generated: Vec<Row> = (0..20).map(|k| row(k as f64)).collect();
+        let truth: Vec<RowTruth> = (0..20)
+            .map(|k| RowTruth { true_attitude_deg: [0.0; 3], oscillation_deg: [0.0; 3], errors_arcsec: if k < 10 { [10.0; 4] } else { [20.0; 4] } })
+            .collect();
+        let mut b = ReportBuilder::new(TruthRows::Generated { rows: &generated, truth: &truth, time_offset_s: 0.0 });
+        for (k, jitter) in [0.3, -0.2, 0.1, 0.45, -0.4, 0.0, 0.2, -0.1, 0.3, 0.0, 0.2, -0.3, 0.1, 0.0].iter().enumerate() {
+            let t = k as f64 + jitter;
+            b.observe(&row(t), &output(t, if t.round() < 10.0 { [10.0; 4] } else { [20.0; 4] }));
+        }
+        let a = b.finish(1.0).accuracy;
+        assert_eq!(a.within_percent_from_s[0], Some(0.3), "every row exact against its nearest truth: {a:?}");
+        // Constant truth, any start time.
+        let mut c = ReportBuilder::new(TruthRows::Constant([200.0, -150.0, 300.0, 0.0]));
+        for k in 0..30_000 {
+            let t = 1000.5 + k as f64;
+            c.observe(&row(t), &output(t, [200.0, -150.0, 300.0, 0.0]));
+        }
+        let r = c.finish(1.0);
+        assert!(r.rms_last_quarter.is_none());
+        assert_eq!(r.accuracy.points.len(), 1);
+        assert_eq!(r.accuracy.points[0].error_arcsec.map(|e| e.map(f64::abs).iter().fold(0.0, |m: f64, v| m.max(*v)) < 1e-3), Some(true));
+        assert_eq!(r.accuracy.within_percent_from_s, [Some(1000.5); 4]);
+        assert_eq!(r.accuracy.within_arcsec_from_s, [Some(1000.5); 4]);
     }
 
     #[test]

@@ -8,14 +8,20 @@
 //!
 //! At the end it prints `step cost: max N instructions, mean M instructions` (QEMU; cycles on a
 //! board): the firmware times every `Estimator::step` with its cost counter ([`cost`]).
+//!
+//! Before streaming it reads the firmware's `Status`: a firmware that already holds an estimator
+//! state (samples accepted, or a checkpoint restored from its flash) is never fed another log
+//! silently. Without `--resume` (continue that log after its checkpoint) or `--reset` (the firmware
+//! forgets the state and erases its checkpoints) the stream is refused. On a terminal it shows
+//! its progress on standard error (rows, rate, time left).
 
 pub mod cost;
 pub mod link;
 pub mod qemu;
 
 use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{LogError, LogLine, LogReader};
-use crate::pipeline::default_estimates_path;
+use crate::log_csv::{is_stdio, LogReader, RowFilter};
+use crate::pipeline::{check_output_is_not_input, default_estimates_path, open_output};
 use crate::replay::sample_of;
 use anyhow::{bail, Context};
 use cost::{CostStats, CostUnit};
@@ -24,8 +30,7 @@ use link::FirmwareLink;
 use link_protocol::frame::FrameError;
 use link_protocol::{Counters, Request, Response, SampleMsg, StatusReply, PROTOCOL_VERSION};
 use qemu::{Machine, Qemu};
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -45,11 +50,12 @@ pub struct StreamArgs {
     /// (mps2-an386: feature board-mps2-an386, UART0; netduinoplus2: feature board-stm32f405, USART1).
     #[arg(long, value_enum, default_value_t = Machine::Mps2An386)]
     pub machine: Machine,
-    /// Attitude log (CSV, see shared/log-format.md).
+    /// Attitude log (CSV, plain or gzip, `-` for standard input; format: docs/log-format.md).
     #[arg(value_name = "FILE.csv")]
     pub log: PathBuf,
-    /// Estimates CSV to write (default: LOG.estimates.csv beside the log, as `estimate`).
-    #[arg(long, value_name = "EST.csv")]
+    /// Estimates CSV to write (default: LOG.estimates.csv beside the log, as `estimate`; `-`:
+    /// standard output).
+    #[arg(long, value_name = "EST.csv", allow_hyphen_values = true)]
     pub out: Option<PathBuf>,
     /// Serial device of a board running the firmware (instead of --qemu).
     #[arg(long, value_name = "DEVICE")]
@@ -67,9 +73,17 @@ pub struct StreamArgs {
     /// checkpoints) across runs (default: a fresh scratch directory, so every boot starts empty).
     #[arg(long, value_name = "DIR", requires = "qemu")]
     pub flash_dir: Option<PathBuf>,
-    /// Skip the log rows up to the time of the checkpoint the firmware restored at boot.
-    #[arg(long)]
+    /// The firmware holds the state of this very log (e.g. restored after a power cut): skip the
+    /// log rows up to the time of its checkpoint and continue from there.
+    #[arg(long, conflicts_with = "reset")]
     pub resume: bool,
+    /// Start clean: the firmware forgets any state it holds and erases its checkpoints (so that no
+    /// power cut brings them back), then the whole log is streamed.
+    #[arg(long)]
+    pub reset: bool,
+    /// Refuse the log at its first unreadable row (default: skip it, count it, report its line).
+    #[arg(long)]
+    pub strict: bool,
 }
 
 /// The firmware, wherever it runs.
@@ -224,36 +238,158 @@ pub struct StreamSummary {
     pub cost: CostStats,
     pub final_status: StatusReply,
     pub wall: Duration,
+    /// Unreadable rows skipped.
+    pub unreadable: RowFilter,
 }
 
-/// Streams log lines through the target, writing one estimates row per line.
-pub fn stream_lines<I, W>(
+/// Whether the firmware holds an estimator state: samples accepted since its last reset, or a
+/// checkpoint (restored at boot or saved since).
+pub fn holds_state(s: &StatusReply) -> bool {
+    s.accepted > 0 || s.checkpoint_time_s.is_some() || s.estimate.is_some()
+}
+
+fn describe_state(s: &StatusReply) -> String {
+    let checkpoint = match s.checkpoint_time_s {
+        Some(t) => format!("a checkpoint of {t} s"),
+        None => "no checkpoint".to_string(),
+    };
+    format!("{} samples accepted, {checkpoint}", s.accepted)
+}
+
+/// Decides, from the firmware's state and `--resume` / `--reset`, where the log starts: `Ok(Some(t))`
+/// to skip the rows up to `t` s. Refuses to feed a log into a state it did not come from.
+pub fn prepare_firmware(target: &mut Target, resume: bool, reset: bool, info: &mut dyn Write) -> anyhow::Result<Option<f64>> {
+    let before = target.boot_status;
+    if reset {
+        let after = match target.request(&Request::Reset)? {
+            Response::Status(s) => s,
+            other => bail!("the firmware answered Reset with {other:?}"),
+        };
+        if holds_state(&after) {
+            bail!(
+                "the firmware still holds {} after Reset: its checkpoints were not erased (a flash error, or a firmware older than this host-sim); nothing was streamed",
+                describe_state(&after)
+            );
+        }
+        if holds_state(&before) {
+            writeln!(info, "reset the firmware: it forgot {} and erased its checkpoints", describe_state(&before))?;
+        }
+        target.boot_status = after;
+        return Ok(None);
+    }
+    if !holds_state(&before) {
+        if resume {
+            writeln!(info, "nothing to resume (the firmware holds no state): streaming the whole log")?;
+        }
+        return Ok(None);
+    }
+    if !resume {
+        bail!(
+            "the firmware already holds an estimator state ({}), from another stream or a checkpoint in its flash: \
+             streaming this log into it would mix two logs and give wrong estimates. \
+             Give --reset to start clean (the firmware forgets that state and erases its checkpoints), \
+             or --resume if that state came from this very log (the rows after the checkpoint are streamed)",
+            describe_state(&before)
+        );
+    }
+    match before.checkpoint_time_s {
+        Some(t) => {
+            writeln!(info, "resuming after the firmware's checkpoint of {t} s ({} samples accepted)", before.accepted)?;
+            Ok(Some(t))
+        }
+        None => {
+            writeln!(
+                info,
+                "resuming: the firmware holds {} samples but no checkpoint; every row is streamed (rows it has seen are rejected as time_not_increasing)",
+                before.accepted
+            )?;
+            Ok(None)
+        }
+    }
+}
+
+/// Progress on standard error, only when it is a terminal (rows, rate, time left).
+struct Progress {
+    bar: indicatif::ProgressBar,
+    start: Instant,
+}
+
+impl Progress {
+    /// `total_bytes`: the log's size when known (a plain file), for the time left.
+    fn new(total_bytes: Option<u64>) -> Progress {
+        let bar = if !std::io::stderr().is_terminal() {
+            indicatif::ProgressBar::hidden()
+        } else if let Some(n) = total_bytes {
+            let bar = indicatif::ProgressBar::new(n);
+            if let Ok(style) = indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {percent:>3}% {msg}, {eta} left") {
+                bar.set_style(style.progress_chars("=> "));
+            }
+            bar
+        } else {
+            let bar = indicatif::ProgressBar::new_spinner();
+            if let Ok(style) = indicatif::ProgressStyle::with_template("{elapsed_precise} {spinner} {msg}") {
+                bar.set_style(style);
+            }
+            bar
+        };
+        Progress { bar, start: Instant::now() }
+    }
+
+    fn update(&self, rows: u64, bytes: u64) {
+        if rows % 256 == 0 && !self.bar.is_hidden() {
+            let rate = rows as f64 / self.start.elapsed().as_secs_f64().max(1e-9);
+            self.bar.set_position(bytes);
+            self.bar.set_message(format!("{rows} rows, {rate:.0} rows/s"));
+        }
+    }
+}
+
+impl Drop for Progress {
+    fn drop(&mut self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+/// Streams the log's rows after `resume_after_s` through the target, writing one estimates row
+/// per row. Unreadable rows go through `filter` (skipped and counted, or refused when strict).
+pub fn stream_log<R: Read, W: Write>(
     target: &mut Target,
-    lines: I,
+    lines: &mut LogReader<R>,
+    mut filter: RowFilter,
+    resume_after_s: Option<f64>,
     writer: &mut EstimatesWriter<W>,
-) -> anyhow::Result<StreamSummary>
-where
-    I: IntoIterator<Item = Result<LogLine, LogError>>,
-    W: Write,
-{
+    total_bytes: Option<u64>,
+) -> anyhow::Result<StreamSummary> {
     let start = Instant::now();
+    let progress = Progress::new(total_bytes);
     let mut cost = CostStats::default();
     let mut rows = 0u64;
-    for line in lines {
-        let line = line?;
+    while let Some(item) = lines.next() {
+        let Some(line) = filter.admit(item, &mut |e| {
+            progress.bar.suspend(|| eprintln!("warning: {e} (row skipped)"));
+        })?
+        else {
+            continue;
+        };
+        if resume_after_s.is_some_and(|t| line.row.time_s <= t) {
+            continue;
+        }
         let sample = sample_of(&line.row);
         let answer =
             step_remote(target, &SampleMsg::from(&sample)).with_context(|| format!("log line {}", line.line))?;
         cost.add(answer.step_cost_ticks);
         writer.write_step(line.row.time_s, &answer.result)?;
         rows += 1;
+        progress.update(rows, lines.bytes_read());
     }
+    drop(progress);
     let final_status = target.status()?;
     Ok(StreamSummary {
         rows,
         cost,
         final_status,
         wall: start.elapsed(),
+        unreadable: filter,
     })
 }
 
@@ -261,7 +397,9 @@ where
 pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let timeout = Duration::from_secs_f64(args.timeout_s.max(0.001));
     let out = args.out.clone().unwrap_or_else(|| default_estimates_path(&args.log));
-    let lines = LogReader::open(&args.log)?;
+    check_output_is_not_input(&args.log, &out)?;
+    let mut lines = LogReader::open(&args.log)?;
+    let plain_size = (!is_stdio(&args.log)).then(|| std::fs::metadata(&args.log).ok()).flatten().map(|m| m.len());
     let (mut target, what) = match (&args.qemu, &args.port) {
         (Some(elf), _) => (
             Target::boot_qemu(
@@ -279,69 +417,78 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         ),
         (None, None) => bail!("give --qemu FIRMWARE.elf or --port DEVICE"),
     };
-    let file = File::create(&out).map_err(|e| LogError::new(&out, 0, format!("cannot create: {e}")))?;
-    let mut writer =
-        EstimatesWriter::new(BufWriter::new(file)).with_context(|| format!("{}:0: cannot write", out.display()))?;
-    let resume_after_s = if args.resume {
-        target.boot_status.checkpoint_time_s
+    // The summary goes where the estimates do not.
+    let mut info: Box<dyn Write> = if is_stdio(&out) {
+        Box::new(std::io::stderr())
     } else {
-        None
+        Box::new(std::io::stdout().lock())
     };
-    if let Some(t) = resume_after_s {
-        println!("resuming after the firmware's checkpoint of {t} s");
-    }
-    let lines = lines.filter(move |l| match (l, resume_after_s) {
-        (Ok(line), Some(t)) => line.row.time_s > t,
-        _ => true,
-    });
-    let summary = stream_lines(&mut target, lines, &mut writer)?;
+    let resume_after_s = prepare_firmware(&mut target, args.resume, args.reset, &mut info)?;
+    let mut writer =
+        EstimatesWriter::new(open_output(&out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
+    // A gzip log's size says nothing of its rows: no time left then.
+    let gzip = plain_size.is_some() && lines.is_gzip();
+    let total = if gzip { None } else { plain_size };
+    let summary = stream_log(&mut target, &mut lines, RowFilter::new(args.strict), resume_after_s, &mut writer, total)?;
     writer
         .finish()
         .with_context(|| format!("{}:0: cannot write", out.display()))?;
     drop(target.qemu.take());
-    print_summary(&args.log, &out, &what, &summary, &target);
+    print_summary(&mut info, &args.log, &out, &what, &summary, &target)?;
+    info.flush()?;
     Ok(())
 }
 
-fn print_summary(log: &Path, out: &Path, what: &str, s: &StreamSummary, target: &Target) {
+fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &StreamSummary, target: &Target) -> std::io::Result<()> {
     let st = &s.final_status;
-    println!(
-        "{}: {} rows streamed through {what} in {:.1} s ({:.0} rows/s); estimates in {}",
-        log.display(),
+    let out = if is_stdio(out) { "standard output".to_string() } else { out.display().to_string() };
+    let log = if is_stdio(log) { "standard input".to_string() } else { log.display().to_string() };
+    writeln!(
+        w,
+        "{log}: {} rows streamed through {what} in {:.1} s ({:.0} rows/s); estimates in {out}",
         s.rows,
         s.wall.as_secs_f64(),
         s.rows as f64 / s.wall.as_secs_f64().max(1e-9),
-        out.display()
-    );
-    println!(
+    )?;
+    if s.unreadable.skipped > 0 {
+        let lines: Vec<String> = s.unreadable.first.iter().map(|e| e.line.to_string()).collect();
+        let more = if s.unreadable.skipped as usize > lines.len() { ", ..." } else { "" };
+        writeln!(w, "  unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)", s.unreadable.skipped, lines.join(", "))?;
+    }
+    writeln!(
+        w,
         "  firmware: {} accepted, {} filled, {} window restarts",
         st.accepted, st.filled, st.window_restarts
-    );
+    )?;
     let frames: Vec<String> = (0..FrameError::COUNT)
         .map(|i| format!("{} {}", FrameError::name(i), st.counters.bad_frames[i]))
         .collect();
-    println!(
+    writeln!(
+        w,
         "  bad frames: {} ({})",
         st.counters.bad_frames_total(),
         frames.join(", ")
-    );
+    )?;
     let samples: Vec<String> = (0..SampleError::COUNT)
         .map(|i| format!("{} {}", SampleError::reason_name(i), st.counters.rejected_samples[i]))
         .collect();
-    println!(
+    writeln!(
+        w,
         "  rejected samples: {} ({})",
         st.counters.rejected_samples_total(),
         samples.join(", ")
-    );
-    println!(
+    )?;
+    writeln!(
+        w,
         "  stack (painted): start-up peak {} bytes, service loop peak {} bytes, of {} bytes",
         st.boot_stack_peak_bytes, st.stack_peak_bytes, st.stack_size_bytes
-    );
+    )?;
     if let Some(t) = st.checkpoint_time_s {
-        println!(
+        writeln!(
+            w,
             "  checkpoints: {} saved in this run, newest at {t} s",
             st.checkpoints_saved
-        );
+        )?;
     }
-    println!("{}", target.unit.summary(&s.cost));
+    writeln!(w, "{}", target.unit.summary(&s.cost))
 }

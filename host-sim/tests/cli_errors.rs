@@ -6,12 +6,16 @@ use common::{host_sim, host_sim_ok, path_str, temp_dir};
 use host_sim::estimates_csv::read_estimates;
 use host_sim::log_csv::HEADER;
 
-/// Runs `estimate` on a log with `text`; expects failure and a one-line `FILE:LINE: message`.
-fn expect_error(name: &str, text: &str, line: usize, needle: &str) {
+/// Runs `estimate` (with `extra` arguments) on a log with `text`; expects failure and a one-line
+/// `FILE:LINE: message`.
+fn expect_error(name: &str, text: &str, line: usize, needle: &str, extra: &[&str]) {
     let dir = temp_dir(&format!("cli-err-{name}"));
     let log = dir.join("bad.csv");
     std::fs::write(&log, text).unwrap();
-    let out = host_sim(&["estimate", path_str(&log), "--out", path_str(&dir.join("e.csv"))]);
+    let est = dir.join("e.csv");
+    let mut args = vec!["estimate", path_str(&log), "--out", path_str(&est)];
+    args.extend_from_slice(extra);
+    let out = host_sim(&args);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{name}: should fail");
     assert_eq!(out.status.code(), Some(1), "{name}: exit code (a panic gives 101)");
@@ -24,17 +28,48 @@ fn expect_error(name: &str, text: &str, line: usize, needle: &str) {
 
 #[test]
 fn bad_header_is_reported_with_its_line() {
-    expect_error("header", "# exported\ntime,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n0,1,2,3,4,5,6\n", 2, "bad header");
+    expect_error("header", "# exported\ntime,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n0,1,2,3,4,5,6\n", 2, "bad header: no column \"time_s\"", &[]);
 }
 
 #[test]
-fn non_number_is_reported_with_its_line() {
-    expect_error("nonnum", &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n1,1.75,2,40,4,abc,0.1\n"), 3, "roll_deg: not a number");
+fn strict_refuses_a_non_number_with_its_line() {
+    expect_error("nonnum", &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n1,1.75,2,40,4,abc,0.1\n"), 3, "roll_deg: not a number", &["--strict"]);
 }
 
 #[test]
-fn short_row_is_reported_with_its_line() {
-    expect_error("short", &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n\n1,1.75,2,40,4,0.5\n"), 4, "short row");
+fn strict_refuses_a_short_row_with_its_line() {
+    expect_error("short", &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n\n1,1.75,2,40,4,0.5\n"), 4, "short row", &["--strict"]);
+}
+
+/// Without --strict, a blank cell and a truncated last line are rejected rows, reported with their
+/// line numbers; every other row is processed and written.
+#[test]
+fn unreadable_rows_are_skipped_counted_and_reported_with_their_lines() {
+    let dir = temp_dir("cli-unreadable");
+    let log = dir.join("p.csv");
+    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "1200", "--out", path_str(&log)]);
+    let text = std::fs::read_to_string(&log).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    // Line numbers are 1-based with the header on line 1: row t is on line t + 2.
+    let blank = 500 + 1; // t = 500
+    let mut cells: Vec<&str> = lines[blank].split(',').collect();
+    cells[5] = "";
+    lines[blank] = cells.join(",");
+    // A log cut in the middle of its last line.
+    let last = lines.len() - 1;
+    lines[last] = lines[last][..12].to_string();
+    std::fs::write(&log, lines.join("\n")).unwrap();
+    let est = dir.join("e.csv");
+    let out = host_sim(&["estimate", path_str(&log), "--out", path_str(&est)]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert_eq!(out.status.code(), Some(0), "{stdout}\n{stderr}");
+    assert!(stderr.contains(&format!("{}:502: roll_deg: blank cell (row skipped)", log.display())), "{stderr}");
+    assert!(stderr.contains(&format!("{}:1201: short row", log.display())), "{stderr}");
+    assert!(stdout.contains("1198 rows, 1198 accepted"), "{stdout}");
+    assert!(stdout.contains("unreadable rows skipped: 2 (lines 502, 1201;"), "{stdout}");
+    let rows = read_estimates(&est).unwrap();
+    assert_eq!(rows.len(), 1198);
+    assert!(rows.iter().all(|r| r.time_s != 500.0 && r.time_s != 1199.0));
 }
 
 #[test]

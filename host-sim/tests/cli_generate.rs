@@ -51,8 +51,13 @@ fn mismatch_logs_unchanged() {
 }
 
 use host_sim::estimates_csv::read_estimates;
-use host_sim::log_csv::{read_log, read_truth, truth_path, Truth};
-use host_sim::scenario::Row;
+use host_sim::log_csv::{read_log, read_truth, truth_path};
+use host_sim::scenario::{Row, ScenarioParams};
+
+/// What `generate` records beside a log: the scenario's parameters.
+struct Truth {
+    params: ScenarioParams,
+}
 
 /// Generates a paper-scenario log with `extra` options; returns its rows and truth.
 fn generate(dir: &Path, name: &str, extra: &[&str]) -> (Vec<Row>, Truth) {
@@ -61,7 +66,8 @@ fn generate(dir: &Path, name: &str, extra: &[&str]) -> (Vec<Row>, Truth) {
     args.extend_from_slice(extra);
     host_sim_ok(&args);
     let rows = read_log(&log).unwrap().into_iter().map(|l| l.row).collect();
-    (rows, read_truth(&truth_path(&log)).unwrap().expect("truth file"))
+    let truth = read_truth(&truth_path(&log)).unwrap().expect("truth file");
+    (rows, Truth { params: truth.params.expect("generate records the scenario's parameters") })
 }
 
 /// Change of the logged rotation angle from one row to the next, deg, in (-180, 180].
@@ -244,20 +250,26 @@ fn sample_interval_sets_the_row_spacing() {
 }
 
 #[test]
-fn estimator_period_and_interval_are_pinned_from_the_command_line() {
+fn estimator_learns_the_period_and_interval_or_takes_them_from_the_command_line() {
     let dir = temp_dir("gen-pin");
     let log = dir.join("two.csv");
     host_sim_ok(&["generate", "--scenario", "paper", "--duration", "6000", "--sample-interval", "2", "--out", path_str(&log)]);
     let x = read_truth(&truth_path(&log)).unwrap().unwrap().x_arcsec;
-    // Configured for 1 s, the estimator restarts its window at every 2 s step: no estimate.
-    let unpinned = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("u.csv"))]);
-    assert!(unpinned.contains("no estimate"), "{unpinned}");
-    // Pinned to 2 s and 480 s (240 samples): estimates within 2 arcsec by 6000 s.
-    host_sim_ok(&["estimate", path_str(&log), "--sample-interval", "2", "--rotation-period", "480", "--out", path_str(&dir.join("p.csv"))]);
-    let e = read_estimates(&dir.join("p.csv")).unwrap().last().unwrap().x_arcsec.expect("an estimate");
-    for i in 0..4 {
-        assert!((e[i] - x[i]).abs() < 2.0, "x{}: {} vs {}", i + 1, e[i], x[i]);
+    // Nothing pinned: the 2 s interval and the 480 s period are learned from the log.
+    let learned = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("u.csv"))]);
+    assert!(learned.contains("rotation: one-way, period 480 s; sample interval 2 s"), "{learned}");
+    // Pinned to 2 s and 480 s: said so, and estimating from the first window.
+    let pinned = host_sim_ok(&["estimate", path_str(&log), "--sample-interval", "2", "--rotation-period", "480", "--out", path_str(&dir.join("p.csv"))]);
+    assert!(pinned.contains("period 480 s (pinned)"), "{pinned}");
+    for name in ["u.csv", "p.csv"] {
+        let rows = read_estimates(&dir.join(name)).unwrap();
+        let e = rows.last().unwrap().x_arcsec.expect("an estimate");
+        for i in 0..4 {
+            assert!((e[i] - x[i]).abs() < 2.0, "{name}: x{}: {} vs {}", i + 1, e[i], x[i]);
+        }
     }
+    let first = |name: &str| read_estimates(&dir.join(name)).unwrap().iter().find(|r| r.x_arcsec.is_some()).map(|r| r.time_s);
+    assert!(first("p.csv") < first("u.csv"), "pinned {:?}, learned {:?}", first("p.csv"), first("u.csv"));
 }
 
 #[test]

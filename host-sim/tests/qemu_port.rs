@@ -1,6 +1,7 @@
 //! `host-sim stream --port DEVICE --baud N`, the path for a real board, exercised against the
 //! firmware in QEMU with its UART0 on a pseudo-terminal (`-serial pty`): the serial-port code of
-//! host-sim must give the same estimates CSV as `host-sim estimate`.
+//! host-sim must give the same estimates CSV as `host-sim estimate`. A second stream to the same
+//! board, which now holds the first one's state, is refused; with `--reset` it is exact again.
 
 mod qemu_support;
 
@@ -49,7 +50,8 @@ fn stream_over_a_serial_port_matches_estimate() {
             "-kernel",
         ])
         .arg(&elf)
-        // The firmware keeps its checkpoint flash, rins-flash.bin, in QEMU's working directory.
+        // QEMU's working directory holds the firmware's flash file: the scratch directory, never
+        // the source tree (a flash left there would be restored by the next run).
         .current_dir(&dir)
         .stdin(Stdio::null())
         .stdout(std::fs::File::create(&stdout_path).unwrap())
@@ -90,4 +92,17 @@ fn stream_over_a_serial_port_matches_estimate() {
         line.starts_with("step cost: max ") && line.contains(" cycles"),
         "{line}"
     );
+
+    // The board still runs and holds the first stream's state.
+    let again = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["stream", "--port", &pts, log.to_str().unwrap(), "--out", dir.join("again.csv").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&again.stderr);
+    assert_eq!(again.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("already holds an estimator state (1200 samples accepted"), "{stderr}");
+    let reset = dir.join("reset.csv");
+    let out = host_sim(&["stream", "--port", &pts, "--reset", log.to_str().unwrap(), "--out", reset.to_str().unwrap()]);
+    assert!(out.contains("reset the firmware: it forgot 1200 samples accepted"), "{out}");
+    assert_eq!(std::fs::read(&est).unwrap(), std::fs::read(&reset).unwrap(), "estimates after --reset differ");
 }

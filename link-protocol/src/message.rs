@@ -18,7 +18,8 @@ use crate::frame::FrameError;
 pub enum Request {
     /// (0) One RINS sample: answered by [`Response::Step`] or [`Response::Rejected`].
     Sample(SampleMsg),
-    /// (1) Forget everything learnt (the estimator's `reset`; counters are kept): answered by
+    /// (1) Forget everything learnt (the estimator's `reset`; counters are kept) and invalidate
+    /// the stored checkpoints, so that no restart can bring the state back: answered by
     /// [`Response::Status`].
     Reset,
     /// (2) Answered by [`Response::Status`].

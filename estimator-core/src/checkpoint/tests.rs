@@ -4,6 +4,7 @@
 
 use super::wire::Writer;
 use super::*;
+use crate::config::Bound;
 use crate::config::{Config, Method};
 use crate::estimator::{Estimator, RotationFault};
 use crate::methods::{MethodState, Windowed};
@@ -253,16 +254,20 @@ fn tampered_configuration_grid_and_estimator_are_refused_with_a_typed_error() {
         f(&mut e);
         e
     };
-    rejects(&with(&|e| e.config.measurement_sigma_rad = -1.0), InvalidConfig(ConfigError::Parameter));
-    rejects(&with(&|e| e.config.max_filled_gap_samples = 4), InvalidConfig(ConfigError::Parameter));
+    let param = |name: &'static str, value: f64, bound: Bound| InvalidConfig(ConfigError::Parameter { name, value, bound });
+    rejects(&with(&|e| e.config.measurement_sigma_rad = -1.0), param("measurement_sigma_rad", -1.0, Bound::Positive));
+    rejects(&with(&|e| e.config.max_filled_gap_samples = 4), param("max_filled_gap_samples", 4.0, Bound::AtMost(3.0)));
     // Regressions, fuzz target `checkpoint_restore`: a flipped exponent made the traditional
     // random walk 1e26 rad/sqrt(s), whose square is infinite in f32; a sigma whose square
     // underflows; a flipped top byte of the gap bridged (filled, now) made one step work for minutes.
-    rejects(&with(&|e| e.config.traditional_drift_rad_per_sqrt_s = 2.0 * Real::MAX.sqrt()), InvalidConfig(ConfigError::Parameter));
-    rejects(&with(&|e| e.config.measurement_sigma_rad = (if R == 4 { 1e-30 } else { 1e-200 }) as Real), InvalidConfig(ConfigError::Parameter));
-    rejects(&with(&|e| e.config.max_filled_gap_samples = 0x6c00_0000), InvalidConfig(ConfigError::Parameter));
-    rejects(&with(&|e| e.config.rotation_period_s = Some(10.0)), InvalidConfig(ConfigError::RotationPeriod));
-    rejects(&with(&|e| e.config.sample_interval_s = Some(f64::NAN)), InvalidConfig(ConfigError::SampleInterval));
+    let huge = 2.0 * Real::MAX.sqrt();
+    let bound = Bound::AtMost(1.0 / libm::sqrt(crate::config::SAMPLE_INTERVAL_RANGE_S.1));
+    rejects(&with(&|e| e.config.traditional_drift_rad_per_sqrt_s = huge), param("traditional_drift_rad_per_sqrt_s", huge as f64, bound));
+    let tiny = (if R == 4 { 1e-30 } else { 1e-200 }) as Real;
+    rejects(&with(&|e| e.config.measurement_sigma_rad = tiny), param("measurement_sigma_rad", tiny as f64, Bound::SquareUnderflows));
+    rejects(&with(&|e| e.config.max_filled_gap_samples = 0x6c00_0000), param("max_filled_gap_samples", f64::from(0x6c00_0000u32), Bound::AtMost(3.0)));
+    rejects(&with(&|e| e.config.rotation_period_s = Some(10.0)), InvalidConfig(ConfigError::RotationPeriod { value_s: 10.0 }));
+    rejects(&with(&|e| e.config.sample_interval_s = Some(f64::NAN)), InvalidConfig(ConfigError::SampleInterval { value_s: f64::NAN }));
 
     rejects(&with(&|e| e.grid.interval_s = Some(-1.0)), InvalidValue(Part::TimeGrid));
     rejects(&with(&|e| e.grid.last_stamp_s = Some(f64::INFINITY)), InvalidValue(Part::TimeGrid));

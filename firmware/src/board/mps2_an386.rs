@@ -4,8 +4,10 @@
 //!   sleeps (WFI) until a byte arrives: the RX interrupt (IRQ 0) is enabled in the UART and the NVIC
 //!   but masked by PRIMASK, so it wakes the core without running a handler; no interrupt handler
 //!   exists. Sleeping instead of spinning leaves the host's CPU to QEMU's I/O thread.
-//! - Cost counter: SysTick at the 25 MHz core clock (`systick_cost.rs`): under QEMU with
-//!   `-icount shift=0`, one tick is exactly 40 instructions.
+//! - Cost counter: SysTick on the core clock, free-running over 24 bits. On real silicon a tick is a
+//!   core cycle (40 ns). Under QEMU with `-icount shift=0` each instruction takes 1 ns of virtual
+//!   time, so one tick (1/25 MHz = 40 ns) is exactly 40 instructions; the TCG plugin
+//!   `firmware/tools/stepcount.c` confirms it.
 //! - Logs: defmt over semihosting (QEMU's stdout). Fatal errors: semihosting exit with status 1.
 //! - Flash for checkpoints: the host file `rins-flash.bin` in QEMU's working directory
 //!   ([`Flash`], `semihosted_flash.rs`), 256-byte pages at 0.5 ms of core clock each.
@@ -84,7 +86,7 @@ impl Uart {
             reg_write(UART_CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_INT_EN);
             reg_write(UART_INTSTATUS, 0xF);
             // One dummy read: QEMU wakes its chardev only when DATA is read, so without it the first
-            // input byte waits about a second.
+            // input byte waits about a second (measured under QEMU).
             let _ = reg_read(UART_DATA);
         }
         Uart { nvic }
