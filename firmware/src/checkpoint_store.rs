@@ -108,7 +108,7 @@ impl<F: NorFlash> CheckpointStore<F> {
     pub fn invalidate(&mut self) -> Result<(), StoreError> {
         let newest_slot = self.newest.map_or(1, |(_, slot)| slot);
         for slot in [1 - newest_slot, newest_slot] {
-            let base = (slot * SLOT_BYTES) as u32;
+            let base = (slot * Self::SLOT_BYTES) as u32;
             let header_block = F::ERASE_SIZE.max(HEADER_BYTES) as u32;
             self.flash
                 .erase(base, base + header_block)

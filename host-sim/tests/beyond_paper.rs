@@ -1,4 +1,4 @@
-//! Issue 6's goals, pinned: on the paper's scenario our default method reaches 0.5 % of truth by
+//! The goals beyond the paper, pinned: on the paper's scenario our default method reaches 0.5 % of truth by
 //! 5000 s and 10 arcsec by 2000 s for seeds 1-10 (the paper needs 45000 s), and on every scenario it
 //! is no worse than the paper's method as published.
 

@@ -37,8 +37,11 @@ pub use blocking_writer::BlockingWriter;
 pub use frame::{decode_frame, encode_frame, EncodeError, FrameError};
 pub use message::{Counters, EstimateMsg, RejectedReply, Request, Response, SampleMsg, StatusReply, StepReply};
 
-/// Version of this protocol, reported in [`StatusReply::protocol_version`].
-pub const PROTOCOL_VERSION: u8 = 3;
+/// Version of this protocol, reported in [`StatusReply::protocol_version`]. 4: status code 9
+/// (the estimator detecting the sample interval or the rotation pattern), the third counter of
+/// `Status` counts filled samples, `Reset` erases the checkpoint slots (docs/link-protocol.md,
+/// Versioning).
+pub const PROTOCOL_VERSION: u8 = 4;
 
 /// Largest COBS-encoded request the firmware accepts (without the two 0x00 delimiters). The largest
 /// request, a sample, encodes to 36 bytes; anything longer than this is counted as oversized.
