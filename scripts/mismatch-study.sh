@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 6's robustness study: every method on the sea scenario with, in turn, each effect that eq (2)
+# Robustness study: every method on the sea scenario with, in turn, each effect that eq (2)
 # does not contain. Prints one markdown table per effect (`host-sim compare` output).
 # Usage: bash scripts/mismatch-study.sh [SEEDS]   (default 5 seeds per line)
 set -euo pipefail
