@@ -98,7 +98,9 @@
 //! Why this and not a bank of filters with several random-walk levels: a bank multiplies the
 //! Kalman updates, the bulk of the step, by its size, and the step on the Cortex-M4F is within
 //! about 300 instructions of its budget. This costs per update a dozen multiply-adds on residual
-//! means already formed and three divisions (the running-mean weight, `n / r` and the share).
+//! means already formed and four divisions (the running-mean weight, the configured `r` per bin,
+//! `n / r` and the share): the step's maximum on the Cortex-M4F went from about 4,720 to 4,760
+//! instructions (`host-sim/tests/qemu_budgets.rs`, docs/uncertainty.md).
 //! Before the first full horizon both stay at their defaults (scale 1, full walk), so the start
 //! is as before.
 
