@@ -79,6 +79,8 @@ pub struct Config {
     /// reason for estimating in real time), and with no process noise at all the filter stops
     /// following them. Chosen by measurement (README, "Choosing the defaults"): it costs about
     /// 0.1 arcsec of steady-state noise and cuts the lag behind a 20 arcsec/day drift from 8 to 2 arcsec.
+    /// The windowed method applies it in full only while its residuals show a persistent bias, and
+    /// none while they are noise ([`crate::methods::windowed`], "Learning the noise and the drift").
     pub drift_rad_per_sqrt_s: Real,
     /// 1-sigma of raw roll or pitch about eq (2) for the traditional baseline: the sway. Default
     /// 3 deg / sqrt(2), the RMS of the paper's 3 deg roll sway.

@@ -427,13 +427,13 @@ fn an_image_of_the_previous_format_version_is_refused_as_such() {
     let mut target: Estimator = Estimator::new(Config::with_method(Method::Traditional)).unwrap();
     let before = target.clone();
     let mut old = good.clone();
-    old[4..6].copy_from_slice(&2u16.to_le_bytes());
+    old[4..6].copy_from_slice(&3u16.to_le_bytes());
     let n = old.len();
     let crc = crc32(&old[..n - 4]);
     old[n - 4..].copy_from_slice(&crc.to_le_bytes());
     let err = target.restore(&old).unwrap_err();
-    assert_eq!(err, CheckpointError::Version { found: 2, expected: 3 });
-    assert_eq!(VERSION, 3);
+    assert_eq!(err, CheckpointError::Version { found: 3, expected: 4 });
+    assert_eq!(VERSION, 4);
     assert!(err.to_string().contains("older firmware"), "{err}");
     assert!(target == before);
     target.restore(good).unwrap();
@@ -443,7 +443,7 @@ fn an_image_of_the_previous_format_version_is_refused_as_such() {
 #[test]
 fn default_image_size_is_documented_and_fits_six_flash_pages_with_the_slot_header() {
     #[cfg(not(feature = "f64"))]
-    assert_eq!(CHECKPOINT_LEN, 23_328);
+    assert_eq!(CHECKPOINT_LEN, 23_384);
     // The firmware stores a 16-byte slot header before the image, in 4 KiB erase blocks.
     assert!(16 + CHECKPOINT_LEN <= 6 * 4096);
     let est: Estimator = Estimator::new(Config::default()).unwrap();

@@ -220,8 +220,16 @@ fn thirty_day_run_keeps_sums_exact_covariance_spd_estimates_within_10_arcsec_and
 
 /// Runs `steps` healthy samples at `latitude_deg`; returns the last output and whether any step
 /// was `Converged`, and checks honesty at every hour: each error within 3 sigma.
+/// The configuration of the latitude runs: the defaults without the random walk. The windowed
+/// method learns how much of the walk to apply from its residuals, so with it the covariance
+/// would depend on the noise drawn; without it the covariance is that of the information alone,
+/// what the pitch-only comparison below is about.
+fn latitude_config() -> Config {
+    Config { drift_rad_per_sqrt_s: 0.0, ..Config::default() }
+}
+
 fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator) {
-    let mut est: Estimator = Estimator::new(Config::default()).unwrap();
+    let mut est: Estimator = Estimator::new(latitude_config()).unwrap();
     let mut src = Source::new(latitude_deg);
     let mut last = None;
     let mut converged = false;
@@ -240,10 +248,10 @@ fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator) {
 }
 
 /// The scalar filter x1 would have if it were observed by the pitch channel alone (its gain
-/// `gain`, 1/2 times the low-pass of the reference, and the default measurement noise and random
-/// walk): its variance after `updates`.
+/// `gain`, 1/2 times the low-pass of the reference, and the measurement noise and random walk of
+/// [`latitude_config`]): its variance after `updates`.
 fn pitch_only_variance(updates: u64, gain: f64) -> f64 {
-    let c = Config::default();
+    let c = latitude_config();
     let (r, q) = ((c.measurement_sigma_rad as f64).powi(2), (c.drift_rad_per_sqrt_s as f64).powi(2));
     let mut p = (c.prior_sigma_rad as f64).powi(2);
     for _ in 0..updates {
@@ -273,9 +281,11 @@ fn equator_x1_x2_come_from_pitch_alone() {
     let p = s.p;
     let pitch_only = pitch_only_variance(u64::from(s.updates), pitch_gain(&est));
     for i in 0..2 {
-        // Within 1 %: the scalar filter uses the gain of the last window, while the first windows,
-        // filled as the reference's low-pass settled, had slightly other gains.
-        assert!((p[i][i] / pitch_only - 1.0).abs() < 1e-2, "x{}: variance {} vs pitch-only {}", i + 1, p[i][i], pitch_only);
+        // Within 2 %: the scalar filter uses the gain of the last window, while the first windows,
+        // filled as the reference's low-pass settled, had slightly other gains; without a random
+        // walk the filter never forgets them (measured: 1.1 %; 0.5 % with the default walk, which
+        // the windowed method now switches off when its residuals show no drift).
+        assert!((p[i][i] / pitch_only - 1.0).abs() < 2e-2, "x{}: variance {} vs pitch-only {}", i + 1, p[i][i], pitch_only);
         assert_eq!(p[i][2], 0.0);
         assert_eq!(p[i][3], 0.0);
     }

@@ -55,7 +55,7 @@ fn within(r: &Run, bound_arcsec: f64) -> bool {
 
 /// Every scheme at 360, 480 and 720 s and at -60, 0 and 45 deg: the period and the shape are
 /// detected, the first estimate comes within three periods, and every error is within 1 arcsec
-/// by 10000 s and within 3 sigma.
+/// by 10000 s and within 4 sigma.
 #[test]
 fn every_scheme_period_and_latitude_is_detected_and_estimated() {
     for scheme in SCHEMES {
@@ -75,8 +75,12 @@ fn every_scheme_period_and_latitude_is_detected_and_estimated() {
                 assert_eq!(rot.kind, Some(kind), "{name}");
                 assert!(r.first_estimate_s.is_some_and(|t| t <= 3.0 * period), "{name}: first estimate at {:?}", r.first_estimate_s);
                 assert!(within(&r, 1.0), "{name}: {:?}", r.errors_arcsec);
+                // 4 sigma: the largest of 180 normalized errors. With an honest 1-sigma (the
+                // windowed method rescales it to the noise it measures) one of 180 is beyond 3
+                // sigma in about 40 % of draws, beyond 4 sigma in about 1 %; before, the 1-sigma
+                // assumed twice this log's noise and 3 of it were 6 true sigma.
                 for i in 0..4 {
-                    assert!(r.errors_arcsec[i].abs() < 3.0 * r.sigma_arcsec[i], "{name}: x{} {:.3} vs 1-sigma {:.3}", i + 1, r.errors_arcsec[i], r.sigma_arcsec[i]);
+                    assert!(r.errors_arcsec[i].abs() < 4.0 * r.sigma_arcsec[i], "{name}: x{} {:.3} vs 1-sigma {:.3}", i + 1, r.errors_arcsec[i], r.sigma_arcsec[i]);
                 }
             }
         }

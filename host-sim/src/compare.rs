@@ -2,7 +2,7 @@
 //! one table per rotation scheme, headed by how its logs are made ([`describe`]).
 
 use crate::cli_args::method_label;
-use crate::monte_carlo::{quantile, run_all, sorted, Draw};
+use crate::monte_carlo::{coverage_2sigma, quantile, run_all, sorted, Draw};
 use crate::replay::HostEstimator;
 use crate::report::Accuracy;
 use crate::scenario::ScenarioKind;
@@ -24,6 +24,9 @@ pub struct CompareRow {
     /// Largest |error| of the four at each of [`COMPARE_TIMES_S`] inside the run (NaN outside),
     /// median and 95th percentile, arcsec.
     pub error_at_arcsec: Vec<(f64, f64)>,
+    /// Share of (run, error) pairs within twice the reported 1-sigma at each of
+    /// [`COMPARE_TIMES_S`] inside the run (NaN outside; [`coverage_2sigma`]).
+    pub coverage_2sigma: Vec<f64>,
     pub duration_s: f64,
     /// Status at the end of each run, with how many runs ended in it (most frequent first); a
     /// configuration the estimator rejects counts every run under `configuration rejected (...)`.
@@ -48,6 +51,7 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
             to_percent_s: (inf, inf),
             to_arcsec_s: (inf, inf),
             error_at_arcsec: COMPARE_TIMES_S.iter().map(|t| if *t > duration_s { (f64::NAN, f64::NAN) } else { (inf, inf) }).collect(),
+            coverage_2sigma: COMPARE_TIMES_S.iter().map(|t| if *t > duration_s { f64::NAN } else { 0.0 }).collect(),
             duration_s,
             final_status: vec![(format!("configuration rejected ({e:?})"), seeds)],
         });
@@ -65,6 +69,7 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
             }))
         })
         .collect();
+    let coverage = COMPARE_TIMES_S.iter().enumerate().map(|(k, t)| if *t > duration_s { f64::NAN } else { coverage_2sigma(&results, k) }).collect();
     let mut final_status: Vec<(String, usize)> = Vec::new();
     for name in results.iter().map(|r| r.final_status.map_or("none", |s| s.name())) {
         match final_status.iter_mut().find(|(n, _)| n == name) {
@@ -81,6 +86,7 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
         to_percent_s: stats(results.iter().map(|r| r.all_within_percent_from_s().unwrap_or(inf))),
         to_arcsec_s: stats(results.iter().map(|r| r.all_within_arcsec_from_s().unwrap_or(inf))),
         error_at_arcsec,
+        coverage_2sigma: coverage,
         duration_s,
     })
 }
@@ -90,6 +96,14 @@ fn fmt_time(t: f64, duration_s: f64) -> String {
         format!("{t:.0}")
     } else {
         format!("> {duration_s:.0}")
+    }
+}
+
+fn fmt_share(v: f64) -> String {
+    if v.is_nan() {
+        "-".into()
+    } else {
+        format!("{:.1} %", 100.0 * v)
     }
 }
 
@@ -106,12 +120,12 @@ fn fmt_err(e: f64) -> String {
 /// The markdown table.
 pub fn format_table(rows: &[CompareRow]) -> String {
     let mut s = String::from(
-        "| scenario | method | runs | time to 0.5 % s (median / p95) | time to 10 arcsec s (median / p95) | max abs error at 20000 s arcsec (median / p95) | max abs error at 45000 s arcsec (median / p95) | status at the end (runs) |\n|---|---|---|---|---|---|---|---|\n",
+        "| scenario | method | runs | time to 0.5 % s (median / p95) | time to 10 arcsec s (median / p95) | max abs error at 20000 s arcsec (median / p95) | max abs error at 45000 s arcsec (median / p95) | errors within 2 sigma at 20000 / 45000 s | status at the end (runs) |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let d = r.duration_s;
         s.push_str(&format!(
-            "| {} | {} | {} | {} / {} | {} / {} | {} / {} | {} / {} | {} |\n",
+            "| {} | {} | {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} | {} |\n",
             r.scenario.name(),
             method_label(r.method),
             r.runs,
@@ -123,6 +137,8 @@ pub fn format_table(rows: &[CompareRow]) -> String {
             fmt_err(r.error_at_arcsec[0].1),
             fmt_err(r.error_at_arcsec[1].0),
             fmt_err(r.error_at_arcsec[1].1),
+            fmt_share(r.coverage_2sigma[0]),
+            fmt_share(r.coverage_2sigma[1]),
             r.final_status.iter().map(|(n, c)| format!("{n} ({c})")).collect::<Vec<_>>().join(", "),
         ));
     }

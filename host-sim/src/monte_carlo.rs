@@ -203,6 +203,16 @@ pub struct Summary {
     pub max_abs_error_arcsec: Vec<[f64; 4]>,
     /// Share of runs with all four errors within 10 arcsec, per time.
     pub share_within_10_arcsec: Vec<f64>,
+    /// Share of (run, error) pairs whose |error| is within twice the estimate's reported 1-sigma,
+    /// per time ([`coverage_2sigma`]): about 0.95 when the 1-sigma is honest.
+    pub coverage_2sigma: Vec<f64>,
+}
+
+/// Share of the (run, error) pairs at report time `k` whose |error| is within twice the reported
+/// 1-sigma. A run without an estimate at that time counts as four pairs outside.
+pub fn coverage_2sigma(results: &[Accuracy], k: usize) -> f64 {
+    let within: usize = results.iter().map(|r| r.points.get(k).map_or(0, |p| p.within_sigmas(2.0))).sum();
+    within as f64 / (4 * results.len()).max(1) as f64
 }
 
 /// Statistics over runs at each report time inside the runs.
@@ -215,6 +225,7 @@ pub fn summarize(results: &[Accuracy]) -> Summary {
         p95_abs_error_arcsec: vec![],
         max_abs_error_arcsec: vec![],
         share_within_10_arcsec: vec![],
+        coverage_2sigma: vec![],
     };
     for k in 0..times_s.len() {
         let abs = |r: &Accuracy, i: usize| r.points.get(k).and_then(|p| p.error_arcsec).map_or(f64::INFINITY, |e| e[i].abs());
@@ -232,18 +243,26 @@ pub fn summarize(results: &[Accuracy]) -> Summary {
         s.max_abs_error_arcsec.push(max);
         let within = results.iter().filter(|r| (0..4).all(|i| abs(r, i) <= crate::report::ARCSEC_THRESHOLD)).count();
         s.share_within_10_arcsec.push(within as f64 / results.len().max(1) as f64);
+        s.coverage_2sigma.push(coverage_2sigma(results, k));
     }
     s
 }
 
 /// The summary as a markdown table.
 pub fn format_summary(s: &Summary) -> String {
-    let mut out = String::from("| time s | stat | x1 arcsec | x2 arcsec | x3 arcsec | x4 arcsec | runs within 10 arcsec |\n|---|---|---|---|---|---|---|\n");
+    let mut out = String::from(
+        "| time s | stat | x1 arcsec | x2 arcsec | x3 arcsec | x4 arcsec | runs within 10 arcsec | errors within 2 sigma |\n|---|---|---|---|---|---|---|---|\n",
+    );
     for (k, t) in s.times_s.iter().enumerate() {
         let row = |v: &[f64; 4]| v.iter().map(|x| format!("{x:.2}")).collect::<Vec<_>>().join(" | ");
-        out.push_str(&format!("| {t:.0} | median | {} | {:.1} % |\n", row(&s.median_abs_error_arcsec[k]), 100.0 * s.share_within_10_arcsec[k]));
-        out.push_str(&format!("| | p95 | {} | |\n", row(&s.p95_abs_error_arcsec[k])));
-        out.push_str(&format!("| | max | {} | |\n", row(&s.max_abs_error_arcsec[k])));
+        out.push_str(&format!(
+            "| {t:.0} | median | {} | {:.1} % | {:.1} % |\n",
+            row(&s.median_abs_error_arcsec[k]),
+            100.0 * s.share_within_10_arcsec[k],
+            100.0 * s.coverage_2sigma[k]
+        ));
+        out.push_str(&format!("| | p95 | {} | | |\n", row(&s.p95_abs_error_arcsec[k])));
+        out.push_str(&format!("| | max | {} | | |\n", row(&s.max_abs_error_arcsec[k])));
     }
     out
 }
@@ -261,6 +280,38 @@ mod tests {
         let with_inf = sorted([1.0, f64::INFINITY, f64::INFINITY]);
         assert_eq!(quantile(&with_inf, 0.95), f64::INFINITY);
         assert_eq!(quantile(&with_inf, 0.25), f64::INFINITY);
+    }
+
+    fn point(time_s: f64, error_arcsec: Option<[f64; 4]>, sigma_arcsec: [f64; 4]) -> crate::report::AccuracyAt {
+        crate::report::AccuracyAt { time_s, error_arcsec, sigma_arcsec: error_arcsec.map(|_| sigma_arcsec), percent: None }
+    }
+
+    fn accuracy(points: Vec<crate::report::AccuracyAt>) -> Accuracy {
+        Accuracy { points, within_percent_from_s: [None; 4], within_arcsec_from_s: [None; 4], final_status: None }
+    }
+
+    #[test]
+    fn coverage_counts_run_error_pairs_within_two_sigma() {
+        // Three runs, two report times. At the first: run 0 has 3 of 4 within 2 sigma, run 1 all
+        // four, run 2 no estimate (4 outside): 7 / 12. At the second: 2 + 0 + 4 = 6 / 12.
+        let runs = vec![
+            accuracy(vec![
+                point(1.0, Some([1.0, -1.9, 0.0, 2.1]), [1.0; 4]),
+                point(2.0, Some([0.5, 0.5, -3.0, 3.0]), [1.0; 4]),
+            ]),
+            accuracy(vec![
+                point(1.0, Some([10.0, -10.0, 5.0, 0.0]), [5.0, 5.0, 2.5, 0.1]),
+                point(2.0, Some([10.0, -10.0, 5.0, 1.0]), [4.0, 4.0, 2.0, 0.1]),
+            ]),
+            accuracy(vec![point(1.0, None, [0.0; 4]), point(2.0, Some([0.0; 4]), [1.0; 4])]),
+        ];
+        assert!((coverage_2sigma(&runs, 0) - 7.0 / 12.0).abs() < 1e-12);
+        assert!((coverage_2sigma(&runs, 1) - 6.0 / 12.0).abs() < 1e-12);
+        assert_eq!(coverage_2sigma(&runs, 2), 0.0, "a time past every run: nothing covered");
+        let s = summarize(&runs);
+        assert_eq!(s.coverage_2sigma.len(), 2);
+        assert!((s.coverage_2sigma[1] - 0.5).abs() < 1e-12);
+        assert!(format_summary(&s).contains("| 58.3 % |"), "{}", format_summary(&s));
     }
 
     #[test]

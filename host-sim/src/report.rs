@@ -24,6 +24,11 @@ pub const REPORT_TIMES_S: [f64; 4] = [20_000.0, 45_000.0, 86_400.0, 172_800.0];
 pub const PERCENT_THRESHOLD: f64 = 0.5;
 pub const ARCSEC_THRESHOLD: f64 = 10.0;
 
+/// The estimate's reported 1-sigma, arcsec, per error; `None` without an estimate.
+pub fn sigmas_arcsec(estimate: Option<&Estimate>) -> Option<[f64; 4]> {
+    estimate.map(|e| e.sigma_rad.map(|s| rad_to_arcsec(s as f64)))
+}
+
 /// Estimate minus truth, arcsec, per error; `None` without an estimate.
 pub fn errors_arcsec(estimate: Option<&Estimate>, truth_arcsec: &[f64; 4]) -> Option<[f64; 4]> {
     estimate.map(|e| core::array::from_fn(|i| rad_to_arcsec(e.x_rad[i] as f64) - truth_arcsec[i]))
@@ -48,16 +53,19 @@ pub fn percent_error(error_arcsec: f64, truth_arcsec: f64) -> f64 {
 #[derive(Clone, Debug)]
 pub struct Tracker {
     times_s: Vec<f64>,
-    /// Estimate error (arcsec) and truth (arcsec) at each of `times_s`, once reached.
-    at: Vec<Option<([f64; 4], [f64; 4])>>,
+    /// Estimate error, truth and reported 1-sigma (all arcsec) at each of `times_s`, once reached.
+    at: Vec<Option<Held>>,
     /// Per error: time of the first row of the current run of rows within the threshold
     /// (`None` while outside).
     within_percent_since: [Option<f64>; 4],
     within_arcsec_since: [Option<f64>; 4],
     last_time_s: f64,
-    last: Option<([f64; 4], [f64; 4])>,
+    last: Option<Held>,
     next_time: usize,
 }
+
+/// What the tracker keeps of the estimate on board: error, truth, reported 1-sigma, arcsec.
+type Held = ([f64; 4], [f64; 4], [f64; 4]);
 
 impl Tracker {
     /// A tracker reporting at `times_s` (ascending).
@@ -86,7 +94,7 @@ impl Tracker {
         }
         self.last_time_s = time_s;
         let err = errors_arcsec(estimate, truth_arcsec);
-        self.last = err.map(|e| (e, *truth_arcsec));
+        self.last = err.zip(sigmas_arcsec(estimate)).map(|(e, sigma)| (e, *truth_arcsec, sigma));
         for i in 0..4 {
             let (in_pct, in_as) = match err {
                 Some(e) => {
@@ -123,7 +131,8 @@ impl Tracker {
             points.push(AccuracyAt {
                 time_s: t,
                 error_arcsec: state.map(|s| s.0),
-                percent: state.map(|(e, x)| core::array::from_fn(|i| percent_of(e[i], x[i]))),
+                sigma_arcsec: state.map(|s| s.2),
+                percent: state.map(|(e, x, _)| core::array::from_fn(|i| percent_of(e[i], x[i]))),
             });
         }
         Accuracy {
@@ -141,8 +150,21 @@ pub struct AccuracyAt {
     pub time_s: f64,
     /// Estimate minus truth, arcsec; `None` without an estimate.
     pub error_arcsec: Option<[f64; 4]>,
+    /// The estimate's reported 1-sigma, arcsec; `None` without an estimate.
+    pub sigma_arcsec: Option<[f64; 4]>,
     /// Absolute percentage error; `None` inside for a true error of 0.
     pub percent: Option<[Option<f64>; 4]>,
+}
+
+impl AccuracyAt {
+    /// How many of the four errors lie within `k` times their reported 1-sigma (0 without an
+    /// estimate).
+    pub fn within_sigmas(&self, k: f64) -> usize {
+        match (self.error_arcsec, self.sigma_arcsec) {
+            (Some(e), Some(s)) => (0..4).filter(|&i| e[i].abs() <= k * s[i]).count(),
+            _ => 0,
+        }
+    }
 }
 
 /// The accuracy table's numbers.
@@ -442,7 +464,29 @@ mod tests {
     use estimator_core::Real;
 
     fn est(x: [f64; 4]) -> Estimate {
-        Estimate { x_rad: x.map(|a| arcsec_to_rad(a) as Real), sigma_rad: [0.0; 4] }
+        est_sigma(x, [0.0; 4])
+    }
+
+    fn est_sigma(x: [f64; 4], sigma_arcsec: [f64; 4]) -> Estimate {
+        Estimate { x_rad: x.map(|a| arcsec_to_rad(a) as Real), sigma_rad: sigma_arcsec.map(|a| arcsec_to_rad(a) as Real) }
+    }
+
+    #[test]
+    fn tracker_keeps_the_reported_sigma_and_counts_errors_within_two_sigma() {
+        let truth = [100.0, -100.0, 200.0, 1000.0];
+        let mut t = Tracker::new(&[1.0, 3.0]);
+        t.observe(0.0, None, &truth);
+        t.observe(1.0, None, &truth);
+        // Errors 1, -2.5, 0.5, 10 arcsec against 1-sigma 1, 1, 0.2, 4: within 2 sigma is x1 only
+        // (1 <= 2; 2.5 > 2, 0.5 > 0.4, 10 > 8); within 3 sigma all four.
+        t.observe(2.0, Some(&est_sigma([101.0, -102.5, 200.5, 1010.0], [1.0, 1.0, 0.2, 4.0])), &truth);
+        let a = t.finish(1.0);
+        assert_eq!(a.points[0].sigma_arcsec, None);
+        assert_eq!(a.points[0].within_sigmas(2.0), 0, "no estimate counts as outside");
+        let s = a.points[1].sigma_arcsec.unwrap();
+        assert!((s[3] - 4.0).abs() < 1e-4 && (s[2] - 0.2).abs() < 1e-5, "{s:?}");
+        assert_eq!(a.points[1].within_sigmas(2.0), 1);
+        assert_eq!(a.points[1].within_sigmas(3.0), 4);
     }
 
     #[test]

@@ -10,7 +10,7 @@ use crate::config::Config;
 use crate::estimator::Estimator;
 
 impl<const CAP: usize> Estimator<CAP> {
-    /// Bytes of a checkpoint image of this estimator (23 328 for the default capacity of 720
+    /// Bytes of a checkpoint image of this estimator (23 384 for the default capacity of 720
     /// with `f32`; see [`super::checkpoint_len`]).
     pub const CHECKPOINT_LEN: usize = checkpoint_len(CAP);
 

@@ -26,7 +26,7 @@ const fn kalman_len(scalar_bytes: usize, n: usize) -> usize {
 }
 
 const fn windowed_len(cap: usize) -> usize {
-    4 + 4 + kalman_len(R, 4) + 4 * R + (1 + 8) + 4 * R + 2 * R + (1 + 12 * R) + correlation_window_len(cap)
+    4 + 4 + kalman_len(R, 4) + 4 * R + (1 + 8) + 4 * R + 2 * R + (8 * R + 8 + 4 * R) + (1 + 12 * R) + correlation_window_len(cap)
 }
 
 const fn paper_len(cap: usize) -> usize {
@@ -115,6 +115,15 @@ pub(super) fn write<const CAP: usize>(w: &mut Writer<'_>, state: &MethodState<CA
             for v in m.product_variance_rad2 {
                 w.real(v);
             }
+            for v in m.residual_mean_long.into_iter().chain(m.residual_power) {
+                w.real(v);
+            }
+            for c in m.long_count {
+                w.u32(c);
+            }
+            for v in m.noise_scale.into_iter().chain(m.drift_share) {
+                w.real(v);
+            }
             w.flag(m.reference.started);
             for stage in m.reference.stages {
                 for v in stage {
@@ -198,6 +207,11 @@ fn read_windowed<const CAP: usize>(
     let residual_count = [r.u32(), r.u32()];
     let gains: [Real; 4] = core::array::from_fn(|_| r.real());
     let product_variance_rad2: [Real; 2] = core::array::from_fn(|_| r.real());
+    let residual_mean_long: [Real; 4] = core::array::from_fn(|_| r.real());
+    let residual_power: [Real; 4] = core::array::from_fn(|_| r.real());
+    let long_count = [r.u32(), r.u32()];
+    let noise_scale: [Real; 2] = core::array::from_fn(|_| r.real());
+    let drift_share: [Real; 2] = core::array::from_fn(|_| r.real());
     let start = r.pos();
     let started = r.flag(Part::Residuals)?;
     let stages: [[Real; 4]; 3] = core::array::from_fn(|_| core::array::from_fn(|_| r.real()));
@@ -208,6 +222,9 @@ fn read_windowed<const CAP: usize>(
     let in_range = residual_mean.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
         && gains.iter().all(|g| within_non_negative(*g, 4.0))
         && product_variance_rad2.iter().all(|v| within_non_negative(*v, MAX_PRODUCT_VARIANCE_RAD2))
+        && residual_mean_long.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
+        && residual_power.iter().chain(&noise_scale).all(|v| within_non_negative(*v, MAX_NOISE_SCALE))
+        && drift_share.iter().all(|v| within_non_negative(*v, 1.0))
         && stages.iter().flatten().all(|c| within(*c, 1.0));
     ensure(in_range, CheckpointError::InvalidValue(Part::Residuals))?;
     read_correlation(r, dst.as_deref_mut().map(|m| &mut m.window), expected_correlation::<CAP>(period_samples))?;
@@ -220,10 +237,20 @@ fn read_windowed<const CAP: usize>(
         m.residual_count = residual_count;
         m.gains = gains;
         m.product_variance_rad2 = product_variance_rad2;
+        m.residual_mean_long = residual_mean_long;
+        m.residual_power = residual_power;
+        m.long_count = long_count;
+        m.noise_scale = noise_scale;
+        m.drift_share = drift_share;
         m.reference = ReferenceFilter { stages, started };
     }
     Ok(())
 }
+
+/// Largest residual power and noise scale restored: a residual mean of [`MAX_RESIDUAL`] over the
+/// smallest standard error (about a 1e-7 rad product sigma averaged over one window), squared,
+/// is far below; anything larger is a crafted image.
+const MAX_NOISE_SCALE: Real = 1.0e30;
 
 /// Largest per-product variance restored, rad^2: a 1 rad measurement sigma plus the window mean
 /// of the fill variances (each below (4.1 x 90 deg)^2, times the saturated fill weight).

@@ -3,7 +3,7 @@
 //!
 //! [`Estimator::checkpoint`] writes the image into a caller-provided buffer of at least
 //! [`Estimator::CHECKPOINT_LEN`] bytes ([`CHECKPOINT_LEN`] for the default capacity of
-//! [`DEFAULT_CAPACITY`] = 720 entries: **23 328 bytes** with `f32`, 24 312 with the `f64`
+//! [`DEFAULT_CAPACITY`] = 720 entries: **23 384 bytes** with `f32`, 24 416 with the `f64`
 //! feature; a multiple of 4, so that a NOR flash with 4-byte writes takes it as it is).
 //! [`Estimator::restore`] reads one back. Restoring an image into a fresh estimator and continuing
 //! gives outputs bit-identical to the uninterrupted run, whatever the phase of the cut: the sample
@@ -40,7 +40,8 @@
 //! # Versions
 //! [`VERSION`] is the only version read. An image of another version is refused with
 //! [`CheckpointError::Version`]: version 1 and 2 images (written before the sample grid, the
-//! rotation pattern monitor and the gap filler, with a pinned period and a 480-entry ring) hold
+//! rotation pattern monitor and the gap filler, with a pinned period and a 480-entry ring) and
+//! version 3 images (without the windowed method's learned noise scale and random walk) hold
 //! too little to continue from, and must be discarded; the estimator then starts afresh.
 //!
 //! # Layout
@@ -98,7 +99,9 @@
 //!   - windowed: updates u32, window entries since the last update u32, Kalman filter (`x` 4 `R`,
 //!     `P` 16 `R` row-major), residual means 4 `R`, the pair the next update takes (u8: 0 pitch,
 //!     1 roll), residuals averaged per pair 2 x u32, channel gains 4 `R`, the per-product variances
-//!     of the pitch and roll channels 2 `R`, the reference's low-pass (started flag, then three
+//!     of the pitch and roll channels 2 `R`, the long means of the residual means 4 `R` and of
+//!     their powers 4 `R`, the residual means in the long averages per pair 2 x u32, the noise
+//!     scale and the drift share per pair 2 + 2 `R`, the reference's low-pass (started flag, then three
 //!     stages of 4 `R`, all zero before it starts), a correlation window (entries of 30 bytes:
 //!     roll, pitch i32, six sines and cosines, four low-passed references i16, fill weight u16);
 //!   - paper: updates u32, samples u32, start time f64, integrals 4 x i64, four Kalman filters (`x`
@@ -137,7 +140,7 @@ use crate::Real;
 /// First four bytes of every image.
 pub const MAGIC: [u8; 4] = *b"RIEC";
 /// Format version written and the only one read.
-pub const VERSION: u16 = 3;
+pub const VERSION: u16 = 4;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 16;
 /// Bytes of the CRC at the end.
@@ -175,7 +178,7 @@ pub const fn checkpoint_len(cap: usize) -> usize {
     (METHOD_OFFSET + method_len(cap)).div_ceil(4) * 4 + CRC_LEN
 }
 
-/// Image length for the default capacity ([`DEFAULT_CAPACITY`]): 23 328 bytes with `f32`.
+/// Image length for the default capacity ([`DEFAULT_CAPACITY`]): 23 384 bytes with `f32`.
 pub const CHECKPOINT_LEN: usize = checkpoint_len(DEFAULT_CAPACITY);
 
 /// The CRC-32/ISO-HDLC without a table (see [`crc32`]).

@@ -61,6 +61,57 @@
 //! reported as [`crate::Status::ModelMismatch`]. With a
 //! consistent model this changes nothing (tested on the paper scenario); with errors drifting at
 //! 20 arcsec/day it raises the 1-sigma to the size of the lag (tested in `host-sim`).
+//!
+//! # Learning the noise and the drift
+//! Two numbers of the model are not known in advance: how noisy the products really are
+//! (`Config::measurement_sigma_rad` is a default: 10 arcsec of white attitude noise, where a
+//! quiet RINS has 5 and coloured noise acts like hundreds), and whether the errors drift
+//! (`Config::drift_rad_per_sqrt_s` is a default random walk that caps the filter's memory at
+//! about `sqrt(r / q)`, some 5000 s, even when the errors are constant). Both are learned from the
+//! residual means the check above already forms, by covariance matching on that sequence: once a
+//! full horizon of residuals has been averaged, each update of a pair feeds two long averages
+//! per channel, of time constant [`LONG_HORIZONS`] horizons (a plain running mean until then):
+//!
+//! ```text
+//! m_long  = E[m]                  the persistent part of the residual mean m
+//! power   = E[m^2 / s_e^2]        s_e^2 = r / n, the model's variance of m (as in the check)
+//! ```
+//!
+//! - **Noise scale** `lambda` = the sum of the pair's two powers (the mean power times 2: an
+//!   exponential mean of time constant `n` samples has half the variance `r / n` of an `n`-sample
+//!   boxcar, so a power of 1/2 per channel is what the model predicts). The reported variance is
+//!   `lambda P_ii + model_i^2`: `P` is the covariance for the configured noise, `lambda` rescales
+//!   it to the noise measured (with the sea scenario's 5 arcsec, `lambda` ~ 1/4; with 20 arcsec of
+//!   coloured noise, tens). At least [`MIN_NOISE_SCALE`]. The filter itself keeps the configured
+//!   `r`: a drift's lag also raises the power, and a larger `r` would lengthen the memory and
+//!   the lag with it, a runaway.
+//! - **Drift share**: the share of the power that is persistent, `sum m_long^2 / s_e^2` over the
+//!   power. Noise, white or coloured, averages out of `m_long` (its share is about 1 /
+//!   [`LONG_HORIZONS`] times the horizons `m` stays correlated); a drift's lag does not (share
+//!   near 1). The random walk applied to the pair's errors is the configured `q` times
+//!   `clamp((share - BIAS_SHARE_NOISE) / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE), 0, 1)`: zero for
+//!   noise (constant errors: the memory grows without bound and the error keeps falling like
+//!   `1 / sqrt(t)`, also under coloured noise, where a short memory loses to the traditional
+//!   baseline), the full configured walk for a drift (measured: 20 arcsec/day followed within
+//!   2 arcsec, docs/uncertainty.md).
+//!
+//! - **Lag**: where a drift is seen (share above zero), the persistent residual mean over the
+//!   channel's gain, `|m_long| / g`, is the error the filter's lag leaves; the reported 1-sigma
+//!   takes the larger of it and the check's widening in quadrature with `lambda P_ii` (measured:
+//!   71 % of the errors within 2 sigma at 5000 s under a 20 arcsec/day drift without it, 85 % with
+//!   it; clean coverage unchanged at 95-97.5 %).
+//!
+//! Why this and not a bank of filters with several random-walk levels: a bank multiplies the
+//! Kalman updates, the bulk of the step, by its size, and the step on the Cortex-M4F is within
+//! about 300 instructions of its budget. This costs per update a dozen multiply-adds on residual
+//! means already formed and four divisions (the running-mean weight, the configured `r` per bin,
+//! `n / r` and the share), plus a division per error in every estimate (the lag): the step's
+//! maximum on the Cortex-M4F (MPS2-AN386) went from about 4,720 to 4,760 instructions with the
+//! noise scale and drift share, and to 4,960 with the lag term, 40 below the budget of 5,000
+//! (`host-sim/tests/qemu_budgets.rs`). Computing the lag once per update instead of every step
+//! would take most of its 200 back, at the price of four more values in the checkpoint.
+//! Before the first full horizon both stay at their defaults (scale 1, full walk), so the start
+//! is as before.
 
 use crate::config::Config;
 use crate::correlation::ReferenceFilter;
@@ -72,6 +123,20 @@ use crate::Real;
 
 /// Time constant of the residual average, in rotation periods.
 pub const RESIDUAL_PERIODS: usize = 4;
+
+/// Time constant of the long averages of the residual mean (its mean and its power), in multiples
+/// of the residual average's horizon (see "Learning the noise and the drift" in the module doc).
+pub const LONG_HORIZONS: u32 = 32;
+
+/// Bias share at and below which the residual mean is taken as noise (no drift: the random walk
+/// is switched off), and at and above which as a persistent bias (the full random walk of
+/// `Config::drift_rad_per_sqrt_s`). Between them the random walk's variance rises linearly.
+pub const BIAS_SHARE_NOISE: Real = 0.35;
+pub const BIAS_SHARE_DRIFT: Real = 0.7;
+
+/// Smallest noise scale applied to the reported 1-sigma (the data may be quieter than
+/// `Config::measurement_sigma_rad` says, but not without bound).
+pub const MIN_NOISE_SCALE: Real = 1.0 / 16.0;
 
 /// State of the windowed method.
 #[derive(Clone, Debug, PartialEq)]
@@ -98,6 +163,19 @@ pub struct Windowed<const CAP: usize> {
     /// Per-product variance of the pitch and of the roll channels at the last update, rad^2
     /// (`r` of the module doc, filled samples included).
     pub product_variance_rad2: [Real; 2],
+    /// Long exponential mean of each channel's residual mean, rad.
+    pub residual_mean_long: [Real; 4],
+    /// Long exponential mean of each channel's squared residual mean, over the model's variance of
+    /// that mean (about 1 when the model holds).
+    pub residual_power: [Real; 4],
+    /// Residual means averaged into the long averages per pair (saturates at their horizon).
+    pub long_count: [u32; 2],
+    /// Noise scale of each pair: the factor applied to the filter's variance in the reported
+    /// 1-sigma (1 until the long averages start).
+    pub noise_scale: [Real; 2],
+    /// Share of the configured random walk's variance applied to each pair's errors, in [0, 1]
+    /// (1 until the long averages start).
+    pub drift_share: [Real; 2],
 }
 
 /// The estimate of one step: x1..x4, their 1-sigma, and whether the model is inconsistent.
@@ -129,6 +207,11 @@ impl<const CAP: usize> Windowed<CAP> {
             residual_count: [0; 2],
             gains: [0.5; 4],
             product_variance_rad2: [0.0; 2],
+            residual_mean_long: [0.0; 4],
+            residual_power: [0.0; 4],
+            long_count: [0; 2],
+            noise_scale: [1.0; 2],
+            drift_share: [1.0; 2],
         }
     }
 
@@ -144,6 +227,11 @@ impl<const CAP: usize> Windowed<CAP> {
         self.residual_count = [0; 2];
         self.gains = [0.5; 4];
         self.product_variance_rad2 = [0.0; 2];
+        self.residual_mean_long = [0.0; 4];
+        self.residual_power = [0.0; 4];
+        self.long_count = [0; 2];
+        self.noise_scale = [1.0; 2];
+        self.drift_share = [1.0; 2];
     }
 
     /// Sets the window to one period of the rotation pattern.
@@ -177,7 +265,8 @@ impl<const CAP: usize> Windowed<CAP> {
         let elapsed_s = interval * bin * self.entries_since_update as Real;
         self.entries_since_update = 0;
         let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
-        self.kf.predict(&[q; 4]);
+        let (qp, qr) = (q * self.drift_share[0], q * self.drift_share[1]);
+        self.kf.predict(&[qp, qp, qr, qr]);
         let sums = self.window.sums();
         let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
         let r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
@@ -193,8 +282,37 @@ impl<const CAP: usize> Windowed<CAP> {
         if applied {
             self.updates = self.updates.saturating_add(1);
             self.average_residuals(pair, &m.rows, &m.z);
+            self.learn_noise_and_drift(config, pair);
         }
         applied
+    }
+
+    /// The long averages of the residual means of `pair` and what they give: the pair's noise
+    /// scale and drift share (see "Learning the noise and the drift" in the module doc). Starts
+    /// once a full horizon of residuals has been averaged.
+    fn learn_noise_and_drift(&mut self, config: &Config, pair: usize) {
+        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
+        if self.residual_count[pair] < horizon.max(1) {
+            return;
+        }
+        let count = &mut self.long_count[pair];
+        *count = count.saturating_add(1).min(LONG_HORIZONS * horizon.max(1));
+        let alpha = 1.0 / *count as Real;
+        // The model's variance of a residual mean, s_e^2 = r / n (as in `consistency`).
+        let sigma2 = config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
+        let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
+        let inv_s_e2 = n / self.product_variance_rad2[pair].max(sigma2);
+        let (mut power, mut bias) = (0.0, 0.0);
+        for ch in 2 * pair..2 * pair + 2 {
+            let mean = self.residual_mean[ch];
+            self.residual_mean_long[ch] += alpha * (mean - self.residual_mean_long[ch]);
+            self.residual_power[ch] += alpha * (mean * mean * inv_s_e2 - self.residual_power[ch]);
+            power += self.residual_power[ch];
+            bias += self.residual_mean_long[ch] * self.residual_mean_long[ch] * inv_s_e2;
+        }
+        self.noise_scale[pair] = power.max(MIN_NOISE_SCALE);
+        let share = if power > 0.0 { bias / power } else { 0.0 };
+        self.drift_share[pair] = ((share - BIAS_SHARE_NOISE) * (1.0 / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE))).clamp(0.0, 1.0);
     }
 
     fn average_residuals(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) {
@@ -261,7 +379,16 @@ impl<const CAP: usize> Windowed<CAP> {
         let check = self.consistency(config);
         let model = check.model_sigma_rad;
         let x_rad = [self.kf.x[0], self.kf.x[1], self.kf.x[2], self.kf.x[3]];
-        let sigma_rad = core::array::from_fn(|i| sqrt(self.kf.p[(i, i)].max(0.0) + model[i] * model[i]));
+        let sigma_rad = core::array::from_fn(|i| {
+            // The persistent residual mean as a state error (a drift's lag), where a drift is seen.
+            let lag = if self.drift_share[i / 2] > 0.0 && self.gains[i] > 1e-6 {
+                (self.residual_mean_long[i] / self.gains[i]).abs().min(config.prior_sigma_rad)
+            } else {
+                0.0
+            };
+            let m = model[i].max(lag);
+            sqrt(self.noise_scale[i / 2] * self.kf.p[(i, i)].max(0.0) + m * m)
+        });
         Some(MethodEstimate { x_rad, sigma_rad, mismatch: check.mismatch })
     }
 }

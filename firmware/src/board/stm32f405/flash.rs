@@ -4,11 +4,11 @@
 //! `rins-flash.bin` ([`SemihostedFlash`], as on mps2-an386). `boards/stm32f405/memory.x` ends the
 //! code's FLASH region before sector 10, so the linker never puts code there.
 //!
-//! Why those sectors: an image is 23.3 KB, more than one of the 16 KiB sectors 1-3, and a slot
+//! Why those sectors: an image is 23.4 KB, more than one of the 16 KiB sectors 1-3, and a slot
 //! must be whole erase blocks that the other slot does not share.
 //!
 //! Timing on silicon, from the STM32F405 datasheet (not measured): a 128 KiB sector erase takes
-//! 1-2 s at 3.3 V (x32 parallelism), byte programming 16 us a byte, so a save (one erase, 23.3 KB)
+//! 1-2 s at 3.3 V (x32 parallelism), byte programming 16 us a byte, so a save (one erase, 23.4 KB)
 //! takes 1.4-2.4 s, once per checkpoint interval (60 s by default). The core stalls on instruction
 //! fetches from flash meanwhile; the host is waiting for the answer to the sample that triggered
 //! the save, so no byte arrives (the host's link timeout is 10 s).
