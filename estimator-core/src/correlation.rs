@@ -90,6 +90,10 @@ pub const PITCH_COS: usize = 1;
 pub const ROLL_SIN: usize = 2;
 /// Index of the channel that isolates x4: roll * cos(rho).
 pub const ROLL_COS: usize = 3;
+/// The pitch channels (x1, x2), as a pair the filter takes in turn with [`ROLL_PAIR`].
+pub const PITCH_PAIR: usize = 0;
+/// The roll channels (x3, x4 and the leakage of x1, x2).
+pub const ROLL_PAIR: usize = 1;
 
 /// The four correlation products of one sample, in channel order (the paper's method uses them
 /// as they are).
@@ -291,6 +295,16 @@ impl CorrelationSums {
 
     /// The centred measurement of the module doc, or `None` for an empty window.
     pub fn measurement(&self) -> Option<Measurement> {
+        let pitch = self.measurement_of(PITCH_PAIR)?;
+        let roll = self.measurement_of(ROLL_PAIR)?;
+        Some(Measurement { z: [pitch.z[0], pitch.z[1], roll.z[2], roll.z[3]], rows: [pitch.rows[0], pitch.rows[1], roll.rows[2], roll.rows[3]] })
+    }
+
+    /// The measurement of one channel pair only ([`PITCH_PAIR`] or [`ROLL_PAIR`]; the other
+    /// pair's channels are left zero), from only the sums it needs: the filter takes one pair a
+    /// step, and the conversion of the sums is most of the measurement's cost. The same values as
+    /// [`CorrelationSums::measurement`], bit for bit.
+    pub fn measurement_of(&self, pair: usize) -> Option<Measurement> {
         if self.count == 0 {
             return None;
         }
@@ -301,19 +315,24 @@ impl CorrelationSums {
         let ttt = tt / TRIG_COUNTS as Real;
         let a = inv_n / ATTITUDE_COUNTS as Real;
         let at = a / TRIG_COUNTS as Real;
-        let scale = [t, t, t, t, t, t, a, a, at, at, at, at, tt, tt, tt, tt, tt, tt, tt, tt, ttt, ttt, ttt, ttt, ttt, ttt, ttt, ttt];
-        let m: [Real; SUMS] = core::array::from_fn(|i| to_real(self.sums[i]) * scale[i]);
-        let (c, ss, cs, roll, pitch) = ([m[0], m[1], m[2], m[3]], m[4], m[5], m[6], m[7]);
+        let m = |i: usize, scale: Real| to_real(self.sums[i]) * scale;
         let cov = |mean_product: Real, a: Real, b: Real| mean_product - a * b;
-        let z = [cov(m[8], pitch, c[0]), cov(m[9], pitch, c[1]), cov(m[10], roll, c[2]), cov(m[11], roll, c[3])];
-        let h = [m[16], m[17], m[18], m[19]];
-        let rows = [
-            [cov(m[12], c[0], ss), -cov(m[13], c[0], cs), 0.0, 0.0],
-            [cov(m[14], c[1], ss), -cov(m[15], c[1], cs), 0.0, 0.0],
-            [-cov(m[20], c[2], h[0]), -cov(m[21], c[2], h[1]), cov(m[22], c[2], h[2]), -cov(m[23], c[2], h[3])],
-            [-cov(m[24], c[3], h[0]), -cov(m[25], c[3], h[1]), cov(m[26], c[3], h[2]), -cov(m[27], c[3], h[3])],
-        ];
-        Some(Measurement { z, rows })
+        let mut out = Measurement { z: [0.0; 4], rows: [[0.0; 4]; 4] };
+        if pair == PITCH_PAIR {
+            let (c0, c1, ss, cs, pitch) = (m(0, t), m(1, t), m(4, t), m(5, t), m(7, a));
+            out.z[0] = cov(m(8, at), pitch, c0);
+            out.z[1] = cov(m(9, at), pitch, c1);
+            out.rows[0] = [cov(m(12, tt), c0, ss), -cov(m(13, tt), c0, cs), 0.0, 0.0];
+            out.rows[1] = [cov(m(14, tt), c1, ss), -cov(m(15, tt), c1, cs), 0.0, 0.0];
+        } else {
+            let (c2, c3, roll) = (m(2, t), m(3, t), m(6, a));
+            let h = [m(16, tt), m(17, tt), m(18, tt), m(19, tt)];
+            out.z[2] = cov(m(10, at), roll, c2);
+            out.z[3] = cov(m(11, at), roll, c3);
+            out.rows[2] = [-cov(m(20, ttt), c2, h[0]), -cov(m(21, ttt), c2, h[1]), cov(m(22, ttt), c2, h[2]), -cov(m(23, ttt), c2, h[3])];
+            out.rows[3] = [-cov(m(24, ttt), c3, h[0]), -cov(m(25, ttt), c3, h[1]), cov(m(26, ttt), c3, h[2]), -cov(m(27, ttt), c3, h[3])];
+        }
+        Some(out)
     }
 }
 

@@ -257,7 +257,7 @@ impl<const CAP: usize> Windowed<CAP> {
             return false;
         }
         let pair = usize::from(self.next_pair.min(1));
-        let Some(m) = self.window.sums().measurement() else {
+        let Some(m) = self.window.sums().measurement_of(pair) else {
             return false;
         };
         self.next_pair = 1 - pair as u8;
