@@ -178,34 +178,6 @@ impl ScenarioOverrides {
     }
 }
 
-/// `--scheme`: how the RINS turns (see [`RotationScheme`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum SchemeArg {
-    /// One way at a constant rate, +360 deg per period (the paper's).
-    #[default]
-    Continuous,
-    /// One way at a constant rate, -360 deg per period.
-    Reversed,
-    /// +360 deg in half a period, back -360 deg in the other half, at a constant rate.
-    Reciprocating,
-    /// Stop and go: four 90 deg moves of 15 s, each followed by a dwell of period/4 - 15 s.
-    FourPosition,
-    /// Stop and go: four 90 deg moves forward then four back, 15 s each, dwells of period/8 - 15 s.
-    EightPosition,
-}
-
-impl From<SchemeArg> for RotationScheme {
-    fn from(s: SchemeArg) -> RotationScheme {
-        match s {
-            SchemeArg::Continuous => RotationScheme::Continuous,
-            SchemeArg::Reversed => RotationScheme::Reversed,
-            SchemeArg::Reciprocating => RotationScheme::Reciprocating,
-            SchemeArg::FourPosition => RotationScheme::FourPosition,
-            SchemeArg::EightPosition => RotationScheme::EightPosition,
-        }
-    }
-}
-
 /// A comma-separated list of schemes, or `all`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SchemeList(pub Vec<RotationScheme>);
@@ -298,7 +270,7 @@ impl RecorderArgs {
 pub struct LogShapeArgs {
     /// Rotation scheme of the RINS.
     #[arg(long, value_enum, default_value_t)]
-    pub scheme: SchemeArg,
+    pub scheme: RotationScheme,
     #[command(flatten)]
     pub timing: TimingArgs,
     #[command(flatten)]
@@ -309,7 +281,7 @@ impl LogShapeArgs {
     /// Applies scheme, timing and recorder to `p` (after its duration is set): outage start times
     /// are drawn from the scenario's seed.
     pub fn apply(&self, p: &mut ScenarioParams) -> anyhow::Result<()> {
-        apply_shape(p, self.scheme.into(), &self.timing, &self.recorder.settings(), p.seed)
+        apply_shape(p, self.scheme, &self.timing, &self.recorder.settings(), p.seed)
     }
 }
 

@@ -4,7 +4,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Method, SampleError};
-use host_sim::cli_args::{method_label, LogShapeArgs, MethodArg, RecorderArgs, ScenarioArg, ScenarioOverrides, SchemeArg, SchemeList, TimingArgs, TuningArgs};
+use host_sim::cli_args::{method_label, LogShapeArgs, MethodArg, RecorderArgs, ScenarioArg, ScenarioOverrides, SchemeList, TimingArgs, TuningArgs};
 use host_sim::log_csv::{self, LogError, Truth};
 use host_sim::pipeline::{default_estimates_path, estimate_log, load_truth, truth_rows, EstimateOptions};
 use host_sim::recorder::{recorded_rows, Recorder};
@@ -35,7 +35,7 @@ enum Command {
     Run(RunArgs),
     /// Many independent runs in parallel: error statistics at 2000 ... 86400 s.
     MonteCarlo(MonteCarloArgs),
-    /// Every method on every scenario over several seeds: a markdown table for the README.
+    /// Every method on every scenario over several seeds: a markdown table for docs/results.md.
     Compare(CompareArgs),
     /// Stream a log through the firmware over its link.
     Stream(host_sim::stream::StreamArgs),
@@ -120,7 +120,7 @@ struct MonteCarloArgs {
     method: MethodArg,
     /// Rotation scheme of the RINS.
     #[arg(long, value_enum, default_value_t)]
-    scheme: SchemeArg,
+    scheme: RotationScheme,
     #[command(flatten)]
     tuning: TuningArgs,
     #[command(flatten)]
@@ -424,7 +424,7 @@ fn thread_pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
 
 fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.runs >= 1, "--runs must be at least 1");
-    let draw = a.spread.draw(a.scenario.into(), a.scheme.into(), a.seed)?;
+    let draw = a.spread.draw(a.scenario.into(), a.scheme, a.seed)?;
     let method: Method = a.method.into();
     let config = a.tuning.config(method);
     let bar = indicatif::ProgressBar::new(a.runs as u64);

@@ -33,8 +33,8 @@ pub const MOVE_S: f64 = 15.0;
 /// Angle of one move of the stop-and-go schemes, rad (90 deg).
 pub const MOVE_RAD: f64 = PI / 2.0;
 
-/// How the RINS turns about its rotation axis.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+/// How the RINS turns about its rotation axis (also `--scheme`, with the names of [`Self::name`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum RotationScheme {
     /// One way (positive) at a constant rate: the paper's scheme.
