@@ -145,7 +145,7 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 /// spans one period (exactly, when `bin` divides the period; the nearest whole number of bins
 /// otherwise). Averaging within a bin slightly low-passes the sway (it helps) and the oscillation
 /// of eq (2) (a relative error of about `(w_r b dt)^2 / 24`, 1e-5 for 5 samples of 0.1 s at 480 s).
-/// Its measured cost is stated in the README.
+/// Its measured cost is in docs/real-logs.md (Bins).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CorrelationWindow<const CAP: usize> {
     pub(crate) ring: [QuantizedSample; CAP],

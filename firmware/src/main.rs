@@ -9,7 +9,7 @@
 //! - [`stack`]: stack painting for the high-water mark; [`fault`]: panic and hard-fault handlers.
 //!
 //! This file wires them together, announces `Ready` on the link and runs the loop. The protocol is
-//! in the README's *Link protocol* section.
+//! in docs/link-protocol.md.
 //!
 //! Built for any other target (as `cargo test --workspace` does on the host), the crate is an
 //! empty program that says where it runs; nothing of the firmware is compiled.
@@ -47,7 +47,7 @@ fn main() {
     std::process::exit(2);
 }
 
-/// Builds the estimator into its static slot. Out of line: `Estimator::new` returns the 13.8 KB
+/// Builds the estimator into its static slot. Out of line: `Estimator::new` returns the 23.6 KB
 /// state by value and the copy into the slot needs a temporary, which should not stay in `main`'s
 /// frame for ever.
 #[cfg(target_os = "none")]

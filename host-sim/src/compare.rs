@@ -1,4 +1,4 @@
-//! `compare`: every method on every scenario over several seeds, as a markdown table for the README;
+//! `compare`: every method on every scenario over several seeds, as a markdown table for docs/results.md;
 //! one table per rotation scheme, headed by how its logs are made ([`describe`]).
 
 use crate::cli_args::method_label;

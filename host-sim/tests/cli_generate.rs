@@ -14,7 +14,7 @@ fn checksum(path: &Path) -> (u64, usize) {
 
 /// The three scenarios' logs, without any of the rotation-scheme or recorder options, are
 /// byte for byte those of the generator before those options existed (checksums of the logs it
-/// wrote): logs, results and figures quoted in the README stay reproducible.
+/// wrote): logs, results and figures quoted in docs/ stay reproducible.
 #[test]
 fn default_scenarios_unchanged() {
     let dir = temp_dir("gen-golden");

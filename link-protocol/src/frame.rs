@@ -215,7 +215,7 @@ mod tests {
         }
     }
 
-    /// Pins the wire layout documented in README.md (Link protocol).
+    /// Pins the wire layout documented in docs/link-protocol.md.
     #[test]
     fn request_layout_is_as_documented() {
         let m = SampleMsg {
@@ -236,7 +236,7 @@ mod tests {
         }
         assert_eq!(bytes, expect);
         assert_eq!(bytes.len(), 33);
-        // The examples of README.md (Link protocol), byte for byte.
+        // The examples of docs/link-protocol.md, byte for byte.
         let sample_frame = [
             0x00, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xf0, 0x3f, 0x01, 0x01, 0x02, 0x40, 0x01, 0x01, 0x01,
             0x01, 0x01, 0x01, 0x02, 0x3f, 0x01, 0x03, 0x80, 0xbf, 0x01, 0x03, 0x80, 0x3e, 0x01, 0x01, 0x04, 0x3e, 0x7a,

@@ -5,7 +5,7 @@
 //! crate, so both ends encode and decode every byte the same way.
 //!
 //! One frame on the wire, in both directions (byte-for-byte description in
-//! the README's *Link protocol* section):
+//! docs/link-protocol.md):
 //!
 //! ```text
 //! 0x00 | COBS( postcard(message) | CRC-16/IBM-3740(postcard(message)) little-endian ) | 0x00

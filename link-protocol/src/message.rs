@@ -1,7 +1,7 @@
 //! The messages. Each is serialised with postcard (serde data model: enum variant = varint index,
 //! `u8` = one byte, `u32` = varint, `f32`/`f64` = 4/8 bytes little-endian IEEE 754, `Option` = one
 //! byte 0/1 then the value, arrays = their elements in order). The byte layout of every message is
-//! in the README's *Link protocol* section; the tests in this module pin it.
+//! in docs/link-protocol.md; the tests in this module pin it.
 //!
 //! Sample fields travel exactly as [`estimator_core::Sample`] holds them, so the firmware feeds its
 //! core bit-identical samples to the ones the host builds with `Sample::from_degrees`; output values
