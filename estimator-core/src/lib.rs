@@ -15,7 +15,8 @@
 //! - the sample grid (interval, jitter, clock steps): [`time_grid`]; lost samples: [`gap_fill`];
 //!   the rotation pattern (period, shape, health): [`rotation_pattern`];
 //! - eqs (13)-(18), the Kalman filter: [`kalman`], used by the three methods in [`methods`];
-//! - input checks, the sway gate and how it all fits together: [`estimator`].
+//! - input checks: [`sample`]; the sway gate: [`sway_gate`]; what one step reports: [`output`];
+//!   how it all fits together: [`estimator`].
 //!
 //! `#![no_std]`, no allocator: every buffer has a const-generic capacity, and
 //! `size_of::<Estimator>()` is checked by a test.
@@ -50,13 +51,17 @@ pub mod installation;
 pub mod kalman;
 pub mod methods;
 pub mod moving_average;
+pub mod output;
 pub mod rotation_pattern;
 pub mod sample;
+pub mod sway_gate;
 pub mod math;
 pub mod time_grid;
 pub mod units;
 
 pub use config::{Config, ConfigError, Method};
-pub use estimator::{Counters, Estimate, Estimator, Holdup, Output, RejectCounts, RotationFault, RotationSummary, Status};
+pub use estimator::Estimator;
+pub use output::{Counters, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status};
+pub use rotation_pattern::RotationFault;
 pub use rotation_pattern::PatternKind;
 pub use sample::{Attitude, Field, Sample, SampleError};

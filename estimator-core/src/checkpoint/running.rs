@@ -10,7 +10,10 @@
 
 use super::wire::{Reader, Writer};
 use super::{ensure, within, within_non_negative, CheckpointError, Part, R};
-use crate::estimator::{Counters, Estimator, Feed, RejectCounts, RotationFault, Status, SwayMonitor};
+use crate::estimator::{Estimator, Feed};
+use crate::output::{Counters, RejectCounts, Status};
+use crate::rotation_pattern::RotationFault;
+use crate::sway_gate::SwayMonitor;
 use crate::math::sin_cos;
 use crate::sample::{SampleError, MAX_TILT_RAD};
 use crate::Real;

@@ -1,0 +1,173 @@
+//! What the estimator reports: its status, the estimate with its 1-sigma, the output of one step,
+//! its counters, what it knows of the rotation pattern and why there is no estimate yet.
+
+use crate::rotation_pattern::{PatternKind, RotationFault};
+use crate::sample::{Attitude, SampleError};
+use crate::Real;
+
+/// What the estimator is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    /// The sway gate has not opened yet.
+    WaitingForSway,
+    /// This sample's rotation breaks the learned pattern; estimates are frozen.
+    RotationFault(RotationFault),
+    /// The first window is filling; no estimate yet.
+    WarmingUp,
+    /// The window is refilling after a long gap or a rotation fault; estimates are frozen.
+    Holding,
+    /// The filter is updating; not every error is below `converged_sigma_rad` yet.
+    Estimating,
+    /// The filter is updating and every error's 1-sigma is below `converged_sigma_rad`.
+    Converged,
+    /// The filter is updating but its residuals show a bias the model does not explain (drifting
+    /// errors, coloured noise): the 1-sigma has been widened to match.
+    ModelMismatch,
+    /// The sample interval or the rotation pattern's period is not known yet; estimates are
+    /// frozen (or none yet).
+    DetectingPattern,
+}
+
+impl Status {
+    /// Every status, in code order.
+    pub const ALL: [Status; 10] = [
+        Status::WaitingForSway,
+        Status::RotationFault(RotationFault::Stopped),
+        Status::RotationFault(RotationFault::Reversed),
+        Status::RotationFault(RotationFault::RateMismatch),
+        Status::WarmingUp,
+        Status::Holding,
+        Status::Estimating,
+        Status::Converged,
+        Status::ModelMismatch,
+        Status::DetectingPattern,
+    ];
+
+    /// Short name used in files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Status::WaitingForSway => "waiting_for_sway",
+            Status::RotationFault(RotationFault::Stopped) => "rotation_stopped",
+            Status::RotationFault(RotationFault::Reversed) => "rotation_reversed",
+            Status::RotationFault(RotationFault::RateMismatch) => "rotation_rate_mismatch",
+            Status::WarmingUp => "warming_up",
+            Status::Holding => "holding",
+            Status::Estimating => "estimating",
+            Status::Converged => "converged",
+            Status::ModelMismatch => "model_mismatch",
+            Status::DetectingPattern => "detecting_pattern",
+        }
+    }
+
+    /// Code used on the firmware link (its index in [`Status::ALL`]).
+    pub fn code(&self) -> u8 {
+        match self {
+            Status::WaitingForSway => 0,
+            Status::RotationFault(RotationFault::Stopped) => 1,
+            Status::RotationFault(RotationFault::Reversed) => 2,
+            Status::RotationFault(RotationFault::RateMismatch) => 3,
+            Status::WarmingUp => 4,
+            Status::Holding => 5,
+            Status::Estimating => 6,
+            Status::Converged => 7,
+            Status::ModelMismatch => 8,
+            Status::DetectingPattern => 9,
+        }
+    }
+
+    /// Inverse of [`Status::code`].
+    pub fn from_code(code: u8) -> Option<Status> {
+        Status::ALL.get(usize::from(code)).copied()
+    }
+}
+
+/// The four installation errors with their 1-sigma, rad.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    pub x_rad: [Real; 4],
+    pub sigma_rad: [Real; 4],
+}
+
+/// What one step returns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Output {
+    /// The sample's time stamp, s, as received.
+    pub time_s: f64,
+    pub status: Status,
+    /// `None` until the filter has had its first measurement.
+    pub estimate: Option<Estimate>,
+    /// The sample's attitude minus eq (2)'s oscillation for the current estimate (unchanged while
+    /// there is none). Heading wrapped to [-pi, pi].
+    pub corrected: Attitude,
+}
+
+/// Rejected samples by reason (index: [`SampleError::reason_index`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RejectCounts(pub [u32; SampleError::COUNT]);
+
+impl RejectCounts {
+    /// Total rejected.
+    pub fn total(&self) -> u32 {
+        self.0.iter().fold(0u32, |a, b| a.saturating_add(*b))
+    }
+}
+
+/// What the estimator has counted since it was made or reset (saturating).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Samples accepted.
+    pub accepted: u32,
+    /// Lost samples filled from their neighbours.
+    pub filled: u32,
+    /// Restarts of the moving average (gaps too long to fill, clock steps, rotation faults).
+    pub window_restarts: u32,
+    /// Clock jumps and steps backwards in the time stamps.
+    pub clock_steps: u32,
+}
+
+/// The rotation pattern as far as it is known.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotationSummary {
+    /// The period, s (sample interval times samples), once pinned or detected.
+    pub period_s: Option<f64>,
+    /// Whether the period was pinned by the configuration.
+    pub pinned: bool,
+    /// The pattern's shape, once a whole cycle has been watched.
+    pub kind: Option<PatternKind>,
+    /// Samples per window entry (1 unless one period holds more samples than the ring).
+    pub samples_per_entry: u32,
+}
+
+/// Why there is no estimate, or no fresh one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Holdup {
+    /// The sway gate is closed.
+    WaitingForSway,
+    /// The sample interval is being learned from the time stamps.
+    SampleIntervalNotKnown,
+    /// The rotation pattern's period is being detected.
+    RotationPeriodNotDetected,
+    /// The rotation has broken its pattern since this sample time, s.
+    RotationFault { fault: RotationFault, since_s: f64 },
+    /// The window is filling: `filled` of `len` entries.
+    WindowFilling { filled: u32, len: u32 },
+}
+
+impl core::fmt::Display for Holdup {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Holdup::WaitingForSway => write!(f, "waiting for the roll sway to exceed the start gate"),
+            Holdup::SampleIntervalNotKnown => write!(f, "sample interval not yet learned from the time stamps"),
+            Holdup::RotationPeriodNotDetected => write!(f, "rotation period not yet detected"),
+            Holdup::RotationFault { fault, since_s } => {
+                let what = match fault {
+                    RotationFault::Stopped => "rotation stopped",
+                    RotationFault::Reversed => "rotation reversed",
+                    RotationFault::RateMismatch => "rotation no longer repeats its pattern",
+                };
+                write!(f, "{what} since {since_s} s")
+            }
+            Holdup::WindowFilling { filled, len } => write!(f, "moving average filling ({filled} of {len} entries)"),
+        }
+    }
+}
