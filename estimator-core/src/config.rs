@@ -1,5 +1,6 @@
 //! Estimator configuration: a plain struct whose [`Default`] reproduces the paper's setting.
 
+use crate::code::{from_code, UnknownCode};
 use crate::gap_fill::MAX_FILLABLE_GAP;
 use crate::units::{arcsec_to_rad, RAD_PER_DEG};
 use crate::Real;
@@ -11,21 +12,25 @@ pub const SAMPLE_INTERVAL_RANGE_S: (f64, f64) = (0.1, 10.0);
 
 /// Which identification method runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[repr(u8)]
 pub enum Method {
     /// Ours (default): the four correlation channels averaged over a moving window of one rotation
     /// period, fed together into one 4-state filter whose measurement rows carry the x1, x2 leakage of
     /// eq (12) exactly (see [`crate::methods::windowed`]).
     #[default]
-    Windowed,
+    Windowed = 0,
     /// The paper's eqs (8), (11), (13)-(18) literally: a cumulative correlation per channel, its
     /// 480 s average, and one 3-state filter (x, b1, b2) per error (see [`crate::methods::paper`]).
-    Paper,
+    Paper = 1,
     /// The paper's Fig. 2 baseline: a 4-state filter straight on raw roll and pitch with eq (2) as
     /// the measurement model, no correlation, no averaging (see [`crate::methods::traditional`]).
-    Traditional,
+    Traditional = 2,
 }
 
 impl Method {
+    /// Every method, in code order.
+    pub const ALL: [Method; 3] = [Method::Windowed, Method::Paper, Method::Traditional];
+
     /// Name used on command lines and in files.
     pub fn name(&self) -> &'static str {
         match self {
@@ -34,24 +39,14 @@ impl Method {
             Method::Traditional => "traditional",
         }
     }
+}
 
-    /// Code used on the firmware link.
-    pub fn code(&self) -> u8 {
-        match self {
-            Method::Windowed => 0,
-            Method::Paper => 1,
-            Method::Traditional => 2,
-        }
-    }
+impl TryFrom<u8> for Method {
+    type Error = UnknownCode;
 
-    /// Inverse of [`Method::code`].
-    pub fn from_code(code: u8) -> Option<Method> {
-        match code {
-            0 => Some(Method::Windowed),
-            1 => Some(Method::Paper),
-            2 => Some(Method::Traditional),
-            _ => None,
-        }
+    /// The method of code `code` (`method as u8`), as on the firmware link and in checkpoints.
+    fn try_from(code: u8) -> Result<Method, UnknownCode> {
+        from_code(&Method::ALL, "method", code)
     }
 }
 

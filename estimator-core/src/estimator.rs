@@ -236,8 +236,7 @@ impl<const CAP: usize> Estimator<CAP> {
         let placement = match sample.check().and_then(|()| self.grid.place(sample.time_s)) {
             Ok(p) => p,
             Err(e) => {
-                let slot = &mut self.rejected.0[e.reason_index()];
-                *slot = slot.saturating_add(1);
+                self.rejected.count(e.reason());
                 return Err(e);
             }
         };

@@ -38,6 +38,17 @@ pub enum KalmanError {
     Degenerate,
 }
 
+impl core::fmt::Display for KalmanError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            KalmanError::NonFinite => write!(f, "measurement, row or noise not finite, or noise negative"),
+            KalmanError::Degenerate => write!(f, "innovation variance h' P h + r not positive"),
+        }
+    }
+}
+
+impl core::error::Error for KalmanError {}
+
 /// State estimate and covariance of `N` constant states.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConstantStateKalman<T: RealField + Copy, const N: usize> {

@@ -43,6 +43,7 @@ pub type Real = f32;
 pub type Real = f64;
 
 pub mod checkpoint;
+pub mod code;
 pub mod config;
 pub mod correlation;
 pub mod estimator;
@@ -64,4 +65,5 @@ pub use estimator::Estimator;
 pub use output::{Counters, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status};
 pub use rotation_pattern::RotationFault;
 pub use rotation_pattern::PatternKind;
-pub use sample::{Attitude, Field, Sample, SampleError};
+pub use code::UnknownCode;
+pub use sample::{Attitude, Field, RejectReason, Sample, SampleError};

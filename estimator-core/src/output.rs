@@ -2,7 +2,8 @@
 //! its counters, what it knows of the rotation pattern and why there is no estimate yet.
 
 use crate::rotation_pattern::{PatternKind, RotationFault};
-use crate::sample::{Attitude, SampleError};
+use crate::code::{from_code, UnknownCode};
+use crate::sample::{Attitude, RejectReason};
 use crate::Real;
 
 /// What the estimator is doing.
@@ -75,9 +76,14 @@ impl Status {
         }
     }
 
+}
+
+impl TryFrom<u8> for Status {
+    type Error = UnknownCode;
+
     /// Inverse of [`Status::code`].
-    pub fn from_code(code: u8) -> Option<Status> {
-        Status::ALL.get(usize::from(code)).copied()
+    fn try_from(code: u8) -> Result<Status, UnknownCode> {
+        from_code(&Status::ALL, "status", code)
     }
 }
 
@@ -101,11 +107,22 @@ pub struct Output {
     pub corrected: Attitude,
 }
 
-/// Rejected samples by reason (index: [`SampleError::reason_index`]).
+/// Rejected samples by reason (index: the [`RejectReason`] code).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RejectCounts(pub [u32; SampleError::COUNT]);
+pub struct RejectCounts(pub [u32; RejectReason::ALL.len()]);
 
 impl RejectCounts {
+    /// Rejected for `reason`.
+    pub fn of(&self, reason: RejectReason) -> u32 {
+        self.0[reason as usize]
+    }
+
+    /// Counts one more rejection for `reason` (saturating).
+    pub fn count(&mut self, reason: RejectReason) {
+        let slot = &mut self.0[reason as usize];
+        *slot = slot.saturating_add(1);
+    }
+
     /// Total rejected.
     pub fn total(&self) -> u32 {
         self.0.iter().fold(0u32, |a, b| a.saturating_add(*b))

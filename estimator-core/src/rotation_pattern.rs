@@ -38,6 +38,7 @@
 //!
 //! A pattern's own dwells and reversals are not faults.
 
+use crate::code::{from_code, UnknownCode};
 use crate::math::wrap_pi;
 use crate::Real;
 
@@ -53,13 +54,27 @@ pub const PASS_HYSTERESIS_RAD: Real = 0.017_453_292;
 
 /// Why the rotation is not healthy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum RotationFault {
     /// Stopped for longer than the pattern's longest dwell.
-    Stopped,
+    Stopped = 0,
     /// Turning the other way, in a pattern that never does.
-    Reversed,
+    Reversed = 1,
     /// The pattern no longer repeats at its period.
-    RateMismatch,
+    RateMismatch = 2,
+}
+
+impl RotationFault {
+    /// Every fault, in code order.
+    pub const ALL: [RotationFault; 3] = [RotationFault::Stopped, RotationFault::Reversed, RotationFault::RateMismatch];
+}
+
+impl TryFrom<u8> for RotationFault {
+    type Error = UnknownCode;
+
+    fn try_from(code: u8) -> Result<RotationFault, UnknownCode> {
+        from_code(&RotationFault::ALL, "rotation fault", code)
+    }
 }
 
 /// The shape of a learned pattern, for people.

@@ -1,5 +1,6 @@
 //! One RINS sample and its sanity checks.
 
+use crate::code::{from_code, UnknownCode};
 use crate::units::{wrap_deg, RAD_PER_DEG};
 use crate::Real;
 
@@ -31,16 +32,44 @@ pub struct Attitude {
     pub pitch_rad: Real,
 }
 
-/// A field of [`Sample`], named in errors.
+/// A field of [`Sample`], named in errors; its code (`field as u8`) is the one on the firmware link.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Field {
-    Time,
-    Rotation,
-    Platform,
-    Latitude,
-    Heading,
-    Roll,
-    Pitch,
+    Time = 0,
+    Rotation = 1,
+    Platform = 2,
+    Latitude = 3,
+    Heading = 4,
+    Roll = 5,
+    Pitch = 6,
+}
+
+impl Field {
+    /// Every field, in code order.
+    pub const ALL: [Field; 7] =
+        [Field::Time, Field::Rotation, Field::Platform, Field::Latitude, Field::Heading, Field::Roll, Field::Pitch];
+
+    /// Name used in messages and files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Field::Time => "time",
+            Field::Rotation => "rotation",
+            Field::Platform => "platform",
+            Field::Latitude => "latitude",
+            Field::Heading => "heading",
+            Field::Roll => "roll",
+            Field::Pitch => "pitch",
+        }
+    }
+}
+
+impl TryFrom<u8> for Field {
+    type Error = UnknownCode;
+
+    fn try_from(code: u8) -> Result<Field, UnknownCode> {
+        from_code(&Field::ALL, "sample field", code)
+    }
 }
 
 /// Why a sample was rejected. A rejected sample is not used and leaves the estimator untouched.
@@ -58,29 +87,78 @@ pub enum SampleError {
     IrregularTimeStep,
 }
 
-impl SampleError {
-    /// Number of distinct reasons (for counters).
-    pub const COUNT: usize = 5;
+/// Why a sample was rejected, without the field: the index of the rejection counters and the
+/// code on the firmware link (`reason as u8`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub enum RejectReason {
+    NonFinite = 0,
+    LatitudeOutOfRange = 1,
+    AngleOutOfRange = 2,
+    TimeNotIncreasing = 3,
+    IrregularTimeStep = 4,
+}
 
-    /// Index of this reason in [`crate::RejectCounts`].
-    pub fn reason_index(&self) -> usize {
+impl RejectReason {
+    /// Every reason, in code order.
+    pub const ALL: [RejectReason; 5] = [
+        RejectReason::NonFinite,
+        RejectReason::LatitudeOutOfRange,
+        RejectReason::AngleOutOfRange,
+        RejectReason::TimeNotIncreasing,
+        RejectReason::IrregularTimeStep,
+    ];
+
+    /// Short machine-readable name, used in files.
+    pub fn name(&self) -> &'static str {
         match self {
-            SampleError::NonFinite(_) => 0,
-            SampleError::LatitudeOutOfRange => 1,
-            SampleError::AngleOutOfRange(_) => 2,
-            SampleError::TimeNotIncreasing => 3,
-            SampleError::IrregularTimeStep => 4,
+            RejectReason::NonFinite => "non_finite",
+            RejectReason::LatitudeOutOfRange => "latitude_out_of_range",
+            RejectReason::AngleOutOfRange => "angle_out_of_range",
+            RejectReason::TimeNotIncreasing => "time_not_increasing",
+            RejectReason::IrregularTimeStep => "irregular_time_step",
+        }
+    }
+}
+
+impl TryFrom<u8> for RejectReason {
+    type Error = UnknownCode;
+
+    fn try_from(code: u8) -> Result<RejectReason, UnknownCode> {
+        from_code(&RejectReason::ALL, "rejection reason", code)
+    }
+}
+
+impl SampleError {
+    /// The reason, without the field.
+    pub fn reason(&self) -> RejectReason {
+        match self {
+            SampleError::NonFinite(_) => RejectReason::NonFinite,
+            SampleError::LatitudeOutOfRange => RejectReason::LatitudeOutOfRange,
+            SampleError::AngleOutOfRange(_) => RejectReason::AngleOutOfRange,
+            SampleError::TimeNotIncreasing => RejectReason::TimeNotIncreasing,
+            SampleError::IrregularTimeStep => RejectReason::IrregularTimeStep,
         }
     }
 
-    /// Short machine-readable name of the reason.
-    pub fn reason_name(index: usize) -> &'static str {
-        match index {
-            0 => "non_finite",
-            1 => "latitude_out_of_range",
-            2 => "angle_out_of_range",
-            3 => "time_not_increasing",
-            _ => "irregular_time_step",
+    /// The field the error names, if it names one.
+    pub fn field(&self) -> Option<Field> {
+        match self {
+            SampleError::NonFinite(field) | SampleError::AngleOutOfRange(field) => Some(*field),
+            _ => None,
+        }
+    }
+
+    /// The error of `reason` naming `field`; `None` when the field does not fit the reason (a
+    /// reason that names a field without one, or one that names none with one).
+    pub fn from_parts(reason: RejectReason, field: Option<Field>) -> Option<SampleError> {
+        match (reason, field) {
+            (RejectReason::NonFinite, Some(field)) => Some(SampleError::NonFinite(field)),
+            (RejectReason::AngleOutOfRange, Some(field)) => Some(SampleError::AngleOutOfRange(field)),
+            (RejectReason::LatitudeOutOfRange, None) => Some(SampleError::LatitudeOutOfRange),
+            (RejectReason::TimeNotIncreasing, None) => Some(SampleError::TimeNotIncreasing),
+            (RejectReason::IrregularTimeStep, None) => Some(SampleError::IrregularTimeStep),
+            _ => None,
         }
     }
 }
@@ -98,6 +176,8 @@ impl core::fmt::Display for SampleError {
         }
     }
 }
+
+impl core::error::Error for SampleError {}
 
 impl Sample {
     /// Builds a sample from degrees, as they appear in logs. Rotation, platform and heading are wrapped

@@ -106,7 +106,7 @@ fn log(plan: Plan) -> Log {
 /// Configurations by number: method, pinned or learned interval and period, sway gate.
 fn config(plan: &Plan, i: u8) -> Config {
     Config {
-        method: Method::from_code(i % 3).unwrap(),
+        method: Method::try_from(i % 3).unwrap(),
         sample_interval_s: (i & 4 != 0).then_some(plan.interval_s),
         rotation_period_s: (i & 8 != 0).then_some(plan.period_s),
         sway_gate_rad: if i & 16 != 0 { 1f64.to_radians() as Real } else { 0.0 },
@@ -128,7 +128,7 @@ fn other(config: &Config) -> Config {
 /// Every bit of a step's result (floats by their bit patterns).
 fn fingerprint(r: &Result<Output, SampleError>) -> Vec<u64> {
     match r {
-        Err(e) => vec![u64::MAX, e.reason_index() as u64],
+        Err(e) => vec![u64::MAX, e.reason() as u64],
         Ok(o) => {
             let mut v = vec![o.time_s.to_bits(), u64::from(o.status.code())];
             let mut push = |x: Real| v.push(x.to_bits() as u64);
@@ -232,7 +232,7 @@ proptest! {
     fn restored_run_is_bit_identical_default_capacity(m in 0u8..3, seed in any::<u64>(), at in 0.0f64..1.0) {
         let plan = Plan { interval_s: 1.0, period_s: 480.0, scheme: Scheme::OneWay(1.0), periods: 5.0, seed };
         let log = log(plan);
-        let config = Config::with_method(Method::from_code(m).unwrap());
+        let config = Config::with_method(Method::try_from(m).unwrap());
         let cut = (at * (log.samples.len() - 1) as f64) as usize;
         let reference = reference::<720>(config, &log.samples);
         check_cut::<720>(config, &log.samples, cut, &reference);
@@ -382,7 +382,7 @@ fn default_sources() -> &'static [(Estimator, Vec<u8>); 3] {
     SOURCES.get_or_init(|| {
         let log = log(Plan { interval_s: 1.0, period_s: 480.0, scheme: Scheme::FourPosition, periods: 4.5, seed: 5 });
         std::array::from_fn(|m| {
-            let mut est: Estimator = Estimator::new(Config::with_method(Method::from_code(m as u8).unwrap())).unwrap();
+            let mut est: Estimator = Estimator::new(Config::with_method(Method::try_from(m as u8).unwrap())).unwrap();
             for s in &log.samples {
                 est.step(s).ok();
             }

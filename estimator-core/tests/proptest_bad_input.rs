@@ -15,7 +15,7 @@
 
 use estimator_core::correlation::CorrelationSums;
 use estimator_core::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S};
-use estimator_core::{Attitude, Config, Estimator, Field, Method, Output, Real, Sample, SampleError};
+use estimator_core::{Attitude, Config, Estimator, Field, Method, Output, Real, RejectReason, Sample, SampleError};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 
@@ -176,7 +176,7 @@ fn run(config: Config, events: &[Event]) -> Result<(), TestCaseError> {
     let mut last_sent = t_next;
     let mut last_accepted: Option<f64> = None;
     let mut fed = 0u32;
-    let mut reasons = [0u32; SampleError::COUNT];
+    let mut reasons = [0u32; RejectReason::ALL.len()];
     let mut estimating_steps = 0u32;
     for ev in events {
         let sample = match ev {
@@ -235,9 +235,9 @@ fn run(config: Config, events: &[Event]) -> Result<(), TestCaseError> {
             }
             (Err(e), Err(w)) => {
                 prop_assert_eq!(*e, w, "sample {:?}", sample);
-                reasons[e.reason_index()] += 1;
+                reasons[e.reason() as usize] += 1;
                 let mut want_rejected = before_rejected;
-                want_rejected.0[e.reason_index()] += 1;
+                want_rejected.count(e.reason());
                 prop_assert_eq!(est.rejected(), want_rejected);
                 prop_assert_eq!(est.counters(), before_counters);
                 prop_assert!(image(&est) == before_image, "a rejected sample changed the state");
@@ -257,7 +257,7 @@ fn config(method: u8, filled: u32) -> Config {
         rotation_period_s: Some(PERIOD as f64),
         sample_interval_s: Some(1.0),
         max_filled_gap_samples: filled,
-        ..Config::with_method(Method::from_code(method % 3).unwrap_or_default())
+        ..Config::with_method(Method::try_from(method % 3).unwrap_or_default())
     }
 }
 
@@ -369,7 +369,7 @@ prop_compose! {
         period_tol in log_uniform(1e-4, 0.6),
     ) -> Config {
         Config {
-            method: Method::from_code(method).unwrap_or_default(),
+            method: Method::try_from(method).unwrap_or_default(),
             rotation_period_s: Some(PERIOD as f64),
             sample_interval_s: Some(1.0),
             prior_sigma_rad: prior,

@@ -112,7 +112,7 @@ impl<'a> Service<'a> {
         let counters = self.estimator.counters();
         StatusReply {
             protocol_version: PROTOCOL_VERSION,
-            method: self.estimator.config().method.code(),
+            method: self.estimator.config().method as u8,
             counters: self.counters(),
             accepted: counters.accepted,
             filled: counters.filled,

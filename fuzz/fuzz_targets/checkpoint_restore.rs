@@ -20,7 +20,7 @@ const PERIOD_SAMPLES: f64 = 64.0;
 /// a few hundred take it through learning the interval, detecting the period, learning the
 /// pattern, filling the window and estimating.
 fn running(method: u8, steps: usize) -> Estimator<CAP> {
-    let config = Config { method: Method::from_code(method % 3).unwrap_or_default(), ..Config::default() };
+    let config = Config { method: Method::try_from(method % 3).unwrap_or_default(), ..Config::default() };
     let mut est = Estimator::<CAP>::new(config).expect("valid config");
     let step = 2.0 * std::f64::consts::PI / PERIOD_SAMPLES;
     for k in 0..steps {

@@ -16,7 +16,7 @@ fuzz_target!(|data: &[u8]| {
     let Some((&head, rest)) = data.split_first() else { return };
     let period = 60 + (head as usize >> 3) % 25; // 60..=84 samples of 1 s
     let config = Config {
-        method: Method::from_code(head % 3).unwrap_or_default(),
+        method: Method::try_from(head % 3).unwrap_or_default(),
         max_filled_gap_samples: u32::from((head >> 2) & 1) * 3,
         // The period pinned or detected, the interval pinned or learned.
         rotation_period_s: ((head >> 6) & 1 == 1).then_some(period as f64),

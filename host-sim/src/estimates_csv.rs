@@ -5,7 +5,7 @@
 //! - `time_s`: 6 decimals;
 //! - `x*_arcsec`, `sigma*_arcsec`: 4 decimals, empty while there is no estimate;
 //! - `status`: [`estimator_core::Status::name`], or `rejected_<reason>` with
-//!   [`SampleError::reason_name`] for an input row the core rejected;
+//!   [`RejectReason::name`](estimator_core::RejectReason::name) for an input row the core rejected;
 //! - `*_corrected_deg`: 9 decimals (heading in [-180, 180]); empty on a rejected row.
 //!
 //! A rejected row carries the estimate held on board at that moment: a rejected sample leaves the
@@ -129,7 +129,7 @@ fn push_rejected(line: &mut String, time_s: f64, reason: &SampleError, held: Opt
     push_estimate(line, held);
     line.push(',');
     line.push_str(REJECTED_PREFIX);
-    line.push_str(SampleError::reason_name(reason.reason_index()));
+    line.push_str(reason.reason().name());
     line.push_str(",,,");
 }
 

@@ -3,7 +3,7 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use estimator_core::units::rad_to_arcsec;
-use estimator_core::{Method, SampleError};
+use estimator_core::{Method, RejectReason};
 use host_sim::cli_args::{method_label, LogShapeArgs, MethodArg, RecorderArgs, ScenarioArg, ScenarioOverrides, SchemeList, TimingArgs, TuningArgs};
 use host_sim::log_csv::{self, LogError, Truth};
 use host_sim::pipeline::{default_estimates_path, estimate_log, load_truth, truth_rows, EstimateOptions};
@@ -325,7 +325,7 @@ fn print_summary(w: &mut dyn Write, log: &Path, method: Method, r: &Replay, out:
         (None, Some(h)) => writeln!(w, "  no estimate: {h}")?,
         (None, None) => writeln!(w, "  no estimate: no row accepted")?,
     }
-    let reasons: Vec<String> = (0..SampleError::COUNT).map(|i| format!("{} {}", SampleError::reason_name(i), r.rejected.0[i])).collect();
+    let reasons: Vec<String> = RejectReason::ALL.iter().map(|&reason| format!("{} {}", reason.name(), r.rejected.of(reason))).collect();
     writeln!(w, "  rejected rows: {} ({})", r.rejected.total(), reasons.join(", "))?;
     if r.unreadable.skipped > 0 {
         let lines: Vec<String> = r.unreadable.first.iter().map(|e| e.line.to_string()).collect();

@@ -25,7 +25,7 @@ use crate::pipeline::{check_output_is_not_input, default_estimates_path, open_ou
 use crate::replay::sample_of;
 use anyhow::{bail, Context};
 use cost::{CostStats, CostUnit};
-use estimator_core::{Output, SampleError};
+use estimator_core::{Output, RejectReason, SampleError};
 use link::FirmwareLink;
 use link_protocol::frame::FrameError;
 use link_protocol::{Counters, Request, Response, SampleMsg, StatusReply, PROTOCOL_VERSION};
@@ -469,8 +469,9 @@ fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &Stre
         st.counters.bad_frames_total(),
         frames.join(", ")
     )?;
-    let samples: Vec<String> = (0..SampleError::COUNT)
-        .map(|i| format!("{} {}", SampleError::reason_name(i), st.counters.rejected_samples[i]))
+    let samples: Vec<String> = RejectReason::ALL
+        .iter()
+        .map(|&reason| format!("{} {}", reason.name(), st.counters.rejected_samples[reason as usize]))
         .collect();
     writeln!(
         w,

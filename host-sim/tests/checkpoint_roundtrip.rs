@@ -10,7 +10,7 @@ use host_sim::scenario::{generate, ScenarioKind, ScenarioParams};
 
 fn fingerprint(r: &Result<Output, SampleError>) -> Vec<u64> {
     match r {
-        Err(e) => vec![u64::MAX, e.reason_index() as u64],
+        Err(e) => vec![u64::MAX, e.reason() as u64],
         Ok(o) => {
             let mut v = vec![o.time_s.to_bits(), u64::from(o.status.code())];
             let mut push = |x: Real| v.push(x.to_bits() as u64);
@@ -45,7 +45,7 @@ fn check(kind: ScenarioKind, method: Method, jitter_deg: f64, cuts: usize) {
     let mut outputs = Vec::with_capacity(n);
     let mut images = Vec::new();
     // Cut points: first, last-but-one, evenly spread, and LCG-random.
-    let mut lcg = 0x2545_F491_4F6C_DD1Du64 ^ (method.code() as u64) << 7;
+    let mut lcg = 0x2545_F491_4F6C_DD1Du64 ^ (method as u64) << 7;
     let mut cut_points: Vec<usize> = vec![0, n - 2];
     cut_points.extend((1..cuts / 2).map(|i| i * n / (cuts / 2)));
     for _ in 0..cuts / 2 {

@@ -8,7 +8,7 @@
 //! travel exactly as [`estimator_core::Output`] holds them, so the host rebuilds the same `Output`.
 //! Variants are only ever appended, never reordered.
 
-use estimator_core::{Attitude, Estimate, Field, Output, Real, Sample, SampleError, Status};
+use estimator_core::{Attitude, Estimate, Field, Output, Real, RejectReason, Sample, SampleError, Status};
 use serde::{Deserialize, Serialize};
 
 use crate::frame::FrameError;
@@ -112,11 +112,11 @@ impl From<&EstimateMsg> for Estimate {
 }
 
 /// Bad frames by [`FrameError::index`] and rejected samples by
-/// [`SampleError::reason_index`], since boot (they survive `Reset`; saturating).
+/// [`RejectReason`] code, since boot (they survive `Reset`; saturating).
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counters {
     pub bad_frames: [u32; FrameError::COUNT],
-    pub rejected_samples: [u32; SampleError::COUNT],
+    pub rejected_samples: [u32; RejectReason::ALL.len()],
 }
 
 impl Counters {
@@ -173,7 +173,7 @@ impl StepReply {
     pub fn output(&self) -> Option<Output> {
         Some(Output {
             time_s: self.time_s,
-            status: Status::from_code(self.status)?,
+            status: Status::try_from(self.status).ok()?,
             estimate: self.estimate.as_ref().map(Estimate::from),
             corrected: Attitude {
                 heading_rad: self.corrected_heading_rad,
@@ -189,9 +189,9 @@ impl StepReply {
 pub struct RejectedReply {
     /// The rejected sample's time, as received.
     pub time_s: f64,
-    /// [`SampleError::reason_index`].
+    /// The [`RejectReason`] code.
     pub reason: u8,
-    /// The field named by the error ([`field_code`]), 0xFF when the reason names none.
+    /// The [`Field`] code of the field named by the error, [`NO_FIELD`] when the reason names none.
     pub field: u8,
     pub step_cost_ticks: u32,
     pub counters: Counters,
@@ -203,58 +203,24 @@ pub const NO_FIELD: u8 = 0xFF;
 impl RejectedReply {
     /// Builds the reply from the core's error.
     pub fn new(time_s: f64, error: &SampleError, step_cost_ticks: u32, counters: Counters) -> Self {
-        let field = match error {
-            SampleError::NonFinite(f) | SampleError::AngleOutOfRange(f) => field_code(*f),
-            _ => NO_FIELD,
-        };
         RejectedReply {
             time_s,
-            reason: error.reason_index() as u8,
-            field,
+            reason: error.reason() as u8,
+            field: error.field().map_or(NO_FIELD, |f| f as u8),
             step_cost_ticks,
             counters,
         }
     }
 
-    /// The core's error again; `None` for unknown codes.
+    /// The core's error again; `None` for unknown codes or a field that does not fit the reason.
     pub fn error(&self) -> Option<SampleError> {
-        Some(match self.reason {
-            0 => SampleError::NonFinite(field_from_code(self.field)?),
-            1 => SampleError::LatitudeOutOfRange,
-            2 => SampleError::AngleOutOfRange(field_from_code(self.field)?),
-            3 => SampleError::TimeNotIncreasing,
-            4 => SampleError::IrregularTimeStep,
-            _ => return None,
-        })
+        let reason = RejectReason::try_from(self.reason).ok()?;
+        let field = match self.field {
+            NO_FIELD => None,
+            code => Some(Field::try_from(code).ok()?),
+        };
+        SampleError::from_parts(reason, field)
     }
-}
-
-/// Code of a sample field on the link: time 0, rotation 1, platform 2, latitude 3, heading 4,
-/// roll 5, pitch 6.
-pub fn field_code(field: Field) -> u8 {
-    match field {
-        Field::Time => 0,
-        Field::Rotation => 1,
-        Field::Platform => 2,
-        Field::Latitude => 3,
-        Field::Heading => 4,
-        Field::Roll => 5,
-        Field::Pitch => 6,
-    }
-}
-
-/// Inverse of [`field_code`].
-pub fn field_from_code(code: u8) -> Option<Field> {
-    Some(match code {
-        0 => Field::Time,
-        1 => Field::Rotation,
-        2 => Field::Platform,
-        3 => Field::Latitude,
-        4 => Field::Heading,
-        5 => Field::Roll,
-        6 => Field::Pitch,
-        _ => return None,
-    })
 }
 
 /// What the firmware knows about itself.
@@ -262,7 +228,7 @@ pub fn field_from_code(code: u8) -> Option<Field> {
 pub struct StatusReply {
     /// [`crate::PROTOCOL_VERSION`].
     pub protocol_version: u8,
-    /// [`estimator_core::Method::code`] of the running configuration.
+    /// The running configuration's [`estimator_core::Method`] code (`method as u8`).
     pub method: u8,
     pub counters: Counters,
     /// The estimator's counters: samples accepted, lost samples filled from their neighbours,
@@ -309,6 +275,14 @@ mod tests {
         for e in errors {
             let r = RejectedReply::new(1.0, &e, 0, Counters::default());
             assert_eq!(r.error(), Some(e));
+        }
+    }
+
+    #[test]
+    fn a_reply_whose_codes_do_not_fit_is_no_error() {
+        let ok = RejectedReply::new(1.0, &SampleError::NonFinite(Field::Roll), 0, Counters::default());
+        for (reason, field) in [(0, NO_FIELD), (0, 7), (1, 5), (2, NO_FIELD), (5, NO_FIELD), (255, 0)] {
+            assert_eq!(RejectedReply { reason, field, ..ok }.error(), None, "reason {reason} field {field}");
         }
     }
 }

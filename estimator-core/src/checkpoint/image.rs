@@ -27,7 +27,7 @@ impl<const CAP: usize> Estimator<CAP> {
         w.bytes(&MAGIC);
         w.u16(VERSION);
         w.u8(R as u8);
-        w.u8(self.config.method.code());
+        w.u8(self.config.method as u8);
         w.usize(CAP);
         w.usize(len);
         config::write(&mut w, &self.config);

@@ -53,7 +53,7 @@
 //! | 0 | 4 | magic `b"RIEC"` |
 //! | 4 | 2 | version ([`VERSION`]) |
 //! | 6 | 1 | `R` |
-//! | 7 | 1 | method code ([`Method::code`]) |
+//! | 7 | 1 | method code ([`Method`] `as u8`) |
 //! | 8 | 4 | `CAP` |
 //! | 12 | 4 | total length including the CRC (= `CHECKPOINT_LEN`) |
 //! | 16 | [`COMMON_LEN`] | the common part: configuration, estimator, sample grid, rotation monitor, gap filler |
@@ -74,7 +74,7 @@
 //!   ([`Status::code`](crate::Status::code), u8), the last rotation fault (u8: 0 none, else the
 //!   [`Status::code`](crate::Status::code) of that fault) and the sample time it began at (f64, zero
 //!   without a fault), sway monitor (mean `R`, mean square `R`, samples u32), rejected counts
-//!   ([`SampleError::COUNT`](crate::SampleError::COUNT) x u32), counters (accepted, filled, window
+//!   ([`RejectReason::ALL`](crate::RejectReason::ALL) x u32), counters (accepted, filled, window
 //!   restarts, clock steps: u32 each).
 //! - **Sample grid** (103 bytes): interval (optional f64), pinned (flag), the previous accepted
 //!   stamp (optional f64), the learning steps ([`LEARNING_STEPS`](crate::time_grid::LEARNING_STEPS) x
@@ -370,5 +370,5 @@ fn within_non_negative(v: Real, bound: Real) -> bool {
 
 /// Method codes the header can hold.
 fn method_of(code: u8) -> Result<Method, CheckpointError> {
-    Method::from_code(code).ok_or(CheckpointError::UnknownMethod(code))
+    Method::try_from(code).map_err(|_| CheckpointError::UnknownMethod(code))
 }

@@ -15,11 +15,11 @@ use crate::output::{Counters, RejectCounts, Status};
 use crate::rotation_pattern::RotationFault;
 use crate::sway_gate::SwayMonitor;
 use crate::math::sin_cos;
-use crate::sample::{SampleError, MAX_TILT_RAD};
+use crate::sample::{RejectReason, MAX_TILT_RAD};
 use crate::Real;
 
 /// Bytes of the part.
-pub(super) const LEN: usize = 4 + (1 + 8) + 1 + R + 1 + 1 + 8 + (2 * R + 4) + SampleError::COUNT * 4 + 4 * 4;
+pub(super) const LEN: usize = 4 + (1 + 8) + 1 + R + 1 + 1 + 8 + (2 * R + 4) + RejectReason::ALL.len() * 4 + 4 * 4;
 
 /// The part, read and checked.
 #[derive(Clone, Copy)]
@@ -71,11 +71,11 @@ pub(super) fn read(r: &mut Reader<'_>) -> Result<Running, CheckpointError> {
     let gate_open = r.flag(Part::Estimator)?;
     let latitude_rad = r.real();
     ensure(latitude_rad.is_finite() && latitude_rad.abs() < MAX_TILT_RAD, CheckpointError::InvalidValue(Part::Latitude))?;
-    let window_status = Status::from_code(r.u8()).ok_or(CheckpointError::InvalidValue(Part::Status))?;
+    let window_status = Status::try_from(r.u8()).map_err(|_| CheckpointError::InvalidValue(Part::Status))?;
     let fault_code = r.u8();
     let since_start = r.pos();
     let since_s = r.f64();
-    let fault = match (fault_code, Status::from_code(fault_code)) {
+    let fault = match (fault_code, Status::try_from(fault_code).ok()) {
         (0, _) => {
             r.zeros_since(since_start, Part::Fault)?;
             None

@@ -72,8 +72,8 @@ fn bad_samples_are_rejected_by_reason_and_change_nothing_else() {
     for (s, expected) in bad {
         let before = est.clone();
         assert_eq!(est.step(&s), Err(expected));
-        let counted = est.rejected.0[expected.reason_index()];
-        assert_eq!(counted, before.rejected.0[expected.reason_index()] + 1);
+        let counted = est.rejected.of(expected.reason());
+        assert_eq!(counted, before.rejected.of(expected.reason()) + 1);
         let mut restored = est.clone();
         restored.rejected = before.rejected;
         assert!(restored == before, "state changed by {expected:?}");
