@@ -365,7 +365,7 @@ impl<const CAP: usize> Estimator<CAP> {
             self.method.push(&self.config, feed, s);
             self.window_status = if self.method.window_full() { Status::Estimating } else { Status::WarmingUp };
         }
-        self.method.update(&self.config, feed, self.filler.single_fill_variance_rad2());
+        self.method.update(&self.config, feed, self.filler.single_fill_variance());
     }
 
     fn restart_window(&mut self) {

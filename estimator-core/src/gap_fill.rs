@@ -141,6 +141,13 @@ impl Default for GapFiller {
     }
 }
 
+/// The error variance of one filled sample, measured online, of roll and of pitch.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FillVariance {
+    pub roll_rad2: Real,
+    pub pitch_rad2: Real,
+}
+
 impl GapFiller {
     /// Forgets every pending sample (the fill-error estimate stays: it belongs to the sea state).
     pub fn clear(&mut self) {
@@ -148,9 +155,9 @@ impl GapFiller {
         self.newest = None;
     }
 
-    /// The variance of a filled single sample of roll and of pitch, rad^2 (0 until measured).
-    pub fn single_fill_variance_rad2(&self) -> (Real, Real) {
-        (self.roll_error_rad2, self.pitch_error_rad2)
+    /// The variance of a filled single sample of roll and of pitch (0 until measured).
+    pub fn single_fill_variance(&self) -> FillVariance {
+        FillVariance { roll_rad2: self.roll_error_rad2, pitch_rad2: self.pitch_error_rad2 }
     }
 
     /// Takes a received sample `intervals` after the previous one (which the caller has judged

@@ -17,6 +17,8 @@
 //! (a floating-point running sum accumulates rounding as a random walk: 0.3 arcsec after two days
 //! in `f32`). Each value is rounded once, on the way in.
 
+use heapless::Deque;
+
 use crate::correlation::{CorrelationSums, QuantizedSample};
 use crate::gap_fill::GridSample;
 use crate::installation::Angles;
@@ -31,23 +33,17 @@ pub const MAX_MAGNITUDE: Real = 1.999_999;
 /// `CH` channels averaged over the same window of up to `CAP` samples.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WindowAverage<const CH: usize, const CAP: usize> {
-    pub(crate) ring: [[i32; CH]; CAP],
+    /// The samples in the window, oldest first (at most `len`).
+    pub(crate) ring: Deque<[i32; CH], CAP>,
+    /// The exact sums of the samples in `ring`, per channel.
     pub(crate) sums: [i64; CH],
     pub(crate) len: usize,
-    pub(crate) head: usize,
-    pub(crate) filled: usize,
 }
 
 impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
     /// A window of `len` samples, `1 <= len <= CAP` (clamped into that range).
     pub fn new(len: usize) -> Self {
-        WindowAverage {
-            ring: [[0; CH]; CAP],
-            sums: [0; CH],
-            len: len.clamp(1, CAP.max(1)),
-            head: 0,
-            filled: 0,
-        }
+        WindowAverage { ring: Deque::new(), sums: [0; CH], len: len.clamp(1, CAP.max(1)) }
     }
 
     /// Rounds a value to fixed point, clamping it to +-[`MAX_MAGNITUDE`]. NaN becomes 0 (callers
@@ -59,25 +55,25 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 
     /// Adds one sample of every channel, dropping the oldest once the window is full.
     pub fn push(&mut self, values: &[Real; CH]) {
-        let slot = self.head;
-        let full = self.filled == self.len;
-        for ch in 0..CH {
-            let q = Self::quantize(values[ch]);
-            if full {
-                self.sums[ch] -= i64::from(self.ring[slot][ch]);
+        if self.is_full() {
+            if let Some(oldest) = self.ring.pop_front() {
+                for ch in 0..CH {
+                    self.sums[ch] -= i64::from(oldest[ch]);
+                }
             }
-            self.ring[slot][ch] = q;
-            self.sums[ch] += i64::from(q);
         }
-        self.head = if slot + 1 >= self.len { 0 } else { slot + 1 };
-        if !full {
-            self.filled += 1;
+        let q: [i32; CH] = core::array::from_fn(|ch| Self::quantize(values[ch]));
+        // `len <= CAP` and the window was not full: there is room.
+        if self.ring.push_back(q).is_ok() {
+            for ch in 0..CH {
+                self.sums[ch] += i64::from(q[ch]);
+            }
         }
     }
 
     /// True once the window holds `len` samples.
     pub fn is_full(&self) -> bool {
-        self.filled == self.len
+        self.ring.len() >= self.len
     }
 
     /// Window length in samples.
@@ -87,22 +83,20 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 
     /// Samples currently in the window.
     pub fn filled(&self) -> usize {
-        self.filled
+        self.ring.len()
     }
 
     /// Back to the state of [`WindowAverage::new`]`(len)`, in place: no `CAP x CH` temporary on
     /// the stack (13 KB for the default estimator), which a microcontroller's stack may not hold.
     pub fn reset(&mut self, len: usize) {
-        self.ring.fill([0; CH]);
         self.clear();
         self.len = len.clamp(1, CAP.max(1));
     }
 
     /// Forgets every sample (after a long gap or a rotation fault).
     pub fn clear(&mut self) {
+        self.ring.clear();
         self.sums = [0; CH];
-        self.head = 0;
-        self.filled = 0;
     }
 
     /// The mean of each channel over the full window, or `None` while it fills.
@@ -125,8 +119,7 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 
     /// The stored samples of channel `ch` over the window, oldest first (fixed-point counts).
     pub fn window_counts(&self, ch: usize) -> impl Iterator<Item = i32> + '_ {
-        let start = if self.is_full() { self.head } else { 0 };
-        (0..self.filled).map(move |i| self.ring[(start + i) % self.len][ch.min(CH - 1)])
+        self.ring.iter().map(move |v| v[ch.min(CH - 1)])
     }
 }
 
@@ -148,15 +141,25 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 /// Its measured cost is in docs/real-logs.md (Bins).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CorrelationWindow<const CAP: usize> {
-    pub(crate) ring: [QuantizedSample; CAP],
-    pub(crate) weights: [u16; CAP],
+    /// The entries in the window, oldest first (at most `len`).
+    pub(crate) ring: Deque<Entry, CAP>,
+    /// The exact sums of the entries in `ring`.
     pub(crate) sums: CorrelationSums,
+    /// Entries in a full window.
     pub(crate) len: usize,
-    pub(crate) head: usize,
-    pub(crate) filled: usize,
     /// Samples per entry.
     pub(crate) bin: u32,
     pub(crate) partial: Bin,
+}
+
+/// One entry of the window: a sample's (or a bin's) fixed-point inputs and how many of its samples
+/// were filled. Packed to 30 bytes rather than padded to 32, which keeps the default estimator's
+/// 720 entries, and so its state, within 24 KiB; its fields are read by value, never by reference.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C, packed(2))]
+pub struct Entry {
+    pub sample: QuantizedSample,
+    pub fill_weight: u16,
 }
 
 /// A bin being filled.
@@ -177,36 +180,42 @@ pub struct Bin {
     pub fill_weight: u32,
 }
 
-/// How a period of `period_samples` is held by a ring of `capacity` entries: `(samples per
-/// entry, entries)`. One sample per entry when the period fits; otherwise the smallest bin that
-/// divides the period into at most `capacity` entries, or, when none does within twice the
-/// smallest possible bin, that smallest bin and the nearest whole number of entries.
-pub fn bins_for_period(period_samples: u32, capacity: usize) -> (u32, usize) {
-    let capacity = capacity.max(2) as u32;
-    let period = period_samples.max(2);
-    if period <= capacity {
-        return (1, period as usize);
-    }
-    let smallest = period.div_ceil(capacity);
-    for bin in smallest..=2 * smallest {
-        if period % bin == 0 && period / bin <= capacity {
-            return (bin, (period / bin) as usize);
+/// How one period is held by the window: samples per entry and entries in a full window.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WindowLayout {
+    pub samples_per_entry: u32,
+    pub entries: usize,
+}
+
+impl WindowLayout {
+    /// How a period of `period_samples` is held by a ring of `capacity` entries. One sample per
+    /// entry when the period fits; otherwise the smallest bin that divides the period into at most
+    /// `capacity` entries, or, when none does within twice the smallest possible bin, that
+    /// smallest bin and the nearest whole number of entries.
+    pub fn for_period(period_samples: u32, capacity: usize) -> WindowLayout {
+        let capacity = capacity.max(2) as u32;
+        let period = period_samples.max(2);
+        if period <= capacity {
+            return WindowLayout { samples_per_entry: 1, entries: period as usize };
         }
+        let smallest = period.div_ceil(capacity);
+        for bin in smallest..=2 * smallest {
+            if period % bin == 0 && period / bin <= capacity {
+                return WindowLayout { samples_per_entry: bin, entries: (period / bin) as usize };
+            }
+        }
+        let entries = ((period + smallest / 2) / smallest).clamp(2, capacity);
+        WindowLayout { samples_per_entry: smallest, entries: entries as usize }
     }
-    let entries = ((period + smallest / 2) / smallest).clamp(2, capacity);
-    (smallest, entries as usize)
 }
 
 impl<const CAP: usize> CorrelationWindow<CAP> {
     /// An empty window of one entry per sample over `len` entries (set by [`Self::configure`]).
     pub fn new() -> Self {
         CorrelationWindow {
-            ring: [QuantizedSample::default(); CAP],
-            weights: [0; CAP],
+            ring: Deque::new(),
             sums: CorrelationSums::default(),
             len: CAP.max(1),
-            head: 0,
-            filled: 0,
             bin: 1,
             partial: Bin::default(),
         }
@@ -214,8 +223,6 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
 
     /// Back to [`Self::new`], in place (no `CAP`-sized temporary on the stack).
     pub fn reset(&mut self) {
-        self.ring.fill(QuantizedSample::default());
-        self.weights.fill(0);
         self.len = CAP.max(1);
         self.bin = 1;
         self.clear();
@@ -223,17 +230,16 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
 
     /// Sets the window to one period of `period_samples` and empties it.
     pub fn configure(&mut self, period_samples: u32) {
-        let (bin, len) = bins_for_period(period_samples, CAP);
-        self.bin = bin;
-        self.len = len.clamp(1, CAP.max(1));
+        let layout = WindowLayout::for_period(period_samples, CAP);
+        self.bin = layout.samples_per_entry;
+        self.len = layout.entries.clamp(1, CAP.max(1));
         self.clear();
     }
 
     /// Forgets every entry and the bin being filled (after a gap or a rotation fault).
     pub fn clear(&mut self) {
+        self.ring.clear();
         self.sums = CorrelationSums::default();
-        self.head = 0;
-        self.filled = 0;
         self.partial = Bin::default();
     }
 
@@ -249,12 +255,12 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
 
     /// True once the window holds `len` entries.
     pub fn is_full(&self) -> bool {
-        self.filled == self.len
+        self.ring.len() >= self.len
     }
 
     /// Entries in the window.
     pub fn filled(&self) -> usize {
-        self.filled
+        self.ring.len()
     }
 
     /// The running sums.
@@ -262,13 +268,9 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         &self.sums
     }
 
-    /// The entries in the window, oldest first, with their fill weights.
-    pub fn entries(&self) -> impl Iterator<Item = (QuantizedSample, u16)> + '_ {
-        let start = if self.is_full() { self.head } else { 0 };
-        (0..self.filled).map(move |i| {
-            let k = (start + i) % self.len;
-            (self.ring[k], self.weights[k])
-        })
+    /// The entries in the window, oldest first.
+    pub fn entries(&self) -> impl Iterator<Item = Entry> + '_ {
+        self.ring.iter().copied()
     }
 
     /// Adds one sample with its low-passed references; returns true when it completed an entry
@@ -306,17 +308,19 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         true
     }
 
-    fn push_entry(&mut self, q: QuantizedSample, weight: u16) {
-        let slot = self.head;
-        if self.filled == self.len {
-            self.sums.subtract(&self.ring[slot], self.weights[slot]);
-        } else {
-            self.filled += 1;
+    fn push_entry(&mut self, sample: QuantizedSample, fill_weight: u16) {
+        if self.is_full() {
+            // Read in place, then dropped: one copy of the packed entry fewer than popping it.
+            if let Some(oldest) = self.ring.front() {
+                let (q, w) = (oldest.sample, oldest.fill_weight);
+                self.sums.subtract(&q, w);
+            }
+            self.ring.pop_front();
         }
-        self.ring[slot] = q;
-        self.weights[slot] = weight;
-        self.sums.add(&q, weight);
-        self.head = if slot + 1 >= self.len { 0 } else { slot + 1 };
+        // `len <= CAP` and the window is not full: there is room.
+        if self.ring.push_back(Entry { sample, fill_weight }).is_ok() {
+            self.sums.add(&sample, fill_weight);
+        }
     }
 }
 

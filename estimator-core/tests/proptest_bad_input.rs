@@ -164,8 +164,8 @@ fn image(est: &Estimator<CAP>) -> String {
 fn consistent(est: &Estimator<CAP>) -> bool {
     let Some(w) = est.windowed() else { return true };
     let mut direct = CorrelationSums::default();
-    for (q, weight) in w.window.entries() {
-        direct.add(&q, weight);
+    for e in w.window.entries() {
+        direct.add(&{ e.sample }, e.fill_weight);
     }
     direct == *w.window.sums() && w.kf.covariance_is_spd()
 }

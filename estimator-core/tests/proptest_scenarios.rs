@@ -126,8 +126,8 @@ fn internals(est: &Estimator) -> Internals {
     let w = est.windowed().expect("the default method is windowed");
     let p = std::array::from_fn(|i| std::array::from_fn(|j| w.kf.p[(i, j)] as f64));
     let mut direct_sums = CorrelationSums::default();
-    for (q, weight) in w.window.entries() {
-        direct_sums.add(&q, weight);
+    for e in w.window.entries() {
+        direct_sums.add(&{ e.sample }, e.fill_weight);
     }
     Internals {
         updates: w.updates,

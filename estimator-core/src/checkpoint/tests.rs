@@ -86,6 +86,20 @@ fn rejects(tampered: &Est, expected: CheckpointError) {
     refused(&image_of(tampered), expected);
 }
 
+/// Offset in `image` of the correlation window whose length, head, fill count and bin are
+/// `indices` (u32 each, the first thing written of a window); there must be exactly one.
+fn window_at(image: &[u8], indices: [u32; 4]) -> usize {
+    let pattern: Vec<u8> = indices.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let hits: Vec<usize> = (METHOD_OFFSET..image.len() - 16).filter(|&i| image[i..i + 16] == pattern[..]).collect();
+    assert_eq!(hits.len(), 1, "{hits:?}");
+    hits[0]
+}
+
+/// From a correlation window's start to its first ring slot: indices, sums, the bin being filled.
+const WINDOW_RING_OFFSET: usize = 4 * 4 + (4 + crate::correlation::SUMS * 8 + 4) + (4 + 11 * R + 4);
+/// Bytes of one ring slot.
+const ENTRY_LEN: usize = 30;
+
 fn accepts(state: &Est) {
     assert_eq!(Est::from_checkpoint(&image_of(state)).as_ref(), Ok(state));
 }
@@ -170,29 +184,62 @@ fn tampered_filters_and_windows_are_refused_with_a_typed_error() {
     rejects(&with_windowed(&base, |m| m.window.sums.sums[3] += 1), Inconsistent(Part::WindowSums));
     rejects(&with_windowed(&base, |m| m.window.sums.count += 1), Inconsistent(Part::WindowSums));
     rejects(&with_windowed(&base, |m| m.window.sums.fill_weight += 1), Inconsistent(Part::WindowSums));
-    rejects(&with_windowed(&base, |m| m.window.weights[7] += 1), Inconsistent(Part::WindowSums));
-    rejects(&with_windowed(&base, |m| m.window.head = m.window.len), Inconsistent(Part::WindowIndices));
+    rejects(
+        &with_windowed(&base, |m| {
+            if let Some(e) = m.window.ring.iter_mut().nth(7) {
+                e.fill_weight += 1;
+            }
+        }),
+        Inconsistent(Part::WindowSums),
+    );
     rejects(&with_windowed(&base, |m| m.window.len -= 1), Inconsistent(Part::WindowIndices));
     rejects(&with_windowed(&base, |m| m.window.bin = 3), Inconsistent(Part::WindowIndices));
     rejects(
         &with_windowed(&base, |m| {
-            m.window.filled = 10;
-            m.window.head = 11;
-        }),
-        Inconsistent(Part::WindowIndices),
-    );
-    rejects(
-        &with_windowed(&base, |m| {
-            let q = &mut m.window.ring[5];
-            m.window.sums.subtract(q, 0);
+            let Some(e) = m.window.ring.iter_mut().nth(5) else { return };
+            let mut q = e.sample;
+            m.window.sums.subtract(&q, 0);
             q.roll = i32::MAX;
-            m.window.sums.add(q, 0);
+            m.window.sums.add(&q, 0);
+            e.sample = q;
         }),
         InvalidValue(Part::WindowEntries),
     );
-    rejects(&with_windowed(&base, |m| m.window.ring[63].sin_lat = 16_385), InvalidValue(Part::WindowEntries));
-    // Stale entries beyond the window (the ring of 64 holds 60) are carried as they are.
-    accepts(&with_windowed(&base, |m| m.window.ring[63].roll = 12345));
+
+    // The ring's indices and spare slots, in the image: the window of 60 entries is full, written
+    // from slot 0 (head 0), in a ring of 64.
+    let image = image_of(&base);
+    let at = window_at(&image, [60, 0, 60, 2]);
+    let entry = |k: usize| at + WINDOW_RING_OFFSET + k * ENTRY_LEN;
+    let tampered = |f: &dyn Fn(&mut Vec<u8>)| {
+        let mut b = image.clone();
+        f(&mut b);
+        reseal(&mut b);
+        b
+    };
+    let put_u32 = |b: &mut Vec<u8>, pos: usize, v: u32| b[pos..pos + 4].copy_from_slice(&v.to_le_bytes());
+    refused(&tampered(&|b| put_u32(b, at + 4, 60)), Inconsistent(Part::WindowIndices));
+    refused(
+        &tampered(&|b| {
+            put_u32(b, at + 4, 11);
+            put_u32(b, at + 8, 10);
+        }),
+        Inconsistent(Part::WindowIndices),
+    );
+    // A spare slot out of range is refused; one in range (a stale entry, as an older writer left
+    // them) is ignored.
+    refused(&tampered(&|b| b[entry(63) + 16..entry(63) + 18].copy_from_slice(&16_385i16.to_le_bytes())), InvalidValue(Part::WindowEntries));
+    assert_eq!(Est::from_checkpoint(&tampered(&|b| put_u32(b, entry(63), 12345))).as_ref(), Ok(&base));
+    // A ring stored rotated (oldest entry in slot 17, as an older writer left it) is the same window.
+    let rotated = tampered(&|b| {
+        let ring: Vec<u8> = b[entry(0)..entry(60)].to_vec();
+        for k in 0..60 {
+            let from = (k + 60 - 17) % 60;
+            b[entry(k)..entry(k + 1)].copy_from_slice(&ring[from * ENTRY_LEN..(from + 1) * ENTRY_LEN]);
+        }
+        put_u32(b, at + 4, 17);
+    });
+    assert_eq!(Est::from_checkpoint(&rotated).as_ref(), Ok(&base));
 
     // The bin being filled.
     rejects(&with_windowed(&base, |m| m.window.partial.count = 2), Inconsistent(Part::Bin));

@@ -1,13 +1,19 @@
 //! The moving-average windows: the windowed method's [`CorrelationWindow`] and the paper
 //! method's [`WindowAverage`].
 //!
+//! Layout: the length, the head, the fill count, then `CAP` ring slots. The entries in the
+//! window, oldest first, are the `filled` slots from slot `head` on, wrapping at the length, once
+//! the window is full, and the first `filled` slots while it fills. This writer puts the oldest
+//! entry in slot 0 (head 0 when full, `filled` otherwise) and zeros in the slots beyond; the
+//! reader also takes images whose ring was rotated or whose spare slots hold stale entries.
+//!
 //! Checked: the length between 1 and `CAP` and, once the period is known, equal to what it gives
-//! ([`bins_for_period`] for the correlation window, the period up to `CAP` for the plain one); the
-//! fill count at most the length; the head equal to the fill count while the window fills, below
-//! the length once it is full; every stored value within the fixed-point range; the running sums
-//! equal to the exact sums of the entries in the window (the first `filled` slots). For the bin
-//! being filled: fewer samples than a bin, all zero when empty, and each sum within its samples'
-//! ranges.
+//! ([`WindowLayout::for_period`] for the correlation window, the period up to `CAP` for the plain
+//! one); the fill count at most the length; the head equal to the fill count while the window
+//! fills, below the length once it is full; every stored value, in the window or not, within the
+//! fixed-point range; the running sums equal to the exact sums of the entries in the window. For
+//! the bin being filled: fewer samples than a bin, all zero when empty, and each sum within its
+//! samples' ranges.
 
 use super::gap_fill::MAX_FILLED_TILT_RAD;
 use super::rotation::MAX_PERIOD_SAMPLES;
@@ -15,7 +21,7 @@ use super::wire::{Reader, Writer};
 use super::{ensure, within, CheckpointError, Part, R};
 use crate::correlation::{CorrelationSums, QuantizedSample, SUMS};
 use crate::installation::Angles;
-use crate::moving_average::{bins_for_period, Bin, CorrelationWindow};
+use crate::moving_average::{Bin, CorrelationWindow, Entry, WindowLayout};
 #[cfg(feature = "paper-method")]
 use crate::moving_average::{WindowAverage, MAX_MAGNITUDE};
 use crate::sample::{MAX_TILT_RAD, MAX_WRAPPED_ANGLE_RAD};
@@ -36,10 +42,29 @@ pub(super) const fn window_average_len(ch: usize, cap: usize) -> usize {
     3 * 4 + ch * 8 + cap * ch * 4
 }
 
+/// The head of a window of `filled` of `len` entries stored from slot 0: see the module's layout.
+fn head_from_slot_0(filled: usize, len: usize) -> usize {
+    if filled < len {
+        filled
+    } else {
+        0
+    }
+}
+
+/// The slot of the `i`-th oldest entry of a window stored with `head` (see the module's layout).
+fn slot_of(i: usize, head: usize, filled: usize, len: usize) -> usize {
+    if filled < len {
+        i
+    } else {
+        (head + i) % len
+    }
+}
+
 pub(super) fn write_correlation<const CAP: usize>(w: &mut Writer<'_>, win: &CorrelationWindow<CAP>) {
+    let filled = win.ring.len();
     w.usize(win.len);
-    w.usize(win.head);
-    w.usize(win.filled);
+    w.usize(head_from_slot_0(filled, win.len));
+    w.usize(filled);
     w.u32(win.bin);
     w.u32(win.sums.count);
     for s in win.sums.sums {
@@ -64,7 +89,9 @@ pub(super) fn write_correlation<const CAP: usize>(w: &mut Writer<'_>, win: &Corr
         w.real(v);
     }
     w.u32(b.fill_weight);
-    for (q, weight) in win.ring.iter().zip(win.weights) {
+    let spare = core::iter::repeat_n(Entry::default(), CAP - filled);
+    for entry in win.ring.iter().copied().chain(spare) {
+        let (q, weight) = (entry.sample, entry.fill_weight);
         w.i32(q.roll);
         w.i32(q.pitch);
         for v in [q.sin_rho, q.cos_rho, q.sin_rho_s, q.cos_rho_s, q.sin_lat, q.cos_lat] {
@@ -112,44 +139,57 @@ pub(super) fn read_correlation<const CAP: usize>(
     let partial = read_bin(r, bin)?;
 
     let (max_attitude, max_trig) = quantized_bounds();
-    let mut direct = CorrelationSums::default();
-    for k in 0..CAP {
-        let q = QuantizedSample {
-            roll: r.i32(),
-            pitch: r.i32(),
-            sin_rho: r.i16(),
-            cos_rho: r.i16(),
-            sin_rho_s: r.i16(),
-            cos_rho_s: r.i16(),
-            sin_lat: r.i16(),
-            cos_lat: r.i16(),
-            reference: [r.i16(), r.i16(), r.i16(), r.i16()],
-        };
-        let weight = r.u16();
+    let ring_start = r.pos();
+    for _ in 0..CAP {
+        let q = read_entry(r).sample;
         let [c0, c1, c2, c3] = q.reference;
         let trig = [q.sin_rho, q.cos_rho, q.sin_rho_s, q.cos_rho_s, q.sin_lat, q.cos_lat, c0, c1, c2, c3];
         let in_range = q.roll.unsigned_abs() <= max_attitude.unsigned_abs()
             && q.pitch.unsigned_abs() <= max_attitude.unsigned_abs()
             && trig.iter().all(|v| v.unsigned_abs() <= max_trig.unsigned_abs());
         ensure(in_range, CheckpointError::InvalidValue(Part::WindowEntries))?;
-        if k < filled {
-            direct.add(&q, weight);
-        }
+    }
+    let ring_end = r.pos();
+    // The entries in the window, oldest first, straight from the image (no `CAP`-sized copy on
+    // the stack).
+    let mut direct = CorrelationSums::default();
+    if let Some(win) = dst.as_deref_mut() {
+        win.ring.clear();
+    }
+    for i in 0..filled {
+        r.seek(ring_start + slot_of(i, head, filled, len) * ENTRY_LEN);
+        let entry = read_entry(r);
+        direct.add(&{ entry.sample }, entry.fill_weight);
         if let Some(win) = dst.as_deref_mut() {
-            win.ring[k] = q;
-            win.weights[k] = weight;
+            // At most `len <= CAP` entries: there is room.
+            let _ = win.ring.push_back(entry);
         }
     }
+    r.seek(ring_end);
     ensure(direct == sums, CheckpointError::Inconsistent(Part::WindowSums))?;
     if let Some(win) = dst {
         win.len = len;
-        win.head = head;
-        win.filled = filled;
         win.bin = bin;
         win.sums = sums;
         win.partial = partial;
     }
     Ok(())
+}
+
+/// One ring slot of a correlation window.
+fn read_entry(r: &mut Reader<'_>) -> Entry {
+    let sample = QuantizedSample {
+        roll: r.i32(),
+        pitch: r.i32(),
+        sin_rho: r.i16(),
+        cos_rho: r.i16(),
+        sin_rho_s: r.i16(),
+        cos_rho_s: r.i16(),
+        sin_lat: r.i16(),
+        cos_lat: r.i16(),
+        reference: [r.i16(), r.i16(), r.i16(), r.i16()],
+    };
+    Entry { sample, fill_weight: r.u16() }
 }
 
 /// Reads and checks the bin being filled of a window of `bin` samples per entry.
@@ -190,15 +230,17 @@ fn read_bin(r: &mut Reader<'_>, bin: u32) -> Result<Bin, CheckpointError> {
 
 #[cfg(feature = "paper-method")]
 pub(super) fn write_average<const CH: usize, const CAP: usize>(w: &mut Writer<'_>, win: &WindowAverage<CH, CAP>) {
+    let filled = win.ring.len();
     w.usize(win.len);
-    w.usize(win.head);
-    w.usize(win.filled);
+    w.usize(head_from_slot_0(filled, win.len));
+    w.usize(filled);
     for s in win.sums {
         w.i64(s);
     }
-    for slot in &win.ring {
+    let spare = core::iter::repeat_n([0; CH], CAP - filled);
+    for slot in win.ring.iter().copied().chain(spare) {
         for v in slot {
-            w.i32(*v);
+            w.i32(v);
         }
     }
 }
@@ -221,25 +263,32 @@ pub(super) fn read_average<const CH: usize, const CAP: usize>(
         *s = r.i64();
     }
     let bound = WindowAverage::<CH, CAP>::quantize(MAX_MAGNITUDE);
+    let ring_start = r.pos();
+    for _ in 0..CAP * CH {
+        let v = r.i32();
+        ensure((-bound..=bound).contains(&v), CheckpointError::InvalidValue(Part::WindowEntries))?;
+    }
+    let ring_end = r.pos();
     let mut direct = [0i64; CH];
-    for k in 0..CAP {
+    if let Some(win) = dst.as_deref_mut() {
+        win.ring.clear();
+    }
+    for i in 0..filled {
+        r.seek(ring_start + slot_of(i, head, filled, len) * CH * 4);
+        let slot: [i32; CH] = core::array::from_fn(|_| r.i32());
         for ch in 0..CH {
-            let v = r.i32();
-            ensure((-bound..=bound).contains(&v), CheckpointError::InvalidValue(Part::WindowEntries))?;
-            if k < filled {
-                direct[ch] += i64::from(v);
-            }
-            if let Some(win) = dst.as_deref_mut() {
-                win.ring[k][ch] = v;
-            }
+            direct[ch] += i64::from(slot[ch]);
+        }
+        if let Some(win) = dst.as_deref_mut() {
+            // At most `len <= CAP` samples: there is room.
+            let _ = win.ring.push_back(slot);
         }
     }
+    r.seek(ring_end);
     ensure(direct == sums, CheckpointError::Inconsistent(Part::WindowSums))?;
     if let Some(win) = dst {
         win.sums = sums;
         win.len = len;
-        win.head = head;
-        win.filled = filled;
     }
     Ok(())
 }
@@ -247,7 +296,7 @@ pub(super) fn read_average<const CH: usize, const CAP: usize>(
 /// `(bin, len)` of a correlation window for a known period.
 pub(super) fn expected_correlation<const CAP: usize>(period_samples: Option<u32>) -> Option<(u32, usize)> {
     period_samples.map(|p| {
-        let (bin, len) = bins_for_period(p, CAP);
-        (bin, len.clamp(1, CAP.max(1)))
+        let layout = WindowLayout::for_period(p, CAP);
+        (layout.samples_per_entry, layout.entries.clamp(1, CAP.max(1)))
     })
 }

@@ -11,8 +11,8 @@ pub mod windowed;
 
 use crate::config::{Config, Method};
 use crate::estimator::Feed;
-use crate::gap_fill::GridSample;
-use crate::Real;
+use crate::gap_fill::{FillVariance, GridSample};
+use crate::output::Estimate;
 
 #[cfg(feature = "paper-method")]
 pub use paper::Paper;
@@ -90,9 +90,9 @@ impl<const CAP: usize> MethodState<CAP> {
 
     /// The windowed method's one update per step (see [`Windowed::update`]); the others update
     /// in [`MethodState::push`].
-    pub fn update(&mut self, config: &Config, feed: &Feed, fill_variance_rad2: (Real, Real)) -> bool {
+    pub fn update(&mut self, config: &Config, feed: &Feed, fill_variance: FillVariance) -> bool {
         match self {
-            MethodState::Windowed(m) => m.update(config, feed.interval, fill_variance_rad2),
+            MethodState::Windowed(m) => m.update(config, feed.interval, fill_variance),
             #[cfg(feature = "paper-method")]
             MethodState::Paper(_) => false,
             MethodState::Traditional(_) => false,
@@ -128,7 +128,7 @@ impl<const CAP: usize> MethodState<CAP> {
     /// had a measurement. Only the windowed method checks its residuals; the others never report
     /// a mismatch.
     pub fn estimate(&self, config: &Config) -> Option<MethodEstimate> {
-        let plain = |(x_rad, sigma_rad): ([Real; 4], [Real; 4])| MethodEstimate { x_rad, sigma_rad, mismatch: false };
+        let plain = |e: Estimate| MethodEstimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad, mismatch: false };
         match self {
             MethodState::Windowed(m) => m.estimate(config),
             #[cfg(feature = "paper-method")]

@@ -19,6 +19,7 @@ use crate::config::Config;
 use crate::correlation::products;
 use crate::gap_fill::GridSample;
 use crate::kalman::ConstantStateKalman;
+use crate::output::Estimate;
 use crate::moving_average::{WindowAverage, COUNTS_PER_UNIT};
 use crate::sample::Attitude;
 use crate::units::EARTH_RATE_RAD_PER_S;
@@ -115,13 +116,13 @@ impl<const CAP: usize> Paper<CAP> {
     }
 
     /// Current estimate and 1-sigma, once updated.
-    pub fn estimate(&self) -> Option<([Real; 4], [Real; 4])> {
+    pub fn estimate(&self) -> Option<Estimate> {
         if self.updates == 0 {
             return None;
         }
-        Some((
-            core::array::from_fn(|j| self.kf[j].x[0] as Real),
-            core::array::from_fn(|j| self.kf[j].sigma(0) as Real),
-        ))
+        Some(Estimate {
+            x_rad: core::array::from_fn(|j| self.kf[j].x[0] as Real),
+            sigma_rad: core::array::from_fn(|j| self.kf[j].sigma(0) as Real),
+        })
     }
 }

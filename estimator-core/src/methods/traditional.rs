@@ -10,6 +10,7 @@
 use crate::config::Config;
 use crate::gap_fill::GridSample;
 use crate::kalman::ConstantStateKalman;
+use crate::output::Estimate;
 use crate::Real;
 
 /// State of the traditional baseline.
@@ -42,12 +43,13 @@ impl Traditional {
     }
 
     /// Current estimate and 1-sigma, once updated.
-    pub fn estimate(&self) -> Option<([Real; 4], [Real; 4])> {
+    pub fn estimate(&self) -> Option<Estimate> {
         if self.updates == 0 {
             return None;
         }
-        let x = [self.kf.x[0], self.kf.x[1], self.kf.x[2], self.kf.x[3]];
-        let s = [self.kf.sigma(0), self.kf.sigma(1), self.kf.sigma(2), self.kf.sigma(3)];
-        Some((x, s))
+        Some(Estimate {
+            x_rad: [self.kf.x[0], self.kf.x[1], self.kf.x[2], self.kf.x[3]],
+            sigma_rad: [self.kf.sigma(0), self.kf.sigma(1), self.kf.sigma(2), self.kf.sigma(3)],
+        })
     }
 }

@@ -115,7 +115,7 @@
 
 use crate::config::Config;
 use crate::correlation::ReferenceFilter;
-use crate::gap_fill::GridSample;
+use crate::gap_fill::{FillVariance, GridSample};
 use crate::kalman::ConstantStateKalman;
 use crate::math::sqrt;
 use crate::moving_average::CorrelationWindow;
@@ -250,9 +250,9 @@ impl<const CAP: usize> Windowed<CAP> {
     }
 
     /// Updates the filter with the window's measurement, if the window is full and has new
-    /// entries. `interval` is the sample interval, s, `fill_variance_rad2` a filled single sample's
-    /// error variance of roll and of pitch ([`crate::gap_fill::GapFiller::single_fill_variance_rad2`]).
-    pub fn update(&mut self, config: &Config, interval: Real, fill_variance_rad2: (Real, Real)) -> bool {
+    /// entries. `interval` is the sample interval, s, `fill_variance` a filled single sample's
+    /// error variance of roll and of pitch ([`crate::gap_fill::GapFiller::single_fill_variance`]).
+    pub fn update(&mut self, config: &Config, interval: Real, fill_variance: FillVariance) -> bool {
         if !self.window.is_full() || self.entries_since_update == 0 {
             return false;
         }
@@ -270,8 +270,8 @@ impl<const CAP: usize> Windowed<CAP> {
         let sums = self.window.sums();
         let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
         let r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
-        let r_pitch = r0 + 0.5 * filled * fill_variance_rad2.1;
-        let r_roll = r0 + 0.5 * filled * fill_variance_rad2.0;
+        let r_pitch = r0 + 0.5 * filled * fill_variance.pitch_rad2;
+        let r_roll = r0 + 0.5 * filled * fill_variance.roll_rad2;
         self.product_variance_rad2 = [r_pitch, r_roll];
         // Each pair takes every other window, so each of its updates carries two entries' worth.
         let r = 0.5 * self.product_variance_rad2[pair];
