@@ -32,9 +32,16 @@ pub fn percent_curves(steps: &[Step], truth: &[RowTruth], interval_s: f64) -> [V
     curves
 }
 
+/// Heading, roll and pitch errors over time, arcsec: before compensation (the oscillation of
+/// eq (2) put in) and after it.
+pub struct AttitudeCurves {
+    pub before: [Curve; 3],
+    pub after: [Curve; 3],
+}
+
 /// Attitude error of eq (2) before (the oscillation put in) and after compensation, arcsec
 /// (Figs. 7 and 8).
-pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interval_s: f64) -> ([Curve; 3], [Curve; 3]) {
+pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interval_s: f64) -> AttitudeCurves {
     let mut before: [Vec<(f64, f64)>; 3] = Default::default();
     let mut after: [Vec<(f64, f64)>; 3] = Default::default();
     for (row, step) in rows.iter().zip(steps) {
@@ -45,7 +52,7 @@ pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interva
             after[a].push((step.time_s, res[a]));
         }
     }
-    (before, after)
+    AttitudeCurves { before, after }
 }
 
 /// Fig. 3: for the roll as logged, and split with the truth into the true roll, the oscillatory
@@ -127,7 +134,7 @@ pub fn write_figures(
     plots::correlation_figure(&path, &correlation_panels(&rows[..n3], truth, interval_s, window), x_arcsec[2] * lat.cos() / 2.0)?;
     written.push(path);
     if let Some((name, steps)) = replays.first() {
-        let (before, after) = attitude_curves(rows, steps, truth, interval_s);
+        let AttitudeCurves { before, after } = attitude_curves(rows, steps, truth, interval_s);
         let span = before.iter().flatten().map(|p| p.1.abs()).fold(10.0, f64::max) * 1.1;
         let path = dir.join("fig7_attitude_error_before.png");
         plots::attitude_error_figure(&path, "Attitude error of eq (2) before compensation", &before, span)?;

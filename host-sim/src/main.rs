@@ -282,7 +282,7 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     a.timing.check()?;
     let options = EstimateOptions { config: a.timing.pin(a.tuning.checked_config(method)?), restart_at_s: restart_at.clone(), strict: a.strict };
     let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
-    let rows = truth.as_ref().map(|(t, g)| truth_rows(t, g.as_ref()));
+    let rows = truth.as_ref().map(|t| truth_rows(&t.file, t.generated.as_ref()));
     let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_, _| {})?;
     // The summary goes where the estimates do not.
     let mut info: Box<dyn Write> = if log_csv::is_stdio(&out) { Box::new(std::io::stderr()) } else { Box::new(std::io::stdout().lock()) };

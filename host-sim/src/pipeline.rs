@@ -56,9 +56,15 @@ pub fn open_output(out: &Path) -> Result<Box<dyn Write>, LogError> {
     Ok(Box::new(BufWriter::with_capacity(1 << 16, file)))
 }
 
-/// The truth beside a log, if any: the file, and its scenario regenerated when it names one.
-/// A truth file that cannot be read is a warning (`warn`), not an error: no accuracy table.
-pub fn load_truth(log: &Path, warn: &mut dyn FnMut(String)) -> Option<(TruthFile, Option<Generated>)> {
+/// The truth beside a log: the file, and its scenario regenerated when it names one.
+pub struct LogTruth {
+    pub file: TruthFile,
+    pub generated: Option<Generated>,
+}
+
+/// The truth beside a log, if any. A truth file that cannot be read is a warning (`warn`), not an
+/// error: no accuracy table.
+pub fn load_truth(log: &Path, warn: &mut dyn FnMut(String)) -> Option<LogTruth> {
     if is_stdio(log) {
         return None;
     }
@@ -76,7 +82,7 @@ pub fn load_truth(log: &Path, warn: &mut dyn FnMut(String)) -> Option<(TruthFile
                 ));
             }
             let generated = truth.params.as_ref().map(generate);
-            Some((truth, generated))
+            Some(LogTruth { file: truth, generated })
         }
     }
 }

@@ -149,14 +149,3 @@ where
         unreadable: filter,
     })
 }
-
-/// Replays generated rows (no file) and keeps every step: for plots and in-memory reports.
-pub fn replay_rows(rows: &[Row], config: Config) -> Result<(Replay, Vec<Step>), ReplayError> {
-    let lines = rows.iter().enumerate().map(|(i, row)| Ok(LogLine { line: i + 2, row: *row }));
-    let mut steps = Vec::with_capacity(rows.len());
-    let replay = replay_each(lines, config, &[], RowFilter::new(true), &mut |_| {}, |line, result| {
-        steps.push(Step { time_s: line.row.time_s, result: *result });
-        Ok(())
-    })?;
-    Ok((replay, steps))
-}
