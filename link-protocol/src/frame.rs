@@ -7,7 +7,6 @@
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use crate::cobs;
 use crate::crc::crc16;
 use crate::MAX_MESSAGE;
 
@@ -63,7 +62,7 @@ pub enum EncodeError {
 }
 
 /// Largest frame, delimiters included, that [`encode_frame`] writes.
-pub const MAX_FRAME: usize = cobs::max_encoded_len(MAX_MESSAGE + 2) + 2;
+pub const MAX_FRAME: usize = cobs::max_encoding_length(MAX_MESSAGE + 2) + 2;
 
 /// Writes `0x00, COBS(postcard(message), CRC-16 LE), 0x00` to `out`; returns the frame's length.
 pub fn encode_frame<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, EncodeError> {
@@ -81,14 +80,32 @@ pub fn encode_frame<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, 
     let data = raw.get(..n + 2).ok_or(EncodeError::MessageTooLarge)?;
     *out.first_mut().ok_or(EncodeError::BufferTooSmall)? = 0;
     let body = out.get_mut(1..).ok_or(EncodeError::BufferTooSmall)?;
-    let m = cobs::encode(data, body).map_err(|_| EncodeError::BufferTooSmall)?;
+    // `try_encode` can return a length one past the end of `body` when only the last code byte
+    // does not fit (it skips that write); the closing 0x00 at `m + 1` then lies past the end of
+    // `out`, so the check below turns that case into `BufferTooSmall` too.
+    let m = cobs::try_encode(data, body).map_err(|_| EncodeError::BufferTooSmall)?;
     *out.get_mut(m + 1).ok_or(EncodeError::BufferTooSmall)? = 0;
     Ok(m + 2)
 }
 
+/// COBS-decodes a received frame (without its 0x00 delimiters) in place; returns the decoded
+/// length. Strict: an empty frame, a group whose code byte points past the end of the frame (a
+/// truncated frame) and a 0x00 anywhere in the frame are errors, never a shorter message.
+///
+/// The `cobs` crate's decoder rejects the first two itself, but it stops at the first 0x00 and
+/// returns the bytes decoded before it (`[0x00]` decodes to an empty message, `[0x02, 0x11, 0x00,
+/// 0x05]` to `[0x11]`). The [`crate::FrameAccumulator`] never passes a 0x00 on, but
+/// [`decode_frame`] is public, so such a frame is refused here before the crate sees it.
+pub(crate) fn cobs_decode_strict(encoded: &mut [u8]) -> Result<usize, FrameError> {
+    if encoded.contains(&0) {
+        return Err(FrameError::Cobs);
+    }
+    cobs::decode_in_place(encoded).map_err(|_| FrameError::Cobs)
+}
+
 /// Decodes one received frame (the bytes between two 0x00, COBS-encoded; decoded in place).
 pub fn decode_frame<T: DeserializeOwned>(encoded: &mut [u8]) -> Result<T, FrameError> {
-    let n = cobs::decode_in_place(encoded).map_err(|_| FrameError::Cobs)?;
+    let n = cobs_decode_strict(encoded)?;
     if n < 3 {
         return Err(FrameError::TooShort);
     }
@@ -272,7 +289,7 @@ mod tests {
             let mut bad = data.clone();
             bad[bit / 8] ^= 1 << (bit % 8);
             let mut enc = std::vec![0u8; 64];
-            let n = cobs::encode(&bad, &mut enc).unwrap();
+            let n = cobs::try_encode(&bad, &mut enc).unwrap();
             assert_eq!(
                 decode_frame::<Request>(&mut enc[..n]),
                 Err(FrameError::Crc),
@@ -286,7 +303,7 @@ mod tests {
     fn short_frames_and_unknown_messages() {
         for data in [&[0x01u8][..], &[0x01, 0x02]] {
             let mut enc = std::vec![0u8; 8];
-            let n = cobs::encode(data, &mut enc).unwrap();
+            let n = cobs::try_encode(data, &mut enc).unwrap();
             assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::TooShort));
         }
         // Unknown variant 7, and a valid Reset followed by a stray byte: CRC fine, message wrong.
@@ -294,7 +311,7 @@ mod tests {
             let mut data = msg.to_vec();
             data.extend_from_slice(&crate::crc::crc16(msg).to_le_bytes());
             let mut enc = std::vec![0u8; 8];
-            let n = cobs::encode(&data, &mut enc).unwrap();
+            let n = cobs::try_encode(&data, &mut enc).unwrap();
             assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::Message));
         }
     }
@@ -306,5 +323,54 @@ mod tests {
             encode_frame(&Request::Sample(sample()), &mut out),
             Err(EncodeError::BufferTooSmall)
         );
+        // Every length short of the frame, including the one that lacks only the last code byte
+        // (which the COBS encoder alone does not report), is an error; the exact length is enough.
+        let requests = [Request::Sample(sample()), Request::Reset, Request::ReadStatus];
+        for r in requests {
+            let full = frame_of(&r);
+            for len in 0..full.len() {
+                let mut out = std::vec![0u8; len];
+                assert_eq!(encode_frame(&r, &mut out), Err(EncodeError::BufferTooSmall), "{r:?} in {len}");
+            }
+            let mut out = std::vec![0u8; full.len()];
+            assert_eq!(encode_frame(&r, &mut out), Ok(full.len()));
+            assert_eq!(out, full);
+        }
+    }
+
+    #[test]
+    fn truncated_groups_are_cobs_errors_never_short_messages() {
+        // One group of 7: every cut leaves a group that runs past the end of the frame.
+        let mut enc = [0u8; 8];
+        let n = cobs::try_encode(&[1, 2, 3, 4, 5, 6], &mut enc).unwrap();
+        assert_eq!(&enc[..n], [0x07, 1, 2, 3, 4, 5, 6]);
+        for cut in 1..n {
+            let mut part = enc[..cut].to_vec();
+            assert_eq!(cobs_decode_strict(&mut part), Err(FrameError::Cobs), "cut at {cut}");
+        }
+        assert_eq!(cobs_decode_strict(&mut []), Err(FrameError::Cobs));
+        // The Ready frame (one group) cut anywhere.
+        let ready = body(&frame_of(&Response::Ready {
+            protocol_version: crate::PROTOCOL_VERSION,
+        }));
+        assert_eq!(ready, [0x05, 0x03, 0x04, 0xd8, 0x08]);
+        for cut in 0..ready.len() {
+            let mut part = ready[..cut].to_vec();
+            assert_eq!(decode_frame::<Response>(&mut part), Err(FrameError::Cobs), "cut at {cut}");
+        }
+    }
+
+    #[test]
+    fn a_zero_byte_inside_a_frame_is_a_cobs_error() {
+        for frame in [&[0x02u8, 0x00][..], &[0x00], &[0x01, 0x00, 0x05], &[0x02, 0x11, 0x00, 0x05]] {
+            let mut f = frame.to_vec();
+            assert_eq!(cobs_decode_strict(&mut f), Err(FrameError::Cobs), "{frame:02x?}");
+        }
+        // A whole, valid frame followed by a 0x00 and more bytes is refused, not read up to the 0x00.
+        for r in [Request::Sample(sample()), Request::Reset] {
+            let mut inner = body(&frame_of(&r));
+            inner.extend_from_slice(&[0x00, 0x01]);
+            assert_eq!(decode_frame::<Request>(&mut inner), Err(FrameError::Cobs));
+        }
     }
 }

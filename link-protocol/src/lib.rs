@@ -13,8 +13,8 @@
 //!
 //! - [`message`]: the request and response types (postcard-serialised with serde);
 //! - [`crc`]: the CRC-16 over the message bytes;
-//! - [`cobs`]: strict COBS encoding and decoding (a truncated group is an error);
-//! - [`frame`]: one message to one frame and back, with every way a frame can be bad;
+//! - [`frame`]: one message to one frame and back, with every way a frame can be bad (COBS from
+//!   the `cobs` crate, decoded strictly: a truncated group or a 0x00 inside is an error);
 //! - [`accumulator`]: the bounded streaming receiver: splits the byte stream at 0x00, detects
 //!   oversized frames, resynchronises on the next 0x00;
 //! - [`blocking_writer`]: a serial transmitter wrapper that never returns `Ok(0)`, so that
@@ -27,7 +27,8 @@ extern crate std;
 
 pub mod accumulator;
 pub mod blocking_writer;
-pub mod cobs;
+#[cfg(test)]
+mod cobs_reference;
 pub mod crc;
 pub mod frame;
 pub mod message;
