@@ -127,7 +127,7 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
         for &b in bytes {
             match shadow.push_decode::<Request>(b) {
                 Some(Err(e)) => {
-                    predicted[e.index()] += 1;
+                    predicted[e as usize] += 1;
                     bad += 1;
                 }
                 Some(Ok(_)) => good += 1,
@@ -221,14 +221,14 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
         frame_faults,
         "one bad frame per injected frame fault"
     );
-    for (kind, n) in predicted.iter().enumerate() {
-        assert!(*n > 0, "no {} fault exercised", FrameError::name(kind));
+    for (kind, n) in FrameError::ALL.iter().zip(predicted) {
+        assert!(n > 0, "no {} fault exercised", kind.name());
     }
     let bad = status.counters.bad_frames;
-    assert_eq!(bad[FrameError::Oversize.index()], injected[3]);
-    assert!(bad[FrameError::Crc.index()] >= injected[2]);
-    assert_eq!(bad[FrameError::Message.index()], injected[4]);
-    assert!(bad[FrameError::TooShort.index()] >= injected[5]);
+    assert_eq!(bad[FrameError::Oversize as usize], injected[3]);
+    assert!(bad[FrameError::Crc as usize] >= injected[2]);
+    assert_eq!(bad[FrameError::Message as usize], injected[4]);
+    assert!(bad[FrameError::TooShort as usize] >= injected[5]);
     let rejected = status.counters.rejected_samples;
     assert_eq!(
         rejected[SampleError::NonFinite(Field::Roll).reason_index()],

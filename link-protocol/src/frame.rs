@@ -10,56 +10,116 @@ use serde::Serialize;
 use crate::crc::crc16;
 use crate::MAX_MESSAGE;
 
-/// Why a received frame was dropped. Counted on the firmware by [`FrameError::index`].
+/// Why a received frame was dropped. The code (`as u8`) is the frame's index in
+/// [`crate::Counters::bad_frames`] and in docs/link-protocol.md's table; [`FrameError::name`] is
+/// the kind's name there and in the host's reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum FrameError {
-    /// (0) More bytes than the receive buffer holds arrived before the next 0x00.
-    Oversize,
-    /// (1) Not valid COBS: a group runs past the end of the frame (truncated frame).
-    Cobs,
-    /// (2) Decodes to fewer than 3 bytes: no room for a message and its CRC.
-    TooShort,
-    /// (3) The CRC does not match the message bytes.
-    Crc,
-    /// (4) The CRC matches but the bytes are not exactly one known message.
-    Message,
+    /// More bytes than the receive buffer holds arrived before the next 0x00.
+    Oversize = 0,
+    /// Not valid COBS: a group runs past the end of the frame (truncated frame), or the frame is
+    /// empty or has a 0x00 inside.
+    Cobs = 1,
+    /// Decodes to fewer than 3 bytes: no room for a message and its CRC.
+    TooShort = 2,
+    /// The CRC does not match the message bytes.
+    Crc = 3,
+    /// The CRC matches but the bytes are not exactly one known message.
+    Message = 4,
 }
 
 impl FrameError {
+    /// Every kind, in code order: `ALL[k as usize] == k`.
+    pub const ALL: [FrameError; 5] = [
+        FrameError::Oversize,
+        FrameError::Cobs,
+        FrameError::TooShort,
+        FrameError::Crc,
+        FrameError::Message,
+    ];
+
     /// Number of kinds (for counters).
-    pub const COUNT: usize = 5;
+    pub const COUNT: usize = Self::ALL.len();
 
-    /// Index of this kind in [`crate::Counters::bad_frames`].
-    pub fn index(&self) -> usize {
+    /// Short machine-readable name of this kind.
+    pub const fn name(&self) -> &'static str {
         match self {
-            FrameError::Oversize => 0,
-            FrameError::Cobs => 1,
-            FrameError::TooShort => 2,
-            FrameError::Crc => 3,
-            FrameError::Message => 4,
-        }
-    }
-
-    /// Short machine-readable name of the kind at `index`.
-    pub fn name(index: usize) -> &'static str {
-        match index {
-            0 => "oversize",
-            1 => "cobs",
-            2 => "too_short",
-            3 => "crc",
-            _ => "message",
+            FrameError::Oversize => "oversize",
+            FrameError::Cobs => "cobs",
+            FrameError::TooShort => "too_short",
+            FrameError::Crc => "crc",
+            FrameError::Message => "message",
         }
     }
 }
 
+/// A code that names no [`FrameError`] (the code is kept).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct UnknownFrameErrorCode(pub u8);
+
+impl TryFrom<u8> for FrameError {
+    type Error = UnknownFrameErrorCode;
+
+    fn try_from(code: u8) -> Result<Self, UnknownFrameErrorCode> {
+        Self::ALL
+            .into_iter()
+            .find(|kind| *kind as u8 == code)
+            .ok_or(UnknownFrameErrorCode(code))
+    }
+}
+
+impl core::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            FrameError::Oversize => "frame longer than the receive buffer",
+            FrameError::Cobs => "frame is not valid COBS (truncated?)",
+            FrameError::TooShort => "frame too short for a message and its CRC",
+            FrameError::Crc => "frame CRC does not match",
+            FrameError::Message => "frame CRC matches but the bytes are no known message",
+        })
+    }
+}
+
+impl core::error::Error for FrameError {}
+
+/// Logged as its [`FrameError::name`].
+#[cfg(feature = "defmt")]
+impl defmt::Format for FrameError {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "{=str}", self.name());
+    }
+}
+
+impl core::fmt::Display for UnknownFrameErrorCode {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "unknown bad-frame code {}", self.0)
+    }
+}
+
+impl core::error::Error for UnknownFrameErrorCode {}
+
 /// Why a message could not be encoded (a bug on the sending side, never caused by received data).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum EncodeError {
     /// The message does not fit in [`MAX_MESSAGE`] bytes.
     MessageTooLarge,
     /// The output buffer is too small for the frame.
     BufferTooSmall,
 }
+
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            EncodeError::MessageTooLarge => "message longer than MAX_MESSAGE bytes",
+            EncodeError::BufferTooSmall => "output buffer too small for the frame",
+        })
+    }
+}
+
+impl core::error::Error for EncodeError {}
 
 /// Largest frame, delimiters included, that [`encode_frame`] writes.
 pub const MAX_FRAME: usize = cobs::max_encoding_length(MAX_MESSAGE + 2) + 2;
@@ -336,6 +396,37 @@ mod tests {
             assert_eq!(encode_frame(&r, &mut out), Ok(full.len()));
             assert_eq!(out, full);
         }
+    }
+
+    #[test]
+    fn frame_error_codes_are_the_documented_indices_and_round_trip() {
+        // docs/link-protocol.md's table: index, kind.
+        let table = [(0u8, "oversize"), (1, "cobs"), (2, "too_short"), (3, "crc"), (4, "message")];
+        assert_eq!(FrameError::COUNT, table.len());
+        for (kind, (code, name)) in FrameError::ALL.into_iter().zip(table) {
+            assert_eq!(kind as u8, code);
+            assert_eq!(kind.name(), name);
+            assert_eq!(FrameError::try_from(code), Ok(kind));
+        }
+        for code in FrameError::COUNT as u8..=u8::MAX {
+            assert_eq!(FrameError::try_from(code), Err(UnknownFrameErrorCode(code)));
+        }
+    }
+
+    #[test]
+    fn errors_display_a_sentence() {
+        use std::string::ToString;
+        for kind in FrameError::ALL {
+            let text = kind.to_string();
+            assert!(text.starts_with("frame "), "{text}");
+        }
+        assert_eq!(
+            EncodeError::BufferTooSmall.to_string(),
+            "output buffer too small for the frame"
+        );
+        assert_eq!(UnknownFrameErrorCode(9).to_string(), "unknown bad-frame code 9");
+        let boxed: std::boxed::Box<dyn core::error::Error> = std::boxed::Box::new(FrameError::Crc);
+        assert_eq!(boxed.to_string(), "frame CRC does not match");
     }
 
     #[test]

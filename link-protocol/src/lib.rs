@@ -35,7 +35,7 @@ pub mod message;
 
 pub use accumulator::FrameAccumulator;
 pub use blocking_writer::BlockingWriter;
-pub use frame::{decode_frame, encode_frame, EncodeError, FrameError};
+pub use frame::{decode_frame, encode_frame, EncodeError, FrameError, UnknownFrameErrorCode};
 pub use message::{Counters, EstimateMsg, RejectedReply, Request, Response, SampleMsg, StatusReply, StepReply};
 
 /// Version of this protocol, reported in [`StatusReply::protocol_version`]. 4: status code 9
