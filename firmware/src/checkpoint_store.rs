@@ -33,12 +33,25 @@ struct Header {
     time_s: f64,
 }
 
-/// Why a save failed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Why a save or an invalidation failed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
 pub enum StoreError {
+    /// The core could not write its checkpoint image.
     Checkpoint,
+    /// The flash refused an erase or a write.
     Flash,
 }
+
+impl core::fmt::Display for StoreError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            StoreError::Checkpoint => "the estimator could not write its checkpoint image",
+            StoreError::Flash => "the flash refused an erase or a write",
+        })
+    }
+}
+
+impl core::error::Error for StoreError {}
 
 /// The two slots on a flash.
 pub struct CheckpointStore<F> {

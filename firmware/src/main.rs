@@ -38,7 +38,7 @@ use cortex_m_rt::entry;
 #[cfg(target_os = "none")]
 use estimator_core::{Config, ConfigError, Estimator};
 #[cfg(target_os = "none")]
-use link_protocol::{FrameError, Response};
+use link_protocol::Response;
 
 /// On the host: the firmware is not built; say how to build it.
 #[cfg(not(target_os = "none"))]
@@ -131,7 +131,7 @@ fn main() -> ! {
             }
             Err(error) => {
                 service.count_bad_frame(error);
-                defmt::warn!("bad frame: {=str}", FrameError::name(error.index()));
+                defmt::warn!("bad frame: {}", error);
             }
         }
     }

@@ -54,8 +54,8 @@ impl<'a> Service<'a> {
             None => p.last_s = Some(time_s),
             Some(last) if time_s - last >= f64::from(CHECKPOINT_INTERVAL_S) => {
                 p.last_s = Some(time_s);
-                if p.store.save(self.estimator, time_s, p.image).is_err() {
-                    defmt::error!("checkpoint at {=f64} s not saved", time_s);
+                if let Err(error) = p.store.save(self.estimator, time_s, p.image) {
+                    defmt::error!("checkpoint at {=f64} s not saved: {}", time_s, error);
                 }
             }
             Some(_) => {}
@@ -91,8 +91,8 @@ impl<'a> Service<'a> {
                 // tells the host that the reset is incomplete.
                 if let Some(p) = self.persistence.as_mut() {
                     p.last_s = None;
-                    if p.store.invalidate().is_err() {
-                        defmt::error!("checkpoints not invalidated by the reset");
+                    if let Err(error) = p.store.invalidate() {
+                        defmt::error!("checkpoints not invalidated by the reset: {}", error);
                     }
                 }
                 Response::Status(self.status())

@@ -460,8 +460,9 @@ fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &Stre
         "  firmware: {} accepted, {} filled, {} window restarts",
         st.accepted, st.filled, st.window_restarts
     )?;
-    let frames: Vec<String> = (0..FrameError::COUNT)
-        .map(|i| format!("{} {}", FrameError::name(i), st.counters.bad_frames[i]))
+    let frames: Vec<String> = FrameError::ALL
+        .iter()
+        .map(|kind| format!("{} {}", kind.name(), st.counters.bad_frames[*kind as usize]))
         .collect();
     writeln!(
         w,

@@ -12,7 +12,7 @@ use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::frame::MAX_FRAME;
 use link_protocol::{
-    cobs, crc, encode_frame, FrameAccumulator, FrameError, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
+    crc, encode_frame, FrameAccumulator, FrameError, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
 };
 use qemu_support::*;
 use std::time::Duration;
@@ -44,8 +44,8 @@ fn frame_with_bad_crc(request: &Request) -> Vec<u8> {
     let n = cobs::decode_in_place(&mut body).unwrap();
     let mut data = body[..n].to_vec();
     *data.last_mut().unwrap() ^= 0x01;
-    let mut enc = vec![0u8; cobs::max_encoded_len(data.len())];
-    let n = cobs::encode(&data, &mut enc).unwrap();
+    let mut enc = vec![0u8; cobs::max_encoding_length(data.len())];
+    let n = cobs::try_encode(&data, &mut enc).unwrap();
     let mut f = vec![0];
     f.extend_from_slice(&enc[..n]);
     f.push(0);
@@ -57,7 +57,7 @@ fn frame_of_unknown_message() -> Vec<u8> {
     let mut data = vec![9u8];
     data.extend_from_slice(&crc::crc16(&[9]).to_le_bytes());
     let mut enc = vec![0u8; 8];
-    let n = cobs::encode(&data, &mut enc).unwrap();
+    let n = cobs::try_encode(&data, &mut enc).unwrap();
     let mut f = vec![0];
     f.extend_from_slice(&enc[..n]);
     f.push(0);
@@ -127,7 +127,7 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
         for &b in bytes {
             match shadow.push_decode::<Request>(b) {
                 Some(Err(e)) => {
-                    predicted[e.index()] += 1;
+                    predicted[e as usize] += 1;
                     bad += 1;
                 }
                 Some(Ok(_)) => good += 1,
@@ -221,14 +221,14 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
         frame_faults,
         "one bad frame per injected frame fault"
     );
-    for (kind, n) in predicted.iter().enumerate() {
-        assert!(*n > 0, "no {} fault exercised", FrameError::name(kind));
+    for (kind, n) in FrameError::ALL.iter().zip(predicted) {
+        assert!(n > 0, "no {} fault exercised", kind.name());
     }
     let bad = status.counters.bad_frames;
-    assert_eq!(bad[FrameError::Oversize.index()], injected[3]);
-    assert!(bad[FrameError::Crc.index()] >= injected[2]);
-    assert_eq!(bad[FrameError::Message.index()], injected[4]);
-    assert!(bad[FrameError::TooShort.index()] >= injected[5]);
+    assert_eq!(bad[FrameError::Oversize as usize], injected[3]);
+    assert!(bad[FrameError::Crc as usize] >= injected[2]);
+    assert_eq!(bad[FrameError::Message as usize], injected[4]);
+    assert!(bad[FrameError::TooShort as usize] >= injected[5]);
     let rejected = status.counters.rejected_samples;
     assert_eq!(
         rejected[RejectReason::NonFinite as usize],

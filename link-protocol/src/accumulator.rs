@@ -10,8 +10,12 @@ use crate::frame::{decode_frame, FrameError};
 
 /// Receive buffer of `N` bytes.
 pub struct FrameAccumulator<const N: usize> {
-    buffer: [u8; N],
-    len: usize,
+    /// The bytes of the frame being received; after its 0x00, the frame just ended (lent out by
+    /// [`Self::push`]) until the next byte arrives.
+    frame: heapless::Vec<u8, N>,
+    /// `frame` holds an ended frame: the next byte starts a new one.
+    ended: bool,
+    /// More than `N` bytes have arrived since the last 0x00.
     oversize: bool,
 }
 
@@ -25,8 +29,8 @@ impl<const N: usize> FrameAccumulator<N> {
     /// An empty receiver.
     pub const fn new() -> Self {
         FrameAccumulator {
-            buffer: [0; N],
-            len: 0,
+            frame: heapless::Vec::new(),
+            ended: false,
             oversize: false,
         }
     }
@@ -34,25 +38,22 @@ impl<const N: usize> FrameAccumulator<N> {
     /// Takes one byte. At a frame's end returns its COBS bytes (without delimiters), or
     /// `Err(Oversize)`; `None` otherwise.
     pub fn push(&mut self, byte: u8) -> Option<Result<&mut [u8], FrameError>> {
+        if core::mem::take(&mut self.ended) {
+            self.frame.clear();
+        }
         if byte == 0 {
-            let len = core::mem::replace(&mut self.len, 0);
-            if core::mem::replace(&mut self.oversize, false) {
+            if core::mem::take(&mut self.oversize) {
+                self.frame.clear();
                 return Some(Err(FrameError::Oversize));
             }
-            if len == 0 {
+            if self.frame.is_empty() {
                 return None;
             }
-            return self.buffer.get_mut(..len).map(Ok);
+            self.ended = true;
+            return Some(Ok(self.frame.as_mut_slice()));
         }
-        if self.oversize {
-            return None;
-        }
-        match self.buffer.get_mut(self.len) {
-            Some(slot) => {
-                *slot = byte;
-                self.len += 1;
-            }
-            None => self.oversize = true,
+        if !self.oversize && self.frame.push(byte).is_err() {
+            self.oversize = true;
         }
         None
     }
@@ -64,7 +65,11 @@ impl<const N: usize> FrameAccumulator<N> {
 
     /// Bytes of the frame being received so far.
     pub fn pending(&self) -> usize {
-        self.len
+        if self.ended {
+            0
+        } else {
+            self.frame.len()
+        }
     }
 }
 
@@ -187,6 +192,21 @@ mod tests {
         let got = feed(&mut rx, &f);
         assert_eq!(got.len(), 1);
         assert!(matches!(got[0], Err(FrameError::Crc | FrameError::Cobs)));
+    }
+
+    #[test]
+    fn pending_counts_the_bytes_of_the_frame_in_progress_only() {
+        let mut rx = Rx::new();
+        let f = frame(&Request::Reset);
+        assert_eq!(f, [0x00, 0x04, 0x01, 0xd1, 0xf1, 0x00]);
+        for (i, b) in f[..5].iter().enumerate() {
+            assert!(rx.push(*b).is_none());
+            assert_eq!(rx.pending(), i, "after {} bytes", i + 1);
+        }
+        assert_eq!(rx.push(0).map(|r| r.map(|bytes| bytes.to_vec())), Some(Ok(f[1..5].to_vec())));
+        assert_eq!(rx.pending(), 0);
+        assert!(rx.push(0x02).is_none());
+        assert_eq!(rx.pending(), 1, "a new frame starts after the ended one");
     }
 
     #[test]

@@ -4,57 +4,94 @@
 //! noise received before the frame as a (counted) bad frame of its own, so noise can never corrupt
 //! the frame that follows it; the receiver ignores the empty frame between two delimiters.
 
+use estimator_core::UnknownCode;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use crate::cobs;
 use crate::crc::crc16;
 use crate::MAX_MESSAGE;
 
-/// Why a received frame was dropped. Counted on the firmware by [`FrameError::index`].
+/// Why a received frame was dropped. The code (`as u8`) is the frame's index in
+/// [`crate::Counters::bad_frames`] and in docs/link-protocol.md's table; [`FrameError::name`] is
+/// the kind's name there and in the host's reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum FrameError {
-    /// (0) More bytes than the receive buffer holds arrived before the next 0x00.
-    Oversize,
-    /// (1) Not valid COBS: a group runs past the end of the frame (truncated frame).
-    Cobs,
-    /// (2) Decodes to fewer than 3 bytes: no room for a message and its CRC.
-    TooShort,
-    /// (3) The CRC does not match the message bytes.
-    Crc,
-    /// (4) The CRC matches but the bytes are not exactly one known message.
-    Message,
+    /// More bytes than the receive buffer holds arrived before the next 0x00.
+    Oversize = 0,
+    /// Not valid COBS: a group runs past the end of the frame (truncated frame), or the frame is
+    /// empty or has a 0x00 inside.
+    Cobs = 1,
+    /// Decodes to fewer than 3 bytes: no room for a message and its CRC.
+    TooShort = 2,
+    /// The CRC does not match the message bytes.
+    Crc = 3,
+    /// The CRC matches but the bytes are not exactly one known message.
+    Message = 4,
 }
 
 impl FrameError {
-    /// Number of kinds (for counters).
-    pub const COUNT: usize = 5;
+    /// Every kind, in code order: `ALL[k as usize] == k`.
+    pub const ALL: [FrameError; 5] = [
+        FrameError::Oversize,
+        FrameError::Cobs,
+        FrameError::TooShort,
+        FrameError::Crc,
+        FrameError::Message,
+    ];
 
-    /// Index of this kind in [`crate::Counters::bad_frames`].
-    pub fn index(&self) -> usize {
+    /// Number of kinds (for counters).
+    pub const COUNT: usize = Self::ALL.len();
+
+    /// Short machine-readable name of this kind.
+    pub const fn name(&self) -> &'static str {
         match self {
-            FrameError::Oversize => 0,
-            FrameError::Cobs => 1,
-            FrameError::TooShort => 2,
-            FrameError::Crc => 3,
-            FrameError::Message => 4,
+            FrameError::Oversize => "oversize",
+            FrameError::Cobs => "cobs",
+            FrameError::TooShort => "too_short",
+            FrameError::Crc => "crc",
+            FrameError::Message => "message",
         }
     }
+}
 
-    /// Short machine-readable name of the kind at `index`.
-    pub fn name(index: usize) -> &'static str {
-        match index {
-            0 => "oversize",
-            1 => "cobs",
-            2 => "too_short",
-            3 => "crc",
-            _ => "message",
-        }
+impl TryFrom<u8> for FrameError {
+    type Error = UnknownCode;
+
+    /// The kind of code `code`; the same convention as the core's code enums.
+    fn try_from(code: u8) -> Result<Self, UnknownCode> {
+        Self::ALL
+            .into_iter()
+            .find(|kind| *kind as u8 == code)
+            .ok_or(UnknownCode { what: "bad-frame", code })
+    }
+}
+
+impl core::fmt::Display for FrameError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            FrameError::Oversize => "frame longer than the receive buffer",
+            FrameError::Cobs => "frame is not valid COBS (truncated?)",
+            FrameError::TooShort => "frame too short for a message and its CRC",
+            FrameError::Crc => "frame CRC does not match",
+            FrameError::Message => "frame CRC matches but the bytes are no known message",
+        })
+    }
+}
+
+impl core::error::Error for FrameError {}
+
+/// Logged as its [`FrameError::name`].
+#[cfg(feature = "defmt")]
+impl defmt::Format for FrameError {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "{=str}", self.name());
     }
 }
 
 /// Why a message could not be encoded (a bug on the sending side, never caused by received data).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum EncodeError {
     /// The message does not fit in [`MAX_MESSAGE`] bytes.
     MessageTooLarge,
@@ -62,8 +99,19 @@ pub enum EncodeError {
     BufferTooSmall,
 }
 
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            EncodeError::MessageTooLarge => "message longer than MAX_MESSAGE bytes",
+            EncodeError::BufferTooSmall => "output buffer too small for the frame",
+        })
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
 /// Largest frame, delimiters included, that [`encode_frame`] writes.
-pub const MAX_FRAME: usize = cobs::max_encoded_len(MAX_MESSAGE + 2) + 2;
+pub const MAX_FRAME: usize = cobs::max_encoding_length(MAX_MESSAGE + 2) + 2;
 
 /// Writes `0x00, COBS(postcard(message), CRC-16 LE), 0x00` to `out`; returns the frame's length.
 pub fn encode_frame<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, EncodeError> {
@@ -81,14 +129,32 @@ pub fn encode_frame<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, 
     let data = raw.get(..n + 2).ok_or(EncodeError::MessageTooLarge)?;
     *out.first_mut().ok_or(EncodeError::BufferTooSmall)? = 0;
     let body = out.get_mut(1..).ok_or(EncodeError::BufferTooSmall)?;
-    let m = cobs::encode(data, body).map_err(|_| EncodeError::BufferTooSmall)?;
+    // `try_encode` can return a length one past the end of `body` when only the last code byte
+    // does not fit (it skips that write); the closing 0x00 at `m + 1` then lies past the end of
+    // `out`, so the check below turns that case into `BufferTooSmall` too.
+    let m = cobs::try_encode(data, body).map_err(|_| EncodeError::BufferTooSmall)?;
     *out.get_mut(m + 1).ok_or(EncodeError::BufferTooSmall)? = 0;
     Ok(m + 2)
 }
 
+/// COBS-decodes a received frame (without its 0x00 delimiters) in place; returns the decoded
+/// length. Strict: an empty frame, a group whose code byte points past the end of the frame (a
+/// truncated frame) and a 0x00 anywhere in the frame are errors, never a shorter message.
+///
+/// The `cobs` crate's decoder rejects the first two itself, but it stops at the first 0x00 and
+/// returns the bytes decoded before it (`[0x00]` decodes to an empty message, `[0x02, 0x11, 0x00,
+/// 0x05]` to `[0x11]`). The [`crate::FrameAccumulator`] never passes a 0x00 on, but
+/// [`decode_frame`] is public, so such a frame is refused here before the crate sees it.
+pub(crate) fn cobs_decode_strict(encoded: &mut [u8]) -> Result<usize, FrameError> {
+    if encoded.contains(&0) {
+        return Err(FrameError::Cobs);
+    }
+    cobs::decode_in_place(encoded).map_err(|_| FrameError::Cobs)
+}
+
 /// Decodes one received frame (the bytes between two 0x00, COBS-encoded; decoded in place).
 pub fn decode_frame<T: DeserializeOwned>(encoded: &mut [u8]) -> Result<T, FrameError> {
-    let n = cobs::decode_in_place(encoded).map_err(|_| FrameError::Cobs)?;
+    let n = cobs_decode_strict(encoded)?;
     if n < 3 {
         return Err(FrameError::TooShort);
     }
@@ -272,7 +338,7 @@ mod tests {
             let mut bad = data.clone();
             bad[bit / 8] ^= 1 << (bit % 8);
             let mut enc = std::vec![0u8; 64];
-            let n = cobs::encode(&bad, &mut enc).unwrap();
+            let n = cobs::try_encode(&bad, &mut enc).unwrap();
             assert_eq!(
                 decode_frame::<Request>(&mut enc[..n]),
                 Err(FrameError::Crc),
@@ -286,7 +352,7 @@ mod tests {
     fn short_frames_and_unknown_messages() {
         for data in [&[0x01u8][..], &[0x01, 0x02]] {
             let mut enc = std::vec![0u8; 8];
-            let n = cobs::encode(data, &mut enc).unwrap();
+            let n = cobs::try_encode(data, &mut enc).unwrap();
             assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::TooShort));
         }
         // Unknown variant 7, and a valid Reset followed by a stray byte: CRC fine, message wrong.
@@ -294,7 +360,7 @@ mod tests {
             let mut data = msg.to_vec();
             data.extend_from_slice(&crate::crc::crc16(msg).to_le_bytes());
             let mut enc = std::vec![0u8; 8];
-            let n = cobs::encode(&data, &mut enc).unwrap();
+            let n = cobs::try_encode(&data, &mut enc).unwrap();
             assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::Message));
         }
     }
@@ -306,5 +372,85 @@ mod tests {
             encode_frame(&Request::Sample(sample()), &mut out),
             Err(EncodeError::BufferTooSmall)
         );
+        // Every length short of the frame, including the one that lacks only the last code byte
+        // (which the COBS encoder alone does not report), is an error; the exact length is enough.
+        let requests = [Request::Sample(sample()), Request::Reset, Request::ReadStatus];
+        for r in requests {
+            let full = frame_of(&r);
+            for len in 0..full.len() {
+                let mut out = std::vec![0u8; len];
+                assert_eq!(encode_frame(&r, &mut out), Err(EncodeError::BufferTooSmall), "{r:?} in {len}");
+            }
+            let mut out = std::vec![0u8; full.len()];
+            assert_eq!(encode_frame(&r, &mut out), Ok(full.len()));
+            assert_eq!(out, full);
+        }
+    }
+
+    #[test]
+    fn frame_error_codes_are_the_documented_indices_and_round_trip() {
+        // docs/link-protocol.md's table: index, kind.
+        let table = [(0u8, "oversize"), (1, "cobs"), (2, "too_short"), (3, "crc"), (4, "message")];
+        assert_eq!(FrameError::COUNT, table.len());
+        for (kind, (code, name)) in FrameError::ALL.into_iter().zip(table) {
+            assert_eq!(kind as u8, code);
+            assert_eq!(kind.name(), name);
+            assert_eq!(FrameError::try_from(code), Ok(kind));
+        }
+        for code in FrameError::COUNT as u8..=u8::MAX {
+            assert_eq!(FrameError::try_from(code), Err(UnknownCode { what: "bad-frame", code }));
+        }
+    }
+
+    #[test]
+    fn errors_display_a_sentence() {
+        use std::string::ToString;
+        for kind in FrameError::ALL {
+            let text = kind.to_string();
+            assert!(text.starts_with("frame "), "{text}");
+        }
+        assert_eq!(
+            EncodeError::BufferTooSmall.to_string(),
+            "output buffer too small for the frame"
+        );
+        assert_eq!(FrameError::try_from(9).unwrap_err().to_string(), "9 is not a known bad-frame code");
+        let boxed: std::boxed::Box<dyn core::error::Error> = std::boxed::Box::new(FrameError::Crc);
+        assert_eq!(boxed.to_string(), "frame CRC does not match");
+    }
+
+    #[test]
+    fn truncated_groups_are_cobs_errors_never_short_messages() {
+        // One group of 7: every cut leaves a group that runs past the end of the frame.
+        let mut enc = [0u8; 8];
+        let n = cobs::try_encode(&[1, 2, 3, 4, 5, 6], &mut enc).unwrap();
+        assert_eq!(&enc[..n], [0x07, 1, 2, 3, 4, 5, 6]);
+        for cut in 1..n {
+            let mut part = enc[..cut].to_vec();
+            assert_eq!(cobs_decode_strict(&mut part), Err(FrameError::Cobs), "cut at {cut}");
+        }
+        assert_eq!(cobs_decode_strict(&mut []), Err(FrameError::Cobs));
+        // The Ready frame (one group) cut anywhere.
+        let ready = body(&frame_of(&Response::Ready {
+            protocol_version: crate::PROTOCOL_VERSION,
+        }));
+        assert_eq!(ready, [0x05, 0x03, 0x04, 0xd8, 0x08]);
+        for cut in 0..ready.len() {
+            let mut part = ready[..cut].to_vec();
+            assert_eq!(decode_frame::<Response>(&mut part), Err(FrameError::Cobs), "cut at {cut}");
+        }
+    }
+
+    #[test]
+    fn a_zero_byte_inside_a_frame_is_a_cobs_error() {
+        for frame in [&[0x02u8, 0x00][..], &[0x00], &[0x01, 0x00, 0x05], &[0x02, 0x11, 0x00, 0x05]] {
+            let mut f = frame.to_vec();
+            assert_eq!(cobs_decode_strict(&mut f), Err(FrameError::Cobs), "{frame:02x?}");
+        }
+        // A whole, valid frame followed by a 0x00 and more bytes is refused, not read up to the 0x00.
+        for r in [Request::Sample(sample()), Request::Reset] {
+            let mut inner = body(&frame_of(&r));
+            inner.extend_from_slice(&[0x00, 0x01]);
+            assert_eq!(decode_frame::<Request>(&mut inner), Err(FrameError::Cobs));
+        }
     }
 }

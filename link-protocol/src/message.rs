@@ -111,8 +111,8 @@ impl From<&EstimateMsg> for Estimate {
     }
 }
 
-/// Bad frames by [`FrameError::index`] and rejected samples by
-/// [`RejectReason`] code, since boot (they survive `Reset`; saturating).
+/// Bad frames by [`FrameError`] code (`as u8`) and rejected samples by [`RejectReason`] code,
+/// since boot (they survive `Reset`; saturating).
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counters {
     pub bad_frames: [u32; FrameError::COUNT],
@@ -122,7 +122,7 @@ pub struct Counters {
 impl Counters {
     /// Counts one bad frame.
     pub fn count_bad_frame(&mut self, error: FrameError) {
-        if let Some(slot) = self.bad_frames.get_mut(error.index()) {
+        if let Some(slot) = self.bad_frames.get_mut(error as usize) {
             *slot = slot.saturating_add(1);
         }
     }

@@ -3,7 +3,7 @@
 
 use anyhow::{bail, Context};
 use link_protocol::frame::MAX_FRAME;
-use link_protocol::{encode_frame, FrameAccumulator, FrameError, Request, Response, MAX_RESPONSE_ENCODED};
+use link_protocol::{encode_frame, FrameAccumulator, Request, Response, MAX_RESPONSE_ENCODED};
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 
@@ -71,7 +71,7 @@ impl FirmwareLink {
                 match self.rx.push_decode::<Response>(b) {
                     None => {}
                     Some(Ok(r)) => self.received.push_back(r),
-                    Some(Err(e)) => bail!("bad frame from the firmware: {}", FrameError::name(e.index())),
+                    Some(Err(e)) => bail!("bad frame from the firmware: {}", e.name()),
                 }
             }
         }
