@@ -70,8 +70,8 @@ pub struct Signal {
 
 impl Signal {
     /// Errors `x_arcsec` at `latitude_deg`, and the defaults: the paper's simulation (3 deg roll
-    /// sway of 6 s, 0.05 deg low-frequency error, 480 s one-way rotation) with a 1 deg, 9 s pitch
-    /// sway, heading 0.5 rad, rotation phase 0.7 rad, platform phase 1.9 rad, no noise, no jitter,
+    /// sway of 6 s, 0.05 deg low-frequency error, here constant, 480 s one-way rotation) with a
+    /// 1 deg, 9 s pitch sway, heading 0.5 rad, rotation phase 0.7 rad, platform phase 1.9 rad, no noise, no jitter,
     /// noise seed [`DEFAULT_SEED`].
     pub fn new(x_arcsec: [f64; 4], latitude_deg: f64) -> Signal {
         Signal {
