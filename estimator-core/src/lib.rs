@@ -18,6 +18,8 @@
 //! - input checks: [`sample`]; the sway gate: [`sway_gate`]; what one step reports: [`output`];
 //!   how it all fits together: [`estimator`].
 //!
+//! For tests and tools, with the `synthetic` feature: RINS output for known errors (`synthetic`).
+//!
 //! `#![no_std]`, no allocator: every buffer has a const-generic capacity, and
 //! `size_of::<Estimator>()` is checked by a test.
 //!
@@ -96,6 +98,8 @@ pub mod output;
 pub mod rotation_pattern;
 pub mod sample;
 pub mod sway_gate;
+#[cfg(any(test, feature = "synthetic"))]
+pub mod synthetic;
 pub mod math;
 pub mod time_grid;
 pub mod units;

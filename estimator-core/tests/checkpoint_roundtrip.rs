@@ -13,10 +13,8 @@
 //! - every single-bit flip of an image is refused and changes nothing; garbage and truncations are
 //!   refused; an image of the previous format version is refused with the version error.
 
-mod common;
-
-use common::{Scheme, Signal};
 use estimator_core::checkpoint::{crc32, CheckpointError, CHECKPOINT_LEN, HEADER_LEN, VERSION};
+use estimator_core::synthetic::{Scheme, Signal};
 use estimator_core::{Config, Estimator, Holdup, Method, Output, Real, Sample, SampleError, Status};
 use proptest::prelude::*;
 

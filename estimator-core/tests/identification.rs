@@ -1,12 +1,10 @@
 //! The derivation of the four correlation channels (x1, x2 from pitch; x3, x4 from roll) and of
 //! eq (12)'s leakage, checked against known errors.
 
-mod common;
-
-use common::Signal;
 use estimator_core::correlation::{products, ROLL_SIN};
 use estimator_core::installation::Angles;
 use estimator_core::math::sin_cos;
+use estimator_core::synthetic::Signal;
 use estimator_core::units::{arcsec_to_rad, rad_to_arcsec, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use estimator_core::{Config, Estimator, Method, Real, Status};
 
@@ -128,7 +126,7 @@ fn corrected_attitude_removes_the_oscillation() {
         let s = signal.sample(t);
         let out = est.step(&s).unwrap();
         if k >= 3000 {
-            let osc = signal.oscillation(t);
+            let osc = signal.oscillation_rad(t);
             let removed = [
                 (s.attitude.heading_rad - out.corrected.heading_rad) as f64,
                 (s.attitude.roll_rad - out.corrected.roll_rad) as f64,

@@ -14,7 +14,7 @@
 //! sums of its entries, and the covariance is symmetric positive definite.
 
 use estimator_core::correlation::CorrelationSums;
-use estimator_core::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S};
+use estimator_core::synthetic::Signal;
 use estimator_core::{Attitude, Config, Estimator, Field, Method, Output, Real, RejectReason, Sample, SampleError};
 use proptest::prelude::*;
 use std::f64::consts::PI;
@@ -72,22 +72,19 @@ fn event() -> impl Strategy<Value = Event> {
     ]
 }
 
-/// The healthy stream: rotation of PERIOD samples, sway, eq (2)-like roll/pitch content.
+/// The healthy stream: a one-way rotation of PERIOD samples, 0.05 rad roll and 0.02 rad pitch
+/// sway, eq (2)'s oscillation for known errors, no low-frequency error, no noise.
 fn healthy(t: f64) -> Sample {
-    let rho = 0.3 + 2.0 * PI * t / PERIOD as f64;
-    let s = 0.9 + EARTH_RATE_RAD_PER_S * t;
-    let lat: f64 = 0.7;
-    let x = [150.0, -100.0, 220.0, -60.0].map(arcsec_to_rad);
-    let roll = 0.05 * (2.0 * PI * t / 6.0).sin() - x[0] * lat.sin() * (rho - s).cos() + x[2] * lat.cos() * rho.sin();
-    let pitch = 0.02 * (2.0 * PI * t / 9.0).sin() + x[0] * (rho - s).sin() - x[1] * (rho - s).cos();
-    let wrap = |a: f64| (a + PI).rem_euclid(2.0 * PI) - PI;
-    Sample {
-        time_s: t,
-        rotation_rad: wrap(rho) as Real,
-        platform_rad: wrap(s) as Real,
-        latitude_rad: lat as Real,
-        attitude: Attitude { heading_rad: 0.4, roll_rad: roll as Real, pitch_rad: pitch as Real },
-    }
+    let mut signal = Signal::new([150.0, -100.0, 220.0, -60.0], 0.7f64.to_degrees());
+    signal.rotation_period_s = PERIOD as f64;
+    signal.rotation_phase_rad = 0.3;
+    signal.platform_phase_rad = 0.9;
+    signal.heading_rad = 0.4;
+    signal.roll_sway_deg = 0.05f64.to_degrees();
+    signal.pitch_sway_deg = 0.02f64.to_degrees();
+    signal.pitch_sway_phase_rad = 0.0;
+    signal.low_frequency_deg = 0.0;
+    signal.sample(t)
 }
 
 /// The documented checks, written independently of the code: fields first (non-finite in field

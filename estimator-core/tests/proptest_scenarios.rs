@@ -6,17 +6,15 @@
 //! - the rotation stopping, running at another period, reversing: the status says so, the estimates
 //!   freeze and estimation resumes once the rotation is healthy again.
 //!
-//! The sample source is local and deterministic: sinusoidal roll and pitch sway, eq (2)'s
-//! oscillation for known errors (in f64), white noise from a 64-bit LCG, the platform turning at
-//! the Earth rate. Internal values (Kalman covariance, window sums) are read through
+//! The samples come from `estimator_core::synthetic` (sinusoidal roll and pitch sway, eq (2)'s
+//! oscillation for known errors in f64, white noise from a seeded 64-bit LCG, the platform turning
+//! at the Earth rate), the test turning the rotation itself. Internal values (Kalman covariance, window sums) are read through
 //! `Estimator::windowed`.
 
-mod common;
-
-use common::oscillation;
-use estimator_core::units::{arcsec_to_rad, rad_to_arcsec, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use estimator_core::correlation::CorrelationSums;
 use estimator_core::rotation_pattern::SHORT_STEPS;
+use estimator_core::synthetic::Signal;
+use estimator_core::units::{rad_to_arcsec, RAD_PER_DEG};
 use estimator_core::Counters;
 use estimator_core::{Config, Estimator, Output, Real, RotationFault, Sample, Status};
 use std::f64::consts::PI;
@@ -25,72 +23,29 @@ const X_ARCSEC: [f64; 4] = [120.0, -80.0, 250.0, -190.0];
 
 /// Deterministic RINS output with known errors; the caller advances the rotation angle.
 struct Source {
-    x_rad: [f64; 4],
-    latitude_rad: f64,
-    noise_arcsec: f64,
-    /// 1-sigma white jitter of the reported rotation angle (the encoder's), rad; eq (2) sees the
-    /// true angle.
-    rotation_jitter_rad: f64,
+    signal: Signal,
     rho_rad: f64,
     t_s: f64,
-    lcg: u64,
 }
 
 impl Source {
+    /// 3 deg roll and 1 deg pitch sway, no low-frequency error, 10 arcsec of noise on roll, pitch
+    /// and heading.
     fn new(latitude_deg: f64) -> Source {
-        Source {
-            x_rad: X_ARCSEC.map(arcsec_to_rad),
-            latitude_rad: latitude_deg * RAD_PER_DEG,
-            noise_arcsec: 10.0,
-            rotation_jitter_rad: 0.0,
-            rho_rad: 0.4,
-            t_s: 0.0,
-            lcg: 0x9E37_79B9_7F4A_7C15,
-        }
-    }
-
-    /// White noise of unit variance (sum of four uniforms).
-    fn unit_noise(&mut self) -> f64 {
-        let mut acc = 0.0;
-        for _ in 0..4 {
-            self.lcg = self.lcg.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            acc += (self.lcg >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-        }
-        acc * 3f64.sqrt()
-    }
-
-    /// White noise of 1-sigma `noise_arcsec`, rad.
-    fn noise(&mut self) -> f64 {
-        self.unit_noise() * arcsec_to_rad(self.noise_arcsec)
+        let mut signal = Signal::new(X_ARCSEC, latitude_deg).with_seed(0x9E37_79B9_7F4A_7C15);
+        signal.pitch_sway_phase_rad = 0.3;
+        signal.platform_phase_rad = 1.3;
+        signal.low_frequency_deg = 0.0;
+        signal.noise_arcsec = 10.0;
+        signal.heading_noise_arcsec = 10.0;
+        Source { signal, rho_rad: 0.4, t_s: 0.0 }
     }
 
     /// The next sample, one second later, the rotation having turned by `increment_rad`.
     fn next(&mut self, increment_rad: f64) -> Sample {
         self.t_s += 1.0;
         self.rho_rad = (self.rho_rad + increment_rad).rem_euclid(2.0 * PI);
-        let t = self.t_s;
-        let s = (1.3 + EARTH_RATE_RAD_PER_S * t).rem_euclid(2.0 * PI);
-        let d = oscillation(&self.x_rad, self.rho_rad, s, self.latitude_rad);
-        let roll = 3.0 * RAD_PER_DEG * (2.0 * PI * t / 6.0).sin() + d[1] + self.noise();
-        let pitch = 1.0 * RAD_PER_DEG * (2.0 * PI * t / 9.0 + 0.3).sin() + d[2] + self.noise();
-        let heading = 0.5 + d[0] + self.noise();
-        let wrap = |a: f64| ((a + PI).rem_euclid(2.0 * PI) - PI) as Real;
-        let rho_read = if self.rotation_jitter_rad > 0.0 {
-            self.rho_rad + self.rotation_jitter_rad * self.unit_noise()
-        } else {
-            self.rho_rad
-        };
-        Sample {
-            time_s: t,
-            rotation_rad: wrap(rho_read),
-            platform_rad: wrap(s),
-            latitude_rad: self.latitude_rad as Real,
-            attitude: estimator_core::Attitude {
-                heading_rad: wrap(heading),
-                roll_rad: roll as Real,
-                pitch_rad: pitch as Real,
-            },
-        }
+        self.signal.sample_at(self.t_s, self.rho_rad)
     }
 }
 
@@ -498,7 +453,7 @@ fn rotation_reversal_freezes_and_relearns() {
 fn rotation_jitter_of_0_15_deg_raises_no_fault() {
     let mut est: Estimator = Estimator::new(Config::default()).unwrap();
     let mut src = Source::new(40.0);
-    src.rotation_jitter_rad = 0.15 * RAD_PER_DEG;
+    src.signal.rotation_jitter_rad = 0.15 * RAD_PER_DEG;
     let mut last = None;
     for k in 1..=6 * 3600u32 {
         let out = est.step(&src.next(NOMINAL_RAD)).unwrap();

@@ -1,8 +1,7 @@
 //! Any rotation scheme, period and sample interval, learned from the data; lost samples and loose
 //! time stamps cost accuracy, never the estimate.
-mod common;
 
-use common::{Scheme, Signal};
+use estimator_core::synthetic::{Scheme, Signal};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, Estimator, PatternKind, Status};
 

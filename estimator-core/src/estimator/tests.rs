@@ -2,34 +2,25 @@
 //! rotation faults.
 
 use super::*;
-use crate::units::{arcsec_to_rad, rad_to_arcsec, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use crate::gap_fill::NEIGHBOURS;
+use crate::synthetic::Signal;
+use crate::units::{rad_to_arcsec, RAD_PER_DEG};
 use crate::Field;
 
 const X_ARCSEC: [f64; 4] = [200.0, -150.0, 300.0, -250.0];
 
-/// Sway plus eq (2)'s oscillation (computed with the core's own rows) at time `t`.
+/// Sway plus eq (2)'s oscillation at time `t`: one-way 480 s rotation, 40 deg latitude, roll sway
+/// of `roll_sway_deg` and 6 s, 1 deg pitch sway of 9 s, no low-frequency error, no noise. The
+/// oscillation is `synthetic`'s f64 eq (2), independent of the core's f32 rows.
 fn sample(t: f64, roll_sway_deg: f64) -> Sample {
-    let rho = 0.3 + 2.0 * core::f64::consts::PI * t / 480.0;
-    let s = 1.1 + EARTH_RATE_RAD_PER_S * t;
-    let lat = 40.0 * RAD_PER_DEG;
-    let x: [Real; 4] = core::array::from_fn(|i| arcsec_to_rad(X_ARCSEC[i]) as Real);
-    let angles = Angles::new(
-        wrap_pi(rho as Real),
-        wrap_pi(s as Real),
-        sin_cos(lat as Real),
-    );
-    let d = angles.oscillation(&x);
-    let deg = |r: Real| r as f64 / RAD_PER_DEG;
-    Sample::from_degrees(
-        t,
-        rho / RAD_PER_DEG,
-        s / RAD_PER_DEG,
-        40.0,
-        10.0 + deg(d.heading_rad),
-        roll_sway_deg * libm::sin(2.0 * core::f64::consts::PI * t / 6.0) + deg(d.roll_rad),
-        libm::sin(2.0 * core::f64::consts::PI * t / 9.0) + deg(d.pitch_rad),
-    )
+    let mut signal = Signal::new(X_ARCSEC, 40.0);
+    signal.rotation_phase_rad = 0.3;
+    signal.platform_phase_rad = 1.1;
+    signal.heading_rad = 10.0 * RAD_PER_DEG;
+    signal.roll_sway_deg = roll_sway_deg;
+    signal.pitch_sway_phase_rad = 0.0;
+    signal.low_frequency_deg = 0.0;
+    signal.sample(t)
 }
 
 fn errors_arcsec(est: &Estimator) -> [f64; 4] {

@@ -1,29 +1,29 @@
 //! Shared by the fuzz targets: a healthy sample source and the output checks.
 #![allow(dead_code)]
 
-use estimator_core::{Attitude, Estimator, Output, Real, Sample};
-use std::f64::consts::PI;
+use estimator_core::synthetic::Signal;
+use estimator_core::units::rad_to_arcsec;
+use estimator_core::{Estimator, Output, Real, Sample};
 
 /// Ring capacity of the fuzzed estimators (small, so windows fill and the filter runs quickly).
 pub const CAP: usize = 32;
 
-/// A healthy sample at time `t` for a rotation of `period` samples at latitude `lat_rad`, with the
-/// given roll and pitch offsets (rad) and rotation angle `rho` (rad).
+/// A healthy sample at time `t` (s) and rotation angle `rho` (rad) at latitude `lat_rad`, with the
+/// given roll and pitch offsets (rad) added and both clamped to +-1.5 rad: 0.05 rad roll and 0.02
+/// rad pitch sway and eq (2)'s oscillation for fixed errors, from `estimator_core::synthetic`.
 pub fn healthy(t: f64, rho: f64, lat_rad: f64, roll_off: f64, pitch_off: f64) -> Sample {
-    let s = 0.9 + 7.292115e-5 * t;
-    let wrap = |a: f64| (a + PI).rem_euclid(2.0 * PI) - PI;
-    let x = [7e-4, -5e-4, 1e-3, -3e-4];
-    let roll = 0.05 * (2.0 * PI * t / 6.0).sin() - x[0] * lat_rad.sin() * (rho - s).cos()
-        + x[2] * lat_rad.cos() * rho.sin()
-        + roll_off;
-    let pitch = 0.02 * (2.0 * PI * t / 9.0).sin() + x[0] * (rho - s).sin() - x[1] * (rho - s).cos() + pitch_off;
-    Sample {
-        time_s: t,
-        rotation_rad: wrap(rho) as Real,
-        platform_rad: wrap(s) as Real,
-        latitude_rad: lat_rad as Real,
-        attitude: Attitude { heading_rad: 0.4, roll_rad: roll.clamp(-1.5, 1.5) as Real, pitch_rad: pitch.clamp(-1.5, 1.5) as Real },
-    }
+    let mut signal = Signal::new([7e-4, -5e-4, 1e-3, -3e-4].map(rad_to_arcsec), lat_rad.to_degrees());
+    signal.platform_phase_rad = 0.9;
+    signal.heading_rad = 0.4;
+    signal.roll_sway_deg = 0.05f64.to_degrees();
+    signal.pitch_sway_deg = 0.02f64.to_degrees();
+    signal.pitch_sway_phase_rad = 0.0;
+    signal.low_frequency_deg = 0.0;
+    let mut sample = signal.sample_at(t, rho);
+    let offset = |angle: Real, off: f64| (angle as f64 + off).clamp(-1.5, 1.5) as Real;
+    sample.attitude.roll_rad = offset(sample.attitude.roll_rad, roll_off);
+    sample.attitude.pitch_rad = offset(sample.attitude.pitch_rad, pitch_off);
+    sample
 }
 
 /// Panics (a fuzzer finding) if any number in an output is not finite.
