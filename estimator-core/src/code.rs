@@ -45,10 +45,9 @@ mod tests {
         check(Method::ALL, |m| m as u8);
         check(Field::ALL, |f| f as u8);
         check(RejectReason::ALL, |r| r as u8);
-        check(RotationFault::ALL, |f| f as u8);
         check(Status::ALL, |s| s.code());
-        for (i, f) in RotationFault::ALL.iter().enumerate() {
-            assert_eq!(Status::RotationFault(*f).code(), 1 + i as u8);
+        for (i, f) in [RotationFault::Stopped, RotationFault::Reversed, RotationFault::RateMismatch].into_iter().enumerate() {
+            assert_eq!(Status::RotationFault(f).code(), 1 + i as u8);
         }
     }
 

@@ -38,7 +38,6 @@
 //!
 //! A pattern's own dwells and reversals are not faults.
 
-use crate::code::{from_code, UnknownCode};
 use crate::math::wrap_pi;
 use crate::Real;
 
@@ -52,29 +51,16 @@ const QUARTER_PI: Real = core::f64::consts::FRAC_PI_4 as Real;
 /// Hysteresis of a pass, rad (1 deg).
 pub const PASS_HYSTERESIS_RAD: Real = 0.017_453_292;
 
-/// Why the rotation is not healthy.
+/// Why the rotation is not healthy (on the link and in checkpoints, as part of its [`crate::Status`]
+/// code).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[repr(u8)]
 pub enum RotationFault {
     /// Stopped for longer than the pattern's longest dwell.
-    Stopped = 0,
+    Stopped,
     /// Turning the other way, in a pattern that never does.
-    Reversed = 1,
+    Reversed,
     /// The pattern no longer repeats at its period.
-    RateMismatch = 2,
-}
-
-impl RotationFault {
-    /// Every fault, in code order.
-    pub const ALL: [RotationFault; 3] = [RotationFault::Stopped, RotationFault::Reversed, RotationFault::RateMismatch];
-}
-
-impl TryFrom<u8> for RotationFault {
-    type Error = UnknownCode;
-
-    fn try_from(code: u8) -> Result<RotationFault, UnknownCode> {
-        from_code(&RotationFault::ALL, "rotation fault", code)
-    }
+    RateMismatch,
 }
 
 /// The shape of a learned pattern, for people.

@@ -49,19 +49,6 @@ impl Field {
     /// Every field, in code order.
     pub const ALL: [Field; 7] =
         [Field::Time, Field::Rotation, Field::Platform, Field::Latitude, Field::Heading, Field::Roll, Field::Pitch];
-
-    /// Name used in messages and files.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Field::Time => "time",
-            Field::Rotation => "rotation",
-            Field::Platform => "platform",
-            Field::Latitude => "latitude",
-            Field::Heading => "heading",
-            Field::Roll => "roll",
-            Field::Pitch => "pitch",
-        }
-    }
 }
 
 impl TryFrom<u8> for Field {
