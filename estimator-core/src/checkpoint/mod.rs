@@ -108,14 +108,17 @@
 //!     3 f64, `P` 9 f64 each), a plain window of 4 channels;
 //!   - traditional: updates u32, Kalman filter (`x` 4 `R`, `P` 16 `R`).
 //! - A **correlation window** is: length, head, fill count, samples per bin (u32 each); the running
-//!   sums (count u32, 24 x i64, fill weight u32); the bin being filled (samples u32; sums of roll,
+//!   sums (count u32, 28 x i64, fill weight u32); the bin being filled (samples u32; sums of roll,
 //!   pitch and latitude; the first sample's rotation angle and the sum of the offsets from it; the
 //!   same for rotation minus platform: 7 `R`; fill weight u32); then the `CAP` ring entries, each
-//!   roll and pitch (i32), sin rho, cos rho, sin(rho - s), cos(rho - s), sin L, cos L (i16) and its
-//!   fill weight (u16). Entries beyond the fill count (left from before a restart) are carried as
-//!   they are.
+//!   roll and pitch (i32), sin rho, cos rho, sin(rho - s), cos(rho - s), sin L, cos L and the four
+//!   low-passed references (i16) and its fill weight (u16). The window's entries, oldest first, are
+//!   the `filled` slots from slot `head` on (wrapping at the length) once it is full, the first
+//!   `filled` slots while it fills; this writer puts the oldest in slot 0 and zeros in the spare
+//!   slots, and the reader ignores what spare slots hold (older writers left stale entries there)
+//!   beyond checking its range.
 //! - A **plain window** is: length, head, fill count (u32 each), the running sums (`CH` x i64),
-//!   then the ring, `CAP` x `CH` x i32 (slot-major).
+//!   then the ring, `CAP` x `CH` x i32 (slot-major), its entries placed as in a correlation window.
 
 mod config;
 mod gap_fill;
