@@ -1,11 +1,8 @@
 //! The moving-average windows: the windowed method's [`CorrelationWindow`] and the paper
 //! method's [`WindowAverage`].
 //!
-//! Layout: the length, the head, the fill count, then `CAP` ring slots. The entries in the
-//! window, oldest first, are the `filled` slots from slot `head` on, wrapping at the length, once
-//! the window is full, and the first `filled` slots while it fills. This writer puts the oldest
-//! entry in slot 0 (head 0 when full, `filled` otherwise) and zeros in the slots beyond; the
-//! reader also takes images whose ring was rotated or whose spare slots hold stale entries.
+//! Their layout, and where a window's entries sit in its ring slots: the module doc of
+//! [`crate::checkpoint`].
 //!
 //! Checked: the length between 1 and `CAP` and, once the period is known, equal to what it gives
 //! ([`WindowLayout::for_period`] for the correlation window, the period up to `CAP` for the plain
@@ -42,7 +39,7 @@ pub(super) const fn window_average_len(ch: usize, cap: usize) -> usize {
     3 * 4 + ch * 8 + cap * ch * 4
 }
 
-/// The head of a window of `filled` of `len` entries stored from slot 0: see the module's layout.
+/// The head of a window of `filled` of `len` entries stored from slot 0 (the layout in [`crate::checkpoint`]).
 fn head_from_slot_0(filled: usize, len: usize) -> usize {
     if filled < len {
         filled
@@ -51,7 +48,7 @@ fn head_from_slot_0(filled: usize, len: usize) -> usize {
     }
 }
 
-/// The slot of the `i`-th oldest entry of a window stored with `head` (see the module's layout).
+/// The slot of the `i`-th oldest entry of a window stored with `head` (the layout in [`crate::checkpoint`]).
 fn slot_of(i: usize, head: usize, filled: usize, len: usize) -> usize {
     if filled < len {
         i
