@@ -1,5 +1,7 @@
 //! Estimator configuration: a plain struct whose [`Default`] reproduces the paper's setting.
 
+mod checkpoint;
+
 use crate::code::{from_code, UnknownCode};
 use crate::gap_fill::MAX_FILLABLE_GAP;
 use crate::units::{arcsec_to_rad, RAD_PER_DEG};

@@ -77,6 +77,8 @@
 //! is exact: the sums never drift, and host and target agree bit for bit. The quantization of a
 //! reference is no bias: the same quantized value is used in the measurement and in its row.
 
+mod checkpoint;
+
 use crate::installation::Angles;
 use crate::math::round_to_i32;
 use crate::sample::Attitude;
@@ -114,8 +116,8 @@ pub const REFERENCE_TIME_CONSTANT_S: f64 = 10.0;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ReferenceFilter {
     /// Each stage's output per channel; meaningless until `started`.
-    pub stages: [[Real; 4]; 3],
-    pub started: bool,
+    stages: [[Real; 4]; 3],
+    started: bool,
 }
 
 impl ReferenceFilter {

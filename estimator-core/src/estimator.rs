@@ -27,6 +27,8 @@
 //!
 //! When there is no estimate, [`Estimator::progress`] says what holds it back.
 
+pub(crate) mod checkpoint;
+
 use crate::config::{Config, ConfigError, ROTATION_PERIOD_RANGE_S};
 use crate::correlation::ReferenceFilter;
 use crate::gap_fill::{GapFiller, GridSample, SLOTS};
@@ -79,25 +81,25 @@ impl Feed {
 /// The installation-error estimator, with a ring capacity of `CAP` window entries.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Estimator<const CAP: usize = DEFAULT_CAPACITY> {
-    pub(crate) config: Config,
-    pub(crate) method: MethodState<CAP>,
-    pub(crate) grid: TimeGrid,
+    config: Config,
+    method: MethodState<CAP>,
+    grid: TimeGrid,
     /// Grid index of the last accepted sample, once the grid is known.
-    pub(crate) index: u32,
+    index: u32,
     /// Once samples are fed to the filler (interval known, gate open): the constants of the grid.
-    pub(crate) feed: Option<Feed>,
-    pub(crate) filler: GapFiller,
-    pub(crate) rotation: RotationMonitor,
+    feed: Option<Feed>,
+    filler: GapFiller,
+    rotation: RotationMonitor,
     /// Cached `(L, sin L, cos L)`.
-    pub(crate) latitude_trig: (Real, Real, Real),
-    pub(crate) sway: SwayMonitor,
-    pub(crate) gate_open: bool,
+    latitude_trig: (Real, Real, Real),
+    sway: SwayMonitor,
+    gate_open: bool,
     /// Status of the newest sample the window took.
-    pub(crate) window_status: Status,
+    window_status: Status,
     /// The last rotation fault and the time stamp it began at.
-    pub(crate) fault: Option<(RotationFault, f64)>,
-    pub(crate) rejected: RejectCounts,
-    pub(crate) counters: Counters,
+    fault: Option<(RotationFault, f64)>,
+    rejected: RejectCounts,
+    counters: Counters,
 }
 
 impl<const CAP: usize> Estimator<CAP> {
@@ -173,21 +175,21 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// The sample interval, s, once pinned or learned.
     pub fn sample_interval_s(&self) -> Option<f64> {
-        self.grid.interval_s
+        self.grid.interval_s()
     }
 
     /// The rotation pattern as far as it is known.
     pub fn rotation(&self) -> RotationSummary {
-        let period_s = match (self.rotation.period_samples, self.grid.interval_s) {
+        let period_s = match (self.rotation.period_samples(), self.grid.interval_s()) {
             (Some(p), Some(dt)) if self.feed.is_some() => Some(f64::from(p) * dt),
             _ => None,
         };
         RotationSummary {
             period_s,
             pinned: self.config.rotation_period_s.is_some(),
-            kind: self.rotation.features.map(|f| f.kind()),
+            kind: self.rotation.features().map(|f| f.kind()),
             samples_per_entry: match &self.method {
-                MethodState::Windowed(m) => m.window.bin(),
+                MethodState::Windowed(m) => m.window().bin(),
                 #[allow(unreachable_patterns)]
                 _ => 1,
             },
@@ -199,18 +201,18 @@ impl<const CAP: usize> Estimator<CAP> {
         if !self.gate_open {
             return Some(Holdup::WaitingForSway);
         }
-        if self.grid.interval_s.is_none() {
+        if self.grid.interval_s().is_none() {
             return Some(Holdup::SampleIntervalNotKnown);
         }
-        if self.rotation.period_samples.is_none() {
+        if self.rotation.period_samples().is_none() {
             return Some(Holdup::RotationPeriodNotDetected);
         }
         if let (Status::RotationFault(fault), Some((_, since_s))) = (self.window_status, self.fault) {
             return Some(Holdup::RotationFault { fault, since_s });
         }
         match &self.method {
-            MethodState::Windowed(m) if !m.window.is_full() => {
-                Some(Holdup::WindowFilling { filled: m.window.filled() as u32, len: m.window.len() as u32 })
+            MethodState::Windowed(m) if !m.window().is_full() => {
+                Some(Holdup::WindowFilling { filled: m.window().filled() as u32, len: m.window().len() as u32 })
             }
             _ => None,
         }
@@ -247,7 +249,7 @@ impl<const CAP: usize> Estimator<CAP> {
         if !self.gate_open && self.sway.opens(self.config.sway_gate_rad) {
             self.gate_open = true;
         }
-        let status = match self.grid.interval_s {
+        let status = match self.grid.interval_s() {
             Some(interval_s) if self.gate_open => self.feed(sample, &angles, placement, interval_s, sample.time_s),
             _ if !self.gate_open => Status::WaitingForSway,
             _ => Status::DetectingPattern,
@@ -358,7 +360,7 @@ impl<const CAP: usize> Estimator<CAP> {
                 Ok(PatternEvent::PeriodKnown(period)) => self.method.configure(period),
                 Ok(PatternEvent::None) => {}
             }
-            if self.rotation.period_samples.is_none() {
+            if self.rotation.period_samples().is_none() {
                 self.window_status = Status::DetectingPattern;
                 continue;
             }
@@ -371,7 +373,7 @@ impl<const CAP: usize> Estimator<CAP> {
     fn restart_window(&mut self) {
         self.method.restart_window();
         self.counters.window_restarts = self.counters.window_restarts.saturating_add(1);
-        self.window_status = if self.rotation.period_samples.is_some() { Status::WarmingUp } else { Status::DetectingPattern };
+        self.window_status = if self.rotation.period_samples().is_some() { Status::WarmingUp } else { Status::DetectingPattern };
     }
 
     fn angles(&mut self, sample: &Sample) -> Angles {

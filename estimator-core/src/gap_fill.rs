@@ -36,6 +36,8 @@
 //! lost): the window runs [`NEIGHBOURS`] samples behind the input. The output of a step is that of
 //! the newest sample passed on; its attitude is corrected with the current estimate at once.
 
+pub(crate) mod checkpoint;
+
 use crate::installation::Angles;
 use crate::math::{sin_cos, wrap_pi};
 use crate::Real;
@@ -77,15 +79,15 @@ pub struct GridSample {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GapFiller {
     /// Slot `index % SLOTS`: the sample of that index, if received.
-    pub slots: [Option<GridSample>; SLOTS],
+    slots: [Option<GridSample>; SLOTS],
     /// The newest index received, once any.
-    pub newest: Option<u32>,
+    newest: Option<u32>,
     /// The next index to pass on.
-    pub next: u32,
+    next: u32,
     /// Mean square prediction error of present roll and pitch samples, rad^2, and samples averaged.
-    pub roll_error_rad2: Real,
-    pub pitch_error_rad2: Real,
-    pub error_samples: u32,
+    roll_error_rad2: Real,
+    pitch_error_rad2: Real,
+    error_samples: u32,
 }
 
 /// Weights of the 10-point Lagrange prediction of the middle of `-5..=5` (without 0), at nodes

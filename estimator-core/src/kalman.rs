@@ -27,6 +27,8 @@
 //! collinear for hours (`cos w_e t ~ 1` looks like the constant `x`), a covariance whose condition
 //! number exceeds what `f32` can hold.
 
+mod checkpoint;
+
 use nalgebra::{RealField, SMatrix, SVector};
 
 /// Why a measurement was not applied.
@@ -53,9 +55,9 @@ impl core::error::Error for KalmanError {}
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConstantStateKalman<T: RealField + Copy, const N: usize> {
     /// State estimate.
-    pub x: SVector<T, N>,
+    x: SVector<T, N>,
     /// State covariance.
-    pub p: SMatrix<T, N, N>,
+    p: SMatrix<T, N, N>,
 }
 
 impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
@@ -112,6 +114,16 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         self.x = x;
         self.p = p;
         Ok(innovation)
+    }
+
+    /// The state estimate.
+    pub fn state(&self) -> &SVector<T, N> {
+        &self.x
+    }
+
+    /// The state covariance.
+    pub fn covariance(&self) -> &SMatrix<T, N, N> {
+        &self.p
     }
 
     /// 1-sigma of state `i`.

@@ -17,6 +17,8 @@
 //! (a floating-point running sum accumulates rounding as a random walk: 0.3 arcsec after two days
 //! in `f32`). Each value is rounded once, on the way in.
 
+pub(crate) mod checkpoint;
+
 use heapless::Deque;
 
 use crate::correlation::{CorrelationSums, QuantizedSample};
@@ -34,10 +36,10 @@ pub const MAX_MAGNITUDE: Real = 1.999_999;
 #[derive(Clone, Debug, PartialEq)]
 pub struct WindowAverage<const CH: usize, const CAP: usize> {
     /// The samples in the window, oldest first (at most `len`).
-    pub(crate) ring: Deque<[i32; CH], CAP>,
+    ring: Deque<[i32; CH], CAP>,
     /// The exact sums of the samples in `ring`, per channel.
-    pub(crate) sums: [i64; CH],
-    pub(crate) len: usize,
+    sums: [i64; CH],
+    len: usize,
 }
 
 impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
@@ -142,14 +144,14 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct CorrelationWindow<const CAP: usize> {
     /// The entries in the window, oldest first (at most `len`).
-    pub(crate) ring: Deque<Entry, CAP>,
+    ring: Deque<Entry, CAP>,
     /// The exact sums of the entries in `ring`.
-    pub(crate) sums: CorrelationSums,
+    sums: CorrelationSums,
     /// Entries in a full window.
-    pub(crate) len: usize,
+    len: usize,
     /// Samples per entry.
-    pub(crate) bin: u32,
-    pub(crate) partial: Bin,
+    bin: u32,
+    partial: Bin,
 }
 
 /// One entry of the window: a sample's (or a bin's) fixed-point inputs and how many of its samples

@@ -38,6 +38,8 @@
 //!
 //! A pattern's own dwells and reversals are not faults.
 
+pub(crate) mod checkpoint;
+
 use crate::math::wrap_pi;
 use crate::Real;
 
@@ -146,37 +148,47 @@ fn pass_on_time(elapsed: u32, period: u32, limits: &Limits) -> bool {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotationMonitor {
     /// The period, samples, once pinned or detected.
-    pub period_samples: Option<u32>,
+    period_samples: Option<u32>,
     /// Whether the period was pinned by the configuration.
-    pub pinned: bool,
+    pinned: bool,
     /// Features, once a whole cycle has been watched with the period known.
-    pub features: Option<Features>,
+    features: Option<Features>,
     /// The reference angles, rad (set at the first sample).
-    pub levels_rad: Option<Real>,
+    levels_rad: Option<Real>,
     /// Per reference angle: -1 below, +1 above, 0 far (more than 90 deg away).
-    pub level_side: [i8; LEVELS],
+    level_side: [i8; LEVELS],
     /// Per reference angle and direction (0 up, 1 down): sample index of the last pass.
-    pub last_pass: [[Option<u32>; 2]; LEVELS],
+    last_pass: [[Option<u32>; 2]; LEVELS],
     /// The reference angle and direction whose passes time the period (once known).
-    pub timing_pass: Option<(u8, u8)>,
+    timing_pass: Option<(u8, u8)>,
     /// The previous sample's rotation angle and index.
-    pub previous: Option<(u32, Real)>,
+    previous: Option<(u32, Real)>,
     /// Short mean of the increment, rad per sample.
-    pub short_increment_rad: Real,
-    pub short_steps: u32,
+    short_increment_rad: Real,
+    short_steps: u32,
     /// Learning a cycle: its start index, net rotation, dwell run, longest dwell, first direction,
     /// whether it reversed.
-    pub learn_start: Option<u32>,
-    pub learn_rotation_rad: Real,
-    pub dwell_run: u32,
-    pub learn_longest_dwell: u32,
-    pub learn_first_direction: i8,
-    pub learn_reversed: bool,
+    learn_start: Option<u32>,
+    learn_rotation_rad: Real,
+    dwell_run: u32,
+    learn_longest_dwell: u32,
+    learn_first_direction: i8,
+    learn_reversed: bool,
     /// Samples in a row turning against a one-way pattern.
-    pub reversed_run: u32,
+    reversed_run: u32,
 }
 
 impl RotationMonitor {
+    /// The rotation period in samples, pinned or detected; `None` while it is being detected.
+    pub fn period_samples(&self) -> Option<u32> {
+        self.period_samples
+    }
+
+    /// The learned features of the rotation pattern; `None` until a cycle has been learned.
+    pub fn features(&self) -> Option<Features> {
+        self.features
+    }
+
     /// A monitor with the period pinned (in samples) or to be detected.
     pub fn new(pinned_period_samples: Option<u32>) -> RotationMonitor {
         RotationMonitor {

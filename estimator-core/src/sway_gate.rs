@@ -1,15 +1,20 @@
 //! The start gate on roll sway, as in the paper's sea test: nothing is estimated until the roll
 //! sway amplitude exceeds `Config::sway_gate_rad`.
 
+mod checkpoint;
+
 use crate::math::sqrt;
 use crate::Real;
 
 /// Roll sway amplitude for the start gate.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SwayMonitor {
-    pub mean_rad: Real,
-    pub mean_square_rad2: Real,
-    pub samples: u32,
+    /// Exponential mean of roll.
+    mean_rad: Real,
+    /// Exponential mean of roll squared.
+    mean_square_rad2: Real,
+    /// Samples taken (saturating).
+    samples: u32,
 }
 
 impl SwayMonitor {

@@ -25,6 +25,8 @@
 //! - otherwise (`dt <= 0`, or `0 < dt` below half an interval): a repeated or out-of-order row,
 //!   rejected ([`SampleError::TimeNotIncreasing`], [`SampleError::IrregularTimeStep`]).
 
+mod checkpoint;
+
 use crate::sample::SampleError;
 
 /// Positive time steps whose median gives the learned interval.
@@ -54,22 +56,27 @@ pub enum Placement {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimeGrid {
     /// The interval, s, once pinned or learned.
-    pub interval_s: Option<f64>,
+    interval_s: Option<f64>,
     /// Whether the interval was pinned by the configuration (never refined).
-    pub pinned: bool,
+    pinned: bool,
     /// The previous accepted stamp, s.
-    pub last_stamp_s: Option<f64>,
+    last_stamp_s: Option<f64>,
     /// Positive steps seen while learning.
-    pub learning_steps: [f64; LEARNING_STEPS],
-    pub learned: u32,
+    learning_steps: [f64; LEARNING_STEPS],
+    learned: u32,
     /// Sum and count of the one-interval steps of the refinement block being collected.
-    pub step_sum_s: f64,
-    pub steps: u32,
+    step_sum_s: f64,
+    steps: u32,
     /// Clock jumps and steps backwards seen.
-    pub clock_steps: u32,
+    clock_steps: u32,
 }
 
 impl TimeGrid {
+    /// The sample interval, pinned or learned; `None` while it is being learned.
+    pub fn interval_s(&self) -> Option<f64> {
+        self.interval_s
+    }
+
     /// A grid with the interval pinned (`Some`) or to be learned (`None`).
     pub fn new(pinned_interval_s: Option<f64>) -> TimeGrid {
         TimeGrid {

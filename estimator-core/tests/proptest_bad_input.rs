@@ -161,10 +161,10 @@ fn image(est: &Estimator<CAP>) -> String {
 fn consistent(est: &Estimator<CAP>) -> bool {
     let Some(w) = est.windowed() else { return true };
     let mut direct = CorrelationSums::default();
-    for e in w.window.entries() {
+    for e in w.window().entries() {
         direct.add(&{ e.sample }, e.fill_weight);
     }
-    direct == *w.window.sums() && w.kf.covariance_is_spd()
+    direct == *w.window().sums() && w.filter().covariance_is_spd()
 }
 
 fn run(config: Config, events: &[Event]) -> Result<(), TestCaseError> {

@@ -79,17 +79,17 @@ struct Internals {
 
 fn internals(est: &Estimator) -> Internals {
     let w = est.windowed().expect("the default method is windowed");
-    let p = std::array::from_fn(|i| std::array::from_fn(|j| w.kf.p[(i, j)] as f64));
+    let p = std::array::from_fn(|i| std::array::from_fn(|j| w.filter().covariance()[(i, j)] as f64));
     let mut direct_sums = CorrelationSums::default();
-    for e in w.window.entries() {
+    for e in w.window().entries() {
         direct_sums.add(&{ e.sample }, e.fill_weight);
     }
     Internals {
-        updates: w.updates,
+        updates: w.updates(),
         p,
-        window_len: w.window.len(),
-        window_filled: w.window.filled(),
-        sums: *w.window.sums(),
+        window_len: w.window().len(),
+        window_filled: w.window().filled(),
+        sums: *w.window().sums(),
         direct_sums,
     }
 }
@@ -222,7 +222,7 @@ const LATITUDE_STEPS: u64 = 8 * 3600;
 /// low-passed reference lags, so both pitch channels see x1 (with gains `g cos(lag)` and
 /// `g sin(lag)`); together they inform it as one channel of gain `g`.
 fn pitch_gain(est: &Estimator) -> f64 {
-    let rows = est.windowed().unwrap().window.sums().measurement().unwrap().rows;
+    let rows = est.windowed().unwrap().window().sums().measurement().unwrap().rows;
     (rows[0][0] as f64).hypot(rows[1][0] as f64)
 }
 

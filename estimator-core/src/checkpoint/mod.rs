@@ -19,7 +19,7 @@
 //! version, float width, ring capacity, the length in the header, the CRC-32 over everything
 //! before it; then every field, part by part:
 //! - the configuration must pass [`Config::check`];
-//! - every float is finite and within its range (the bounds are in each part's module: angles
+//! - every float is finite and within its range (the bounds are in each part's codec: angles
 //!   within what [`crate::Sample::check`] lets through, the latitude below 90 deg, ratios and
 //!   variances non-negative, Kalman states within [`MAX_STATE`], variances within
 //!   [`MAX_VARIANCE`] or four times the prior, residual means within [`MAX_RESIDUAL`]), so that
@@ -61,7 +61,12 @@
 //! | `CHECKPOINT_LEN - 4` | 4 | CRC-32 ([`crc32`]) of all bytes before it |
 //!
 //! # Parts
-//! Each part's fields, in order (the checks on them are summarised above; each part's module lists them in full).
+//! Each part's fields, in order (the checks on them are summarised above). Each part is written
+//! and read next to its type, in the `checkpoint.rs` of the type's module (`time_grid/`,
+//! `rotation_pattern/`, `gap_fill/`, `moving_average/`, `kalman/`, `methods/windowed/`, ...), so
+//! that the type's fields stay private; that file lists the part's checks in full. This module
+//! keeps the format: the header and CRC (`image.rs`), the byte reader and writer (`wire.rs`), the
+//! errors and the bounds.
 //!
 //! - **Configuration** (22 + 8 `R` bytes): `rotation_period_s` (optional f64),
 //!   `sample_interval_s` (optional f64), `prior_sigma_rad`, `measurement_sigma_rad`,
@@ -95,7 +100,7 @@
 //!   platform, latitude, then the trigonometry sin rho, cos rho, sin(rho - s), cos(rho - s), sin L,
 //!   cos L, all `R`, and the fill weight u16).
 //! - **Method part**, by method (`method_len(CAP)` is the longest: the windowed method's for any
-//!   ring of more than 16 entries; `checkpoint::methods` has its exact length):
+//!   ring of more than 16 entries; `methods/checkpoint.rs` has its exact length):
 //!   - windowed: updates u32, window entries since the last update u32, Kalman filter (`x` 4 `R`,
 //!     `P` 16 `R` row-major), residual means 4 `R`, the pair the next update takes (u8: 0 pitch,
 //!     1 roll), residuals averaged per pair 2 x u32, channel gains 4 `R`, the per-product variances
@@ -120,24 +125,20 @@
 //! - A **plain window** is: length, head, fill count (u32 each), the running sums (`CH` x i64),
 //!   then the ring, `CAP` x `CH` x i32 (slot-major), its entries placed as in a correlation window.
 
-mod config;
-mod gap_fill;
-mod image;
-mod methods;
-mod rotation;
-mod running;
+pub(crate) mod image;
 #[cfg(test)]
-mod tests;
-mod time_grid;
-mod windows;
-mod wire;
+pub(crate) mod tests;
+pub(crate) mod wire;
 
-use crate::config::{ConfigError, Method};
+use crate::config::{Config, ConfigError};
 #[cfg(doc)]
-use crate::config::Config;
+use crate::config::Method;
 use crate::estimator::DEFAULT_CAPACITY;
 #[cfg(doc)]
 use crate::estimator::Estimator;
+use crate::gap_fill::GapFiller;
+use crate::rotation_pattern::RotationMonitor;
+use crate::time_grid::TimeGrid;
 use crate::Real;
 
 /// First four bytes of every image.
@@ -163,16 +164,26 @@ pub const MAX_RESIDUAL: f64 = 1e4;
 /// random walk does.
 pub const MAX_VARIANCE: f64 = 1e12;
 
-const R: usize = core::mem::size_of::<Real>();
+/// Bytes of a [`Real`].
+pub(crate) const R: usize = core::mem::size_of::<Real>();
+
+/// Offset of the estimator's own part (after the header and the configuration).
+pub(crate) const RUNNING_OFFSET: usize = HEADER_LEN + Config::CHECKPOINT_LEN;
+/// Offset of the sample grid part.
+pub(crate) const TIME_GRID_OFFSET: usize = RUNNING_OFFSET + crate::estimator::checkpoint::RUNNING_LEN;
+/// Offset of the rotation monitor part.
+pub(crate) const ROTATION_OFFSET: usize = TIME_GRID_OFFSET + TimeGrid::CHECKPOINT_LEN;
+/// Offset of the gap filler part.
+pub(crate) const GAP_FILL_OFFSET: usize = ROTATION_OFFSET + RotationMonitor::CHECKPOINT_LEN;
 
 /// Bytes of the common part (configuration, estimator, sample grid, rotation monitor, gap filler).
-pub const COMMON_LEN: usize = config::LEN + running::LEN + time_grid::LEN + rotation::LEN + gap_fill::LEN;
+pub const COMMON_LEN: usize = GAP_FILL_OFFSET + GapFiller::CHECKPOINT_LEN - HEADER_LEN;
 /// Offset of the method part.
 pub const METHOD_OFFSET: usize = HEADER_LEN + COMMON_LEN;
 
 /// Bytes of the method part for ring capacity `cap`: the longest of the three methods.
 pub const fn method_len(cap: usize) -> usize {
-    methods::max_len(cap)
+    crate::methods::checkpoint::max_len(cap)
 }
 
 /// Total image length for ring capacity `cap`: header, common part, method part, padding to a
@@ -353,7 +364,7 @@ impl core::fmt::Display for CheckpointError {
 impl core::error::Error for CheckpointError {}
 
 /// `Ok` when `ok`, else `err`.
-fn ensure(ok: bool, err: CheckpointError) -> Result<(), CheckpointError> {
+pub(crate) fn ensure(ok: bool, err: CheckpointError) -> Result<(), CheckpointError> {
     if ok {
         Ok(())
     } else {
@@ -362,16 +373,11 @@ fn ensure(ok: bool, err: CheckpointError) -> Result<(), CheckpointError> {
 }
 
 /// Whether `v` is finite and within `[-bound, bound]`.
-fn within(v: Real, bound: Real) -> bool {
+pub(crate) fn within(v: Real, bound: Real) -> bool {
     v.is_finite() && v.abs() <= bound
 }
 
 /// Whether `v` is finite and within `[0, bound]`.
-fn within_non_negative(v: Real, bound: Real) -> bool {
+pub(crate) fn within_non_negative(v: Real, bound: Real) -> bool {
     v.is_finite() && (0.0..=bound).contains(&v)
-}
-
-/// Method codes the header can hold.
-fn method_of(code: u8) -> Result<Method, CheckpointError> {
-    Method::try_from(code).map_err(|_| CheckpointError::UnknownMethod(code))
 }

@@ -10,96 +10,96 @@ use crate::Real;
 use nalgebra::RealField;
 
 /// Sequential writer into a zero-filled image.
-pub(super) struct Writer<'a> {
+pub(crate) struct Writer<'a> {
     buf: &'a mut [u8],
     pos: usize,
 }
 
 impl<'a> Writer<'a> {
     /// A writer at `pos` of `buf`.
-    pub(super) fn new(buf: &'a mut [u8], pos: usize) -> Self {
+    pub(crate) fn new(buf: &'a mut [u8], pos: usize) -> Self {
         Writer { buf, pos }
     }
 
     /// Bytes written so far, from the start of the buffer.
     #[cfg(test)]
-    pub(super) fn pos(&self) -> usize {
+    pub(crate) fn pos(&self) -> usize {
         self.pos
     }
 
-    pub(super) fn bytes(&mut self, b: &[u8]) {
+    pub(crate) fn bytes(&mut self, b: &[u8]) {
         if let Some(dst) = self.buf.get_mut(self.pos..self.pos + b.len()) {
             dst.copy_from_slice(b);
         }
         self.pos += b.len();
     }
-    pub(super) fn u8(&mut self, v: u8) {
+    pub(crate) fn u8(&mut self, v: u8) {
         self.bytes(&[v]);
     }
-    pub(super) fn i8(&mut self, v: i8) {
+    pub(crate) fn i8(&mut self, v: i8) {
         self.bytes(&v.to_le_bytes());
     }
-    pub(super) fn flag(&mut self, v: bool) {
+    pub(crate) fn flag(&mut self, v: bool) {
         self.u8(u8::from(v));
     }
-    pub(super) fn u16(&mut self, v: u16) {
+    pub(crate) fn u16(&mut self, v: u16) {
         self.bytes(&v.to_le_bytes());
     }
-    pub(super) fn i16(&mut self, v: i16) {
+    pub(crate) fn i16(&mut self, v: i16) {
         self.bytes(&v.to_le_bytes());
     }
-    pub(super) fn u32(&mut self, v: u32) {
+    pub(crate) fn u32(&mut self, v: u32) {
         self.bytes(&v.to_le_bytes());
     }
-    pub(super) fn i32(&mut self, v: i32) {
+    pub(crate) fn i32(&mut self, v: i32) {
         self.bytes(&v.to_le_bytes());
     }
     /// A `usize` that fits in 32 bits (lengths and indices of windows of at most `CAP` entries).
-    pub(super) fn usize(&mut self, v: usize) {
+    pub(crate) fn usize(&mut self, v: usize) {
         self.u32(u32::try_from(v).unwrap_or(u32::MAX));
     }
-    pub(super) fn i64(&mut self, v: i64) {
+    pub(crate) fn i64(&mut self, v: i64) {
         self.bytes(&v.to_le_bytes());
     }
-    pub(super) fn f64(&mut self, v: f64) {
+    pub(crate) fn f64(&mut self, v: f64) {
         self.bytes(&v.to_le_bytes());
     }
-    pub(super) fn real(&mut self, v: Real) {
+    pub(crate) fn real(&mut self, v: Real) {
         self.bytes(&v.to_le_bytes());
     }
-    pub(super) fn float<T: Float>(&mut self, v: T) {
+    pub(crate) fn float<T: Float>(&mut self, v: T) {
         v.put(self);
     }
 
     /// An optional value: a flag byte, then `put(value)`, or `put(zero)` when absent (`zero` must
     /// write only zero bytes, which the reader checks).
-    pub(super) fn option<T>(&mut self, v: Option<T>, zero: T, put: impl FnOnce(&mut Self, T)) {
+    pub(crate) fn option<T>(&mut self, v: Option<T>, zero: T, put: impl FnOnce(&mut Self, T)) {
         self.flag(v.is_some());
         put(self, v.unwrap_or(zero));
     }
 }
 
 /// Sequential reader over an image whose length has been checked.
-pub(super) struct Reader<'a> {
+pub(crate) struct Reader<'a> {
     buf: &'a [u8],
     pos: usize,
 }
 
 impl<'a> Reader<'a> {
     /// A reader at `pos` of `buf`.
-    pub(super) fn new(buf: &'a [u8], pos: usize) -> Self {
+    pub(crate) fn new(buf: &'a [u8], pos: usize) -> Self {
         Reader { buf, pos }
     }
 
-    pub(super) fn pos(&self) -> usize {
+    pub(crate) fn pos(&self) -> usize {
         self.pos
     }
 
-    pub(super) fn seek(&mut self, pos: usize) {
+    pub(crate) fn seek(&mut self, pos: usize) {
         self.pos = pos;
     }
 
-    pub(super) fn array<const N: usize>(&mut self) -> [u8; N] {
+    pub(crate) fn array<const N: usize>(&mut self) -> [u8; N] {
         let mut out = [0u8; N];
         if let Some(src) = self.buf.get(self.pos..self.pos + N) {
             out.copy_from_slice(src);
@@ -107,39 +107,39 @@ impl<'a> Reader<'a> {
         self.pos += N;
         out
     }
-    pub(super) fn u8(&mut self) -> u8 {
+    pub(crate) fn u8(&mut self) -> u8 {
         self.array::<1>()[0]
     }
-    pub(super) fn i8(&mut self) -> i8 {
+    pub(crate) fn i8(&mut self) -> i8 {
         i8::from_le_bytes(self.array())
     }
-    pub(super) fn u16(&mut self) -> u16 {
+    pub(crate) fn u16(&mut self) -> u16 {
         u16::from_le_bytes(self.array())
     }
-    pub(super) fn i16(&mut self) -> i16 {
+    pub(crate) fn i16(&mut self) -> i16 {
         i16::from_le_bytes(self.array())
     }
-    pub(super) fn u32(&mut self) -> u32 {
+    pub(crate) fn u32(&mut self) -> u32 {
         u32::from_le_bytes(self.array())
     }
-    pub(super) fn i32(&mut self) -> i32 {
+    pub(crate) fn i32(&mut self) -> i32 {
         i32::from_le_bytes(self.array())
     }
-    pub(super) fn i64(&mut self) -> i64 {
+    pub(crate) fn i64(&mut self) -> i64 {
         i64::from_le_bytes(self.array())
     }
-    pub(super) fn f64(&mut self) -> f64 {
+    pub(crate) fn f64(&mut self) -> f64 {
         f64::from_le_bytes(self.array())
     }
-    pub(super) fn real(&mut self) -> Real {
+    pub(crate) fn real(&mut self) -> Real {
         Real::from_le_bytes(self.array())
     }
-    pub(super) fn float<T: Float>(&mut self) -> T {
+    pub(crate) fn float<T: Float>(&mut self) -> T {
         T::get(self)
     }
 
     /// A flag byte: 0 or 1, anything else is an invalid value of `part`.
-    pub(super) fn flag(&mut self, part: Part) -> Result<bool, CheckpointError> {
+    pub(crate) fn flag(&mut self, part: Part) -> Result<bool, CheckpointError> {
         match self.u8() {
             0 => Ok(false),
             1 => Ok(true),
@@ -149,7 +149,7 @@ impl<'a> Reader<'a> {
 
     /// An optional value written by [`Writer::option`]: the flag, then `get` reads the value (as
     /// stored, unchecked); when the flag says absent, every byte `get` read must be zero.
-    pub(super) fn option<T>(
+    pub(crate) fn option<T>(
         &mut self,
         part: Part,
         get: impl FnOnce(&mut Self) -> Result<T, CheckpointError>,
@@ -165,7 +165,7 @@ impl<'a> Reader<'a> {
     }
 
     /// Every byte from `start` to the current position is zero, or [`CheckpointError::UnusedNotZero`].
-    pub(super) fn zeros_since(&self, start: usize, part: Part) -> Result<(), CheckpointError> {
+    pub(crate) fn zeros_since(&self, start: usize, part: Part) -> Result<(), CheckpointError> {
         match self.buf.get(start..self.pos) {
             Some(b) if b.iter().all(|v| *v == 0) => Ok(()),
             _ => Err(CheckpointError::UnusedNotZero(part)),
@@ -174,7 +174,7 @@ impl<'a> Reader<'a> {
 }
 
 /// The floats a Kalman filter is kept in (`Real`, and `f64` for the paper's filters).
-pub(super) trait Float: Copy + RealField {
+pub(crate) trait Float: Copy + RealField {
     fn put(self, w: &mut Writer<'_>);
     fn get(r: &mut Reader<'_>) -> Self;
     fn to_f64(self) -> f64;

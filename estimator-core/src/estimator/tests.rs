@@ -233,8 +233,8 @@ fn covariance_stays_symmetric_positive_definite_over_two_days() {
         est.step(&sample(k as f64, 3.0)).unwrap();
         if k % 3600 == 0 || k == 172_799 {
             let w = est.windowed().expect("default is windowed");
-            if w.updates > 0 {
-                assert!(w.kf.covariance_is_spd(), "not SPD at {k} s");
+            if w.updates() > 0 {
+                assert!(w.filter().covariance_is_spd(), "not SPD at {k} s");
             }
         }
     }

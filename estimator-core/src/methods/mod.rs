@@ -4,6 +4,7 @@
 //! healthy, gate open) and is told when the moving average must restart (a long gap, a rotation
 //! fault). None of them does I/O or allocates.
 
+pub(crate) mod checkpoint;
 #[cfg(feature = "paper-method")]
 pub mod paper;
 pub mod traditional;
@@ -117,9 +118,9 @@ impl<const CAP: usize> MethodState<CAP> {
     /// Whether the method's window is full (always, for a method without one).
     pub fn window_full(&self) -> bool {
         match self {
-            MethodState::Windowed(m) => m.window.is_full(),
+            MethodState::Windowed(m) => m.window().is_full(),
             #[cfg(feature = "paper-method")]
-            MethodState::Paper(m) => m.window.is_full(),
+            MethodState::Paper(m) => m.window().is_full(),
             MethodState::Traditional(_) => true,
         }
     }

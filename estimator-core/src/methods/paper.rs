@@ -15,6 +15,8 @@
 //! approximately; the `a0 (1 - cos rho)/(w_r t)` transient of a constant attitude error is not
 //! modelled at all. `host-sim` reports what it achieves.
 
+mod checkpoint;
+
 use crate::config::Config;
 use crate::correlation::products;
 use crate::gap_fill::GridSample;
@@ -29,20 +31,25 @@ use crate::Real;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Paper<const CAP: usize> {
     /// Exact fixed-point integrals of the four products since the start (eq 8 numerator).
-    pub integrals: [i64; 4],
+    integrals: [i64; 4],
     /// Samples integrated.
-    pub samples: u32,
+    samples: u32,
     /// Time of the first integrated sample, s.
-    pub start_time_s: f64,
+    start_time_s: f64,
     /// Moving average of `R_j(t)` (eq 11).
-    pub window: WindowAverage<4, CAP>,
+    window: WindowAverage<4, CAP>,
     /// One `(x_j, b1, b2)` filter per error (eqs 15-18).
-    pub kf: [ConstantStateKalman<f64, 3>; 4],
+    kf: [ConstantStateKalman<f64, 3>; 4],
     /// Measurement steps applied so far.
-    pub updates: u32,
+    updates: u32,
 }
 
 impl<const CAP: usize> Paper<CAP> {
+    /// The moving average of the correlation integrals.
+    pub fn window(&self) -> &WindowAverage<4, CAP> {
+        &self.window
+    }
+
     /// Fresh state.
     pub fn new(config: &Config) -> Self {
         let s = config.prior_sigma_rad as f64;
@@ -121,7 +128,7 @@ impl<const CAP: usize> Paper<CAP> {
             return None;
         }
         Some(Estimate {
-            x_rad: core::array::from_fn(|j| self.kf[j].x[0] as Real),
+            x_rad: core::array::from_fn(|j| self.kf[j].state()[0] as Real),
             sigma_rad: core::array::from_fn(|j| self.kf[j].sigma(0) as Real),
         })
     }

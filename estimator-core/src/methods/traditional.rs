@@ -7,6 +7,8 @@
 //! No correlation, no averaging. Implemented as honestly as ours: how well it does depends on those
 //! two settings, which `host-sim` reports.
 
+mod checkpoint;
+
 use crate::config::Config;
 use crate::gap_fill::GridSample;
 use crate::kalman::ConstantStateKalman;
@@ -17,9 +19,9 @@ use crate::Real;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Traditional {
     /// The 4-state filter of x1..x4.
-    pub kf: ConstantStateKalman<Real, 4>,
+    kf: ConstantStateKalman<Real, 4>,
     /// Measurement steps applied so far.
-    pub updates: u32,
+    updates: u32,
 }
 
 impl Traditional {
@@ -48,7 +50,7 @@ impl Traditional {
             return None;
         }
         Some(Estimate {
-            x_rad: [self.kf.x[0], self.kf.x[1], self.kf.x[2], self.kf.x[3]],
+            x_rad: [self.kf.state()[0], self.kf.state()[1], self.kf.state()[2], self.kf.state()[3]],
             sigma_rad: [self.kf.sigma(0), self.kf.sigma(1), self.kf.sigma(2), self.kf.sigma(3)],
         })
     }

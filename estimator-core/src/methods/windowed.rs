@@ -113,6 +113,8 @@
 //! Before the first full horizon both stay at their defaults (scale 1, full walk), so the start
 //! is as before.
 
+pub(crate) mod checkpoint;
+
 use crate::config::Config;
 use crate::correlation::ReferenceFilter;
 use crate::gap_fill::{FillVariance, GridSample};
@@ -142,40 +144,40 @@ pub const MIN_NOISE_SCALE: Real = 1.0 / 16.0;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Windowed<const CAP: usize> {
     /// The moving window of the correlation sums.
-    pub window: CorrelationWindow<CAP>,
+    window: CorrelationWindow<CAP>,
     /// The low-pass of the correlation references.
-    pub reference: ReferenceFilter,
+    reference: ReferenceFilter,
     /// The 4-state filter of x1..x4.
-    pub kf: ConstantStateKalman<Real, 4>,
+    kf: ConstantStateKalman<Real, 4>,
     /// Measurement steps applied so far.
-    pub updates: u32,
+    updates: u32,
     /// Window entries added since the last update.
-    pub entries_since_update: u32,
+    entries_since_update: u32,
     /// The channel pair the next update takes: 0 pitch (x1, x2), 1 roll (x3, x4).
-    pub next_pair: u8,
+    next_pair: u8,
     /// Exponential mean of each channel's post-fit residual, rad (see the module doc).
-    pub residual_mean: [Real; 4],
+    residual_mean: [Real; 4],
     /// Residuals averaged so far per channel pair (saturates at the averaging time).
-    pub residual_count: [u32; 2],
+    residual_count: [u32; 2],
     /// Channel gains (diagonal of the rows, about `(1/2, 1/2, cosL/2, cosL/2)`) of the last update,
     /// for mapping residuals to x.
-    pub gains: [Real; 4],
+    gains: [Real; 4],
     /// Per-product variance of the pitch and of the roll channels at the last update, rad^2
     /// (`r` of the module doc, filled samples included).
-    pub product_variance_rad2: [Real; 2],
+    product_variance_rad2: [Real; 2],
     /// Long exponential mean of each channel's residual mean, rad.
-    pub residual_mean_long: [Real; 4],
+    residual_mean_long: [Real; 4],
     /// Long exponential mean of each channel's squared residual mean, over the model's variance of
     /// that mean (about 1 when the model holds).
-    pub residual_power: [Real; 4],
+    residual_power: [Real; 4],
     /// Residual means averaged into the long averages per pair (saturates at their horizon).
-    pub long_count: [u32; 2],
+    long_count: [u32; 2],
     /// Noise scale of each pair: the factor applied to the filter's variance in the reported
     /// 1-sigma (1 until the long averages start).
-    pub noise_scale: [Real; 2],
+    noise_scale: [Real; 2],
     /// Share of the configured random walk's variance applied to each pair's errors, in [0, 1]
     /// (1 until the long averages start).
-    pub drift_share: [Real; 2],
+    drift_share: [Real; 2],
 }
 
 /// The estimate of one step: x1..x4, their 1-sigma, and whether the model is inconsistent.
@@ -194,6 +196,21 @@ pub struct Consistency {
 }
 
 impl<const CAP: usize> Windowed<CAP> {
+    /// The moving-average window of the correlation products.
+    pub fn window(&self) -> &CorrelationWindow<CAP> {
+        &self.window
+    }
+
+    /// The Kalman filter of x1..x4.
+    pub fn filter(&self) -> &ConstantStateKalman<Real, 4> {
+        &self.kf
+    }
+
+    /// Measurement updates applied so far.
+    pub fn updates(&self) -> u32 {
+        self.updates
+    }
+
     /// Fresh state: empty window, prior covariance.
     pub fn new(config: &Config) -> Self {
         Windowed {
@@ -321,7 +338,7 @@ impl<const CAP: usize> Windowed<CAP> {
         *count = count.saturating_add(1).min(horizon.max(1));
         let alpha = 1.0 / *count as Real;
         for ch in 2 * pair..2 * pair + 2 {
-            let fit: Real = (0..4).map(|i| rows[ch][i] * self.kf.x[i]).sum();
+            let fit: Real = (0..4).map(|i| rows[ch][i] * self.kf.state()[i]).sum();
             let residual = z[ch] - fit;
             self.residual_mean[ch] += alpha * (residual - self.residual_mean[ch]);
             self.gains[ch] = rows[ch][ch].abs();
@@ -378,7 +395,7 @@ impl<const CAP: usize> Windowed<CAP> {
         }
         let check = self.consistency(config);
         let model = check.model_sigma_rad;
-        let x_rad = [self.kf.x[0], self.kf.x[1], self.kf.x[2], self.kf.x[3]];
+        let x_rad = [self.kf.state()[0], self.kf.state()[1], self.kf.state()[2], self.kf.state()[3]];
         let sigma_rad = core::array::from_fn(|i| {
             // The persistent residual mean as a state error (a drift's lag), where a drift is seen.
             let lag = if self.drift_share[i / 2] > 0.0 && self.gains[i] > 1e-6 {
@@ -387,7 +404,7 @@ impl<const CAP: usize> Windowed<CAP> {
                 0.0
             };
             let m = model[i].max(lag);
-            sqrt(self.noise_scale[i / 2] * self.kf.p[(i, i)].max(0.0) + m * m)
+            sqrt(self.noise_scale[i / 2] * self.kf.covariance()[(i, i)].max(0.0) + m * m)
         });
         Some(MethodEstimate { x_rad, sigma_rad, mismatch: check.mismatch })
     }

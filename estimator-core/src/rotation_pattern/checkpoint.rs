@@ -1,0 +1,157 @@
+//! The rotation monitor part ([`RotationMonitor`]): the period, the learned features and
+//! everything the monitor times passes and learns a cycle with.
+//!
+//! Checked: a period between 2 and [`MAX_PERIOD_SAMPLES`] samples; pinned only with a period the
+//! configuration pins; directions and sides -1, 0 or 1; the timing pass naming one of the
+//! [`LEVELS`] reference angles and one of two directions; the angles within the range
+//! [`crate::Sample::check`] allows (360 deg), the mean increment too (a mean of wrapped
+//! increments), the net rotation of the cycle being learned within `4 MAX_PERIOD_SAMPLES` rad (at
+//! most pi per sample over one period); at most [`SHORT_STEPS`] steps in the short mean.
+
+use super::{Features, RotationMonitor, LEVELS, SHORT_STEPS};
+use crate::checkpoint::wire::{Reader, Writer};
+use crate::checkpoint::{ensure, within, CheckpointError, Part, R};
+use crate::config::Config;
+use crate::sample::MAX_WRAPPED_ANGLE_RAD;
+use crate::Real;
+
+/// Longest period accepted, samples: 2^24, above any period of the allowed range (at most 3600 s)
+/// at any sample rate a RINS logs at (4.6 kHz), and small enough that no count derived from it
+/// overflows.
+pub(crate) const MAX_PERIOD_SAMPLES: u32 = 1 << 24;
+
+impl RotationMonitor {
+    /// Bytes of the part.
+    pub(crate) const CHECKPOINT_LEN: usize =
+        5 + 1 + 7 + (1 + R) + LEVELS + LEVELS * 2 * 5 + 3 + (5 + R) + R + 4 + 5 + R + 4 + 4 + 1 + 1 + 4;
+
+    /// Writes the part.
+    pub(crate) fn write_checkpoint(&self, w: &mut Writer<'_>) {
+        let m = self;
+        w.option(m.period_samples, 0, |w, v| w.u32(v));
+        w.flag(m.pinned);
+        w.option(m.features, Features::default(), |w, f| {
+            w.i8(f.direction);
+            w.flag(f.reverses);
+            w.u32(f.longest_dwell_samples);
+        });
+        w.option(m.levels_rad, 0.0, |w, v| w.real(v));
+        for side in m.level_side {
+            w.i8(side);
+        }
+        for passes in m.last_pass {
+            for pass in passes {
+                w.option(pass, 0, |w, v| w.u32(v));
+            }
+        }
+        w.option(m.timing_pass, (0, 0), |w, (level, dir)| {
+            w.u8(level);
+            w.u8(dir);
+        });
+        w.option(m.previous, (0, 0.0), |w, (index, rho)| {
+            w.u32(index);
+            w.real(rho);
+        });
+        w.real(m.short_increment_rad);
+        w.u32(m.short_steps);
+        w.option(m.learn_start, 0, |w, v| w.u32(v));
+        w.real(m.learn_rotation_rad);
+        w.u32(m.dwell_run);
+        w.u32(m.learn_longest_dwell);
+        w.i8(m.learn_first_direction);
+        w.flag(m.learn_reversed);
+        w.u32(m.reversed_run);
+    }
+
+    /// Reads and checks the part of an image whose configuration is `config`.
+    pub(crate) fn read_checkpoint(r: &mut Reader<'_>, config: &Config) -> Result<RotationMonitor, CheckpointError> {
+        const P: Part = Part::RotationMonitor;
+        let invalid = CheckpointError::InvalidValue(P);
+        let direction = |d: i8| (-1..=1).contains(&d);
+        let period_samples = r.option(P, |r| Ok(r.u32()))?;
+        let pinned = r.flag(P)?;
+        let features = r.option(Part::Features, |r| {
+            Ok(Features { direction: r.i8(), reverses: r.flag(Part::Features)?, longest_dwell_samples: r.u32() })
+        })?;
+        let levels_rad = r.option(P, |r| Ok(r.real()))?;
+        let level_side: [i8; LEVELS] = core::array::from_fn(|_| r.i8());
+        let mut last_pass = [[None; 2]; LEVELS];
+        for passes in last_pass.iter_mut() {
+            for pass in passes.iter_mut() {
+                *pass = r.option(P, |r| Ok(r.u32()))?;
+            }
+        }
+        let timing_pass = r.option(P, |r| Ok((r.u8(), r.u8())))?;
+        let previous = r.option(P, |r| Ok((r.u32(), r.real())))?;
+        let m = RotationMonitor {
+            period_samples,
+            pinned,
+            features,
+            levels_rad,
+            level_side,
+            last_pass,
+            timing_pass,
+            previous,
+            short_increment_rad: r.real(),
+            short_steps: r.u32(),
+            learn_start: r.option(P, |r| Ok(r.u32()))?,
+            learn_rotation_rad: r.real(),
+            dwell_run: r.u32(),
+            learn_longest_dwell: r.u32(),
+            learn_first_direction: r.i8(),
+            learn_reversed: r.flag(P)?,
+            reversed_run: r.u32(),
+        };
+        ensure(m.period_samples.is_none_or(|p| (2..=MAX_PERIOD_SAMPLES).contains(&p)), invalid)?;
+        ensure(!m.pinned || (m.period_samples.is_some() && config.rotation_period_s.is_some()), CheckpointError::Inconsistent(P))?;
+        ensure(m.features.is_none_or(|f| direction(f.direction)), CheckpointError::InvalidValue(Part::Features))?;
+        let angle = |v: Real| within(v, MAX_WRAPPED_ANGLE_RAD);
+        ensure(m.levels_rad.is_none_or(angle) && m.previous.is_none_or(|(_, rho)| angle(rho)), invalid)?;
+        ensure(m.level_side.iter().all(|s| direction(*s)) && direction(m.learn_first_direction), invalid)?;
+        ensure(m.timing_pass.is_none_or(|(level, dir)| usize::from(level) < LEVELS && dir < 2), invalid)?;
+        ensure(angle(m.short_increment_rad) && m.short_steps <= SHORT_STEPS, invalid)?;
+        ensure(within(m.learn_rotation_rad, 4.0 * MAX_PERIOD_SAMPLES as Real), invalid)?;
+        Ok(m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::checkpoint::tests::{config_of, image_of, refused, running, tampered_part};
+    use crate::checkpoint::ROTATION_OFFSET;
+    use crate::config::Method;
+    use CheckpointError::*;
+
+    #[test]
+    fn a_tampered_rotation_monitor_is_refused_with_a_typed_error() {
+        let image = image_of(&running(Method::Windowed));
+        let config = config_of(Method::Windowed);
+        let read = |r: &mut Reader<'_>| RotationMonitor::read_checkpoint(r, &config).unwrap();
+        // What the tampering reaches: the monitor has learned the pattern and times passes.
+        let m = read(&mut Reader::new(&image, ROTATION_OFFSET));
+        assert!(m.features.is_some() && m.timing_pass.is_some() && m.period_samples == Some(120));
+        let tampered = |edit: &dyn Fn(&mut RotationMonitor)| {
+            tampered_part(&image, ROTATION_OFFSET, read, edit, RotationMonitor::write_checkpoint)
+        };
+        refused(&tampered(&|m| m.timing_pass = Some((8, 0))), InvalidValue(P));
+        refused(&tampered(&|m| m.timing_pass = Some((1, 2))), InvalidValue(P));
+        refused(&tampered(&|m| m.level_side[2] = 2), InvalidValue(P));
+        refused(&tampered(&|m| m.period_samples = Some(1)), InvalidValue(P));
+        refused(&tampered(&|m| m.short_steps = 5), InvalidValue(P));
+        refused(&tampered(&|m| m.levels_rad = Some(Real::NAN)), InvalidValue(P));
+        refused(&tampered(&|m| m.previous = Some((3, 7.0))), InvalidValue(P));
+        // Pinned, while the configuration detects the period.
+        refused(&tampered(&|m| m.pinned = true), Inconsistent(P));
+        let bad_direction = |m: &mut RotationMonitor| {
+            if let Some(f) = &mut m.features {
+                f.direction = 3;
+            }
+        };
+        refused(&tampered(&bad_direction), InvalidValue(Part::Features));
+        // The window must match the period (it is laid out for 120 samples).
+        refused(&tampered(&|m| m.period_samples = Some(122)), Inconsistent(Part::WindowIndices));
+    }
+
+    const P: Part = Part::RotationMonitor;
+}
