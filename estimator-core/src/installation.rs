@@ -42,15 +42,6 @@ impl Angles {
         Angles { sin_rho, cos_rho, sin_rho_s, cos_rho_s, sin_lat: lat_sin_cos.0, cos_lat: lat_sin_cos.1 }
     }
 
-    /// sin s and cos s, from rho and rho - s by the angle-difference identities
-    /// (s = rho - (rho - s)); no further trigonometry needed.
-    pub fn sin_cos_platform(&self) -> (Real, Real) {
-        (
-            self.sin_rho * self.cos_rho_s - self.cos_rho * self.sin_rho_s,
-            self.cos_rho * self.cos_rho_s + self.sin_rho * self.sin_rho_s,
-        )
-    }
-
     /// Coefficients of x1..x4 in the heading error of eq (2).
     pub fn heading_row(&self) -> [Real; 4] {
         [

@@ -212,11 +212,6 @@ impl RotationMonitor {
         }
     }
 
-    /// The period in samples and the features, once both are known.
-    pub fn pattern(&self) -> Option<(u32, Features)> {
-        Some((self.period_samples?, self.features?))
-    }
-
     /// Forgets the sample history (after a gap the window cannot bridge): the next sample starts
     /// new increments and new pass timings; what was learned stays.
     pub fn restart(&mut self) {

@@ -303,7 +303,7 @@ pub fn apply_shape(p: &mut ScenarioParams, scheme: RotationScheme, timing: &Timi
         p.rotation_period_s
     );
     anyhow::ensure!(p.duration_s >= p.sample_interval_s, "--duration ({} s) is shorter than one sample interval ({} s)", p.duration_s, p.sample_interval_s);
-    p.recording = recorder.recording(outage_seed, p.duration_s, p.sample_interval_s).map_err(anyhow::Error::msg)?;
+    p.recording = recorder.recording(outage_seed, p.duration_s, p.sample_interval_s)?;
     Ok(())
 }
 

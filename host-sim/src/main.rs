@@ -196,7 +196,7 @@ impl SpreadArgs {
             low_frequency_rate_error: self.lowfreq_rate_error,
             coloured_noise_arcsec: self.coloured_noise_arcsec,
         };
-        d.check().map_err(anyhow::Error::msg)?;
+        d.check()?;
         Ok(d)
     }
 }

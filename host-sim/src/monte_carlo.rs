@@ -5,7 +5,7 @@
 
 use crate::replay::sample_of;
 use crate::report::{Accuracy, Tracker};
-use crate::recorder::{Recorder, RecorderSettings, Recording};
+use crate::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
 use crate::rotation_scheme::RotationScheme;
 use crate::scenario::{Mismatch, Samples, ScenarioKind, ScenarioParams, SwayComponent};
 use estimator_core::Config;
@@ -16,6 +16,46 @@ use serde::Serialize;
 
 /// Report times of the Monte Carlo summary, s (those inside the run are used).
 pub const MC_TIMES_S: [f64; 6] = [2_000.0, 5_000.0, 10_000.0, 20_000.0, 45_000.0, 86_400.0];
+
+/// Why a Monte Carlo draw cannot make its scenarios.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ScenarioError {
+    /// The rotation scheme needs a longer period (its stops and turns do not fit).
+    PeriodTooShortForScheme { scheme: &'static str, min_period_s: f64 },
+    /// The log is shorter than one sample interval.
+    ShorterThanOneSample { duration_s: f64, interval_s: f64 },
+    /// The recorder's settings.
+    Recorder(RecorderError),
+}
+
+impl From<RecorderError> for ScenarioError {
+    fn from(e: RecorderError) -> Self {
+        ScenarioError::Recorder(e)
+    }
+}
+
+impl std::fmt::Display for ScenarioError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ScenarioError::PeriodTooShortForScheme { scheme, min_period_s } => {
+                write!(f, "the {scheme} scheme needs a rotation period of at least {min_period_s} s")
+            }
+            ScenarioError::ShorterThanOneSample { duration_s, interval_s } => {
+                write!(f, "the log ({duration_s} s) is shorter than one sample interval ({interval_s} s)")
+            }
+            ScenarioError::Recorder(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for ScenarioError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ScenarioError::Recorder(e) => Some(e),
+            _ => None,
+        }
+    }
+}
 
 /// How the runs are drawn.
 #[derive(Clone, Debug, PartialEq)]
@@ -58,15 +98,16 @@ impl Draw {
 
     /// Checks that every run's scenario can be made: the scheme fits in its period, the recorder's
     /// settings are valid and its outages fit in the log.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), ScenarioError> {
         let p = self.params(0);
         if p.rotation_period_s < p.scheme.min_period_s() {
-            return Err(format!("the {} scheme needs a rotation period of at least {} s", p.scheme.name(), p.scheme.min_period_s()));
+            return Err(ScenarioError::PeriodTooShortForScheme { scheme: p.scheme.name(), min_period_s: p.scheme.min_period_s() });
         }
         if p.duration_s < p.sample_interval_s {
-            return Err(format!("the log ({} s) is shorter than one sample interval ({} s)", p.duration_s, p.sample_interval_s));
+            return Err(ScenarioError::ShorterThanOneSample { duration_s: p.duration_s, interval_s: p.sample_interval_s });
         }
-        self.recorder.recording(self.run_seed(0), p.duration_s, p.sample_interval_s).map(|_| ())
+        self.recorder.recording(self.run_seed(0), p.duration_s, p.sample_interval_s)?;
+        Ok(())
     }
 
     /// Seed of run `i` (distinct runs, reproducible).
@@ -270,6 +311,22 @@ pub fn format_summary(s: &Summary) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_draw_that_cannot_make_its_scenarios_is_refused_with_a_typed_error() {
+        let ok = Draw { duration_s: Some(3000.0), ..Draw::new(ScenarioKind::Paper, 1) };
+        assert_eq!(ok.check(), Ok(()));
+        let four_position = Draw { scheme: RotationScheme::FourPosition, rotation_period_s: Some(1.0), ..ok.clone() };
+        let min_period_s = RotationScheme::FourPosition.min_period_s();
+        assert!(min_period_s > 1.0);
+        assert_eq!(four_position.check(), Err(ScenarioError::PeriodTooShortForScheme { scheme: "four-position", min_period_s }));
+        let short = Draw { duration_s: Some(0.5), ..ok.clone() };
+        assert_eq!(short.check(), Err(ScenarioError::ShorterThanOneSample { duration_s: 0.5, interval_s: 1.0 }));
+        let outages = Draw { recorder: RecorderSettings { outages: 100, ..RecorderSettings::default() }, ..ok.clone() };
+        let e = outages.check().unwrap_err();
+        assert!(matches!(e, ScenarioError::Recorder(RecorderError::OutagesDoNotFit { count: 100, .. })), "{e:?}");
+        assert!(e.to_string().starts_with("--outages: 100 outages"), "{e}");
+    }
 
     #[test]
     fn quantiles() {

@@ -47,19 +47,15 @@ pub struct Recording {
 
 impl Recording {
     /// Checks the settings for rows every `interval_s`.
-    pub fn check(&self, interval_s: f64) -> Result<(), String> {
+    pub fn check(&self, interval_s: f64) -> Result<(), RecorderError> {
         if !(self.drop_fraction.is_finite() && (0.0..1.0).contains(&self.drop_fraction)) {
-            return Err(format!("--drop-fraction must be in [0, 1), got {}", self.drop_fraction));
+            return Err(RecorderError::DropFraction(self.drop_fraction));
         }
         if !(self.time_offset_s.is_finite() && self.time_offset_s.abs() <= MAX_TIME_OFFSET_S) {
-            return Err(format!("--time-offset must be within +-{MAX_TIME_OFFSET_S} s, got {}", self.time_offset_s));
+            return Err(RecorderError::TimeOffset { value_s: self.time_offset_s });
         }
         if !(self.time_jitter_s.is_finite() && self.time_jitter_s >= 0.0 && self.time_jitter_s < interval_s / 2.0) {
-            return Err(format!(
-                "--time-jitter must be >= 0 and below half the sample interval ({} s) so stamps stay in order, got {}",
-                interval_s / 2.0,
-                self.time_jitter_s
-            ));
+            return Err(RecorderError::TimeJitter { value_s: self.time_jitter_s, limit_s: interval_s / 2.0 });
         }
         Ok(())
     }
@@ -80,6 +76,41 @@ impl Recording {
     }
 }
 
+/// Why recorder settings cannot make a log; each names the command-line option to change.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RecorderError {
+    /// The fraction of rows dropped is not in `[0, 1)`.
+    DropFraction(f64),
+    /// The time offset is beyond [`MAX_TIME_OFFSET_S`].
+    TimeOffset { value_s: f64 },
+    /// The jitter is negative, or not below half the sample interval (`limit_s`), so that stamps
+    /// could leave their order.
+    TimeJitter { value_s: f64, limit_s: f64 },
+    /// The outages (each [`OUTAGE_S`], `gap_s` apart) do not fit in the log.
+    OutagesDoNotFit { count: usize, gap_s: f64, duration_s: f64 },
+}
+
+impl std::fmt::Display for RecorderError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            RecorderError::DropFraction(v) => write!(f, "--drop-fraction must be in [0, 1), got {v}"),
+            RecorderError::TimeOffset { value_s } => {
+                write!(f, "--time-offset must be within +-{MAX_TIME_OFFSET_S} s, got {value_s}")
+            }
+            RecorderError::TimeJitter { value_s, limit_s } => write!(
+                f,
+                "--time-jitter must be >= 0 and below half the sample interval ({limit_s} s) so stamps stay in order, got {value_s}"
+            ),
+            RecorderError::OutagesDoNotFit { count, gap_s, duration_s } => write!(
+                f,
+                "--outages: {count} outages of {OUTAGE_S} s (and {gap_s} s between them) do not fit in {duration_s} s"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for RecorderError {}
+
 /// What the recorder is asked to do, before the outages are placed.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RecorderSettings {
@@ -93,10 +124,10 @@ pub struct RecorderSettings {
 impl RecorderSettings {
     /// The recording of a log of `duration_s` with rows every `interval_s`, outage start times
     /// drawn from `seed`; checked.
-    pub fn recording(&self, seed: u64, duration_s: f64, interval_s: f64) -> Result<Recording, String> {
+    pub fn recording(&self, seed: u64, duration_s: f64, interval_s: f64) -> Result<Recording, RecorderError> {
         let r = Recording {
             drop_fraction: self.drop_fraction,
-            outage_starts_s: draw_outage_starts_s(seed, self.outages, duration_s, interval_s).map_err(|e| format!("--outages: {e}"))?,
+            outage_starts_s: draw_outage_starts_s(seed, self.outages, duration_s, interval_s)?,
             outage_duration_s: if self.outages > 0 { OUTAGE_S } else { 0.0 },
             time_offset_s: self.time_offset_s,
             time_jitter_s: self.time_jitter_s,
@@ -145,14 +176,14 @@ pub fn recorded_rows(recording: &Recording, seed: u64, rows: &[Row]) -> Vec<Row>
 /// Start times of `count` outages of [`OUTAGE_S`] in a log of `duration_s`, s, rounded to the
 /// millisecond, ascending: uniformly placed, not overlapping, at least two sample intervals apart
 /// (at least one row between two outages). Deterministic for a seed.
-pub fn draw_outage_starts_s(seed: u64, count: usize, duration_s: f64, interval_s: f64) -> Result<Vec<f64>, String> {
+pub fn draw_outage_starts_s(seed: u64, count: usize, duration_s: f64, interval_s: f64) -> Result<Vec<f64>, RecorderError> {
     if count == 0 {
         return Ok(Vec::new());
     }
     let gap_s = 2.0 * interval_s;
     let free_s = duration_s - count as f64 * OUTAGE_S - (count - 1) as f64 * gap_s;
     if free_s.is_nan() || free_s < 0.0 {
-        return Err(format!("{count} outages of {OUTAGE_S} s (and {gap_s} s between them) do not fit in {duration_s} s"));
+        return Err(RecorderError::OutagesDoNotFit { count, gap_s, duration_s });
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xA24B_AED4_963E_E407) ^ 0x0007_A6E5);
     // Uniform non-overlapping placement: sorted uniform points in the free time, each then
@@ -218,7 +249,10 @@ mod tests {
         }
         assert_eq!(draw_outage_starts_s(3, 2, 500.0, 1.0), draw_outage_starts_s(3, 2, 500.0, 1.0));
         assert_ne!(draw_outage_starts_s(3, 2, 500.0, 1.0), draw_outage_starts_s(4, 2, 500.0, 1.0));
-        assert!(draw_outage_starts_s(1, 3, 180.0, 1.0).is_err());
+        assert_eq!(
+            draw_outage_starts_s(1, 3, 180.0, 1.0),
+            Err(RecorderError::OutagesDoNotFit { count: 3, gap_s: 2.0, duration_s: 180.0 })
+        );
         assert_eq!(draw_outage_starts_s(1, 0, 10.0, 1.0), Ok(vec![]));
     }
 
@@ -234,6 +268,13 @@ mod tests {
             Recording { time_jitter_s: -0.1, ..ok.clone() },
         ] {
             assert!(bad.check(1.0).is_err(), "{bad:?}");
+        }
+        assert_eq!(Recording { drop_fraction: 1.0, ..ok.clone() }.check(1.0), Err(RecorderError::DropFraction(1.0)));
+        assert_eq!(
+            Recording { time_jitter_s: 0.5, ..ok.clone() }.check(1.0),
+            Err(RecorderError::TimeJitter { value_s: 0.5, limit_s: 0.5 })
+        );
+        {
         }
     }
 }
