@@ -1,5 +1,5 @@
-//! The reference low-pass ([`ReferenceFilter`]) in a checkpoint image: the started flag, then
-//! the three stages of 4 `R`, all zero before it starts.
+//! The reference low-pass ([`ReferenceFilter`]) in a checkpoint image, within the windowed
+//! method's part (the layout: the module doc of [`crate::checkpoint`]).
 //!
 //! Checked: the flag 0 or 1, every stage output within +-1 (low-passed sines and cosines), the
 //! stages zero before it starts. Its errors name the windowed method's

@@ -1,6 +1,5 @@
-//! A Kalman filter in a checkpoint image: the states `x` (`N` floats), then the covariance `P`
-//! (`N x N` floats, row-major), in the filter's own float type (`Real`, or `f64` for the paper
-//! method's filters).
+//! A Kalman filter in a checkpoint image, in the filter's own float type (`Real`, or `f64` for the
+//! paper method's filters; the layout: the module doc of [`crate::checkpoint`]).
 //!
 //! Checked: every state finite and within [`MAX_STATE`]; every covariance element finite, the
 //! variances within the bound the caller gives; the covariance exactly symmetric and positive

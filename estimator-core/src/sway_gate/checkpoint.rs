@@ -1,5 +1,5 @@
-//! The sway monitor ([`SwayMonitor`]) in a checkpoint image, within the estimator's own part:
-//! the mean `R`, the mean square `R`, the samples averaged u32.
+//! The sway monitor ([`SwayMonitor`]) in a checkpoint image, within the estimator's own part (the
+//! layout: the module doc of [`crate::checkpoint`]).
 //!
 //! Checked: the mean within 2 rad and the mean square within `[0, 4]` rad^2 (averages of roll
 //! within 90 deg).

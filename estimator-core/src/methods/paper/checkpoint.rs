@@ -1,6 +1,6 @@
-//! The paper method's state in a checkpoint image: updates u32, samples u32, start time f64, the
-//! integrals 4 x i64, the four Kalman filters (`f64`), then the plain window of 4 channels. (Its
-//! length, [`super::super::checkpoint::paper_len`], is known in a build without the method too.)
+//! The paper method's state in a checkpoint image (its layout: the module doc of
+//! [`crate::checkpoint`]; its length, [`super::super::checkpoint::paper_len`], is known in a build
+//! without the method too).
 //!
 //! Checked: the start time finite; the integrals within the fixed-point range times the samples
 //! integrated; the Kalman filters (see [`crate::kalman`]); the window (see

@@ -1,4 +1,5 @@
-//! The traditional baseline's state in a checkpoint image: updates u32, then the Kalman filter.
+//! The traditional baseline's state in a checkpoint image (its layout: the module doc of
+//! [`crate::checkpoint`]).
 //!
 //! Checked: the Kalman filter (see [`crate::kalman`]).
 

@@ -1,10 +1,5 @@
-//! The windowed method's state in a checkpoint image: updates u32, window entries since the last
-//! update u32, the Kalman filter, residual means 4 `R`, the pair the next update takes (u8: 0
-//! pitch, 1 roll), residuals averaged per pair 2 x u32, channel gains 4 `R`, the per-product
-//! variances of the pitch and roll channels 2 `R`, the long means of the residual means 4 `R`
-//! and of their powers 4 `R`, the residual means in the long averages per pair 2 x u32, the noise
-//! scale and the drift share per pair 2 + 2 `R`, the reference's low-pass (started flag, then
-//! three stages of 4 `R`, all zero before it starts), then the correlation window.
+//! The windowed method's state in a checkpoint image (its layout: the module doc of
+//! [`crate::checkpoint`]).
 //!
 //! Checked: the Kalman filter (see [`crate::kalman`]); residual means and their long means within
 //! [`MAX_RESIDUAL`]; gains within `[0, 4]` (a gain is the magnitude of a window mean of products
