@@ -63,11 +63,6 @@ pub(crate) fn running(method: Method) -> Est {
     est
 }
 
-/// The configuration of [`running`].
-pub(crate) fn config_of(method: Method) -> Config {
-    Config::with_method(method)
-}
-
 /// The image of `est`.
 pub(crate) fn image_of<const CAP: usize>(est: &Estimator<CAP>) -> Vec<u8> {
     let mut buf = vec![0u8; Estimator::<CAP>::CHECKPOINT_LEN];

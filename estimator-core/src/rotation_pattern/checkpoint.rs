@@ -118,7 +118,7 @@ impl RotationMonitor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::checkpoint::tests::{config_of, image_of, refused, running, tampered_part};
+    use crate::checkpoint::tests::{image_of, refused, running, tampered_part};
     use crate::checkpoint::ROTATION_OFFSET;
     use crate::config::Method;
     use CheckpointError::*;
@@ -126,7 +126,7 @@ mod tests {
     #[test]
     fn a_tampered_rotation_monitor_is_refused_with_a_typed_error() {
         let image = image_of(&running(Method::Windowed));
-        let config = config_of(Method::Windowed);
+        let config = Config::with_method(Method::Windowed);
         let read = |r: &mut Reader<'_>| RotationMonitor::read_checkpoint(r, &config).unwrap();
         // What the tampering reaches: the monitor has learned the pattern and times passes.
         let m = read(&mut Reader::new(&image, ROTATION_OFFSET));

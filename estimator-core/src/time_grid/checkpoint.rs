@@ -61,7 +61,7 @@ impl TimeGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::checkpoint::tests::{config_of, image_of, refused, running, tampered_part};
+    use crate::checkpoint::tests::{image_of, refused, running, tampered_part};
     use crate::checkpoint::TIME_GRID_OFFSET;
     use crate::config::Method;
     use CheckpointError::*;
@@ -69,7 +69,7 @@ mod tests {
     #[test]
     fn a_tampered_grid_is_refused_with_a_typed_error() {
         let image = image_of(&running(Method::Windowed));
-        let config = config_of(Method::Windowed);
+        let config = Config::with_method(Method::Windowed);
         let tampered = |edit: &dyn Fn(&mut TimeGrid)| {
             let read = |r: &mut Reader<'_>| TimeGrid::read_checkpoint(r, &config).unwrap();
             tampered_part(&image, TIME_GRID_OFFSET, read, edit, TimeGrid::write_checkpoint)

@@ -62,13 +62,13 @@ impl<const CAP: usize> Paper<CAP> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::checkpoint::tests::{config_of, image_of, refused, reseal, running, tampered_part};
+    use crate::checkpoint::tests::{image_of, refused, reseal, running, tampered_part};
     use crate::checkpoint::METHOD_OFFSET;
-    use crate::config::Method;
+    use crate::config::{Config, Method};
     use CheckpointError::*;
 
     fn read_paper(r: &mut Reader<'_>) -> Paper<64> {
-        let mut m = Paper::new(&config_of(Method::Paper));
+        let mut m = Paper::new(&Config::with_method(Method::Paper));
         Paper::read_checkpoint(r, Some(&mut m), Some(120), f64::INFINITY).unwrap();
         m
     }

@@ -131,13 +131,13 @@ impl<const CAP: usize> Windowed<CAP> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::checkpoint::tests::{config_of, image_of, refused, reseal, running, tampered_part, Est};
+    use crate::checkpoint::tests::{image_of, refused, reseal, running, tampered_part, Est};
     use crate::checkpoint::METHOD_OFFSET;
-    use crate::config::Method;
+    use crate::config::{Config, Method};
     use CheckpointError::*;
 
     fn read_windowed(r: &mut Reader<'_>) -> Windowed<64> {
-        let mut m = Windowed::new(&config_of(Method::Windowed));
+        let mut m = Windowed::new(&Config::with_method(Method::Windowed));
         Windowed::read_checkpoint(r, Some(&mut m), Some(120), f64::INFINITY).unwrap();
         m
     }
