@@ -239,7 +239,16 @@ impl QuantizedSample {
 /// Number of running sums.
 pub const SUMS: usize = 28;
 
+/// The weight of an entry that counts in full (see [`CorrelationSums`]); a sample next to a run of
+/// lost rows counts less ([`crate::gap_fill`]).
+pub const FULL_WEIGHT: u8 = 64;
+
 /// The window's exact running sums.
+///
+/// Each entry is added with its weight `w` (0 to [`FULL_WEIGHT`]): the sums are of `w` times the
+/// products, and the means divide by the sum of the weights, so a weighted mean of every product
+/// and `z = row . x` holds for any weights. With `w` at most 64 (2^6) and at most 2^46 per product,
+/// a window of up to 2^11 entries stays within `i64`.
 ///
 /// `sums`, in fixed-point counts (T = 2^14 per unit of a sine or cosine, A = 2^30 per rad), with
 /// `c0..c3` the channels' low-passed references (of `sin(rho-s)`, `cos(rho-s)`, `sin rho`,
@@ -256,6 +265,8 @@ pub struct CorrelationSums {
     pub sums: [i64; SUMS],
     /// Sum of the entries' fill weights (see [`crate::gap_fill`]).
     pub fill_weight: u32,
+    /// Sum of the entries' weights (a full-weight entry counts [`FULL_WEIGHT`]).
+    pub weight: u32,
 }
 
 /// An exact sum in the step's float type: its high and low 32 bits converted apart (one FPU
@@ -275,24 +286,28 @@ pub struct Measurement {
 }
 
 impl CorrelationSums {
-    /// Adds one entry.
-    pub fn add(&mut self, q: &QuantizedSample, fill_weight: u16) {
+    /// Adds one entry of weight `weight` (at most [`FULL_WEIGHT`]).
+    pub fn add(&mut self, q: &QuantizedSample, fill_weight: u16, weight: u8) {
         let t = q.terms();
+        let w = i64::from(weight.min(FULL_WEIGHT));
         for i in 0..SUMS {
-            self.sums[i] += t[i];
+            self.sums[i] += w * t[i];
         }
         self.count += 1;
         self.fill_weight += u32::from(fill_weight);
+        self.weight += w as u32;
     }
 
     /// Subtracts an entry added before: exactly undoes [`CorrelationSums::add`].
-    pub fn subtract(&mut self, q: &QuantizedSample, fill_weight: u16) {
+    pub fn subtract(&mut self, q: &QuantizedSample, fill_weight: u16, weight: u8) {
         let t = q.terms();
+        let w = i64::from(weight.min(FULL_WEIGHT));
         for i in 0..SUMS {
-            self.sums[i] -= t[i];
+            self.sums[i] -= w * t[i];
         }
         self.count = self.count.saturating_sub(1);
         self.fill_weight = self.fill_weight.saturating_sub(u32::from(fill_weight));
+        self.weight = self.weight.saturating_sub(w as u32);
     }
 
     /// The centred measurement of the module doc, or `None` for an empty window.
@@ -307,11 +322,12 @@ impl CorrelationSums {
     /// step, and the conversion of the sums is most of the measurement's cost. The same values as
     /// [`CorrelationSums::measurement`], bit for bit.
     pub fn measurement_of(&self, pair: usize) -> Option<Measurement> {
-        if self.count == 0 {
+        if self.count == 0 || self.weight == 0 {
             return None;
         }
-        // Powers of two: exact in f32, and no software f64 on the Cortex-M4F.
-        let inv_n = 1.0 / self.count as Real;
+        // The sums are of weighted products: their means divide by the sum of the weights. The
+        // scales are powers of two: exact in f32, and no software f64 on the Cortex-M4F.
+        let inv_n = 1.0 / self.weight as Real;
         let t = inv_n / TRIG_COUNTS as Real;
         let tt = t / TRIG_COUNTS as Real;
         let ttt = tt / TRIG_COUNTS as Real;
@@ -358,7 +374,7 @@ mod tests {
         let mut sums = CorrelationSums::default();
         for k in 0..480 {
             let rho = 0.2 + 2.0 * core::f64::consts::PI * k as f64 / 480.0;
-            sums.add(&quantized(0.0, 0.0, &angles(rho, s, lat)), 0);
+            sums.add(&quantized(0.0, 0.0, &angles(rho, s, lat)), 0, FULL_WEIGHT);
         }
         let rows = sums.measurement().unwrap().rows;
         let (sl, cl) = (lat.sin() as Real, lat.cos() as Real);
@@ -382,11 +398,11 @@ mod tests {
         let qs: std::vec::Vec<QuantizedSample> = (0..300)
             .map(|k| quantized(0.05 * (k as Real).sin(), -0.02, &angles(k as f64 * 0.7, 0.1, 0.5)))
             .collect();
-        for q in &qs {
-            sums.add(q, 1);
+        for (k, q) in qs.iter().enumerate() {
+            sums.add(q, 1, (k % 65) as u8);
         }
-        for q in &qs {
-            sums.subtract(q, 1);
+        for (k, q) in qs.iter().enumerate() {
+            sums.subtract(q, 1, (k % 65) as u8);
         }
         assert_eq!(sums, CorrelationSums::default());
     }
@@ -398,7 +414,7 @@ mod tests {
         let mut sums = CorrelationSums::default();
         for k in 0..480 {
             let rho = [0.0, 1.5708, 3.1416, 4.7124][(k * 7 / 480) % 4];
-            sums.add(&quantized(heel, -heel, &angles(rho, 0.4, 0.6)), 0);
+            sums.add(&quantized(heel, -heel, &angles(rho, 0.4, 0.6)), 0, [FULL_WEIGHT, 17, 0, 40][k % 4]);
         }
         let z = sums.measurement().unwrap().z;
         for (ch, v) in z.iter().enumerate() {

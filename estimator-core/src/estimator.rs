@@ -31,7 +31,7 @@ pub(crate) mod checkpoint;
 
 use crate::config::{Config, ConfigError, ROTATION_PERIOD_RANGE_S};
 use crate::correlation::ReferenceFilter;
-use crate::gap_fill::{GapFiller, GridSample, SLOTS};
+use crate::gap_fill::{GapFiller, GridSample, Passed};
 use crate::installation::Angles;
 use crate::math::{sin_cos, wrap_pi};
 use crate::methods::MethodState;
@@ -41,6 +41,11 @@ use crate::sample::{Attitude, Sample, SampleError};
 use crate::sway_gate::SwayMonitor;
 use crate::time_grid::{Placement, TimeGrid};
 use crate::Real;
+
+/// Most samples the window takes in one step (see `Estimator::take`).
+pub const MAX_SAMPLES_PER_STEP: u32 = 2;
+/// Most window operations (a sample taken, an old entry removed) in one step.
+pub const MAX_WORK_PER_STEP: u32 = 4;
 
 /// The ring capacity of the default estimator, in window entries: one period of up to 720 samples
 /// without bins (720 s at 1 Hz); longer periods are binned. 30 bytes an entry (the inputs and a
@@ -281,25 +286,15 @@ impl<const CAP: usize> Estimator<CAP> {
     /// Places an accepted sample on the grid, passes it through the gap filler and the window
     /// takes what comes out; returns the status of the newest sample the window took.
     fn feed(&mut self, sample: &Sample, angles: &Angles, placement: Placement, interval_s: f64, stamp_s: f64) -> Status {
-        let mut out: heapless::Vec<GridSample, SLOTS> = heapless::Vec::new();
-        let feed = match self.feed {
-            None => self.start_feeding(interval_s),
+        let (feed, restart) = match self.feed {
+            None => (self.start_feeding(interval_s), false),
             Some(feed) => {
                 let (step, restart) = match placement {
-                    Placement::OnGrid { intervals } => (intervals, intervals.saturating_sub(1) > self.config.max_filled_gap_samples),
+                    Placement::OnGrid { intervals } => (intervals, intervals.saturating_sub(1) >= self.restart_gap_samples(&feed)),
                     Placement::Learning | Placement::ClockStep => (1, true),
                 };
                 self.index = self.index.wrapping_add(step);
-                if restart {
-                    self.filler.flush(&mut |s| {
-                        let _ = out.push(*s);
-                    });
-                    self.take(&out, &feed, stamp_s);
-                    out.clear();
-                    self.restart_window();
-                    self.rotation.restart();
-                }
-                feed
+                (feed, restart)
             }
         };
         let grid_sample = GridSample {
@@ -312,11 +307,21 @@ impl<const CAP: usize> Estimator<CAP> {
             angles: *angles,
             fill_weight: 0,
         };
-        self.filler.push(grid_sample, &mut |s| {
-            let _ = out.push(*s);
-        });
-        self.take(&out, &feed, stamp_s);
+        self.filler.push(grid_sample, restart);
+        self.take(&feed, stamp_s);
         self.window_status
+    }
+
+    /// Lost rows in a row from which the window restarts rather than leaving them out: an eighth
+    /// of the rotation period once known (a gap of an eighth of a period or more is not bridged);
+    /// half the shortest period while it is being learned (the samples since the first row are kept
+    /// for the first window, and gaps must not restart the period's detection).
+    fn restart_gap_samples(&self, feed: &Feed) -> u32 {
+        let fill = self.config.max_filled_gap_samples + 1;
+        match self.rotation.period_samples() {
+            Some(p) => (p / 8).max(fill),
+            None => (feed.limits.min_period_samples / 2).max(fill),
+        }
     }
 
     /// The first sample on a known grid: the grid's constants are fixed, the rotation monitor
@@ -334,40 +339,72 @@ impl<const CAP: usize> Estimator<CAP> {
         feed
     }
 
-    /// The window takes the samples the filler passed on, then the filter updates once. `stamp_s`
-    /// is the time stamp of the newest sample received (at grid index `self.index`).
-    fn take(&mut self, samples: &[GridSample], feed: &Feed, stamp_s: f64) {
-        if samples.is_empty() {
-            return;
-        }
-        for s in samples {
-            if s.fill_weight > 0 {
-                self.counters.filled = self.counters.filled.saturating_add(1);
+    /// The window takes what the filler passes on, then the filter updates once. `stamp_s` is the
+    /// time stamp of the newest sample received (at grid index `self.index`).
+    ///
+    /// # Bounded work a step
+    /// Normally one sample comes out of the filler a step and the window takes it, removing the
+    /// entry that leaves it; the filter then updates. After lost rows the filler holds more than
+    /// one sample ready (the samples before a run of lost rows are ready at once), and the window
+    /// must drop the entries of the lost rows' numbers: that work is spread over the following
+    /// steps. A step takes a second sample only while samples are waiting, and does not update the
+    /// filter when it took two or when the window removed more than one entry (its work was then
+    /// a second sample's); the window takes no measurement while it holds more than one period.
+    fn take(&mut self, feed: &Feed, stamp_s: f64) {
+        let mut work = 0;
+        let mut took = 0;
+        while took < MAX_SAMPLES_PER_STEP && work < MAX_WORK_PER_STEP {
+            if took > 0 && self.filler.backlog() == 0 {
+                break;
             }
-            match self.rotation.observe(s.index, s.rotation_rad, &feed.limits) {
-                Err(fault) => {
-                    if !matches!(self.window_status, Status::RotationFault(_)) {
-                        let behind = f64::from(self.index.wrapping_sub(s.index));
-                        self.fault = Some((fault, stamp_s - behind * feed.interval_s));
-                    }
-                    self.restart_window();
-                    if fault != RotationFault::RateMismatch {
-                        self.rotation.after_fault();
-                    }
-                    self.window_status = Status::RotationFault(fault);
-                    continue;
+            let Some(passed) = self.filler.pass_on(self.config.max_filled_gap_samples) else {
+                break;
+            };
+            took += 1;
+            work += 1 + self.take_one(&passed, feed, stamp_s);
+        }
+        if took > 0 && work <= 2 {
+            self.method.update(&self.config, feed, self.filler.single_fill_variance());
+        }
+    }
+
+    /// The window takes one sample; returns how many old entries it removed.
+    fn take_one(&mut self, passed: &Passed, feed: &Feed, stamp_s: f64) -> u32 {
+        let s = &passed.sample;
+        if passed.restart {
+            self.restart_window();
+            self.rotation.restart();
+        }
+        if s.fill_weight > 0 {
+            self.counters.filled = self.counters.filled.saturating_add(1);
+        }
+        match self.rotation.observe(s.index, s.rotation_rad, &feed.limits) {
+            Err(fault) => {
+                if !matches!(self.window_status, Status::RotationFault(_)) {
+                    let behind = f64::from(self.index.wrapping_sub(s.index));
+                    self.fault = Some((fault, stamp_s - behind * feed.interval_s));
                 }
-                Ok(PatternEvent::PeriodKnown(period)) => self.method.configure(period),
-                Ok(PatternEvent::None) => {}
+                self.restart_window();
+                if fault != RotationFault::RateMismatch {
+                    self.rotation.after_fault();
+                }
+                self.window_status = Status::RotationFault(fault);
+                return 0;
             }
-            if self.rotation.period_samples().is_none() {
-                self.window_status = Status::DetectingPattern;
-                continue;
-            }
-            self.method.push(&self.config, feed, s);
-            self.window_status = if self.method.window_full() { Status::Estimating } else { Status::WarmingUp };
+            Ok(PatternEvent::PeriodKnown(period)) => self.method.configure(period),
+            Ok(PatternEvent::None) => {}
         }
-        self.method.update(&self.config, feed, self.filler.single_fill_variance());
+        // The window keeps the samples from the first row on while the period is being learned,
+        // so that it holds a whole period as soon as the period is known.
+        let removed = self.method.push(&self.config, feed, s, passed.weight, self.rotation.period_samples().is_some());
+        self.window_status = if self.rotation.period_samples().is_none() {
+            Status::DetectingPattern
+        } else if self.method.window_full() {
+            Status::Estimating
+        } else {
+            Status::WarmingUp
+        };
+        removed
     }
 
     fn restart_window(&mut self) {

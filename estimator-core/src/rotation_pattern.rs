@@ -144,6 +144,25 @@ fn pass_on_time(elapsed: u32, period: u32, limits: &Limits) -> bool {
     (elapsed as Real - period as Real).abs() <= limits.period_tolerance * period as Real + 1.0
 }
 
+/// The grid index at which a pass between the sample `k` and the one `steps` later (across lost
+/// rows) happened, by linear interpolation of the angle from the reference: the first index at or
+/// after the moment the angle crossed the hysteresis threshold it crossed (`+` for a pass upwards,
+/// `dir` 0; `-` downwards), which is the index a received row there would have given for a
+/// rotation at a steady rate. `d_prev` and `d` are the angles from the reference at `k` and now.
+fn pass_across_gap(k: u32, steps: u32, d_prev: Real, d: Real, dir: usize) -> u32 {
+    let mut d_prev = d_prev;
+    if d_prev < -PI {
+        d_prev += 2.0 * PI;
+    }
+    let threshold = if dir == 0 { PASS_HYSTERESIS_RAD } else { -PASS_HYSTERESIS_RAD };
+    let span = d - d_prev;
+    let f = if span != 0.0 { ((threshold - d_prev) / span).clamp(0.0, 1.0) } else { 1.0 };
+    let x = f * steps as Real;
+    let whole = x as u32;
+    let after = if (whole as Real) < x { whole + 1 } else { whole };
+    k.wrapping_add(after.clamp(1, steps))
+}
+
 /// The rotation monitor.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotationMonitor {
@@ -244,13 +263,16 @@ impl RotationMonitor {
     pub fn observe(&mut self, index: u32, rotation_rad: Real, limits: &Limits) -> Result<PatternEvent, RotationFault> {
         let base = *self.levels_rad.get_or_insert(wrap_pi(rotation_rad + 0.5 * QUARTER_PI));
         let previous = self.previous.replace((index, rotation_rad));
-        let increment = match previous {
-            Some((k, rho)) if index.wrapping_sub(k) == 1 => Some(wrap_pi(rotation_rad - rho)),
-            _ => None,
+        // Samples since the previous one (more than 1 across lost rows) and the rotation over them:
+        // the angle is continuous between the rows that are there.
+        let (steps, increment) = match previous {
+            Some((k, rho)) if index.wrapping_sub(k) >= 1 => (index.wrapping_sub(k), Some(wrap_pi(rotation_rad - rho))),
+            _ => (1, None),
         };
         if let Some(inc) = increment {
             self.short_steps = (self.short_steps + 1).min(SHORT_STEPS);
-            self.short_increment_rad += (inc - self.short_increment_rad) / self.short_steps as Real;
+            let per_step = if steps == 1 { inc } else { inc / steps as Real };
+            self.short_increment_rad += (per_step - self.short_increment_rad) / self.short_steps as Real;
         }
         let mut event = PatternEvent::None;
         // Passes of the reference angles.
@@ -283,10 +305,14 @@ impl RotationMonitor {
                 (1, -1) => 1usize,
                 _ => continue,
             };
-            let last = self.last_pass[m][dir].replace(index);
+            let pass = match previous {
+                Some((k, rho)) if steps > 1 => pass_across_gap(k, steps, wrap_pi(rho - base) - m as Real * QUARTER_PI, d, dir),
+                _ => index,
+            };
+            let last = self.last_pass[m][dir].replace(pass);
             match (self.period_samples, last) {
                 (None, Some(k)) => {
-                    let period = index.wrapping_sub(k);
+                    let period = pass.wrapping_sub(k);
                     if period >= limits.min_period_samples && period <= limits.max_period_samples {
                         self.period_samples = Some(period);
                         self.timing_pass = Some((m as u8, dir as u8));
@@ -294,7 +320,7 @@ impl RotationMonitor {
                     }
                 }
                 (Some(period), Some(k)) if self.timing_pass == Some((m as u8, dir as u8)) => {
-                    if self.features.is_some() && !pass_on_time(index.wrapping_sub(k), period, limits) {
+                    if self.features.is_some() && !pass_on_time(pass.wrapping_sub(k), period, limits) {
                         self.forget();
                         return Err(RotationFault::RateMismatch);
                     }
@@ -311,7 +337,7 @@ impl RotationMonitor {
         };
         let nominal = (2.0 * core::f64::consts::PI / period as f64) as Real;
         let still = self.short_steps > 0 && self.short_increment_rad.abs() < 0.25 * nominal;
-        self.dwell_run = if still { self.dwell_run.saturating_add(1) } else { 0 };
+        self.dwell_run = if still { self.dwell_run.saturating_add(steps) } else { 0 };
         let Some(features) = self.features else {
             self.learn(index, increment, nominal, period);
             return Ok(event);
@@ -359,7 +385,7 @@ impl RotationMonitor {
             return;
         };
         let Some(inc) = increment else {
-            // A gap inside the cycle: start it again.
+            // After a gap the window cannot bridge: start the cycle again.
             self.learn_start = None;
             return;
         };

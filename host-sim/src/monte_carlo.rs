@@ -178,7 +178,7 @@ pub fn track_run(params: &ScenarioParams, config: Config, times_s: &[f64]) -> an
 /// As [`track_run`], with an estimator of another ring capacity (to measure what binning costs).
 pub fn track_run_with_capacity<const CAP: usize>(params: &ScenarioParams, config: Config, times_s: &[f64]) -> anyhow::Result<Accuracy> {
     let mut est = estimator_core::Estimator::<CAP>::new(config).map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
-    let mut recorder = Recorder::new(&params.recording, params.seed);
+    let mut recorder = Recorder::new(&params.recording, params.seed, params.sample_interval_s);
     let mut tracker = Tracker::new(times_s);
     let mut held = None;
     let mut status = None;

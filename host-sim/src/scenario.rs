@@ -430,7 +430,7 @@ mod tests {
     fn parameters_without_scheme_or_recording_read_as_one_way_and_lossless() {
         let p = ScenarioParams::new(ScenarioKind::Paper, 2);
         let mut v = serde_json::to_value(&p).unwrap();
-        for key in ["scheme", "drop_fraction", "outage_starts_s", "outage_duration_s", "time_offset_s", "time_jitter_s"] {
+        for key in ["scheme", "drop_fraction", "outage_starts_s", "outage_duration_s", "time_offset_s", "time_jitter_s", "gap_every_s", "gap_rows"] {
             assert!(v.as_object_mut().unwrap().remove(key).is_some(), "{key} written");
         }
         let back: ScenarioParams = serde_json::from_value(v).unwrap();

@@ -65,7 +65,7 @@ fn every_scheme_period_and_latitude_on_the_paper_and_sea_scenarios() {
 /// paper and sea scenarios, seeds 1-3.
 #[test]
 fn lost_rows_outages_and_loose_unix_stamps() {
-    let lossy = RecorderSettings { drop_fraction: 0.02, outages: 3, time_offset_s: 1.7e9, time_jitter_s: 0.02 };
+    let lossy = RecorderSettings { drop_fraction: 0.02, outages: 3, time_offset_s: 1.7e9, time_jitter_s: 0.02, ..RecorderSettings::default() };
     let lossier = RecorderSettings { drop_fraction: 0.05, ..RecorderSettings::default() };
     let mut cases = Vec::new();
     for kind in [ScenarioKind::Paper, ScenarioKind::Sea] {

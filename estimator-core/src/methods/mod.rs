@@ -75,17 +75,27 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
-    /// Feeds one sample (received or filled); true if the filter was updated (the windowed method
-    /// updates in [`MethodState::update`], once per step).
-    pub fn push(&mut self, config: &Config, feed: &Feed, sample: &GridSample) -> bool {
+    /// Feeds one sample (received or filled) of weight `weight` ([`crate::gap_fill`]); returns how
+    /// many old window entries it removed. The windowed method takes samples from the first row on
+    /// (its window keeps them while the period is learned) and updates in
+    /// [`MethodState::update`], once per step; the others take samples once the period is known
+    /// (`period_known`) and update here, and leave the weights aside.
+    pub fn push(&mut self, config: &Config, feed: &Feed, sample: &GridSample, weight: u8, period_known: bool) -> u32 {
         match self {
-            MethodState::Windowed(m) => {
-                m.push(sample, feed.reference_alpha);
-                false
-            }
+            MethodState::Windowed(m) => m.push(sample, feed.reference_alpha, weight),
             #[cfg(feature = "paper-method")]
-            MethodState::Paper(m) => m.step(config, feed.interval_s, sample),
-            MethodState::Traditional(m) => m.step(config, feed.interval, sample),
+            MethodState::Paper(m) => {
+                if period_known {
+                    m.step(config, feed.interval_s, sample);
+                }
+                0
+            }
+            MethodState::Traditional(m) => {
+                if period_known {
+                    m.step(config, feed.interval, sample);
+                }
+                0
+            }
         }
     }
 

@@ -116,7 +116,7 @@
 pub(crate) mod checkpoint;
 
 use crate::config::Config;
-use crate::correlation::ReferenceFilter;
+use crate::correlation::{ReferenceFilter, FULL_WEIGHT};
 use crate::gap_fill::{FillVariance, GridSample};
 use crate::kalman::ConstantStateKalman;
 use crate::math::sqrt;
@@ -257,13 +257,16 @@ impl<const CAP: usize> Windowed<CAP> {
         self.entries_since_update = 0;
     }
 
-    /// Adds one sample to the window (its references low-passed on the way, with stage gain
-    /// `reference_alpha`: [`ReferenceFilter::alpha`]).
-    pub fn push(&mut self, sample: &GridSample, reference_alpha: Real) {
+    /// Adds one sample of weight `weight` to the window (its references low-passed on the way,
+    /// with stage gain `reference_alpha`: [`ReferenceFilter::alpha`]); returns how many old
+    /// entries the window removed.
+    pub fn push(&mut self, sample: &GridSample, reference_alpha: Real, weight: u8) -> u32 {
         let reference = self.reference.filter(&sample.angles, reference_alpha);
-        if self.window.push(sample, &reference) {
+        let pushed = self.window.push(sample, &reference, weight);
+        if pushed.completed {
             self.entries_since_update = self.entries_since_update.saturating_add(1);
         }
+        pushed.removed
     }
 
     /// Updates the filter with the window's measurement, if the window is full and has new
@@ -286,7 +289,13 @@ impl<const CAP: usize> Windowed<CAP> {
         self.kf.predict(&[qp, qp, qr, qr]);
         let sums = self.window.sums();
         let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
-        let r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
+        let mut r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
+        // Entries left out or weighted down near lost rows: the window carries their share less
+        // information (its weight over that of a full window of full-weight entries).
+        let full = (self.window.len() as u32).saturating_mul(u32::from(FULL_WEIGHT));
+        if sums.weight < full && sums.weight > 0 {
+            r0 *= full as Real / sums.weight as Real;
+        }
         let r_pitch = r0 + 0.5 * filled * fill_variance.pitch_rad2;
         let r_roll = r0 + 0.5 * filled * fill_variance.roll_rad2;
         self.product_variance_rad2 = [r_pitch, r_roll];

@@ -17,7 +17,7 @@ use super::{Bin, CorrelationWindow, Entry, WindowLayout};
 use super::{WindowAverage, MAX_MAGNITUDE};
 use crate::checkpoint::wire::{Reader, Writer};
 use crate::checkpoint::{ensure, within, CheckpointError, Part, R};
-use crate::correlation::{CorrelationSums, QuantizedSample, SUMS};
+use crate::correlation::{CorrelationSums, QuantizedSample, FULL_WEIGHT, SUMS};
 use crate::gap_fill::checkpoint::MAX_FILLED_TILT_RAD;
 use crate::installation::Angles;
 use crate::rotation_pattern::checkpoint::MAX_PERIOD_SAMPLES;
@@ -131,11 +131,12 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             && (1..=MAX_PERIOD_SAMPLES).contains(&bin)
             && expected.is_none_or(|e| e == (bin, len));
         ensure(consistent, CheckpointError::Inconsistent(Part::WindowIndices))?;
-        let mut sums = CorrelationSums { count: r.u32(), sums: [0; SUMS], fill_weight: 0 };
+        let mut sums = CorrelationSums { count: r.u32(), sums: [0; SUMS], fill_weight: 0, weight: 0 };
         for s in sums.sums.iter_mut() {
             *s = r.i64();
         }
         sums.fill_weight = r.u32();
+        sums.weight = sums.count * u32::from(FULL_WEIGHT);
         let partial = read_bin(r, bin)?;
 
         let (max_attitude, max_trig) = quantized_bounds();
@@ -159,7 +160,7 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         for i in 0..filled {
             r.seek(ring_start + slot_of(i, head, filled, len) * ENTRY_LEN);
             let entry = read_entry(r);
-            direct.add(&{ entry.sample }, entry.fill_weight);
+            direct.add(&{ entry.sample }, entry.fill_weight, entry.weight);
             if let Some(win) = dst.as_deref_mut() {
                 // At most `len <= CAP` entries: there is room.
                 let _ = win.ring.push_back(entry);
@@ -190,13 +191,15 @@ fn read_entry(r: &mut Reader<'_>) -> Entry {
         cos_lat: r.i16(),
         reference: [r.i16(), r.i16(), r.i16(), r.i16()],
     };
-    Entry { sample, fill_weight: r.u16() }
+    Entry { sample, fill_weight: r.u16(), number: 0, weight: FULL_WEIGHT }
 }
 
 /// Reads and checks the bin being filled of a window of `bin` samples per entry.
 fn read_bin(r: &mut Reader<'_>, bin: u32) -> Result<Bin, CheckpointError> {
     let start = r.pos();
     let b = Bin {
+        number: 0,
+        weight: 0.0,
         count: r.u32(),
         roll_rad: r.real(),
         pitch_rad: r.real(),
@@ -352,9 +355,9 @@ mod tests {
         let out_of_range = |w: &mut CorrelationWindow<64>| {
             let Some(e) = w.ring.iter_mut().nth(5) else { return };
             let mut q = e.sample;
-            w.sums.subtract(&q, 0);
+            w.sums.subtract(&q, 0, FULL_WEIGHT);
             q.roll = i32::MAX;
-            w.sums.add(&q, 0);
+            w.sums.add(&q, 0, FULL_WEIGHT);
             e.sample = q;
         };
         refused(&tampered(&out_of_range), InvalidValue(Part::WindowEntries));
