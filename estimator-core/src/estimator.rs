@@ -216,7 +216,7 @@ impl<const CAP: usize> Estimator<CAP> {
             return Some(Holdup::RotationFault { fault, since_s });
         }
         match &self.method {
-            MethodState::Windowed(m) if !m.window().is_full() => {
+            MethodState::Windowed(m) if !m.window().has_spanned_a_period() => {
                 Some(Holdup::WindowFilling { filled: m.window().filled() as u32, len: m.window().len() as u32 })
             }
             _ => None,

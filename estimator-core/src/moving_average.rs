@@ -329,9 +329,15 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     }
 
     /// True when the window is set to one period, has spanned a whole one since it was emptied,
-    /// and holds no entry older than that period.
+    /// and holds no entry older than that period: a measurement can be taken.
     pub fn is_full(&self) -> bool {
-        self.configured && self.span() >= self.len && !self.is_over_long()
+        self.has_spanned_a_period() && !self.is_over_long()
+    }
+
+    /// True when the window is set to one period and has spanned a whole one since it was emptied
+    /// (it may still hold a few older entries, removed over the next pushes).
+    pub fn has_spanned_a_period(&self) -> bool {
+        self.configured && self.span() >= self.len
     }
 
     /// Whether the window still holds entries older than one period (being removed, a few a push).

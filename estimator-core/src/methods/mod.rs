@@ -125,10 +125,11 @@ impl<const CAP: usize> MethodState<CAP> {
         !matches!(self, MethodState::Traditional(_))
     }
 
-    /// Whether the method's window is full (always, for a method without one).
+    /// Whether the method's window has spanned a whole period since it started (always, for a
+    /// method without one).
     pub fn window_full(&self) -> bool {
         match self {
-            MethodState::Windowed(m) => m.window().is_full(),
+            MethodState::Windowed(m) => m.window().has_spanned_a_period(),
             #[cfg(feature = "paper-method")]
             MethodState::Paper(m) => m.window().is_full(),
             MethodState::Traditional(_) => true,
