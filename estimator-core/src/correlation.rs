@@ -194,44 +194,51 @@ impl QuantizedSample {
         }
     }
 
-    /// The products summed by the window, in the order of [`CorrelationSums::sums`] (see there).
-    pub fn terms(&self) -> [i64; SUMS] {
+    /// The products summed by the window, in the order of [`CorrelationSums::sums`] (see there),
+    /// each times the weight `w` (0 to [`FULL_WEIGHT`]). The weight is folded into the factors
+    /// before the products are formed (into the references, and into the terms without a
+    /// reference), so that weighting costs a dozen small integer products rather than one 64-bit
+    /// product a term.
+    pub fn terms(&self, w: u8) -> [i64; SUMS] {
+        let w = i32::from(w.min(FULL_WEIGHT));
         let (sr, cr, ss, cs) = (i32::from(self.sin_rho), i32::from(self.cos_rho), i32::from(self.sin_rho_s), i32::from(self.cos_rho_s));
         let (sl, cl) = (i32::from(self.sin_lat), i32::from(self.cos_lat));
-        let [c0, c1, c2, c3] = self.reference.map(i32::from);
+        // The references times the weight: within 2^14 x 2^6.
+        let [c0, c1, c2, c3] = self.reference.map(|c| i32::from(c) * w);
         let (r, p) = (i64::from(self.roll), i64::from(self.pitch));
+        let w64 = i64::from(w);
         // eq (2)'s roll row without its signs: sinL cos(rho-s), sinL sin(rho-s), cosL sin rho, cosL cos rho.
         let (h0, h1, h2, h3) = (sl * cs, sl * ss, cl * sr, cl * cr);
-        let w = |a: i32, b: i32| i64::from(a) * i64::from(b);
+        let m = |a: i32, b: i32| i64::from(a) * i64::from(b);
         [
             i64::from(c0),
             i64::from(c1),
             i64::from(c2),
             i64::from(c3),
-            i64::from(ss),
-            i64::from(cs),
-            r,
-            p,
+            i64::from(ss * w),
+            i64::from(cs * w),
+            r * w64,
+            p * w64,
             p * i64::from(c0),
             p * i64::from(c1),
             r * i64::from(c2),
             r * i64::from(c3),
-            w(c0, ss),
-            w(c0, cs),
-            w(c1, ss),
-            w(c1, cs),
-            i64::from(h0),
-            i64::from(h1),
-            i64::from(h2),
-            i64::from(h3),
-            w(c2, h0),
-            w(c2, h1),
-            w(c2, h2),
-            w(c2, h3),
-            w(c3, h0),
-            w(c3, h1),
-            w(c3, h2),
-            w(c3, h3),
+            m(c0, ss),
+            m(c0, cs),
+            m(c1, ss),
+            m(c1, cs),
+            i64::from(h0) * w64,
+            i64::from(h1) * w64,
+            i64::from(h2) * w64,
+            i64::from(h3) * w64,
+            m(c2, h0),
+            m(c2, h1),
+            m(c2, h2),
+            m(c2, h3),
+            m(c3, h0),
+            m(c3, h1),
+            m(c3, h2),
+            m(c3, h3),
         ]
     }
 }
@@ -288,26 +295,24 @@ pub struct Measurement {
 impl CorrelationSums {
     /// Adds one entry of weight `weight` (at most [`FULL_WEIGHT`]).
     pub fn add(&mut self, q: &QuantizedSample, fill_weight: u16, weight: u8) {
-        let t = q.terms();
-        let w = i64::from(weight.min(FULL_WEIGHT));
+        let t = q.terms(weight);
         for i in 0..SUMS {
-            self.sums[i] += w * t[i];
+            self.sums[i] += t[i];
         }
         self.count += 1;
         self.fill_weight += u32::from(fill_weight);
-        self.weight += w as u32;
+        self.weight += u32::from(weight.min(FULL_WEIGHT));
     }
 
     /// Subtracts an entry added before: exactly undoes [`CorrelationSums::add`].
     pub fn subtract(&mut self, q: &QuantizedSample, fill_weight: u16, weight: u8) {
-        let t = q.terms();
-        let w = i64::from(weight.min(FULL_WEIGHT));
+        let t = q.terms(weight);
         for i in 0..SUMS {
-            self.sums[i] -= w * t[i];
+            self.sums[i] -= t[i];
         }
         self.count = self.count.saturating_sub(1);
         self.fill_weight = self.fill_weight.saturating_sub(u32::from(fill_weight));
-        self.weight = self.weight.saturating_sub(w as u32);
+        self.weight = self.weight.saturating_sub(u32::from(weight.min(FULL_WEIGHT)));
     }
 
     /// The centred measurement of the module doc, or `None` for an empty window.

@@ -307,7 +307,7 @@ impl<const CAP: usize> Estimator<CAP> {
             angles: *angles,
             fill_weight: 0,
         };
-        self.filler.push(grid_sample, restart);
+        self.filler.push(grid_sample, restart, self.config.max_filled_gap_samples);
         self.take(&feed, stamp_s);
         self.window_status
     }
@@ -357,7 +357,7 @@ impl<const CAP: usize> Estimator<CAP> {
             if took > 0 && self.filler.backlog() == 0 {
                 break;
             }
-            let Some(passed) = self.filler.pass_on(self.config.max_filled_gap_samples) else {
+            let Some(passed) = self.filler.pass_on() else {
                 break;
             };
             took += 1;

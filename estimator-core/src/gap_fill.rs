@@ -118,11 +118,21 @@ pub struct Passed {
     pub restart: bool,
 }
 
+/// Most holes (runs too long to fill, and restarts) known ahead of the next sample to pass on.
+pub const HOLES: usize = 16;
+
 /// The delay line and the fill-error monitor.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GapFiller {
-    /// Received samples in index order: the [`NEIGHBOURS`] passed on last, then those waiting.
+    /// Received samples in index order: the `history` passed on last (for the fills), then those
+    /// waiting.
     line: Deque<Held, LINE>,
+    /// How many samples at the front of `line` have been passed on (at most [`NEIGHBOURS`]).
+    history: usize,
+    /// The first lost row of each hole (or restart) ahead, nearest first.
+    holes: Deque<u32, HOLES>,
+    /// Lost rows in a row that are filled (the configuration's `max_filled_gap_samples`).
+    max_fill: u32,
     /// The newest index received, once any.
     newest: Option<u32>,
     /// The next index to pass on.
@@ -190,6 +200,9 @@ impl Default for GapFiller {
     fn default() -> Self {
         GapFiller {
             line: Deque::new(),
+            history: 0,
+            holes: Deque::new(),
+            max_fill: 0,
             newest: None,
             next: 0,
             hole_end: None,
@@ -212,6 +225,8 @@ impl GapFiller {
     /// Forgets every pending sample (the fill-error estimate stays: it belongs to the sea state).
     pub fn clear(&mut self) {
         self.line.clear();
+        self.history = 0;
+        self.holes.clear();
         self.newest = None;
         self.hole_end = None;
     }
@@ -228,15 +243,25 @@ impl GapFiller {
 
     /// Takes a received sample (indices increase; lost ones are skipped). With `restart`, the
     /// window restarts before it (the gap before it is too long to bridge, or the clock stepped).
-    pub fn push(&mut self, sample: GridSample, restart: bool) {
-        if self.newest.is_none() {
-            self.next = sample.index;
+    /// Runs of up to `max_fill` lost rows are to be filled, longer ones left out.
+    pub fn push(&mut self, sample: GridSample, restart: bool, max_fill: u32) {
+        self.max_fill = max_fill;
+        match self.newest {
+            None => self.next = sample.index,
+            Some(n) => {
+                let lost = sample.index.wrapping_sub(n).wrapping_sub(1);
+                if (restart || lost > max_fill) && !self.holes.is_full() {
+                    let _ = self.holes.push_back(n.wrapping_add(1));
+                }
+            }
         }
         if self.line.is_full() {
             // Rows arrive in runs faster than they are passed on: the oldest goes (a sample
             // passed on, or else the oldest waiting, which becomes lost).
-            if let Some(old) = self.line.pop_front() {
-                if old.sample.index.wrapping_sub(self.next) < 1 << 31 {
+            if self.line.pop_front().is_some() {
+                if self.history > 0 {
+                    self.history -= 1;
+                } else {
                     self.overflows = self.overflows.saturating_add(1);
                 }
             }
@@ -257,30 +282,37 @@ impl GapFiller {
     /// lost, or a hole after it already known): received, or filled when it lies in a run of at
     /// most `max_fill` lost rows. Runs too long to fill are stepped over. `None` when the next
     /// sample must wait.
-    pub fn pass_on(&mut self, max_fill: u32) -> Option<Passed> {
+    pub fn pass_on(&mut self) -> Option<Passed> {
         let newest = self.newest?;
         loop {
             let k = self.next;
             if newest.wrapping_sub(k) >= 1 << 31 {
                 return None;
             }
-            // Position of the first held sample at or after `k`, and the one before it.
-            let pos = self.line.iter().position(|h| h.sample.index.wrapping_sub(k) < 1 << 31)?;
-            let held = *self.line.iter().nth(pos)?;
-            let before = if pos > 0 { self.line.iter().nth(pos - 1).map(|h| h.sample.index) } else { None };
+            // The first held sample at or after `k`, and the one before it.
+            let pos = self.history;
+            let held = self.line.get(pos)?;
             let received = held.sample.index == k;
-            let run = match before {
-                Some(b) => held.sample.index.wrapping_sub(b) - 1,
-                None => 0,
-            };
-            if !received && (run > max_fill || held.restart || before.is_none()) {
-                // A hole: step over it.
-                self.hole_end = Some(held.sample.index.wrapping_sub(1));
-                self.next = held.sample.index;
-                continue;
+            if !received {
+                let before = if pos > 0 { self.line.get(pos - 1).map(|h| h.sample.index) } else { None };
+                let run = before.map_or(u32::MAX, |b| held.sample.index.wrapping_sub(b).wrapping_sub(1));
+                if run > self.max_fill || held.restart {
+                    // A hole: step over it.
+                    self.hole_end = Some(held.sample.index.wrapping_sub(1));
+                    self.next = held.sample.index;
+                    continue;
+                }
             }
-            // Its weight needs the nearest hole after it: known, or nothing can come nearer.
-            let hole_after = self.hole_after(pos, k, max_fill);
+            // Holes behind are done with; the nearest ahead tapers this sample. Its weight is
+            // final once a hole ahead is known (none can come nearer) or `DELAY` samples have come.
+            while let Some(&h) = self.holes.front() {
+                if h.wrapping_sub(k).wrapping_sub(1) >= 1 << 31 {
+                    self.holes.pop_front();
+                } else {
+                    break;
+                }
+            }
+            let hole_after = self.holes.front().copied();
             if hole_after.is_none() && newest.wrapping_sub(k) < DELAY {
                 return None;
             }
@@ -288,8 +320,10 @@ impl GapFiller {
             let d_after = hole_after.map_or(u32::MAX, |h| h.wrapping_sub(k));
             let weight = ((taper(d_before) * taper(d_after) + 32) / 64) as u8;
             let (sample, restart) = if received {
-                self.measure_fill_error(&held.sample, pos);
-                (held.sample, held.restart)
+                let (sample, restart) = (held.sample, held.restart);
+                self.measure_fill_error(&sample, pos);
+                self.history += 1;
+                (sample, restart)
             } else {
                 (self.fill(k, pos)?, false)
             };
@@ -298,32 +332,12 @@ impl GapFiller {
             }
             self.next = k.wrapping_add(1);
             // Keep the last NEIGHBOURS passed on for the fills and the fill-error measure.
-            while let Some(front) = self.line.front() {
-                if self.next.wrapping_sub(front.sample.index) > NEIGHBOURS as u32 && self.next.wrapping_sub(front.sample.index) < 1 << 31 {
-                    self.line.pop_front();
-                } else {
-                    break;
-                }
+            while self.history > NEIGHBOURS {
+                self.line.pop_front();
+                self.history -= 1;
             }
             return Some(Passed { sample, weight: weight.min(FULL_WEIGHT), restart });
         }
-    }
-
-    /// The first lost row of the nearest hole (or restart) after index `k` (held at or after
-    /// position `pos`), if one is known within [`TAPER_LEN`].
-    fn hole_after(&self, pos: usize, k: u32, max_fill: u32) -> Option<u32> {
-        let mut previous = k;
-        for h in self.line.iter().skip(pos) {
-            let i = h.sample.index;
-            if previous.wrapping_sub(k) >= TAPER_LEN {
-                return None;
-            }
-            if (h.restart && i != k) || i.wrapping_sub(previous) > max_fill + 1 {
-                return Some(previous.wrapping_add(1));
-            }
-            previous = i;
-        }
-        None
     }
 
     /// The sample at `index` if received, searched within [`NEIGHBOURS`] positions of `pos`
@@ -335,6 +349,7 @@ impl GapFiller {
             .map(|h| &h.sample)
             .find(|s| s.index == index)
     }
+
     /// Predicts a present sample from its 10 neighbours, when all are present, and averages the
     /// squared prediction error. Every [`FILL_ERROR_EVERY`]th index only: the mean square of a sea
     /// state needs no more, and the step's cost stays low.
@@ -345,11 +360,18 @@ impl GapFiller {
         let mut roll = 0.0;
         let mut pitch = 0.0;
         let w = &SYMMETRIC_WEIGHTS;
+        if pos < NEIGHBOURS {
+            return;
+        }
         for i in 0..2 * NEIGHBOURS {
             let offset = if i < NEIGHBOURS { i as i32 - NEIGHBOURS as i32 } else { i as i32 - NEIGHBOURS as i32 + 1 };
-            let Some(n) = self.at(s.index.wrapping_add(offset as u32), pos) else {
+            // All ten present: each sits `offset` places from `s` in the line.
+            let Some(n) = self.line.get((pos as i32 + offset) as usize).map(|h| &h.sample) else {
                 return;
             };
+            if n.index != s.index.wrapping_add(offset as u32) {
+                return;
+            }
             roll += w[i] * n.roll_rad;
             pitch += w[i] * n.pitch_rad;
         }
@@ -457,8 +479,8 @@ mod tests {
         let mut f = GapFiller::default();
         let mut passed = std::vec::Vec::new();
         for i in (0..200u32).filter(|i| !(40..50).contains(i) && !(120..122).contains(i)) {
-            f.push(grid_sample(i), false);
-            while let Some(p) = f.pass_on(2) {
+            f.push(grid_sample(i), false, 2);
+            while let Some(p) = f.pass_on() {
                 assert!(i >= p.sample.index + DELAY || p.sample.index < 40, "{} passed at {i}", p.sample.index);
                 passed.push(p);
             }

@@ -6,13 +6,25 @@
 //! multi-position stop-and-go with or without reversals. Nothing here assumes a constant rate.
 //!
 //! # Period
-//! Pinned by [`crate::Config::rotation_period_s`], or detected: eight reference angles 45 deg apart
-//! are placed around the first angle seen (offset by 22.5 deg, so that none sits on a dwell position
-//! of a scheme that stops at multiples of 45 deg from where it started). A pattern that repeats
-//! passes every angle it reaches once per period in each direction it turns, so the time between two
-//! passes of the same reference angle in the same direction is the period. A pass is counted with
-//! 1 deg of hysteresis (jitter of the angle reading does not count as passes). The first reference
-//! passed twice in one direction gives the period, within the first one or two cycles.
+//! Pinned by [`crate::Config::rotation_period_s`], or detected: sixteen reference angles 22.5 deg
+//! apart are placed around the first angle seen (offset by 11.25 deg, so that none sits on a dwell
+//! position of a scheme that stops at multiples of 45 deg from where it started, and a rotation
+//! either way passes one within 11.25 deg). A pattern that repeats passes every angle it reaches
+//! once per period in each direction it turns, so the time between two passes of the same
+//! reference angle in the same direction is the period. A pass is counted with 1 deg of
+//! hysteresis (jitter of the angle reading does not count as passes). The first reference passed
+//! twice in one direction gives the period: a one-way rotation within a period and 1/32 of the
+//! start (sixteen references rather than eight take a sixteenth of a period off the first
+//! estimate, which waits for the period).
+//!
+//! # Across lost rows
+//! A gap is not a restart: the angle is continuous between the rows that are there. A pass seen
+//! across lost rows is placed where the angle, interpolated linearly between the rows on either
+//! side, crossed the threshold (exact for a steady rate, a few samples off inside a stop-and-go
+//! move, whose effect on the period is checked by the health check below); the rate over the gap
+//! is the angle turned over the samples it spans, and a dwell counts the lost samples too. Only a
+//! gap the window cannot bridge (an eighth of a period, see [`crate::estimator`]) restarts the
+//! pass timings.
 //!
 //! # What the pattern looks like
 //! Over the cycle after the period is known (while the first window fills), with `w_n = 2 pi / T`
@@ -44,11 +56,12 @@ use crate::math::wrap_pi;
 use crate::Real;
 
 /// Reference angles watched for passes.
-pub const LEVELS: usize = 8;
+pub const LEVELS: usize = 16;
 /// Samples in the short mean of the rotation increment.
 pub const SHORT_STEPS: u32 = 4;
 const PI: Real = core::f64::consts::PI as Real;
-const QUARTER_PI: Real = core::f64::consts::FRAC_PI_4 as Real;
+/// The spacing of the reference angles, rad (22.5 deg).
+const LEVEL_STEP_RAD: Real = core::f64::consts::FRAC_PI_8 as Real;
 
 /// Hysteresis of a pass, rad (1 deg).
 pub const PASS_HYSTERESIS_RAD: Real = 0.017_453_292;
@@ -261,7 +274,7 @@ impl RotationMonitor {
 
     /// Watches one sample (index on the sample grid, rotation angle).
     pub fn observe(&mut self, index: u32, rotation_rad: Real, limits: &Limits) -> Result<PatternEvent, RotationFault> {
-        let base = *self.levels_rad.get_or_insert(wrap_pi(rotation_rad + 0.5 * QUARTER_PI));
+        let base = *self.levels_rad.get_or_insert(wrap_pi(rotation_rad + 0.5 * LEVEL_STEP_RAD));
         let previous = self.previous.replace((index, rotation_rad));
         // Samples since the previous one (more than 1 across lost rows) and the rotation over them:
         // the angle is continuous between the rows that are there.
@@ -276,7 +289,7 @@ impl RotationMonitor {
         }
         let mut event = PatternEvent::None;
         // Passes of the reference angles.
-        // The angle from the first reference, once wrapped; from the others by subtracting 45 deg
+        // The angle from the first reference, once wrapped; from the others by subtracting 22.5 deg
         // steps and wrapping with one comparison (no division on the step's path).
         let d0 = wrap_pi(rotation_rad - base);
         // Once the period is known, only the reference that times it needs watching.
@@ -285,7 +298,7 @@ impl RotationMonitor {
             _ => 0..LEVELS,
         };
         for m in watched {
-            let mut d = d0 - m as Real * QUARTER_PI;
+            let mut d = d0 - m as Real * LEVEL_STEP_RAD;
             if d < -PI {
                 d += 2.0 * PI;
             }
@@ -306,7 +319,7 @@ impl RotationMonitor {
                 _ => continue,
             };
             let pass = match previous {
-                Some((k, rho)) if steps > 1 => pass_across_gap(k, steps, wrap_pi(rho - base) - m as Real * QUARTER_PI, d, dir),
+                Some((k, rho)) if steps > 1 => pass_across_gap(k, steps, wrap_pi(rho - base) - m as Real * LEVEL_STEP_RAD, d, dir),
                 _ => index,
             };
             let last = self.last_pass[m][dir].replace(pass);
