@@ -167,6 +167,21 @@ pub struct QuantizedSample {
     pub reference: [i16; 4],
 }
 
+/// `v` clamped to `[-limit, limit]`, 0 for NaN: the same values as `clamp`, by comparisons (on the
+/// Cortex-M4F `f32::clamp` is two library calls, `fmaxf` and `fminf`; this is a few FPU
+/// compares).
+fn within_or_zero(v: Real, limit: Real) -> Real {
+    if v > limit {
+        limit
+    } else if v < -limit {
+        -limit
+    } else if !v.is_nan() {
+        v
+    } else {
+        0.0
+    }
+}
+
 /// Largest attitude magnitude stored, rad (roll and pitch are checked to within 90 deg).
 const MAX_ATTITUDE_RAD: Real = 1.999;
 
@@ -174,11 +189,11 @@ impl QuantizedSample {
     /// Rounds a sample's roll, pitch, trigonometry and references to fixed point.
     pub fn new(roll_rad: Real, pitch_rad: Real, angles: &Angles, reference: &[Real; 4]) -> QuantizedSample {
         let att = |v: Real| {
-            let v = if v.is_nan() { 0.0 } else { v.clamp(-MAX_ATTITUDE_RAD, MAX_ATTITUDE_RAD) };
+            let v = within_or_zero(v, MAX_ATTITUDE_RAD);
             round_to_i32(v * ATTITUDE_COUNTS as Real)
         };
         let trig = |v: Real| {
-            let v = if v.is_nan() { 0.0 } else { v.clamp(-1.0, 1.0) };
+            let v = within_or_zero(v, 1.0);
             round_to_i32(v * TRIG_COUNTS as Real) as i16
         };
         QuantizedSample {

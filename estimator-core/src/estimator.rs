@@ -307,7 +307,7 @@ impl<const CAP: usize> Estimator<CAP> {
             angles: *angles,
             fill_weight: 0,
         };
-        self.filler.push(grid_sample, restart, self.config.max_filled_gap_samples);
+        self.filler.push(&grid_sample, restart, self.config.max_filled_gap_samples);
         self.take(&feed, stamp_s);
         self.window_status
     }

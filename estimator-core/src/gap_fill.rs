@@ -244,7 +244,7 @@ impl GapFiller {
     /// Takes a received sample (indices increase; lost ones are skipped). With `restart`, the
     /// window restarts before it (the gap before it is too long to bridge, or the clock stepped).
     /// Runs of up to `max_fill` lost rows are to be filled, longer ones left out.
-    pub fn push(&mut self, sample: GridSample, restart: bool, max_fill: u32) {
+    pub fn push(&mut self, sample: &GridSample, restart: bool, max_fill: u32) {
         self.max_fill = max_fill;
         match self.newest {
             None => self.next = sample.index,
@@ -266,7 +266,7 @@ impl GapFiller {
                 }
             }
         }
-        let _ = self.line.push_back(Held { sample, restart });
+        let _ = self.line.push_back(Held { sample: *sample, restart });
         self.newest = Some(sample.index);
     }
 
@@ -302,6 +302,24 @@ impl GapFiller {
                     self.next = held.sample.index;
                     continue;
                 }
+            }
+            // The usual case: a received sample, no hole near it.
+            if received && self.holes.is_empty() && self.hole_end.is_none_or(|e| k.wrapping_sub(e) > TAPER_LEN) {
+                if newest.wrapping_sub(k) < DELAY {
+                    return None;
+                }
+                let (sample, restart) = (held.sample, held.restart);
+                self.measure_fill_error(&sample, pos);
+                self.history += 1;
+                if restart {
+                    self.hole_end = None;
+                }
+                self.next = k.wrapping_add(1);
+                if self.history > NEIGHBOURS {
+                    self.line.pop_front();
+                    self.history -= 1;
+                }
+                return Some(Passed { sample, weight: FULL_WEIGHT, restart });
             }
             // Holes behind are done with; the nearest ahead tapers this sample. Its weight is
             // final once a hole ahead is known (none can come nearer) or `DELAY` samples have come.
@@ -479,7 +497,7 @@ mod tests {
         let mut f = GapFiller::default();
         let mut passed = std::vec::Vec::new();
         for i in (0..200u32).filter(|i| !(40..50).contains(i) && !(120..122).contains(i)) {
-            f.push(grid_sample(i), false, 2);
+            f.push(&grid_sample(i), false, 2);
             while let Some(p) = f.pass_on() {
                 assert!(i >= p.sample.index + DELAY || p.sample.index < 40, "{} passed at {i}", p.sample.index);
                 passed.push(p);
