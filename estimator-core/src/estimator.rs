@@ -347,19 +347,24 @@ impl<const CAP: usize> Estimator<CAP> {
     /// entry that leaves it; the filter then updates. After lost rows the filler holds more than
     /// one sample ready (the samples before a run of lost rows are ready at once), and the window
     /// must drop the entries of the lost rows' numbers: that work is spread over the following
-    /// steps. A step takes a second sample only while samples are waiting, and does not update the
-    /// filter when it took two or when the window removed more than one entry (its work was then
-    /// a second sample's); the window takes no measurement while it holds more than one period.
+    /// steps. A step takes a second sample only while samples are waiting and when the first was
+    /// not filled (a fill is the costliest sample; the second is never one), and does not update
+    /// the filter when it took two or when the window removed more than one entry (its work was
+    /// then a second sample's); the window takes no measurement while it holds more than one
+    /// period.
     fn take(&mut self, feed: &Feed, stamp_s: f64) {
         let mut work = 0;
         let mut took = 0;
+        let mut filled = false;
         while took < MAX_SAMPLES_PER_STEP && work < MAX_WORK_PER_STEP {
-            if took > 0 && self.filler.backlog() == 0 {
+            if took > 0 && (filled || self.filler.backlog() == 0) {
                 break;
             }
-            let Some(passed) = self.filler.pass_on() else {
+            // A second sample is never a filled one (a fill is the costliest sample).
+            let Some(passed) = self.filler.pass_on(took == 0) else {
                 break;
             };
+            filled = passed.sample.fill_weight > 0;
             took += 1;
             work += 1 + self.take_one(&passed, feed, stamp_s);
         }

@@ -170,19 +170,22 @@ const SYMMETRIC_WEIGHTS: [Real; 2 * NEIGHBOURS] = {
     w
 };
 
-/// Lagrange weights at 0 for the first `n` integer nodes (all distinct and non-zero).
+/// Lagrange weights at 0 for the first `n` integer nodes (all distinct, non-zero, within
+/// +-[`NEIGHBOURS`]): `w_i = prod_{m != i} (-x_m) / prod_{m != i} (x_i - x_m)`. Numerator and
+/// denominator are formed in integers (exact: at most 5!^2 and 10!/... below 2^24, so exact in
+/// f32 too, the same values the f32 products gave) and divided once.
 fn lagrange_at_zero(nodes: &[i32; 2 * NEIGHBOURS], n: usize) -> [Real; 2 * NEIGHBOURS] {
     let mut w = [0.0; 2 * NEIGHBOURS];
     for i in 0..n {
-        let mut num: Real = 1.0;
-        let mut den: Real = 1.0;
+        let mut num: i32 = 1;
+        let mut den: i32 = 1;
         for m in 0..n {
             if m != i {
-                num *= -(nodes[m] as Real);
-                den *= (nodes[i] - nodes[m]) as Real;
+                num *= -nodes[m];
+                den *= nodes[i] - nodes[m];
             }
         }
-        w[i] = num / den;
+        w[i] = num as Real / den as Real;
     }
     w
 }
@@ -280,9 +283,9 @@ impl GapFiller {
 
     /// Passes on the next sample whose weight is known (its [`DELAY`] successors received or
     /// lost, or a hole after it already known): received, or filled when it lies in a run of at
-    /// most `max_fill` lost rows. Runs too long to fill are stepped over. `None` when the next
-    /// sample must wait.
-    pub fn pass_on(&mut self) -> Option<Passed> {
+    /// most `max_fill` lost rows (only with `allow_fill`: a fill is the costliest sample). Runs
+    /// too long to fill are stepped over. `None` when the next sample must wait.
+    pub fn pass_on(&mut self, allow_fill: bool) -> Option<Passed> {
         let newest = self.newest?;
         loop {
             let k = self.next;
@@ -342,8 +345,10 @@ impl GapFiller {
                 self.measure_fill_error(&sample, pos);
                 self.history += 1;
                 (sample, restart)
-            } else {
+            } else if allow_fill {
                 (self.fill(k, pos)?, false)
+            } else {
+                return None;
             };
             if restart {
                 self.hole_end = None;
@@ -358,14 +363,28 @@ impl GapFiller {
         }
     }
 
-    /// The sample at `index` if received, searched within [`NEIGHBOURS`] positions of `pos`
-    /// (indices increase along the line, so a sample within `NEIGHBOURS` indices of the one at
-    /// `pos` is within as many positions).
-    fn at(&self, index: u32, pos: usize) -> Option<&GridSample> {
-        (pos.saturating_sub(NEIGHBOURS)..=pos + NEIGHBOURS)
-            .filter_map(|p| self.line.get(p))
-            .map(|h| &h.sample)
-            .find(|s| s.index == index)
+    /// The sample at `index` (within [`NEIGHBOURS`] of the lost index `k`) if received. `pos` is
+    /// the position of the first held sample after `k`: a sample `o` before `k` sits at `pos + o`
+    /// when nothing between is lost, and nearer `pos` otherwise; one `o` after it at
+    /// `pos + o - 1`, and nearer `pos` otherwise. So a short walk towards `pos` finds it.
+    fn at(&self, index: u32, k: u32, pos: usize) -> Option<&GridSample> {
+        let o = index.wrapping_sub(k) as i32;
+        let (mut p, step) = if o < 0 { (pos as i32 + o, 1) } else { (pos as i32 + o - 1, -1) };
+        for _ in 0..NEIGHBOURS {
+            if p >= 0 {
+                let s = &self.line.get(p as usize)?.sample;
+                let d = s.index.wrapping_sub(index) as i32;
+                if d == 0 {
+                    return Some(s);
+                }
+                // Walked past where it would be: it was lost.
+                if (o < 0 && d > 0) || (o > 0 && d < 0) {
+                    return None;
+                }
+            }
+            p += step;
+        }
+        None
     }
 
     /// Predicts a present sample from its 10 neighbours, when all are present, and averages the
@@ -412,7 +431,7 @@ impl GapFiller {
             if offset == 0 {
                 continue;
             }
-            let Some(s) = self.at(index.wrapping_add(offset as u32), pos) else {
+            let Some(s) = self.at(index.wrapping_add(offset as u32), index, pos) else {
                 let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR[offset.unsigned_abs() as usize - 1];
                 weight = weight.saturating_mul(factor);
                 continue;
@@ -498,7 +517,7 @@ mod tests {
         let mut passed = std::vec::Vec::new();
         for i in (0..200u32).filter(|i| !(40..50).contains(i) && !(120..122).contains(i)) {
             f.push(&grid_sample(i), false, 2);
-            while let Some(p) = f.pass_on() {
+            while let Some(p) = f.pass_on(true) {
                 assert!(i >= p.sample.index + DELAY || p.sample.index < 40, "{} passed at {i}", p.sample.index);
                 passed.push(p);
             }
