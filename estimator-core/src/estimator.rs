@@ -349,9 +349,9 @@ impl<const CAP: usize> Estimator<CAP> {
     /// must drop the entries of the lost rows' numbers: that work is spread over the following
     /// steps. A step takes a second sample only while samples are waiting and when the first was
     /// not filled (a fill is the costliest sample; the second is never one), and does not update
-    /// the filter when it took two or when the window removed more than one entry (its work was
-    /// then a second sample's); the window takes no measurement while it holds more than one
-    /// period.
+    /// the filter when it took two, when it filled one, or when the window removed more than one
+    /// entry (its work was then a second sample's); the window takes no measurement while it
+    /// holds more than one period.
     fn take(&mut self, feed: &Feed, stamp_s: f64) {
         let mut work = 0;
         let mut took = 0;
@@ -368,7 +368,8 @@ impl<const CAP: usize> Estimator<CAP> {
             took += 1;
             work += 1 + self.take_one(&passed, feed, stamp_s);
         }
-        if took > 0 && work <= 2 {
+        // A filled sample is a sample's work and a fill's: the filter waits for the next step.
+        if took > 0 && work <= 2 && !filled {
             self.method.update(&self.config, feed, self.filler.single_fill_variance());
         }
     }

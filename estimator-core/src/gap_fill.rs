@@ -147,17 +147,26 @@ pub struct GapFiller {
     overflows: u32,
 }
 
-/// Weights of the 10-point Lagrange prediction of the middle of `-5..=5` (without 0), at nodes
-/// -5..-1, 1..5: `w_j = prod_{m != j} m / (m - j)`, exact rationals (denominator 126), computed
-/// once at build time.
-const SYMMETRIC_WEIGHTS: [Real; 2 * NEIGHBOURS] = {
-    let nodes: [i64; 2 * NEIGHBOURS] = [-5, -4, -3, -2, -1, 1, 2, 3, 4, 5];
+/// Lagrange weights at 0 for the nodes -5..=5 without 0 and without `skip` (0: none), in order,
+/// computed at build time as exact rationals (the fills of the usual patterns, one lost row or
+/// two in a row, need no weights at run time).
+const fn weights_without(skip: i64) -> [Real; 2 * NEIGHBOURS] {
+    let mut nodes = [0i64; 2 * NEIGHBOURS];
+    let mut n = 0;
+    let mut x = -(NEIGHBOURS as i64);
+    while x <= NEIGHBOURS as i64 {
+        if x != 0 && x != skip {
+            nodes[n] = x;
+            n += 1;
+        }
+        x += 1;
+    }
     let mut w = [0.0; 2 * NEIGHBOURS];
     let mut j = 0;
-    while j < 2 * NEIGHBOURS {
+    while j < n {
         let (mut num, mut den) = (1i64, 1i64);
         let mut m = 0;
-        while m < 2 * NEIGHBOURS {
+        while m < n {
             if m != j {
                 num *= -nodes[m];
                 den *= nodes[j] - nodes[m];
@@ -168,7 +177,13 @@ const SYMMETRIC_WEIGHTS: [Real; 2 * NEIGHBOURS] = {
         j += 1;
     }
     w
-};
+}
+
+/// Fill weights with every neighbour present, and with the one after or before lost (two lost in
+/// a row).
+const ALL_NEIGHBOURS: [Real; 2 * NEIGHBOURS] = weights_without(0);
+const WITHOUT_NEXT: [Real; 2 * NEIGHBOURS] = weights_without(1);
+const WITHOUT_PREVIOUS: [Real; 2 * NEIGHBOURS] = weights_without(-1);
 
 /// Lagrange weights at 0 for the first `n` integer nodes (all distinct, non-zero, within
 /// +-[`NEIGHBOURS`]): `w_i = prod_{m != i} (-x_m) / prod_{m != i} (x_i - x_m)`. Numerator and
@@ -396,7 +411,7 @@ impl GapFiller {
         }
         let mut roll = 0.0;
         let mut pitch = 0.0;
-        let w = &SYMMETRIC_WEIGHTS;
+        let w = &ALL_NEIGHBOURS;
         if pos < NEIGHBOURS {
             return;
         }
@@ -427,6 +442,7 @@ impl GapFiller {
         let mut before: Option<(i32, &GridSample)> = None;
         let mut after: Option<(i32, &GridSample)> = None;
         let mut weight = 1u32;
+        let mut missing = 0i32;
         for offset in -(NEIGHBOURS as i32)..=(NEIGHBOURS as i32) {
             if offset == 0 {
                 continue;
@@ -434,6 +450,7 @@ impl GapFiller {
             let Some(s) = self.at(index.wrapping_add(offset as u32), index, pos) else {
                 let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR[offset.unsigned_abs() as usize - 1];
                 weight = weight.saturating_mul(factor);
+                missing = offset;
                 continue;
             };
             {
@@ -448,7 +465,12 @@ impl GapFiller {
             }
         }
         let ((ob, b), (oa, a)) = (before?, after?);
-        let w = lagrange_at_zero(&nodes, n);
+        let w = match (n, missing) {
+            (10, _) => ALL_NEIGHBOURS,
+            (9, 1) => WITHOUT_NEXT,
+            (9, -1) => WITHOUT_PREVIOUS,
+            _ => lagrange_at_zero(&nodes, n),
+        };
         let (mut roll, mut pitch) = (0.0, 0.0);
         for i in 0..n {
             roll += w[i] * values[i].0;
