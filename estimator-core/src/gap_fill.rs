@@ -131,6 +131,8 @@ pub struct GapFiller {
     history: usize,
     /// The first lost row of each hole (or restart) ahead, nearest first.
     holes: Deque<u32, HOLES>,
+    /// Lost rows in the holes ahead (stepped over at once when the next sample reaches them).
+    hole_rows_ahead: u32,
     /// Lost rows in a row that are filled (the configuration's `max_filled_gap_samples`).
     max_fill: u32,
     /// The newest index received, once any.
@@ -220,6 +222,7 @@ impl Default for GapFiller {
             line: Deque::new(),
             history: 0,
             holes: Deque::new(),
+            hole_rows_ahead: 0,
             max_fill: 0,
             newest: None,
             next: 0,
@@ -245,6 +248,7 @@ impl GapFiller {
         self.line.clear();
         self.history = 0;
         self.holes.clear();
+        self.hole_rows_ahead = 0;
         self.newest = None;
         self.hole_end = None;
     }
@@ -270,6 +274,7 @@ impl GapFiller {
                 let lost = sample.index.wrapping_sub(n).wrapping_sub(1);
                 if (restart || lost > max_fill) && !self.holes.is_full() {
                     let _ = self.holes.push_back(n.wrapping_add(1));
+                    self.hole_rows_ahead = self.hole_rows_ahead.saturating_add(lost);
                 }
             }
         }
@@ -288,10 +293,15 @@ impl GapFiller {
         self.newest = Some(sample.index);
     }
 
-    /// Samples waiting that could be passed on now (whose successors are known).
+    /// How far the samples passed on lag behind the delay, in samples: the rows filled (each
+    /// takes a step of its own) since the lag was last made up. The rows of holes ahead do not
+    /// count: they are stepped over at once when the next sample reaches them, which makes up
+    /// the lag they caused.
     pub fn backlog(&self) -> u32 {
         match self.newest {
-            Some(n) if n.wrapping_sub(self.next) < 1 << 31 => n.wrapping_sub(self.next).saturating_sub(DELAY - 1).min(LINE as u32),
+            Some(n) if n.wrapping_sub(self.next) < 1 << 31 => {
+                n.wrapping_sub(self.next).saturating_sub(DELAY - 1).saturating_sub(self.hole_rows_ahead).min(LINE as u32)
+            }
             _ => 0,
         }
     }
@@ -317,6 +327,7 @@ impl GapFiller {
                 if run > self.max_fill || held.restart {
                     // A hole: step over it.
                     self.hole_end = Some(held.sample.index.wrapping_sub(1));
+                    self.hole_rows_ahead = self.hole_rows_ahead.saturating_sub(held.sample.index.wrapping_sub(k));
                     self.next = held.sample.index;
                     continue;
                 }
