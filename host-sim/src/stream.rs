@@ -378,7 +378,6 @@ pub fn stream_log<R: Read, W: Write>(
         let answer =
             step_remote(target, &SampleMsg::from(&sample)).with_context(|| format!("log line {}", line.line))?;
         cost.add(answer.step_cost_ticks);
-        if std::env::var_os("DEBUG_STEP_TICKS").is_some() { eprintln!("TICKS {} {}", line.row.time_s, answer.step_cost_ticks); }
         writer.write_step(line.row.time_s, &answer.result)?;
         rows += 1;
         progress.update(rows, lines.bytes_read());
