@@ -218,6 +218,13 @@ fn taper(d: u32) -> u32 {
 
 impl Default for GapFiller {
     fn default() -> Self {
+        GapFiller::new()
+    }
+}
+
+impl GapFiller {
+    /// An empty delay line, no fill error measured yet.
+    pub const fn new() -> Self {
         GapFiller {
             line: Deque::new(),
             history: 0,

@@ -6,16 +6,15 @@
 //! multi-position stop-and-go with or without reversals. Nothing here assumes a constant rate.
 //!
 //! # Period
-//! Pinned by [`crate::Config::rotation_period_s`], or detected: sixteen reference angles 22.5 deg
-//! apart are placed around the first angle seen (offset by 11.25 deg, so that none sits on a dwell
-//! position of a scheme that stops at multiples of 45 deg from where it started, and a rotation
-//! either way passes one within 11.25 deg). A pattern that repeats passes every angle it reaches
-//! once per period in each direction it turns, so the time between two passes of the same
-//! reference angle in the same direction is the period. A pass is counted with 1 deg of
-//! hysteresis (jitter of the angle reading does not count as passes). The first reference passed
-//! twice in one direction gives the period: a one-way rotation within a period and 1/32 of the
-//! start (sixteen references rather than eight take a sixteenth of a period off the first
-//! estimate, which waits for the period).
+//! Pinned by [`crate::Config::rotation_period_s`], or detected: eight reference angles 45 deg apart
+//! are placed around the first angle seen (offset by 22.5 deg, so that none sits on a dwell position
+//! of a scheme that stops at multiples of 45 deg from where it started). A pattern that repeats
+//! passes every angle it reaches once per period in each direction it turns, so the time between two
+//! passes of the same reference angle in the same direction is the period. A pass is counted with
+//! 1 deg of hysteresis (jitter of the angle reading does not count as passes). The first reference
+//! passed twice in one direction gives the period: a one-way rotation within a period and 1/16 of
+//! the start. (Sixteen references would take a sixteenth of a period off the first estimate; the
+//! measured effect on its accuracy was mixed, and the checkpoint image keeps eight.)
 //!
 //! # Across lost rows
 //! A gap is not a restart: the angle is continuous between the rows that are there. A pass seen
@@ -56,12 +55,12 @@ use crate::math::wrap_pi;
 use crate::Real;
 
 /// Reference angles watched for passes.
-pub const LEVELS: usize = 16;
+pub const LEVELS: usize = 8;
 /// Samples in the short mean of the rotation increment.
 pub const SHORT_STEPS: u32 = 4;
 const PI: Real = core::f64::consts::PI as Real;
-/// The spacing of the reference angles, rad (22.5 deg).
-const LEVEL_STEP_RAD: Real = core::f64::consts::FRAC_PI_8 as Real;
+/// The spacing of the reference angles, rad (45 deg).
+const LEVEL_STEP_RAD: Real = core::f64::consts::FRAC_PI_4 as Real;
 
 /// Hysteresis of a pass, rad (1 deg).
 pub const PASS_HYSTERESIS_RAD: Real = 0.017_453_292;
@@ -222,7 +221,7 @@ impl RotationMonitor {
     }
 
     /// A monitor with the period pinned (in samples) or to be detected.
-    pub fn new(pinned_period_samples: Option<u32>) -> RotationMonitor {
+    pub const fn new(pinned_period_samples: Option<u32>) -> RotationMonitor {
         RotationMonitor {
             period_samples: pinned_period_samples,
             pinned: pinned_period_samples.is_some(),
@@ -289,7 +288,7 @@ impl RotationMonitor {
         }
         let mut event = PatternEvent::None;
         // Passes of the reference angles.
-        // The angle from the first reference, once wrapped; from the others by subtracting 22.5 deg
+        // The angle from the first reference, once wrapped; from the others by subtracting 45 deg
         // steps and wrapping with one comparison (no division on the step's path).
         let d0 = wrap_pi(rotation_rad - base);
         // Once the period is known, only the reference that times it needs watching.
