@@ -175,6 +175,8 @@ pub struct CorrelationWindow<const CAP: usize> {
     /// The number of the first entry since the window was emptied, and of the newest.
     first: u32,
     newest: Option<u32>,
+    /// Whether the window has held exactly one period since it was emptied.
+    was_full: bool,
     partial: Bin,
 }
 
@@ -284,6 +286,7 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             origin: None,
             first: 0,
             newest: None,
+            was_full: false,
             partial: Bin::ZERO,
         }
     }
@@ -319,6 +322,7 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         self.origin = None;
         self.newest = None;
         self.first = 0;
+        self.was_full = false;
     }
 
     /// Entry numbers in a full window.
@@ -347,13 +351,13 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     /// True when the window is set to one period, has spanned a whole one since it was emptied,
     /// and holds no entry older than that period: a measurement can be taken.
     pub fn is_full(&self) -> bool {
-        self.has_spanned_a_period() && !self.is_over_long()
+        self.configured && self.span() >= self.len && !self.is_over_long()
     }
 
-    /// True when the window is set to one period and has spanned a whole one since it was emptied
-    /// (it may still hold a few older entries, removed over the next pushes).
+    /// True once the window has held exactly one period since it was emptied (after a run of lost
+    /// rows it may hold a few older entries for a few pushes: still true).
     pub fn has_spanned_a_period(&self) -> bool {
-        self.configured && self.span() >= self.len
+        self.was_full
     }
 
     /// Whether the window still holds entries older than one period (being removed, a few a push).
@@ -459,6 +463,9 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         }
         if self.ring.push_back(Entry { sample, fill_weight, number: number as u16, weight }).is_ok() {
             self.sums.add(&sample, fill_weight, weight);
+        }
+        if !self.was_full && self.is_full() {
+            self.was_full = true;
         }
         removed as u32
     }

@@ -387,7 +387,7 @@ fn run_fault(fault_increment_rad: f64, fault_s: u64) -> FaultRun {
 /// stand still (a reversal passes through zero), plus the delay of the gap filler.
 fn stop_settle() -> u64 {
     let alpha = 1.0 / SHORT_STEPS as f64;
-    (0.25f64.ln() / (1.0 - alpha).ln()).ceil() as u64 + 2 + estimator_core::gap_fill::NEIGHBOURS as u64
+    (0.25f64.ln() / (1.0 - alpha).ln()).ceil() as u64 + 2 + u64::from(estimator_core::gap_fill::DELAY)
 }
 
 /// What the status did during the fault.
