@@ -14,3 +14,4 @@ pub mod report;
 pub mod rotation_scheme;
 pub mod scenario;
 pub mod stream;
+pub mod time_stamps;
