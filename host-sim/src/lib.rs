@@ -3,9 +3,12 @@
 pub mod cli_args;
 pub mod compare;
 pub mod estimates_csv;
+pub mod exit_status;
 pub mod figures;
+pub mod html_report;
 pub mod log_csv;
 pub mod monte_carlo;
+pub mod output_file;
 pub mod pipeline;
 pub mod plots;
 pub mod recorder;
@@ -15,3 +18,5 @@ pub mod rotation_scheme;
 pub mod scenario;
 pub mod stream;
 pub mod time_stamps;
+pub mod timeline;
+pub mod trial_report;

@@ -26,7 +26,7 @@ use crate::scenario::{Row, ScenarioParams};
 use crate::time_stamps::TimeColumn;
 use serde::{Deserialize, Serialize};
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Read, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
 /// The attitude log's header as `generate` writes it.
@@ -498,14 +498,16 @@ where
     w.flush()
 }
 
-/// Writes rows as an attitude log file.
-pub fn write_log<I>(path: &Path, rows: I) -> Result<(), LogError>
+/// Writes rows as an attitude log file (through a temporary file beside it, renamed when complete:
+/// [`crate::output_file`]).
+pub fn write_log<I>(path: &Path, rows: I) -> anyhow::Result<()>
 where
     I: IntoIterator,
     I::Item: std::borrow::Borrow<Row>,
 {
-    let file = File::create(path).map_err(|e| LogError::new(path, 0, format!("cannot create: {e}")))?;
-    write_log_to(BufWriter::new(file), rows).map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))
+    let mut out = crate::output_file::OutputFile::create(path)?;
+    write_log_to(&mut out, rows).map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))?;
+    out.commit()
 }
 
 /// The truth file of a generated log: the installation errors and every scenario parameter.
@@ -530,10 +532,10 @@ pub fn truth_path(log_path: &Path) -> PathBuf {
     stem.with_file_name(name)
 }
 
-/// Writes the truth file.
-pub fn write_truth(path: &Path, truth: &Truth) -> Result<(), LogError> {
+/// Writes the truth file (through a temporary file beside it).
+pub fn write_truth(path: &Path, truth: &Truth) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(truth).map_err(|e| LogError::new(path, 0, format!("cannot encode: {e}")))?;
-    std::fs::write(path, text + "\n").map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))
+    crate::output_file::write_bytes(path, (text + "\n").as_bytes())
 }
 
 /// A truth file as read: the errors, and the scenario when `generate` wrote it.
