@@ -254,7 +254,7 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
                 let pad = 0.1 * (hi - lo);
                 let mut p = time_panel(format!("{} estimate, arcsec ({method})", X_NAMES[i]), "arcsec", (lo - pad, hi + pad), false);
                 p.bands.push(Band {
-                    label: "estimate +- 1-sigma".into(),
+                    label: "estimate ± 1-sigma".into(),
                     color: PALETTE[i],
                     points: with_estimate.iter().map(|(t, e, _)| (*t, e.x[i] - e.sigma[i], e.x[i] + e.sigma[i])).collect(),
                 });
@@ -339,7 +339,11 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
             .map(|a| Band {
                 label: AXES[a].into(),
                 color: PALETTE[a],
-                points: buckets.iter().filter(|b| b.t0_s >= from_s).filter_map(|b| pick(b).map(|e| (0.5 * (b.t0_s + b.t1_s), e.min[a], e.max[a]))).collect(),
+                points: buckets
+                    .iter()
+                    .filter(|b| b.t0_s >= from_s)
+                    .map(|b| pick(b).map_or((f64::NAN, f64::NAN, f64::NAN), |e| (0.5 * (b.t0_s + b.t1_s), e.min[a], e.max[a])))
+                    .collect(),
             })
             .collect()
     };
@@ -352,7 +356,17 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
         p.bands = before;
         panels.push(p);
         let after = envelope_bands(&|b| b.after_arcsec, first_estimate_s);
-        let mut p = time_panel(format!("After compensation, from the first estimate (envelope; its own scale), arcsec ({method})"), "arcsec", band_range(&after, 0.1), false);
+        // The scale of the last three quarters from the first estimate on: what is left once the
+        // estimate has settled; the first estimates' larger errors are cut at the axis.
+        let settled_s = first_estimate_s + 0.25 * (x_range.1 - first_estimate_s);
+        let settled: Vec<Band> =
+            after.iter().map(|b| Band { points: b.points.iter().copied().filter(|p| p.0 >= settled_s).collect(), ..b.clone() }).collect();
+        let mut p = time_panel(
+            "After compensation from the first estimate (envelope; scale of its last 3/4), arcsec".to_string(),
+            "arcsec",
+            band_range(&settled, 0.01),
+            false,
+        );
         p.bands = after;
         panels.push(p);
         let mut p = time_panel("After compensation, the last two rotation periods, every row, arcsec".into(), "arcsec", (0.0, 0.0), false);
@@ -364,7 +378,7 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
     } else {
         let removed = envelope_bands(&|b| b.removed_arcsec, f64::NEG_INFINITY);
         let mut p = time_panel(
-            format!("Oscillation removed by the compensation (eq 2 with the running estimate; envelope), arcsec ({method})"),
+            format!("Oscillation removed by the compensation (eq 2, running estimate; envelope), arcsec ({method})"),
             "arcsec",
             band_range(&removed, 1.0),
             false,
@@ -395,7 +409,35 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
             .map(|c| Band {
                 label: CHANNELS[c].into(),
                 color: PALETTE[c],
-                points: buckets.iter().filter_map(|b| b.residual_arcsec.map(|e| (0.5 * (b.t0_s + b.t1_s), e.min[c], e.max[c]))).collect(),
+                points: buckets.iter().map(|b| b.residual_arcsec.map_or((f64::NAN, f64::NAN, f64::NAN), |e| (0.5 * (b.t0_s + b.t1_s), e.min[c], e.max[c]))).collect(),
+            })
+            .collect();
+        // Their mean over about one rotation period (the buckets it spans), as the filter's
+        // residual check averages them: a drift or a model mismatch moves it off 0.
+        let span_s = period_s.unwrap_or(480.0);
+        let means: Vec<Series> = (0..4)
+            .map(|c| {
+                let mut points = Vec::new();
+                let mut window: std::collections::VecDeque<(f64, f64, u64)> = Default::default();
+                for b in &buckets {
+                    let Some(e) = b.residual_arcsec else {
+                        window.clear();
+                        points.push((f64::NAN, f64::NAN));
+                        continue;
+                    };
+                    window.push_back((b.t1_s, e.sum[c], e.rows));
+                    while window.front().is_some_and(|f| f.0 < b.t1_s - span_s) {
+                        window.pop_front();
+                    }
+                    // Only once the mean spans a whole period (after the start and each restart).
+                    if window.front().is_some_and(|f| f.0 > b.t1_s - 0.9 * span_s) {
+                        points.push((f64::NAN, f64::NAN));
+                        continue;
+                    }
+                    let (sum, rows) = window.iter().fold((0.0, 0u64), |(s, n), w| (s + w.1, n + w.2));
+                    points.push((b.t1_s, sum / rows.max(1) as f64));
+                }
+                Series { label: format!("{} mean over a period", CHANNELS[c]), color: PALETTE[c], points }
             })
             .collect();
         // The scale of the second half: the first windows' sway residuals are cut and marked.
@@ -403,9 +445,15 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
         let range = symmetric_range(bands.iter().flat_map(|b| b.points.iter().filter(|p| p.0 >= mid).flat_map(|p| [p.1, p.2])), 0.01);
         let mut p = time_panel(format!("Post-fit residuals z - H x of the correlation channels (envelope), arcsec ({method})"), "arcsec", range, false);
         p.bands = bands;
+        let mean_range = symmetric_range(means.iter().flat_map(|s| s.points.iter().filter(|p| p.0 >= mid).map(|p| p.1)), 0.01);
+        let mut m = time_panel("Their mean over one rotation period, arcsec".into(), "arcsec", mean_range, false);
+        m.series = means;
         let path = dir.join("residuals.png");
-        plots::draw_png(&path, &[p], 1000, 360)?;
-        figures.push(Figure { path, caption: "What eq (2) with the current estimate leaves unexplained in each window's correlations: noise around 0 when the model holds".into() });
+        plots::draw_png(&path, &[p, m], 1000, 330)?;
+        figures.push(Figure {
+            path,
+            caption: "What eq (2) with the current estimate leaves unexplained in each window's correlations, and its mean over a period: noise around 0 when the model holds".into(),
+        });
     }
     Ok(figures)
 }

@@ -47,7 +47,8 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
 }
 
-/// A shaded band between two curves: `(x, low, high)` points.
+/// A shaded band between two curves: `(x, low, high)` points; a point with a non-finite value is
+/// a gap in the band.
 #[derive(Clone, Debug)]
 pub struct Band {
     pub label: String,
@@ -117,6 +118,7 @@ fn x_extent(panel: &Panel) -> (f64, f64) {
         .series
         .iter()
         .flat_map(|s| s.points.iter().map(|p| p.0))
+        .chain(panel.bands.iter().flat_map(|b| b.points.iter().map(|p| p.0)))
         .filter(|x| x.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
     if lo < hi {
@@ -153,21 +155,32 @@ where
         .map_err(|e| anyhow!("plot: {e}"))?;
     for b in &panel.bands {
         let color = b.color;
-        let pts: Vec<(f64, f64, f64)> = b.points.iter().copied().filter(|p| p.0.is_finite() && p.1.is_finite() && p.2.is_finite()).collect();
-        // One polygon per stretch without gaps: the low edge forward, the high edge back.
-        let polygon: Vec<(f64, f64)> = pts.iter().map(|p| (p.0, p.1.clamp(y0, y1))).chain(pts.iter().rev().map(|p| (p.0, p.2.clamp(y0, y1)))).collect();
+        // One polygon per stretch of finite points (a non-finite point is a gap): the low edge
+        // forward, the high edge back.
+        let polygons: Vec<Vec<(f64, f64)>> = b
+            .points
+            .split(|p| !(p.0.is_finite() && p.1.is_finite() && p.2.is_finite()))
+            .filter(|run| !run.is_empty())
+            .map(|run| run.iter().map(|p| (p.0, p.1.clamp(y0, y1))).chain(run.iter().rev().map(|p| (p.0, p.2.clamp(y0, y1)))).collect())
+            .collect();
         let label = if band_is_cut(b, panel.y_range) { format!("{} (cut at the axis)", b.label) } else { b.label.clone() };
         chart
-            .draw_series(std::iter::once(Polygon::new(polygon, color.mix(0.25).filled())))
+            .draw_series(polygons.into_iter().map(|polygon| Polygon::new(polygon, color.mix(0.4).filled())))
             .map_err(|e| anyhow!("plot: {e}"))?
             .label(label)
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 20, y + 5)], color.mix(0.25).filled()));
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 20, y + 5)], color.mix(0.4).filled()));
     }
     for s in &panel.series {
         let color = s.color;
-        let pts = s.points.iter().map(|&(x, v)| (x, if v.is_nan() { v } else { v.clamp(y0, y1) })).filter(|p| p.1.is_finite());
+        // A NaN is a gap in the line; values beyond the axis are drawn at its edge.
+        let runs: Vec<Vec<(f64, f64)>> = s
+            .points
+            .split(|p| p.1.is_nan() || !p.0.is_finite())
+            .filter(|run| !run.is_empty())
+            .map(|run| run.iter().map(|&(x, v)| (x, v.clamp(y0, y1))).collect())
+            .collect();
         chart
-            .draw_series(LineSeries::new(pts, color.stroke_width(1)))
+            .draw_series(runs.into_iter().map(|run| PathElement::new(run, color.stroke_width(1))))
             .map_err(|e| anyhow!("plot: {e}"))?
             .label(legend_label(s, panel.y_range))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));

@@ -33,38 +33,47 @@ pub const TAIL_ROWS: usize = 8192;
 /// Events listed at most.
 pub const MAX_EVENTS: usize = 200;
 
-/// Least and greatest value of `N` signals over some rows.
+/// Least and greatest value, and the sum, of `N` signals over some rows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Envelope<const N: usize> {
     pub min: [f64; N],
     pub max: [f64; N],
+    pub sum: [f64; N],
+    pub rows: u64,
 }
 
 impl<const N: usize> Envelope<N> {
-    fn of(v: &[f64; N]) -> Self {
-        Envelope { min: *v, max: *v }
-    }
-
     fn add(this: &mut Option<Self>, v: &[f64; N]) {
         if v.iter().any(|x| !x.is_finite()) {
             return;
         }
-        match this {
-            None => *this = Some(Envelope::of(v)),
-            Some(e) => {
+        let e = this.get_or_insert(Envelope { min: *v, max: *v, sum: [0.0; N], rows: 0 });
+        for i in 0..N {
+            e.min[i] = e.min[i].min(v[i]);
+            e.max[i] = e.max[i].max(v[i]);
+            e.sum[i] += v[i];
+        }
+        e.rows += 1;
+    }
+
+    fn merge(this: &mut Option<Self>, other: &Option<Self>) {
+        match (this.as_mut(), other) {
+            (_, None) => {}
+            (None, Some(o)) => *this = Some(*o),
+            (Some(e), Some(o)) => {
                 for i in 0..N {
-                    e.min[i] = e.min[i].min(v[i]);
-                    e.max[i] = e.max[i].max(v[i]);
+                    e.min[i] = e.min[i].min(o.min[i]);
+                    e.max[i] = e.max[i].max(o.max[i]);
+                    e.sum[i] += o.sum[i];
                 }
+                e.rows += o.rows;
             }
         }
     }
 
-    fn merge(this: &mut Option<Self>, other: &Option<Self>) {
-        if let Some(o) = other {
-            Envelope::add(this, &o.min);
-            Envelope::add(this, &o.max);
-        }
+    /// The mean of signal `i`.
+    pub fn mean(&self, i: usize) -> f64 {
+        self.sum[i] / self.rows.max(1) as f64
     }
 }
 
@@ -385,6 +394,9 @@ mod tests {
         assert_eq!(buckets.iter().map(|b| b.rows).sum::<u64>(), n as u64, "every row in one bucket");
         let peak = buckets.iter().filter_map(|b| b.removed_arcsec).map(|e| e.max[1]).fold(0.0, f64::max);
         assert!((peak - 500.0).abs() < 1e-3, "the spike survives the merging: {peak}");
+        let (sum, rows) = buckets.iter().filter_map(|b| b.removed_arcsec).fold((0.0, 0), |(s, n), e| (s + e.sum[1], n + e.rows));
+        assert_eq!(rows, n as u64);
+        assert!((sum / rows as f64 - (10.0 + 490.0 / n as f64)).abs() < 1e-6, "means over merged buckets");
         assert!(buckets[0].saw(Status::WarmingUp) && !buckets.last().unwrap().saw(Status::WarmingUp));
         assert_eq!(tl.tail().count(), TAIL_ROWS);
         assert_eq!(tl.first_estimate_s, Some(100.0));
