@@ -616,3 +616,28 @@ fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
     );
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every option that takes a value, of every command, takes a negative number too (the
+    /// option's own check then names what is wrong with it).
+    #[test]
+    fn every_option_takes_a_negative_number() {
+        fn walk(cmd: &clap::Command, missing: &mut Vec<String>) {
+            for arg in cmd.get_arguments() {
+                if arg.get_action().takes_values() && !arg.is_positional() && !arg.is_allow_negative_numbers_set() {
+                    missing.push(format!("{} --{}", cmd.get_name(), arg.get_id()));
+                }
+            }
+            cmd.get_subcommands().for_each(|c| walk(c, missing));
+        }
+        let mut missing = Vec::new();
+        let mut cmd = host_sim::cli_args::accept_negative_numbers(Cli::command());
+        cmd.build();
+        walk(&cmd, &mut missing);
+        assert!(missing.is_empty(), "{missing:?}");
+        assert!(cmd.get_subcommands().count() >= 6);
+    }
+}

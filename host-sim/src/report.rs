@@ -633,6 +633,25 @@ mod tests {
     }
 
     #[test]
+    fn the_cores_oscillation_of_eq_2_is_the_generators() {
+        // The oscillation a constant truth file puts into each row, from the core's rows, against
+        // the generator's own eq (2), over a one-way and a reciprocating log.
+        for scheme in [crate::rotation_scheme::RotationScheme::Continuous, crate::rotation_scheme::RotationScheme::Reciprocating] {
+            let mut p = crate::scenario::ScenarioParams::new(crate::scenario::ScenarioKind::Sea, 3);
+            p.duration_s = 2000.0;
+            p.scheme = scheme;
+            let g = crate::scenario::generate(&p);
+            for (row, truth) in g.rows.iter().zip(&g.truth) {
+                let ours = oscillation_deg(row, &truth.errors_arcsec);
+                for a in 0..3 {
+                    let diff_arcsec = (ours[a] - truth.oscillation_deg[a]).abs() * 3600.0;
+                    assert!(diff_arcsec < 1e-3, "{scheme:?} t = {}: axis {a} off by {diff_arcsec} arcsec", row.time_s);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn truth_index_matches_grid() {
         assert_eq!(truth_index(3.0, 1.0, 10), Some(3));
         assert_eq!(truth_index(3.5, 1.0, 10), None);
