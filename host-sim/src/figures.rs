@@ -273,24 +273,31 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
 
     // The error against the truth: arcsec and percent (eq (7)), log scales.
     if tl.has_truth && tl.first_estimate_s.is_some() {
-        let errors: Vec<(f64, [f64; 4], [f64; 4], [f64; 4])> = buckets
+        /// At a bucket's last row: time, error, truth, reported 1-sigma (arcsec).
+        struct Judged {
+            t: f64,
+            error: [f64; 4],
+            truth: [f64; 4],
+            sigma: [f64; 4],
+        }
+        let errors: Vec<Judged> = buckets
             .iter()
-            .filter_map(|b| Some((b.t1_s, b.error_arcsec?, b.truth_x_arcsec?, b.estimate?.sigma)))
+            .filter_map(|b| Some(Judged { t: b.t1_s, error: b.error_arcsec?, truth: b.truth_x_arcsec?, sigma: b.estimate?.sigma }))
             .collect();
         let mut arcsec = time_panel(format!("Error against the truth, |estimate - truth|, arcsec ({method})"), "arcsec", (1e-3, 1e4), true);
         let mut percent = time_panel(format!("Absolute percentage error (eq 7) ({method})"), "%", (1e-3, 1e3), true);
         for i in 0..4 {
-            arcsec.series.push(Series { label: X_NAMES[i].into(), color: PALETTE[i], points: errors.iter().map(|e| (e.0, e.1[i].abs())).collect() });
+            arcsec.series.push(Series { label: X_NAMES[i].into(), color: PALETTE[i], points: errors.iter().map(|e| (e.t, e.error[i].abs())).collect() });
             percent.series.push(Series {
                 label: X_NAMES[i].into(),
                 color: PALETTE[i],
-                points: errors.iter().filter(|e| e.2[i] != 0.0).map(|e| (e.0, crate::report::percent_error(e.1[i], e.2[i]))).collect(),
+                points: errors.iter().filter(|e| e.truth[i] != 0.0).map(|e| (e.t, crate::report::percent_error(e.error[i], e.truth[i]))).collect(),
             });
         }
         arcsec.series.push(Series {
             label: "2-sigma reported, largest of the four".into(),
             color: GREY,
-            points: errors.iter().map(|e| (e.0, 2.0 * e.3.iter().fold(0.0f64, |m, s| m.max(*s)))).collect(),
+            points: errors.iter().map(|e| (e.t, 2.0 * e.sigma.iter().fold(0.0f64, |m, s| m.max(*s)))).collect(),
         });
         let path = dir.join("error.png");
         plots::draw_png(&path, &[arcsec, percent], 1000, 360)?;

@@ -643,8 +643,8 @@ mod tests {
             let g = crate::scenario::generate(&p);
             for (row, truth) in g.rows.iter().zip(&g.truth) {
                 let ours = oscillation_deg(row, &truth.errors_arcsec);
-                for a in 0..3 {
-                    let diff_arcsec = (ours[a] - truth.oscillation_deg[a]).abs() * 3600.0;
+                for (a, (o, t)) in ours.iter().zip(&truth.oscillation_deg).enumerate() {
+                    let diff_arcsec = (o - t).abs() * 3600.0;
                     assert!(diff_arcsec < 1e-3, "{scheme:?} t = {}: axis {a} off by {diff_arcsec} arcsec", row.time_s);
                 }
             }

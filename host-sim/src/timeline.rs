@@ -48,10 +48,10 @@ impl<const N: usize> Envelope<N> {
             return;
         }
         let e = this.get_or_insert(Envelope { min: *v, max: *v, sum: [0.0; N], rows: 0 });
-        for i in 0..N {
-            e.min[i] = e.min[i].min(v[i]);
-            e.max[i] = e.max[i].max(v[i]);
-            e.sum[i] += v[i];
+        for (i, x) in v.iter().enumerate() {
+            e.min[i] = e.min[i].min(*x);
+            e.max[i] = e.max[i].max(*x);
+            e.sum[i] += x;
         }
         e.rows += 1;
     }
