@@ -1,8 +1,9 @@
 //! A firmware's estimator state is never mixed with another log. `host-sim stream` twice into one
 //! flash directory: the second run finds the first run's checkpoint and refuses (exit 1, nothing
 //! written); with `--reset` it starts clean and gives estimates byte-identical to
-//! `host-sim estimate`; with `--resume` it continues after the checkpoint. And a `Reset` erases the
-//! checkpoints: a power cut right after it brings no state back.
+//! `host-sim estimate`; with `--resume` it continues after the checkpoint (the logs are too short
+//! for an estimate: each run ends with exit status 4). And a `Reset` erases the checkpoints: a
+//! power cut right after it brings no state back.
 
 mod qemu_support;
 
@@ -18,6 +19,16 @@ fn s(p: &std::path::Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Runs host-sim on a log of 600 s, too short for a first estimate: it must end with exit status 4
+/// and say so on standard error (every output written); returns stdout.
+fn host_sim_no_estimate(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim")).args(args).output().unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr));
+    assert_eq!(out.status.code(), Some(4), "host-sim {args:?}:\n{stdout}\n{stderr}");
+    assert!(stderr.contains("no estimate: "), "{stderr}");
+    stdout
+}
+
 #[test]
 fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
     let elf = firmware_elf(Board::Mps2An386);
@@ -29,7 +40,7 @@ fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
     let flash = dir.join("flash");
     std::fs::create_dir_all(&flash).unwrap();
 
-    host_sim(&["stream", "--qemu", s(&elf), s(&first), "--flash-dir", s(&flash), "--out", s(&dir.join("first.stream.csv"))]);
+    host_sim_no_estimate(&["stream", "--qemu", s(&elf), s(&first), "--flash-dir", s(&flash), "--out", s(&dir.join("first.stream.csv"))]);
 
     let refused_out = dir.join("refused.csv");
     let refused = Command::new(env!("CARGO_BIN_EXE_host-sim"))
@@ -43,14 +54,14 @@ fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
     assert!(!refused_out.exists(), "a refused stream writes no estimates");
 
     let (expected, streamed) = (dir.join("second.estimate.csv"), dir.join("second.stream.csv"));
-    host_sim(&["estimate", s(&second), "--out", s(&expected)]);
-    let out = host_sim(&["stream", "--qemu", s(&elf), s(&second), "--flash-dir", s(&flash), "--reset", "--out", s(&streamed)]);
+    host_sim_no_estimate(&["estimate", s(&second), "--out", s(&expected)]);
+    let out = host_sim_no_estimate(&["stream", "--qemu", s(&elf), s(&second), "--flash-dir", s(&flash), "--reset", "--out", s(&streamed)]);
     assert!(out.contains("reset the firmware: it forgot"), "{out}");
     assert_eq!(std::fs::read(&expected).unwrap(), std::fs::read(&streamed).unwrap(), "--reset must give exactly `estimate`'s estimates");
 
     // The flash now holds the second log's checkpoint (540 s): --resume streams the rows after it.
     let resumed = dir.join("resumed.csv");
-    let out = host_sim(&["stream", "--qemu", s(&elf), s(&second), "--flash-dir", s(&flash), "--resume", "--out", s(&resumed)]);
+    let out = host_sim_no_estimate(&["stream", "--qemu", s(&elf), s(&second), "--flash-dir", s(&flash), "--resume", "--out", s(&resumed)]);
     assert!(out.contains("resuming after the firmware's checkpoint of 540 s"), "{out}");
     assert!(out.contains(": 59 rows streamed"), "{out}");
     // The resumed rows are the uninterrupted run's rows from 541 s on (a restore is exact).
