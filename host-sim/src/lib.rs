@@ -5,6 +5,8 @@ pub mod compare;
 pub mod estimates_csv;
 pub mod exit_status;
 pub mod figures;
+pub mod flash_life;
+pub mod flash_model;
 pub mod html_report;
 pub mod log_csv;
 pub mod monte_carlo;

@@ -184,8 +184,9 @@ where
 /// (skipped and counted, `warn` told; or refused when strict). The first stamps are checked
 /// ([`IntervalCheck`]: an interval that makes no sense for a RINS, or contradicts the pinned one,
 /// stops the replay before any estimate). After the first row at or after each of `restart_at_s`
-/// (ascending) the estimator is checkpointed, dropped and restored from the bytes: a power cycle
-/// with a saved state. The outputs must not change.
+/// (ascending) the estimator is checkpointed, dropped and restored from the bytes: a power cut
+/// right after a save. The estimates go on from the checkpoint's while the window refills (see
+/// `estimator_core::checkpoint`).
 pub fn replay_each<I, F>(
     rows: I,
     config: Config,
