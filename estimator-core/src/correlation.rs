@@ -168,45 +168,34 @@ pub struct QuantizedSample {
     pub reference: [i16; 4],
 }
 
-/// `v` clamped to `[-limit, limit]`, 0 for NaN: the same values as `clamp`, by comparisons (on the
-/// Cortex-M4F `f32::clamp` is two library calls, `fmaxf` and `fminf`; this is a few FPU
-/// compares).
-fn within_or_zero(v: Real, limit: Real) -> Real {
-    if v > limit {
-        limit
-    } else if v < -limit {
-        -limit
-    } else if !v.is_nan() {
-        v
-    } else {
-        0.0
-    }
+/// A sine, cosine or reference in fixed point ([`TRIG_COUNTS`] per unit), clamped to +-1; NaN
+/// gives 0.
+pub fn trig_count(v: Real) -> i16 {
+    round_to_i32(v * TRIG_COUNTS as Real).clamp(-MAX_TRIG_COUNT, MAX_TRIG_COUNT) as i16
 }
 
-/// Largest attitude magnitude stored, rad (roll and pitch are checked to within 90 deg).
-const MAX_ATTITUDE_RAD: Real = 1.999;
+/// Largest count of a quantized sine, cosine or reference (1 in [`TRIG_COUNTS`]).
+const MAX_TRIG_COUNT: i32 = 1 << 14;
 
 impl QuantizedSample {
     /// Rounds a sample's roll, pitch, trigonometry and references to fixed point.
+    ///
+    /// No floating-point clamp: the conversion to `i32` saturates and takes NaN to 0, so an
+    /// attitude beyond +-2 rad (impossible: roll and pitch are checked to within 90 deg) stays at
+    /// +-2^31 counts, and a sine, cosine or reference is clamped to +-1 in integers (one `ssat`
+    /// on the Cortex-M4F, where a float clamp is two library calls or four compares a value).
     pub fn new(roll_rad: Real, pitch_rad: Real, angles: &Angles, reference: &[Real; 4]) -> QuantizedSample {
-        let att = |v: Real| {
-            let v = within_or_zero(v, MAX_ATTITUDE_RAD);
-            round_to_i32(v * ATTITUDE_COUNTS as Real)
-        };
-        let trig = |v: Real| {
-            let v = within_or_zero(v, 1.0);
-            round_to_i32(v * TRIG_COUNTS as Real) as i16
-        };
+        let att = |v: Real| round_to_i32(v * ATTITUDE_COUNTS as Real);
         QuantizedSample {
             roll: att(roll_rad),
             pitch: att(pitch_rad),
-            sin_rho: trig(angles.sin_rho),
-            cos_rho: trig(angles.cos_rho),
-            sin_rho_s: trig(angles.sin_rho_s),
-            cos_rho_s: trig(angles.cos_rho_s),
-            sin_lat: trig(angles.sin_lat),
-            cos_lat: trig(angles.cos_lat),
-            reference: reference.map(trig),
+            sin_rho: trig_count(angles.sin_rho),
+            cos_rho: trig_count(angles.cos_rho),
+            sin_rho_s: trig_count(angles.sin_rho_s),
+            cos_rho_s: trig_count(angles.cos_rho_s),
+            sin_lat: trig_count(angles.sin_lat),
+            cos_lat: trig_count(angles.cos_lat),
+            reference: reference.map(trig_count),
         }
     }
 
@@ -314,26 +303,39 @@ pub struct Measurement {
 }
 
 impl CorrelationSums {
-    /// Adds one entry of weight `weight` (at most [`FULL_WEIGHT`]).
-    pub fn add(&mut self, q: &QuantizedSample, fill_weight: u16, weight: u8) {
+    /// Adds one entry of weight `weight` (at most [`FULL_WEIGHT`]) and fill weight `fill_weight`.
+    pub fn add(&mut self, q: &QuantizedSample, fill_weight: u32, weight: u8) {
         let t = q.terms(weight);
         for i in 0..SUMS {
             self.sums[i] += t[i];
         }
         self.count += 1;
-        self.fill_weight += u32::from(fill_weight);
+        self.fill_weight = self.fill_weight.saturating_add(fill_weight);
         self.weight += u32::from(weight.min(FULL_WEIGHT));
     }
 
     /// Subtracts an entry added before: exactly undoes [`CorrelationSums::add`].
-    pub fn subtract(&mut self, q: &QuantizedSample, fill_weight: u16, weight: u8) {
+    pub fn subtract(&mut self, q: &QuantizedSample, fill_weight: u32, weight: u8) {
         let t = q.terms(weight);
         for i in 0..SUMS {
             self.sums[i] -= t[i];
         }
         self.count = self.count.saturating_sub(1);
-        self.fill_weight = self.fill_weight.saturating_sub(u32::from(fill_weight));
+        self.fill_weight = self.fill_weight.saturating_sub(fill_weight);
         self.weight = self.weight.saturating_sub(u32::from(weight.min(FULL_WEIGHT)));
+    }
+
+    /// Subtracts the entry `old` and adds `new` in one pass over the sums: the same sums as
+    /// [`CorrelationSums::subtract`] then [`CorrelationSums::add`] (integers: exact in any order),
+    /// with one load and store of each sum instead of two (what a window does every sample once
+    /// it is full).
+    pub fn replace(&mut self, old: &QuantizedSample, old_fill_weight: u32, old_weight: u8, new: &QuantizedSample, fill_weight: u32, weight: u8) {
+        let (to, tn) = (old.terms(old_weight), new.terms(weight));
+        for i in 0..SUMS {
+            self.sums[i] += tn[i] - to[i];
+        }
+        self.fill_weight = self.fill_weight.saturating_sub(old_fill_weight).saturating_add(fill_weight);
+        self.weight = self.weight.saturating_sub(u32::from(old_weight.min(FULL_WEIGHT))) + u32::from(weight.min(FULL_WEIGHT));
     }
 
     /// The centred measurement of the module doc, or `None` for an empty window.

@@ -424,26 +424,26 @@ impl GapFiller {
     /// squared prediction error. Every [`FILL_ERROR_EVERY`]th index only: the mean square of a sea
     /// state needs no more, and the step's cost stays low.
     fn measure_fill_error(&mut self, s: &GridSample, pos: usize) {
-        if s.index % FILL_ERROR_EVERY != 0 {
+        if s.index % FILL_ERROR_EVERY != 0 || pos < NEIGHBOURS {
+            return;
+        }
+        // All ten present: the line holds increasing indices, so they are when the fifth before
+        // and the fifth after are five away; each then sits its offset from `s` in the line.
+        let (Some(first), Some(last)) = (self.line.get(pos - NEIGHBOURS), self.line.get(pos + NEIGHBOURS)) else {
+            return;
+        };
+        let n = NEIGHBOURS as u32;
+        if s.index.wrapping_sub(first.sample.index) != n || last.sample.index.wrapping_sub(s.index) != n {
             return;
         }
         let mut roll = 0.0;
         let mut pitch = 0.0;
-        let w = &ALL_NEIGHBOURS;
-        if pos < NEIGHBOURS {
-            return;
-        }
-        for i in 0..2 * NEIGHBOURS {
-            let offset = if i < NEIGHBOURS { i as i32 - NEIGHBOURS as i32 } else { i as i32 - NEIGHBOURS as i32 + 1 };
-            // All ten present: each sits `offset` places from `s` in the line.
-            let Some(n) = self.line.get((pos as i32 + offset) as usize).map(|h| &h.sample) else {
-                return;
-            };
-            if n.index != s.index.wrapping_add(offset as u32) {
-                return;
+        for (i, w) in ALL_NEIGHBOURS.iter().enumerate() {
+            let p = if i < NEIGHBOURS { pos - NEIGHBOURS + i } else { pos + i + 1 - NEIGHBOURS };
+            if let Some(h) = self.line.get(p) {
+                roll += w * h.sample.roll_rad;
+                pitch += w * h.sample.pitch_rad;
             }
-            roll += w[i] * n.roll_rad;
-            pitch += w[i] * n.pitch_rad;
         }
         self.error_samples = (self.error_samples + 1).min(FILL_ERROR_SAMPLES);
         let a = 1.0 / self.error_samples as Real;

@@ -32,10 +32,18 @@ pub fn round_to_i32(x: Real) -> i32 {
     (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i32
 }
 
-/// Round to nearest, ties to even.
+/// Round to nearest, ties to even: `libm::rintf`, bit for bit, in four FPU instructions for
+/// |x| < 2^22 (every value the step rounds; a library call otherwise). Adding 1.5 x 2^23 leaves
+/// no bits below the units, so the FPU's addition rounds `x` to an integer (ties to even), and
+/// subtracting it again is exact; the sign is `x`'s, as `rintf` gives -0 for -0.3.
 #[cfg(not(feature = "f64"))]
 pub fn round(x: f32) -> f32 {
-    libm::rintf(x)
+    const SHIFT: f32 = 12_582_912.0;
+    if x.abs() < 4_194_304.0 {
+        ((x + SHIFT) - SHIFT).copysign(x)
+    } else {
+        libm::rintf(x)
+    }
 }
 /// Round to nearest, ties to even.
 #[cfg(feature = "f64")]
@@ -75,7 +83,7 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
     const PIO2_HI: f32 = 1.570_312_5;
     const PIO2_MID: f32 = 4.837_513e-4;
     const PIO2_LO: f32 = 7.549_79e-8;
-    let k = libm::rintf(x * FRAC_2_PI);
+    let k = round(x * FRAC_2_PI);
     let r = ((x - k * PIO2_HI) - k * PIO2_MID) - k * PIO2_LO;
     let z = r * r;
     let s = r + r * z * (-1.666_665_5e-1 + z * (8.332_161e-3 + z * -1.951_529_6e-4));
@@ -128,6 +136,28 @@ mod tests {
         assert_eq!(sqrt(0.0), 0.0);
         assert!(sqrt(-1.0).is_nan() && sqrt(Real::NAN).is_nan());
         assert_eq!(sqrt(Real::INFINITY), Real::INFINITY);
+    }
+
+    #[test]
+    #[cfg(not(feature = "f64"))]
+    fn round_is_rintf_bit_for_bit() {
+        let mut bits: u32 = 0;
+        loop {
+            for x in [f32::from_bits(bits), -f32::from_bits(bits)] {
+                assert_eq!(round(x).to_bits(), libm::rintf(x).to_bits(), "{x:e}");
+            }
+            // Every 331st float of either sign from 0 to infinity (below: every half-integer
+            // near 0).
+            if bits >= 0x7F80_0000 {
+                break;
+            }
+            bits = (bits + 331).min(0x7F80_0000);
+        }
+        for k in -4000..4000 {
+            let x = k as f32 * 0.5;
+            assert_eq!(round(x).to_bits(), libm::rintf(x).to_bits(), "{x}");
+        }
+        assert!(round(f32::NAN).is_nan());
     }
 
     #[test]

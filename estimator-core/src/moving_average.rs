@@ -128,7 +128,8 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 /// exact [`CorrelationSums`] of their fixed-point inputs.
 ///
 /// The ring holds each entry's inputs ([`QuantizedSample`], 28 bytes: roll, pitch, the sines and
-/// cosines, and the low-passed references) rather than its 28 products; the products of the entry
+/// cosines, and the low-passed references; 32 with its number and weights, [`Entry`]) rather than
+/// its 28 products; the products of the entry
 /// that leaves the window are formed again from them, exactly as they were when it came in, and
 /// subtracted.
 ///
@@ -190,18 +191,69 @@ pub struct Pushed {
 /// Most old entries a push removes (see [`CorrelationWindow`], "Bounded work a push").
 pub const MAX_REMOVALS_PER_PUSH: usize = 3;
 
-/// One entry of the window: a sample's (or a bin's) fixed-point inputs, how many of its samples
-/// were filled, its number on the grid (low 16 bits) and its weight. Packed to 34 bytes, its
-/// fields read by value, never by reference.
+/// One entry of the window: a sample's (or a bin's) fixed-point inputs, its number on the grid
+/// (low 16 bits), its weight and its fill weight in one byte ([`FillCode`]). 32 bytes, aligned
+/// like its `i32`s: an entry is copied in and out of the ring by a few word moves (a packed entry
+/// took a byte-wise library copy each way).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[repr(C, packed(2))]
 pub struct Entry {
     pub sample: QuantizedSample,
-    pub fill_weight: u16,
     /// The entry's number (grid index, or bin number with bins), low 16 bits.
     pub number: u16,
     /// Its weight in the sums, 0 to [`FULL_WEIGHT`].
     pub weight: u8,
+    /// How much of it was filled ([`crate::gap_fill`]): its fill weight, coded.
+    pub fill: FillCode,
+}
+
+impl Entry {
+    /// The fill weight the sums count for this entry.
+    pub fn fill_weight(&self) -> u32 {
+        self.fill.weight()
+    }
+}
+
+/// A fill weight (a filled sample's error variance in units of a single filled sample's, summed
+/// over a bin; 0 when nothing was filled) in one byte: exact up to 127, above that rounded up to
+/// four significant bits (at most 6.25 % high, never low), saturating at 31,744. Codes 0-127 are
+/// the weight itself; code `128 + 16 e + m` is `(16 + m) 2^(e + 3)`. The window's sums count the
+/// coded weight, in and out alike, so they stay exact.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FillCode(pub u8);
+
+impl FillCode {
+    /// The largest weight a code holds.
+    pub const MAX_WEIGHT: u32 = 31 << 10;
+
+    /// The code of the smallest coded weight at or above `weight` (saturating).
+    pub fn of(weight: u32) -> FillCode {
+        if weight < 128 {
+            return FillCode(weight as u8);
+        }
+        if weight >= Self::MAX_WEIGHT {
+            return FillCode(u8::MAX);
+        }
+        // weight in [2^(b), 2^(b+1)), b >= 7: four significant bits, e = b - 7.
+        let e = 31 - weight.leading_zeros() - 7;
+        let shift = e + 3;
+        let mut m = weight >> shift;
+        if weight & ((1 << shift) - 1) != 0 {
+            m += 1;
+        }
+        let (e, m) = if m == 32 { (e + 1, 16) } else { (e, m) };
+        FillCode((128 + 16 * e + (m - 16)) as u8)
+    }
+
+    /// The weight the code stands for.
+    pub fn weight(self) -> u32 {
+        let c = u32::from(self.0);
+        if c < 128 {
+            c
+        } else {
+            let k = c - 128;
+            (16 + (k & 15)) << ((k >> 4) + 3)
+        }
+    }
 }
 
 /// A bin being filled: the sums of its samples' values times their weights.
@@ -388,7 +440,8 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     /// Samples come in grid order; lost ones are simply not pushed.
     pub fn push(&mut self, s: &GridSample, reference: &[Real; 4], weight: u8) -> Pushed {
         if self.bin <= 1 {
-            let removed = self.push_entry(s.index, QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference), s.fill_weight, weight);
+            let q = QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference);
+            let removed = self.push_entry(s.index, q, FillCode::of(u32::from(s.fill_weight)), weight);
             return Pushed { completed: true, removed };
         }
         let origin = *self.origin.get_or_insert(s.index);
@@ -433,21 +486,23 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         let rotation_minus_platform = wrap_pi(b.rotation_minus_platform0_rad + b.rotation_minus_platform_offset_rad / n);
         let angles = Angles::from_rotation(rotation, rotation_minus_platform, sin_cos(b.latitude_rad / n));
         let q = QuantizedSample::new(b.roll_rad / n, b.pitch_rad / n, &angles, &b.reference.map(|r| r / n));
-        let fill_weight = b.fill_weight.min(u32::from(u16::MAX)) as u16;
+        let fill = FillCode::of(b.fill_weight);
         // The bin's weight: the mean of its samples' (lost samples count 0).
         let weight = round(n * FULL_WEIGHT as Real / self.bin as Real).clamp(0.0, FULL_WEIGHT as Real) as u8;
-        let removed = self.push_entry(b.number, q, fill_weight, weight);
+        let removed = self.push_entry(b.number, q, fill, weight);
         Pushed { completed: true, removed }
     }
 
     /// Adds an entry, removing up to [`MAX_REMOVALS_PER_PUSH`] entries older than one period (and
-    /// the oldest when the ring is full); returns how many went.
-    fn push_entry(&mut self, number: u32, sample: QuantizedSample, fill_weight: u16, weight: u8) -> u32 {
+    /// the oldest when the ring is full); returns how many went. The first entry removed and the
+    /// new one change the sums in one pass ([`CorrelationSums::replace`]).
+    fn push_entry(&mut self, number: u32, sample: QuantizedSample, fill: FillCode, weight: u8) -> u32 {
         if self.newest.is_none() {
             self.first = number;
         }
         self.newest = Some(number);
         let mut removed = 0;
+        let mut replaced = false;
         while let Some(oldest) = self.ring.front() {
             let stale = usize::from((number as u16).wrapping_sub(oldest.number)) >= self.len;
             // A full ring makes room whatever the budget (only when more than `CAP` numbers are
@@ -455,14 +510,24 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             if !(stale && removed < MAX_REMOVALS_PER_PUSH) && !self.ring.is_full() {
                 break;
             }
-            // Read in place, then dropped: one copy of the packed entry fewer than popping it.
-            let (q, f, w) = (oldest.sample, oldest.fill_weight, oldest.weight);
-            self.sums.subtract(&q, f, w);
+            if removed == 0 {
+                self.sums.replace(&oldest.sample, oldest.fill_weight(), oldest.weight, &sample, fill.weight(), weight);
+                replaced = true;
+            } else {
+                self.sums.subtract(&oldest.sample, oldest.fill_weight(), oldest.weight);
+            }
             self.ring.pop_front();
             removed += 1;
         }
-        if self.ring.push_back(Entry { sample, fill_weight, number: number as u16, weight }).is_ok() {
-            self.sums.add(&sample, fill_weight, weight);
+        let entry = Entry { sample, number: number as u16, weight, fill };
+        // The ring has room: it was not full, or an entry just went.
+        if self.ring.push_back(entry).is_ok() {
+            if !replaced {
+                self.sums.add(&sample, fill.weight(), weight);
+            }
+        } else if replaced {
+            // Not reached (an entry went, so there was room); kept exact all the same.
+            self.sums.subtract(&sample, fill.weight(), weight);
         }
         if !self.was_full && self.is_full() {
             self.was_full = true;

@@ -347,7 +347,8 @@ impl RotationMonitor {
         let Some(period) = self.period_samples else {
             return Ok(event);
         };
-        let nominal = (2.0 * core::f64::consts::PI / period as f64) as Real;
+        // In the step's float type: no software f64 division a sample.
+        let nominal = 2.0 * PI / period as Real;
         let still = self.short_steps > 0 && self.short_increment_rad.abs() < 0.25 * nominal;
         self.dwell_run = if still { self.dwell_run.saturating_add(steps) } else { 0 };
         let Some(features) = self.features else {

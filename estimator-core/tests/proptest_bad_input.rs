@@ -162,7 +162,7 @@ fn consistent(est: &Estimator<CAP>) -> bool {
     let Some(w) = est.windowed() else { return true };
     let mut direct = CorrelationSums::default();
     for e in w.window().entries() {
-        direct.add(&{ e.sample }, e.fill_weight, e.weight);
+        direct.add(&e.sample, e.fill_weight(), e.weight);
     }
     direct == *w.window().sums() && w.filter().covariance_is_spd()
 }

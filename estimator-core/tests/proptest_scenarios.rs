@@ -82,7 +82,7 @@ fn internals(est: &Estimator) -> Internals {
     let p = std::array::from_fn(|i| std::array::from_fn(|j| w.filter().covariance()[(i, j)] as f64));
     let mut direct_sums = CorrelationSums::default();
     for e in w.window().entries() {
-        direct_sums.add(&{ e.sample }, e.fill_weight, e.weight);
+        direct_sums.add(&e.sample, e.fill_weight(), e.weight);
     }
     Internals {
         updates: w.updates(),
