@@ -78,7 +78,7 @@ fn write_estimate<W: Write>(w: &mut W, estimate: Option<&Estimate>) -> fmt::Resu
 /// `{:.6}` of a time, byte for byte. Whole seconds (nearly every log row) are written as an
 /// integer and `.000000`.
 fn write_time<W: Write>(w: &mut W, time_s: f64) -> fmt::Result {
-    if time_s.fract() == 0.0 && time_s.abs() < 9.0e15 && !(time_s == 0.0 && time_s.is_sign_negative()) {
+    if libm::trunc(time_s) == time_s && time_s.abs() < 9.0e15 && !(time_s == 0.0 && time_s.is_sign_negative()) {
         if time_s < 0.0 {
             w.write_char('-')?;
         }
