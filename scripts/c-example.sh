@@ -47,7 +47,7 @@ else
         -ffunction-sections -fdata-sections --specs=rdimon.specs -nostartfiles \
         -T examples/c/mps2-an386/link.ld -Wl,--gc-sections -Wl,-z,noexecstack -Wl,-Map="$DIR/replay.map" \
         -o "$DIR/replay.elf" examples/c/mps2-an386/startup.c examples/c/replay.c \
-        target/thumbv7em-none-eabihf/firmware/libestimator_ffi.a -lm
+        -lm -lc target/thumbv7em-none-eabihf/firmware/libestimator_ffi.a
     # Semihosting gives the program QEMU's standard streams: the log in, the estimates out.
     timeout 600 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -display none -monitor none -serial none \
         -semihosting-config enable=on,target=native -kernel "$DIR/replay.elf" < "$LOG" > "$OUT"

@@ -116,16 +116,17 @@ fn write_fixed<W: Write>(w: &mut W, value: f64, decimals: usize) -> fmt::Result 
     if rem > half || (rem == half && q & 1 == 1) {
         q += 1;
     }
-    let (Ok(q), Ok(unit)) = (u64::try_from(q), u64::try_from(scale)) else {
+    let parts = u64::try_from(q).ok().zip(u64::try_from(scale).ok()).and_then(|(q, unit)| q.checked_div(unit).zip(q.checked_rem(unit)));
+    let Some((whole, fraction)) = parts else {
         return write!(w, "{value:.decimals$}");
     };
     if value.is_sign_negative() {
         w.write_char('-')?;
     }
-    write_digits(w, q / unit, 1)?;
+    write_digits(w, whole, 1)?;
     if decimals > 0 {
         w.write_char('.')?;
-        write_digits(w, q % unit, decimals)?;
+        write_digits(w, fraction, decimals)?;
     }
     Ok(())
 }

@@ -1,13 +1,20 @@
 /* Start-up for the C examples on QEMU's mps2-an386 (Cortex-M4F) with newlib and semihosting: the
  * vector table, the FPU switched on, .bss cleared, newlib's semihosting standard streams opened,
  * main() run and its status returned to QEMU. Any fault ends the run with status 1 instead of
- * hanging QEMU. Linked with link.ld, `--specs=rdimon.specs -nostartfiles`. */
+ * hanging QEMU. Linked with link.ld, `--specs=rdimon.specs -nostartfiles`.
+ *
+ * It also measures the program's deepest stack: the free RAM between the heap's reserve and the
+ * stack is painted with a pattern before main(), and at exit the lowest word no longer holding it
+ * tells how far the stack reached (`stack high-water: N bytes` on standard error). */
 
+#include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
 extern uint32_t __bss_start__, __bss_end__, __stack_top;
+extern uint32_t end[]; /* the start of newlib's heap (link.ld) */
+extern void *sbrk(ptrdiff_t increment);
 extern int main(void);
 extern void initialise_monitor_handles(void);
 extern void __libc_init_array(void);
@@ -25,13 +32,37 @@ static void fault(void) {
     }
 }
 
+/* The heap (stdio's buffers) stays below this many bytes above `end`; the stack above it. */
+enum { HEAP_RESERVE = 256 * 1024 };
+static const uint32_t PAINT = 0xA5A5A5A5u;
+
+static uint32_t *paint_start(void) { return end + HEAP_RESERVE / sizeof(uint32_t); }
+
+static void report_stack(void) {
+    const uint32_t *p = paint_start();
+    while (p < &__stack_top && *p == PAINT) {
+        p++;
+    }
+    if ((char *)sbrk(0) > (char *)paint_start()) {
+        fprintf(stderr, "stack high-water: unknown (the heap grew past its reserve)\n");
+    } else {
+        fprintf(stderr, "stack high-water: %lu bytes\n", (unsigned long)((const char *)&__stack_top - (const char *)p));
+    }
+}
+
 void reset_handler(void) {
+    uint32_t *p, *sp;
     /* CPACR: full access to CP10 and CP11, the FPU, before any floating-point instruction. */
     *(volatile uint32_t *)0xE000ED88 |= 0xFu << 20;
     __asm__ volatile("dsb\n\tisb" ::: "memory");
     memset(&__bss_start__, 0, (size_t)((char *)&__bss_end__ - (char *)&__bss_start__));
+    __asm__ volatile("mov %0, sp" : "=r"(sp));
+    for (p = paint_start(); p < sp - 16; p++) {
+        *p = PAINT;
+    }
     initialise_monitor_handles();
     __libc_init_array();
+    atexit(report_stack);
     exit(main());
 }
 
