@@ -6,7 +6,7 @@
 //! Fixed, deterministic formatting:
 //! - `time_s`: 6 decimals;
 //! - `x*_arcsec`, `sigma*_arcsec`: 4 decimals, empty while there is no estimate;
-//! - `status`: [`Status::name`], or `rejected_<reason>` with [`RejectReason::name`] for an input
+//! - `status`: [`crate::Status::name`], or `rejected_<reason>` with [`RejectReason::name`] for an input
 //!   row the core rejected;
 //! - `*_corrected_deg`: 9 decimals (heading in [-180, 180]); empty on a rejected row.
 //!

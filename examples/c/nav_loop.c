@@ -85,10 +85,13 @@ static int navigation_step(RinsEstimator *estimator, double t_s) {
 static const double TRUE_X_ARCSEC[4] = {200.0, -150.0, 300.0, -250.0};
 
 int main(void) {
-    RinsEstimator *estimator = boot();
+    RinsEstimator *estimator;
     RinsEstimate estimate;
     int ok = 1;
     long t;
+    fprintf(stderr, "estimator: %lu of the RINS_ESTIMATOR_SIZE = %lu bytes; checkpoint image: %lu bytes\n",
+            (unsigned long)rins_estimator_size(), (unsigned long)RINS_ESTIMATOR_SIZE, (unsigned long)RINS_CHECKPOINT_LEN);
+    estimator = boot();
     if (!estimator) {
         return 1;
     }
