@@ -69,8 +69,8 @@ enum RinsError
   // The checkpoint is not an intact image: no image at all, a CRC that does not match, or
   // values out of their bounds. The estimator is unchanged.
   RINS_ERROR_CHECKPOINT_CORRUPT = 9,
-  // The checkpoint is intact but was written by another build: another format version,
-  // float width, ring capacity, or a method this build does not have. The estimator is
+  // The checkpoint was written by another build: another format version, float width, ring
+  // capacity or image length, or a method this build does not have. The estimator is
   // unchanged.
   RINS_ERROR_CHECKPOINT_INCOMPATIBLE = 10,
   // The text is not a number as the log reader reads one.

@@ -34,8 +34,8 @@ pub enum RinsError {
     /// The checkpoint is not an intact image: no image at all, a CRC that does not match, or
     /// values out of their bounds. The estimator is unchanged.
     CheckpointCorrupt = 9,
-    /// The checkpoint is intact but was written by another build: another format version,
-    /// float width, ring capacity, or a method this build does not have. The estimator is
+    /// The checkpoint was written by another build: another format version, float width, ring
+    /// capacity or image length, or a method this build does not have. The estimator is
     /// unchanged.
     CheckpointIncompatible = 10,
     /// The text is not a number as the log reader reads one.
@@ -94,11 +94,11 @@ impl From<CheckpointError> for RinsError {
             CheckpointError::Version { .. }
             | CheckpointError::RealWidthMismatch(_)
             | CheckpointError::CapacityMismatch(_)
+            | CheckpointError::LengthMismatch { .. }
+            | CheckpointError::UnknownMethod(_)
             | CheckpointError::InvalidConfig(ConfigError::MethodUnavailable) => RinsError::CheckpointIncompatible,
             CheckpointError::BadMagic
-            | CheckpointError::LengthMismatch { .. }
             | CheckpointError::CrcMismatch { .. }
-            | CheckpointError::UnknownMethod(_)
             | CheckpointError::InvalidConfig(_)
             | CheckpointError::InvalidValue(_)
             | CheckpointError::NotPositiveDefinite(_)
