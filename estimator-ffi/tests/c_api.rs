@@ -160,7 +160,8 @@ fn init_refuses_bad_memory_and_configurations_and_writes_nothing() {
     // on) it is accepted.
     // SAFETY: valid arguments.
     let paper_result = unsafe { rins_estimator_init(base, size, &paper, &mut handle) };
-    let expected = if Config::with_method(estimator_core::Method::Paper).check(720).is_ok() { RinsError::Ok } else { RinsError::InvalidConfig };
+    let paper_built = Config::with_method(estimator_core::Method::Paper).check(estimator_core::estimator::DEFAULT_CAPACITY).is_ok();
+    let expected = if paper_built { RinsError::Ok } else { RinsError::InvalidConfig };
     assert_eq!(paper_result, expected);
 }
 
