@@ -165,7 +165,8 @@ mod tests {
             time_s,
             status: if estimate.is_some() { Status::Estimating } else { Status::WarmingUp },
             estimate,
-            corrected: Attitude { heading_rad: 0.5, roll_rad: -0.01, pitch_rad: 0.02 },
+            // Exact in f32 and in f64: the same row in either build.
+            corrected: Attitude { heading_rad: 0.5, roll_rad: -0.25, pitch_rad: 0.125 },
         }
     }
 
@@ -181,7 +182,7 @@ mod tests {
             x_rad: [200.0, -150.0, 300.0, -250.0].map(|a| arcsec_to_rad(a) as Real),
             sigma_rad: [1.0, 2.0, 3.0, 4.0].map(|a| arcsec_to_rad(a) as Real),
         };
-        assert_eq!(row(|w| write_output(w, &output(0.0, None))), "0.000000,,,,,,,,,warming_up,28.647889757,-0.572957782,1.145915565");
+        assert_eq!(row(|w| write_output(w, &output(0.0, None))), "0.000000,,,,,,,,,warming_up,28.647889757,-14.323944878,7.161972439");
         let with = row(|w| write_output(w, &output(1.0, Some(e))));
         assert!(with.starts_with("1.000000,200.0000,-150.0000,300.0000,-250.0000,1.0000,2.0000,3.0000,4.0000,estimating,"), "{with}");
         let rejected = row(|w| write_rejected(w, 2.0, RejectReason::NonFinite, Some(&e)));
