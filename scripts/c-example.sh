@@ -27,6 +27,12 @@ cd "$(dirname "$0")/.."
 
 CFLAGS=(-std=c11 -O2 -Wall -Wextra -pedantic -Iestimator-ffi/include)
 if [ "$QEMU" = 0 ]; then
+    # The header on its own compiles without a warning as C99 and, where there is a C++
+    # compiler, as C++11.
+    echo '#include "rins_estimator.h"' | cc -std=c99 -Wall -Wextra -pedantic -Werror -Iestimator-ffi/include -x c -fsyntax-only -
+    if command -v c++ >/dev/null; then
+        echo '#include "rins_estimator.h"' | c++ -std=c++11 -Wall -Wextra -pedantic -Werror -Iestimator-ffi/include -x c++ -fsyntax-only -
+    fi
     cargo build -q -p estimator-ffi --release
     DIR=target/c-example/host
     mkdir -p "$DIR"
