@@ -16,7 +16,7 @@
 #include <stdint.h>
 
 // Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.
-#define RINS_CHECKPOINT_LEN 23384
+#define RINS_CHECKPOINT_LEN 840
 
 // Bytes of a buffer that holds any estimates CSV row with its line end and NUL.
 #define RINS_ROW_MAX_LEN 1024
@@ -69,9 +69,8 @@ enum RinsError
   // The checkpoint is not an intact image: no image at all, a CRC that does not match, or
   // values out of their bounds. The estimator is unchanged.
   RINS_ERROR_CHECKPOINT_CORRUPT = 9,
-  // The checkpoint was written by another build: another format version, float width, ring
-  // capacity or image length, or a method this build does not have. The estimator is
-  // unchanged.
+  // The checkpoint was written by another build: another format version, float width or
+  // image length, or a method this build does not have. The estimator is unchanged.
   RINS_ERROR_CHECKPOINT_INCOMPATIBLE = 10,
   // The text is not a number as the log reader reads one.
   RINS_ERROR_NOT_A_NUMBER = 11,
@@ -285,8 +284,10 @@ typedef struct RinsCounters {
 extern "C" {
 #endif // __cplusplus
 
-// Writes the estimator's whole state (its configuration included) into `buffer`
-// (`capacity` bytes, at least `RINS_CHECKPOINT_LEN`) and the image's length into `*written`.
+// Writes what a restart needs (the configuration, the filter and what it learned of noise and
+// drift, the sample interval and rotation pattern, health, counters, the last sample's time;
+// not the one-period window, which the next samples refill) into `buffer` (`capacity` bytes, at
+// least `RINS_CHECKPOINT_LEN`) and the image's length into `*written`.
 // `RINS_ERROR_BUFFER_TOO_SMALL` leaves the buffer as it was. The estimator is not changed.
 //
 // # Safety
@@ -298,9 +299,11 @@ RinsError rins_estimator_checkpoint(const struct RinsEstimator *estimator,
                                     size_t capacity,
                                     size_t *written);
 
-// Replaces the estimator's whole state (its configuration included) with the image in `buffer`
-// (`len` bytes, as `rins_estimator_checkpoint` wrote them; a longer buffer is fine). Every part
-// of the image is checked before anything is changed: on `RINS_ERROR_CHECKPOINT_CORRUPT`,
+// Replaces the estimator's state (its configuration included) with the image in `buffer`
+// (`len` bytes, as `rins_estimator_checkpoint` wrote them; a longer buffer is fine). The estimate
+// and its 1-sigma are reported again from the next sample on, with `RINS_STATUS_HOLDING` while
+// the window refills (one rotation period), as after a long gap. Every part of the image is
+// checked before anything is changed: on `RINS_ERROR_CHECKPOINT_CORRUPT`,
 // `RINS_ERROR_CHECKPOINT_INCOMPATIBLE` or `RINS_ERROR_BUFFER_TOO_SMALL` the estimator is exactly
 // as it was, so a program at boot sets up a fresh estimator, tries to restore, and runs on either
 // way.

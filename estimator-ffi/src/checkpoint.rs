@@ -1,6 +1,6 @@
-//! Checkpoints: the estimator's state as a versioned, CRC-protected image in the caller's buffer
-//! (for flash, EEPROM or a file), and back. The image's layout is the core's
-//! (`estimator_core::checkpoint`); the firmware writes the same images.
+//! Checkpoints: what a restarted estimator needs to go on, as a small, versioned, CRC-protected
+//! image in the caller's buffer (for flash, EEPROM or a file), and back. The image's layout is the
+//! core's (`estimator_core::checkpoint`); the firmware writes the same images.
 
 use crate::error::RinsError;
 use crate::estimator::{from_handle, from_handle_mut, RinsEstimator};
@@ -10,8 +10,10 @@ use estimator_core::Estimator;
 /// Bytes of a checkpoint image: the buffer `rins_estimator_checkpoint` needs.
 pub const RINS_CHECKPOINT_LEN: usize = <Estimator>::CHECKPOINT_LEN;
 
-/// Writes the estimator's whole state (its configuration included) into `buffer`
-/// (`capacity` bytes, at least `RINS_CHECKPOINT_LEN`) and the image's length into `*written`.
+/// Writes what a restart needs (the configuration, the filter and what it learned of noise and
+/// drift, the sample interval and rotation pattern, health, counters, the last sample's time;
+/// not the one-period window, which the next samples refill) into `buffer` (`capacity` bytes, at
+/// least `RINS_CHECKPOINT_LEN`) and the image's length into `*written`.
 /// `RINS_ERROR_BUFFER_TOO_SMALL` leaves the buffer as it was. The estimator is not changed.
 ///
 /// # Safety
@@ -41,9 +43,11 @@ pub unsafe extern "C" fn rins_estimator_checkpoint(
     }
 }
 
-/// Replaces the estimator's whole state (its configuration included) with the image in `buffer`
-/// (`len` bytes, as `rins_estimator_checkpoint` wrote them; a longer buffer is fine). Every part
-/// of the image is checked before anything is changed: on `RINS_ERROR_CHECKPOINT_CORRUPT`,
+/// Replaces the estimator's state (its configuration included) with the image in `buffer`
+/// (`len` bytes, as `rins_estimator_checkpoint` wrote them; a longer buffer is fine). The estimate
+/// and its 1-sigma are reported again from the next sample on, with `RINS_STATUS_HOLDING` while
+/// the window refills (one rotation period), as after a long gap. Every part of the image is
+/// checked before anything is changed: on `RINS_ERROR_CHECKPOINT_CORRUPT`,
 /// `RINS_ERROR_CHECKPOINT_INCOMPATIBLE` or `RINS_ERROR_BUFFER_TOO_SMALL` the estimator is exactly
 /// as it was, so a program at boot sets up a fresh estimator, tries to restore, and runs on either
 /// way.

@@ -34,9 +34,8 @@ pub enum RinsError {
     /// The checkpoint is not an intact image: no image at all, a CRC that does not match, or
     /// values out of their bounds. The estimator is unchanged.
     CheckpointCorrupt = 9,
-    /// The checkpoint was written by another build: another format version, float width, ring
-    /// capacity or image length, or a method this build does not have. The estimator is
-    /// unchanged.
+    /// The checkpoint was written by another build: another format version, float width or
+    /// image length, or a method this build does not have. The estimator is unchanged.
     CheckpointIncompatible = 10,
     /// The text is not a number as the log reader reads one.
     NotANumber = 11,
@@ -93,7 +92,6 @@ impl From<CheckpointError> for RinsError {
             CheckpointError::BufferTooSmall { .. } => RinsError::BufferTooSmall,
             CheckpointError::Version { .. }
             | CheckpointError::RealWidthMismatch(_)
-            | CheckpointError::CapacityMismatch(_)
             | CheckpointError::LengthMismatch { .. }
             | CheckpointError::UnknownMethod(_)
             | CheckpointError::InvalidConfig(ConfigError::MethodUnavailable) => RinsError::CheckpointIncompatible,

@@ -12,7 +12,7 @@ use crate::error::{code, RinsError};
 use crate::output::{RinsEstimate, RinsOutput, RinsSample};
 use crate::pointer;
 use core::ffi::c_void;
-use core::mem::{align_of, size_of};
+use core::mem::{align_of, size_of, MaybeUninit};
 use estimator_core::{Estimator, Sample};
 
 /// Bytes of memory an estimator needs, on every target (32- and 64-bit): at least
@@ -105,12 +105,16 @@ unsafe fn init(memory: *mut c_void, size: usize, config: *const RinsConfig, esti
         return Err(RinsError::BufferTooSmall);
     }
     let config = config.to_core().map_err(|_| RinsError::InvalidConfig)?;
-    let fresh = Estimator::new(config).map_err(|_| RinsError::InvalidConfig)?;
-    // SAFETY: checked non-null, aligned and large enough; writable by the caller's promise. The
-    // old content is not read or dropped (it holds nothing to drop).
-    unsafe { slot.write(RinsEstimator { magic: MAGIC, estimator: fresh }) };
-    // SAFETY: checked above; writable by the caller's promise.
-    unsafe { estimator.write(slot) };
+    // SAFETY: checked non-null, aligned and large enough; writable by the caller's promise, and
+    // used by nothing else. The estimator is built in place (`Estimator::init_in`: nothing the
+    // size of the state passes through the stack) and only then marked; the old content is not
+    // read or dropped (it holds nothing to drop).
+    unsafe {
+        let field = core::ptr::addr_of_mut!((*slot).estimator).cast::<MaybeUninit<Estimator>>();
+        Estimator::init_in(&mut *field, config).map_err(|_| RinsError::InvalidConfig)?;
+        core::ptr::addr_of_mut!((*slot).magic).write(MAGIC);
+        estimator.write(slot);
+    }
     Ok(())
 }
 
