@@ -63,6 +63,14 @@ impl<const N: usize> FrameAccumulator<N> {
         self.push(byte).map(|frame| frame.and_then(|bytes| decode_frame(bytes)))
     }
 
+    /// Drops the frame being received (its bytes were cut by a hole in the stream); the bytes up
+    /// to the next 0x00 then form a frame of their own.
+    pub fn discard(&mut self) {
+        self.frame.clear();
+        self.ended = false;
+        self.oversize = false;
+    }
+
     /// Bytes of the frame being received so far.
     pub fn pending(&self) -> usize {
         if self.ended {
@@ -207,6 +215,22 @@ mod tests {
         assert_eq!(rx.pending(), 0);
         assert!(rx.push(0x02).is_none());
         assert_eq!(rx.pending(), 1, "a new frame starts after the ended one");
+    }
+
+    #[test]
+    fn discard_drops_the_frame_in_progress_only() {
+        let mut rx = Rx::new();
+        let f = frame(&sample(6.0));
+        assert!(feed(&mut rx, &f[..20]).is_empty());
+        rx.discard();
+        assert_eq!(rx.pending(), 0);
+        // The rest of the cut frame is one bad frame; the next frame is whole.
+        let mut stream = f[20..].to_vec();
+        stream.extend(frame(&sample(7.0)));
+        let got = feed(&mut rx, &stream);
+        assert_eq!(got.len(), 2);
+        assert!(got[0].is_err());
+        assert_eq!(got[1], Ok(sample(7.0)));
     }
 
     #[test]
