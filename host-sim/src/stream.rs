@@ -1,7 +1,13 @@
-//! `host-sim stream`: feeds an attitude log to the firmware over its framed serial link, one
-//! sample per request, as fast as the firmware answers, and writes the estimates CSV from the
-//! firmware's answers with the same writer as `host-sim estimate` (so the two files can be compared
-//! byte for byte). With `--qemu FIRMWARE.elf` it boots the firmware in QEMU first
+//! `host-sim stream`: feeds an attitude log to the firmware over its framed serial link and writes
+//! the estimates CSV from the firmware's answers with the same writer as `host-sim estimate` (so
+//! the two files can be compared byte for byte). By default one sample per request, each sent when
+//! the last is answered; with `--push` without waiting for answers (up to a window of frames the
+//! firmware's receive buffer holds, [`PushOptions`]), as fast as the link takes or, with
+//! `--realtime`, at the log's own rate, as a navigation computer sends. Every request is numbered
+//! (link protocol 5) and every answer matched to its request by its number; a request whose answer
+//! never comes (lost on the line, or in a firmware restart) is counted as lost and its row left out
+//! of the estimates. The summary ends with
+//! `frames sent N, answered N, lost N, overruns N` and the firmware's link counters. With `--qemu FIRMWARE.elf` it boots the firmware in QEMU first
 //! ([`qemu`]; `--machine` names the board the image was built for) and waits for the firmware's
 //! `Ready` announcement before its first request; with `--port DEVICE --baud N` it talks to a board
 //! over a serial port.
@@ -28,7 +34,11 @@ use cost::{CostStats, CostUnit};
 use estimator_core::{Output, RejectReason, SampleError};
 use link::FirmwareLink;
 use link_protocol::frame::FrameError;
-use link_protocol::{Counters, Request, Response, SampleMsg, StatusReply, PROTOCOL_VERSION};
+use link_protocol::{
+    ClockSource, Counters, Request, ResetCause, Response, SampleMsg, StatusReply, MAX_SAMPLE_FRAME,
+    PROTOCOL_VERSION,
+};
+use std::collections::VecDeque;
 use qemu::{Machine, Qemu};
 use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
@@ -84,6 +94,18 @@ pub struct StreamArgs {
     /// Refuse the log at its first unreadable row (default: skip it, count it, report its line).
     #[arg(long)]
     pub strict: bool,
+    /// Send samples without waiting for their answers (answers matched by their numbers), up to
+    /// --window frames unanswered; as fast as the link takes them unless --realtime.
+    #[arg(long)]
+    pub push: bool,
+    /// With --push: send each sample at the log's own rate (its time stamps), as a navigation
+    /// computer does, instead of as fast as the link takes them.
+    #[arg(long, requires = "push")]
+    pub realtime: bool,
+    /// With --push: most frames sent and not yet answered (default: what half the firmware's
+    /// receive buffer holds, from its status; at least 1).
+    #[arg(long, value_name = "N", requires = "push", value_parser = clap::value_parser!(u32).range(1..))]
+    pub window: Option<u32>,
 }
 
 /// The firmware, wherever it runs.
@@ -105,8 +127,10 @@ impl Target {
         timeout: Duration,
     ) -> anyhow::Result<Target> {
         let (qemu, stream) = Qemu::boot(elf, machine, defmt_log, flash_dir)?;
-        stream.set_read_timeout(Some(timeout))?;
-        let mut link = FirmwareLink::new(Box::new(stream));
+        let reader = stream.try_clone()?;
+        // Only how often the reader thread looks whether the link is still wanted.
+        reader.set_read_timeout(Some(READER_POLL))?;
+        let mut link = FirmwareLink::new(Box::new(reader), Box::new(stream), timeout);
         let mut qemu = Some(qemu);
         // A serial port drops what arrives before the firmware has enabled it (QEMU's STM32 USART
         // does): nothing is sent before the firmware says it is ready.
@@ -127,7 +151,11 @@ impl Target {
             .timeout(timeout)
             .open()
             .with_context(|| format!("cannot open serial port {device} at {baud} baud"))?;
-        let link = FirmwareLink::new(Box::new(port));
+        let mut reader = port
+            .try_clone()
+            .with_context(|| format!("cannot open serial port {device} a second time for reading"))?;
+        reader.set_timeout(READER_POLL)?;
+        let link = FirmwareLink::new(Box::new(reader), Box::new(port), timeout);
         Target::hello(link, None, |hz| CostUnit::BoardCycles { counter_hz: hz })
     }
 
@@ -169,6 +197,9 @@ impl Target {
     }
 }
 
+/// How often the link's reader thread wakes to see whether the link is still wanted.
+const READER_POLL: Duration = Duration::from_millis(500);
+
 fn check_protocol(firmware: u8) -> anyhow::Result<()> {
     if firmware != PROTOCOL_VERSION {
         bail!("firmware speaks protocol {firmware}, host-sim speaks {PROTOCOL_VERSION}");
@@ -199,7 +230,13 @@ pub struct Answer {
 
 /// Sends one sample and decodes its answer; errors if the answer is not about this sample.
 pub fn step_remote(target: &mut Target, msg: &SampleMsg) -> anyhow::Result<Answer> {
-    match target.request(&Request::Sample(*msg))? {
+    let response = target.request(&Request::Sample(*msg))?;
+    answer_of(msg, response)
+}
+
+/// The answer to the sample `msg` from its response; errors if it is not about this sample.
+fn answer_of(msg: &SampleMsg, response: Response) -> anyhow::Result<Answer> {
+    match response {
         Response::Step(r) => {
             if r.time_s.to_bits() != msg.time_s.to_bits() {
                 bail!("answer for time {} to the sample of time {}", r.time_s, msg.time_s);
@@ -231,10 +268,27 @@ pub fn step_remote(target: &mut Target, msg: &SampleMsg) -> anyhow::Result<Answe
     }
 }
 
+/// What happened on the link during a stream.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LinkSummary {
+    /// Sample frames sent.
+    pub sent: u64,
+    /// Of them, answered.
+    pub answered: u64,
+    /// Of them, never answered (lost on the line or in a firmware restart).
+    pub lost: u64,
+    /// Times the firmware announced `Ready` in the middle of the stream (it restarted).
+    pub restarts: u32,
+}
+
 /// What a stream did.
 #[derive(Clone, Debug)]
 pub struct StreamSummary {
+    /// Rows answered (and written).
     pub rows: u64,
+    pub link: LinkSummary,
+    /// The firmware's status after each restart in the stream (reset cause, restored checkpoint).
+    pub restart_status: Vec<StatusReply>,
     pub cost: CostStats,
     pub final_status: StatusReply,
     pub wall: Duration,
@@ -386,7 +440,214 @@ pub fn stream_log<R: Read, W: Write>(
     let final_status = target.status()?;
     Ok(StreamSummary {
         rows,
+        link: LinkSummary {
+            sent: rows,
+            answered: rows,
+            lost: 0,
+            restarts: 0,
+        },
+        restart_status: Vec::new(),
         cost,
+        final_status,
+        wall: start.elapsed(),
+        unreadable: filter,
+    })
+}
+
+/// How `--push` sends.
+#[derive(Clone, Debug)]
+pub struct PushOptions {
+    /// Send each row at the log's own rate (wall clock follows its time stamps).
+    pub realtime: bool,
+    /// Most sample frames sent and not yet answered.
+    pub window: usize,
+    /// Send this request just before the row with this index (counted from 0 among the rows
+    /// streamed); for tests (the watchdog test's `Hang`).
+    pub inject: Option<(u64, Request)>,
+}
+
+impl PushOptions {
+    /// The default window: the sample frames that half the firmware's receive buffer holds (a DMA
+    /// ring's reader sees every overrun only while at most half of it arrives unread), at least 1.
+    pub fn default_window(status: &StatusReply) -> usize {
+        (status.link.rx_buffer_bytes as usize / 2 / MAX_SAMPLE_FRAME).max(1)
+    }
+}
+
+/// What a request in flight was.
+#[derive(Clone, Copy)]
+enum Sent {
+    /// A sample: its row's time, the message and the log line.
+    Sample { time_s: f64, msg: SampleMsg, line: usize },
+    /// The status asked for after a restart.
+    RestartStatus,
+    /// The status asked for at the end.
+    FinalStatus,
+    /// Anything else (injected); its answer, if any, is passed over.
+    Other,
+}
+
+/// The requests in flight and what the stream has counted so far.
+struct Push {
+    in_flight: VecDeque<(u32, Sent)>,
+    link: LinkSummary,
+    cost: CostStats,
+    restart_status: Vec<StatusReply>,
+    final_status: Option<StatusReply>,
+}
+
+impl Push {
+    fn samples_in_flight(&self) -> usize {
+        self.in_flight.iter().filter(|(_, s)| matches!(s, Sent::Sample { .. })).count()
+    }
+
+    fn send(&mut self, target: &mut Target, request: &Request, sent: Sent) -> anyhow::Result<()> {
+        let seq = target.link.send(request)?;
+        self.in_flight.push_back((seq, sent));
+        if matches!(sent, Sent::Sample { .. }) {
+            self.link.sent += 1;
+        }
+        Ok(())
+    }
+
+    /// Takes one answer, waiting until `deadline` (or the link's timeout), and writes the rows it
+    /// settles: an answer to request `s` settles every earlier request still in flight as lost
+    /// (the firmware answers in order). Returns false if nothing came before the deadline.
+    fn settle<W: Write>(
+        &mut self,
+        target: &mut Target,
+        writer: &mut EstimatesWriter<W>,
+        info: &mut dyn Write,
+        deadline: Option<Instant>,
+    ) -> anyhow::Result<bool> {
+        let received = match deadline {
+            Some(d) => target.link.receive_until(d),
+            None => target.link.receive_numbered().map(Some),
+        };
+        let answer = match received {
+            Ok(Some(a)) => a,
+            Ok(None) => return Ok(false),
+            Err(e) => return Err(e.context(describe_exit(&mut target.qemu))),
+        };
+        if let Response::Ready { .. } = answer.message {
+            self.link.restarts += 1;
+            writeln!(info, "the firmware restarted (it announced Ready): asking for its status")?;
+            self.send(target, &Request::ReadStatus, Sent::RestartStatus)?;
+            return Ok(true);
+        }
+        if !self.in_flight.iter().any(|(seq, _)| *seq == answer.seq) {
+            bail!("an answer numbered {} to no request in flight: {:?}", answer.seq, answer.message);
+        }
+        while let Some((seq, sent)) = self.in_flight.pop_front() {
+            if seq != answer.seq {
+                if matches!(sent, Sent::Sample { .. }) {
+                    self.link.lost += 1;
+                }
+                continue;
+            }
+            match (sent, answer.message) {
+                (Sent::Sample { time_s, msg, line }, response) => {
+                    let a = answer_of(&msg, response).with_context(|| format!("log line {line}"))?;
+                    self.cost.add(a.step_cost_ticks);
+                    writer.write_step(time_s, &a.result)?;
+                    self.link.answered += 1;
+                }
+                (Sent::RestartStatus, Response::Status(s)) => {
+                    let cause = ResetCause::try_from(s.reset_cause).map_or("unknown", |c| c.name());
+                    let checkpoint = s
+                        .checkpoint_time_s
+                        .map_or("no checkpoint".to_string(), |t| format!("the checkpoint of {t} s"));
+                    writeln!(info, "  reset cause {cause}; the firmware restored {checkpoint}")?;
+                    self.restart_status.push(s);
+                }
+                (Sent::FinalStatus, Response::Status(s)) => self.final_status = Some(s),
+                (Sent::Other, _) => {}
+                (_, other) => bail!("the firmware answered ReadStatus with {other:?}"),
+            }
+            break;
+        }
+        Ok(true)
+    }
+}
+
+/// Streams like [`stream_log`], but sends without waiting for each answer ([`PushOptions`]).
+/// Answers are matched to their requests by number. A `Ready` in the middle (the firmware
+/// restarted: watchdog, power) is counted; the host asks for the status (reset cause, restored
+/// checkpoint) and carries on. Rows whose answer never came are counted as lost and left out of
+/// the estimates; a final status request settles every sample sent before it.
+#[allow(clippy::too_many_arguments)]
+pub fn stream_log_push<R: Read, W: Write>(
+    target: &mut Target,
+    lines: &mut LogReader<R>,
+    mut filter: RowFilter,
+    resume_after_s: Option<f64>,
+    writer: &mut EstimatesWriter<W>,
+    total_bytes: Option<u64>,
+    options: &PushOptions,
+    info: &mut dyn Write,
+) -> anyhow::Result<StreamSummary> {
+    let start = Instant::now();
+    let progress = Progress::new(total_bytes);
+    let mut push = Push {
+        in_flight: VecDeque::new(),
+        link: LinkSummary::default(),
+        cost: CostStats::default(),
+        restart_status: Vec::new(),
+        final_status: None,
+    };
+    let mut streamed = 0u64;
+    let mut first_time_s: Option<f64> = None;
+    let window = options.window.max(1);
+    while let Some(item) = lines.next() {
+        let Some(line) = filter.admit(item, &mut |e| {
+            progress.bar.suspend(|| eprintln!("warning: {e} (row skipped)"));
+        })?
+        else {
+            continue;
+        };
+        if resume_after_s.is_some_and(|t| line.row.time_s <= t) {
+            continue;
+        }
+        if let Some((at, request)) = &options.inject {
+            if *at == streamed {
+                push.send(target, request, Sent::Other)?;
+            }
+        }
+        if options.realtime {
+            let first = *first_time_s.get_or_insert(line.row.time_s);
+            let due = start + Duration::from_secs_f64((line.row.time_s - first).max(0.0));
+            while Instant::now() < due {
+                push.settle(target, writer, info, Some(due))?;
+            }
+        }
+        while push.samples_in_flight() >= window {
+            push.settle(target, writer, info, None)?;
+        }
+        let msg = SampleMsg::from(&sample_of(&line.row));
+        let sent = Sent::Sample {
+            time_s: line.row.time_s,
+            msg,
+            line: line.line,
+        };
+        push.send(target, &Request::Sample(msg), sent)?;
+        streamed += 1;
+        // Whatever answers are there already, without waiting.
+        while push.settle(target, writer, info, Some(Instant::now()))? {}
+        progress.update(push.link.answered, lines.bytes_read());
+    }
+    push.send(target, &Request::ReadStatus, Sent::FinalStatus)?;
+    let final_status = loop {
+        push.settle(target, writer, info, None)?;
+        if let Some(s) = push.final_status {
+            break s;
+        }
+    };
+    drop(progress);
+    Ok(StreamSummary {
+        rows: push.link.answered,
+        link: push.link,
+        restart_status: push.restart_status,
+        cost: push.cost,
         final_status,
         wall: start.elapsed(),
         unreadable: filter,
@@ -429,7 +690,17 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     // A gzip log's size says nothing of its rows: no time left then.
     let gzip = plain_size.is_some() && lines.is_gzip();
     let total = if gzip { None } else { plain_size };
-    let summary = stream_log(&mut target, &mut lines, RowFilter::new(args.strict), resume_after_s, &mut writer, total)?;
+    let filter = RowFilter::new(args.strict);
+    let summary = if args.push {
+        let options = PushOptions {
+            realtime: args.realtime,
+            window: args.window.map_or_else(|| PushOptions::default_window(&target.boot_status), |w| w as usize),
+            inject: None,
+        };
+        stream_log_push(&mut target, &mut lines, filter, resume_after_s, &mut writer, total, &options, &mut info)?
+    } else {
+        stream_log(&mut target, &mut lines, filter, resume_after_s, &mut writer, total)?
+    };
     writer
         .finish()
         .with_context(|| format!("{}:0: cannot write", out.display()))?;
@@ -445,7 +716,7 @@ fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &Stre
     let log = if is_stdio(log) { "standard input".to_string() } else { log.display().to_string() };
     writeln!(
         w,
-        "{log}: {} rows streamed through {what} in {:.1} s ({:.0} rows/s); estimates in {out}",
+        "{log}: {} rows answered through {what} in {:.1} s ({:.0} rows/s); estimates in {out}",
         s.rows,
         s.wall.as_secs_f64(),
         s.rows as f64 / s.wall.as_secs_f64().max(1e-9),
@@ -492,5 +763,25 @@ fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &Stre
             st.checkpoints_saved
         )?;
     }
+    let l = &st.link;
+    writeln!(
+        w,
+        "  firmware's link: {} lost frames, {} UART overruns, {} buffer overruns, {} framing errors, {} noise errors; receive buffer peak {} of {} bytes",
+        l.lost_frames, l.uart_overruns, l.buffer_overruns, l.framing_errors, l.noise_errors, l.rx_peak_bytes, l.rx_buffer_bytes
+    )?;
+    let cause = ResetCause::try_from(st.reset_cause).map_or("unknown", |c| c.name());
+    let clock = ClockSource::try_from(st.clock_source).map_or("unknown", |c| c.name());
+    writeln!(w, "  firmware's last reset: {cause}; clock: {clock}")?;
+    if s.link.restarts > 0 {
+        writeln!(w, "  the firmware restarted {} times during the stream", s.link.restarts)?;
+    }
+    writeln!(
+        w,
+        "frames sent {}, answered {}, lost {}, overruns {}",
+        s.link.sent,
+        s.link.answered,
+        s.link.lost,
+        st.link.overruns()
+    )?;
     writeln!(w, "{}", target.unit.summary(&s.cost))
 }
