@@ -43,12 +43,13 @@ use link_protocol::{Response, UNNUMBERED};
 use link_protocol::{Numbered, Request};
 
 /// The watchdog test's build (feature `test-hang`): the main loop stops for good, as a firmware
-/// bug would stop it; interrupts go on, the watchdog is no longer fed and must reset the chip.
+/// bug would stop it (here: waiting for an event that never comes); interrupts go on, the watchdog
+/// is no longer fed and must reset the chip.
 #[cfg(all(target_os = "none", feature = "test-hang"))]
 fn hang() -> ! {
     defmt::warn!("Hang received: the main loop stops (test build); the watchdog must reset");
     loop {
-        cortex_m::asm::nop();
+        cortex_m::asm::wfi();
     }
 }
 
