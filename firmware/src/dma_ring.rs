@@ -97,6 +97,7 @@ impl<const N: usize> Default for DmaRing<N> {
 }
 
 impl<const N: usize> DmaRing<N> {
+    #[allow(clippy::manual_is_multiple_of)] // is_multiple_of needs Rust 1.87; the workspace says 1.85
     const CHECK: () = assert!(N >= 4 && N % 2 == 0 && N <= u16::MAX as usize);
 
     /// A reader for a DMA that starts at the buffer's start (NDTR = `N`).

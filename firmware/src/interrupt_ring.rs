@@ -86,10 +86,12 @@ pub struct RingReader<'a> {
     pending: Option<u8>,
 }
 
-impl RingReader<'_> {
+impl Iterator for RingReader<'_> {
+    type Item = Received;
+
     /// The next received byte (after a [`Received::Gap`] if bytes were lost before it), or `None`
-    /// if nothing is waiting.
-    pub fn next(&mut self) -> Option<Received> {
+    /// if nothing is waiting (more may come later).
+    fn next(&mut self) -> Option<Received> {
         if let Some(byte) = self.pending.take() {
             return Some(Received::Byte(byte));
         }
@@ -101,7 +103,9 @@ impl RingReader<'_> {
         }
         Some(Received::Byte(byte))
     }
+}
 
+impl RingReader<'_> {
     /// Whether nothing is waiting.
     pub fn is_empty(&self) -> bool {
         self.pending.is_none() && self.consumer.len() == 0
@@ -114,7 +118,7 @@ mod tests {
     use std::vec::Vec;
 
     fn drain(reader: &mut RingReader<'_>) -> Vec<Received> {
-        core::iter::from_fn(|| reader.next()).collect()
+        reader.by_ref().collect()
     }
 
     #[test]

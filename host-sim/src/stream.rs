@@ -716,7 +716,7 @@ fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &Stre
     let log = if is_stdio(log) { "standard input".to_string() } else { log.display().to_string() };
     writeln!(
         w,
-        "{log}: {} rows answered through {what} in {:.1} s ({:.0} rows/s); estimates in {out}",
+        "{log}: {} rows streamed through {what} in {:.1} s ({:.0} rows/s); estimates in {out}",
         s.rows,
         s.wall.as_secs_f64(),
         s.rows as f64 / s.wall.as_secs_f64().max(1e-9),
