@@ -23,6 +23,7 @@
 
 pub mod cost;
 pub mod link;
+pub mod push;
 pub mod qemu;
 
 use crate::estimates_csv::EstimatesWriter;
@@ -34,11 +35,8 @@ use cost::{CostStats, CostUnit};
 use estimator_core::{Output, RejectReason, SampleError};
 use link::FirmwareLink;
 use link_protocol::frame::FrameError;
-use link_protocol::{
-    ClockSource, Counters, Request, ResetCause, Response, SampleMsg, StatusReply, MAX_SAMPLE_FRAME,
-    PROTOCOL_VERSION,
-};
-use std::collections::VecDeque;
+use link_protocol::{ClockSource, Counters, Request, ResetCause, Response, SampleMsg, StatusReply, PROTOCOL_VERSION};
+use push::{stream_log_push, PushOptions};
 use qemu::{Machine, Qemu};
 use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
@@ -207,7 +205,7 @@ fn check_protocol(firmware: u8) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn describe_exit(qemu: &mut Option<Qemu>) -> String {
+pub(crate) fn describe_exit(qemu: &mut Option<Qemu>) -> String {
     match qemu {
         Some(q) => match q.exited() {
             Some(status) => format!(
@@ -235,7 +233,7 @@ pub fn step_remote(target: &mut Target, msg: &SampleMsg) -> anyhow::Result<Answe
 }
 
 /// The answer to the sample `msg` from its response; errors if it is not about this sample.
-fn answer_of(msg: &SampleMsg, response: Response) -> anyhow::Result<Answer> {
+pub(crate) fn answer_of(msg: &SampleMsg, response: Response) -> anyhow::Result<Answer> {
     match response {
         Response::Step(r) => {
             if r.time_s.to_bits() != msg.time_s.to_bits() {
@@ -363,14 +361,14 @@ pub fn prepare_firmware(target: &mut Target, resume: bool, reset: bool, info: &m
 }
 
 /// Progress on standard error, only when it is a terminal (rows, rate, time left).
-struct Progress {
-    bar: indicatif::ProgressBar,
+pub(crate) struct Progress {
+    pub(crate) bar: indicatif::ProgressBar,
     start: Instant,
 }
 
 impl Progress {
     /// `total_bytes`: the log's size when known (a plain file), for the time left.
-    fn new(total_bytes: Option<u64>) -> Progress {
+    pub(crate) fn new(total_bytes: Option<u64>) -> Progress {
         let bar = if !std::io::stderr().is_terminal() {
             indicatif::ProgressBar::hidden()
         } else if let Some(n) = total_bytes {
@@ -389,7 +387,7 @@ impl Progress {
         Progress { bar, start: Instant::now() }
     }
 
-    fn update(&self, rows: u64, bytes: u64) {
+    pub(crate) fn update(&self, rows: u64, bytes: u64) {
         if rows % 256 == 0 && !self.bar.is_hidden() {
             let rate = rows as f64 / self.start.elapsed().as_secs_f64().max(1e-9);
             self.bar.set_position(bytes);
@@ -448,206 +446,6 @@ pub fn stream_log<R: Read, W: Write>(
         },
         restart_status: Vec::new(),
         cost,
-        final_status,
-        wall: start.elapsed(),
-        unreadable: filter,
-    })
-}
-
-/// How `--push` sends.
-#[derive(Clone, Debug)]
-pub struct PushOptions {
-    /// Send each row at the log's own rate (wall clock follows its time stamps).
-    pub realtime: bool,
-    /// Most sample frames sent and not yet answered.
-    pub window: usize,
-    /// Send this request just before the row with this index (counted from 0 among the rows
-    /// streamed); for tests (the watchdog test's `Hang`).
-    pub inject: Option<(u64, Request)>,
-}
-
-impl PushOptions {
-    /// The default window: the sample frames that half the firmware's receive buffer holds (a DMA
-    /// ring's reader sees every overrun only while at most half of it arrives unread), at least 1.
-    pub fn default_window(status: &StatusReply) -> usize {
-        (status.link.rx_buffer_bytes as usize / 2 / MAX_SAMPLE_FRAME).max(1)
-    }
-}
-
-/// What a request in flight was.
-#[derive(Clone, Copy)]
-enum Sent {
-    /// A sample: its row's time, the message and the log line.
-    Sample { time_s: f64, msg: SampleMsg, line: usize },
-    /// The status asked for after a restart.
-    RestartStatus,
-    /// The status asked for at the end.
-    FinalStatus,
-    /// Anything else (injected); its answer, if any, is passed over.
-    Other,
-}
-
-/// The requests in flight and what the stream has counted so far.
-struct Push {
-    in_flight: VecDeque<(u32, Sent)>,
-    link: LinkSummary,
-    cost: CostStats,
-    restart_status: Vec<StatusReply>,
-    final_status: Option<StatusReply>,
-}
-
-impl Push {
-    fn samples_in_flight(&self) -> usize {
-        self.in_flight.iter().filter(|(_, s)| matches!(s, Sent::Sample { .. })).count()
-    }
-
-    fn send(&mut self, target: &mut Target, request: &Request, sent: Sent) -> anyhow::Result<()> {
-        let seq = target.link.send(request)?;
-        self.in_flight.push_back((seq, sent));
-        if matches!(sent, Sent::Sample { .. }) {
-            self.link.sent += 1;
-        }
-        Ok(())
-    }
-
-    /// Takes one answer, waiting until `deadline` (or the link's timeout), and writes the rows it
-    /// settles: an answer to request `s` settles every earlier request still in flight as lost
-    /// (the firmware answers in order). Returns false if nothing came before the deadline.
-    fn settle<W: Write>(
-        &mut self,
-        target: &mut Target,
-        writer: &mut EstimatesWriter<W>,
-        info: &mut dyn Write,
-        deadline: Option<Instant>,
-    ) -> anyhow::Result<bool> {
-        let received = match deadline {
-            Some(d) => target.link.receive_until(d),
-            None => target.link.receive_numbered().map(Some),
-        };
-        let answer = match received {
-            Ok(Some(a)) => a,
-            Ok(None) => return Ok(false),
-            Err(e) => return Err(e.context(describe_exit(&mut target.qemu))),
-        };
-        if let Response::Ready { .. } = answer.message {
-            self.link.restarts += 1;
-            writeln!(info, "the firmware restarted (it announced Ready): asking for its status")?;
-            self.send(target, &Request::ReadStatus, Sent::RestartStatus)?;
-            return Ok(true);
-        }
-        if !self.in_flight.iter().any(|(seq, _)| *seq == answer.seq) {
-            bail!("an answer numbered {} to no request in flight: {:?}", answer.seq, answer.message);
-        }
-        while let Some((seq, sent)) = self.in_flight.pop_front() {
-            if seq != answer.seq {
-                if matches!(sent, Sent::Sample { .. }) {
-                    self.link.lost += 1;
-                }
-                continue;
-            }
-            match (sent, answer.message) {
-                (Sent::Sample { time_s, msg, line }, response) => {
-                    let a = answer_of(&msg, response).with_context(|| format!("log line {line}"))?;
-                    self.cost.add(a.step_cost_ticks);
-                    writer.write_step(time_s, &a.result)?;
-                    self.link.answered += 1;
-                }
-                (Sent::RestartStatus, Response::Status(s)) => {
-                    let cause = ResetCause::try_from(s.reset_cause).map_or("unknown", |c| c.name());
-                    let checkpoint = s
-                        .checkpoint_time_s
-                        .map_or("no checkpoint".to_string(), |t| format!("the checkpoint of {t} s"));
-                    writeln!(info, "  reset cause {cause}; the firmware restored {checkpoint}")?;
-                    self.restart_status.push(s);
-                }
-                (Sent::FinalStatus, Response::Status(s)) => self.final_status = Some(s),
-                (Sent::Other, _) => {}
-                (_, other) => bail!("the firmware answered ReadStatus with {other:?}"),
-            }
-            break;
-        }
-        Ok(true)
-    }
-}
-
-/// Streams like [`stream_log`], but sends without waiting for each answer ([`PushOptions`]).
-/// Answers are matched to their requests by number. A `Ready` in the middle (the firmware
-/// restarted: watchdog, power) is counted; the host asks for the status (reset cause, restored
-/// checkpoint) and carries on. Rows whose answer never came are counted as lost and left out of
-/// the estimates; a final status request settles every sample sent before it.
-#[allow(clippy::too_many_arguments)]
-pub fn stream_log_push<R: Read, W: Write>(
-    target: &mut Target,
-    lines: &mut LogReader<R>,
-    mut filter: RowFilter,
-    resume_after_s: Option<f64>,
-    writer: &mut EstimatesWriter<W>,
-    total_bytes: Option<u64>,
-    options: &PushOptions,
-    info: &mut dyn Write,
-) -> anyhow::Result<StreamSummary> {
-    let start = Instant::now();
-    let progress = Progress::new(total_bytes);
-    let mut push = Push {
-        in_flight: VecDeque::new(),
-        link: LinkSummary::default(),
-        cost: CostStats::default(),
-        restart_status: Vec::new(),
-        final_status: None,
-    };
-    let mut streamed = 0u64;
-    let mut first_time_s: Option<f64> = None;
-    let window = options.window.max(1);
-    while let Some(item) = lines.next() {
-        let Some(line) = filter.admit(item, &mut |e| {
-            progress.bar.suspend(|| eprintln!("warning: {e} (row skipped)"));
-        })?
-        else {
-            continue;
-        };
-        if resume_after_s.is_some_and(|t| line.row.time_s <= t) {
-            continue;
-        }
-        if let Some((at, request)) = &options.inject {
-            if *at == streamed {
-                push.send(target, request, Sent::Other)?;
-            }
-        }
-        if options.realtime {
-            let first = *first_time_s.get_or_insert(line.row.time_s);
-            let due = start + Duration::from_secs_f64((line.row.time_s - first).max(0.0));
-            while Instant::now() < due {
-                push.settle(target, writer, info, Some(due))?;
-            }
-        }
-        while push.samples_in_flight() >= window {
-            push.settle(target, writer, info, None)?;
-        }
-        let msg = SampleMsg::from(&sample_of(&line.row));
-        let sent = Sent::Sample {
-            time_s: line.row.time_s,
-            msg,
-            line: line.line,
-        };
-        push.send(target, &Request::Sample(msg), sent)?;
-        streamed += 1;
-        // Whatever answers are there already, without waiting.
-        while push.settle(target, writer, info, Some(Instant::now()))? {}
-        progress.update(push.link.answered, lines.bytes_read());
-    }
-    push.send(target, &Request::ReadStatus, Sent::FinalStatus)?;
-    let final_status = loop {
-        push.settle(target, writer, info, None)?;
-        if let Some(s) = push.final_status {
-            break s;
-        }
-    };
-    drop(progress);
-    Ok(StreamSummary {
-        rows: push.link.answered,
-        link: push.link,
-        restart_status: push.restart_status,
-        cost: push.cost,
         final_status,
         wall: start.elapsed(),
         unreadable: filter,
