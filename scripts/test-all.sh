@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Runs every test of the project on a fresh machine, installing what is missing first:
 #   1. the thumbv7em-none-eabihf Rust target, qemu-system-arm and GNU time (apt), if absent;
-#   2. `cargo test --workspace --release`: estimator-core, link-protocol, host-sim (including the
+#   2. `cargo test --workspace --release`: estimator-core, link-protocol, the firmware's library
+#      on the host (receive rings, the STM32F405's receive timeline), host-sim (including the
 #      QEMU end-to-end tests, which build the firmware for both boards themselves: mps2-an386 and
-#      the STM32F405 on QEMU's netduinoplus2);
+#      the STM32F405 on QEMU's netduinoplus2, and the watchdog test's build);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
 #   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
 #      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
@@ -40,7 +41,7 @@ fi
 qemu-system-arm --version | head -n 1
 cargo --version
 
-log "every crate's tests (release): estimator-core, link-protocol, host-sim (with the QEMU end-to-end tests), firmware (empty on the host)"
+log "every crate's tests (release): estimator-core, link-protocol, firmware (its library on the host), host-sim (with the QEMU end-to-end tests)"
 cargo test --workspace --release
 
 log "estimator-core with f64"
