@@ -28,7 +28,7 @@ use firmware::dma_ring::{snapshot, DmaFlags, DmaRing, DmaStream};
 use firmware::interrupt_ring::InterruptRing;
 use firmware::request_receiver::RequestReceiver;
 use firmware::rx_stats::{LineErrors, RxStats};
-use firmware::{Received, DMA_RX_BUFFER_BYTES, INTERRUPT_RX_RING_ENTRIES};
+use firmware::{DMA_RX_BUFFER_BYTES, INTERRUPT_RX_RING_ENTRIES};
 use link_protocol::frame::MAX_FRAME;
 use link_protocol::{encode_frame, Numbered, Request, SampleMsg};
 
