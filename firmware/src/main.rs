@@ -99,6 +99,7 @@ fn main() -> ! {
     let image = unsafe { &mut *core::ptr::addr_of_mut!(IMAGE) };
     #[cfg(feature = "checkpoint")]
     let watchdog = board.watchdog;
+    #[cfg(feature = "checkpoint")]
     let persistence = board.flash.map(|flash| {
         let mut store = checkpoint_store::CheckpointStore::new(firmware::watchdog::FedFlash::new(flash, watchdog));
         let restored = store.restore(estimator, image);

@@ -260,7 +260,7 @@ mod tests {
         use std::io::Read as _;
         let mut rx = FrameAccumulator::<MAX_REQUEST_ENCODED>::new();
         let mut buf = [0u8; 256];
-        let mut send = |port: &mut UnixStream, seq: u32, message: Response| {
+        let send = |port: &mut UnixStream, seq: u32, message: Response| {
             let mut out = [0u8; MAX_FRAME];
             let n = encode_frame(&Numbered { seq, message }, &mut out).unwrap();
             port.write_all(&out[..n]).unwrap();
