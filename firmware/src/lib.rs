@@ -9,7 +9,8 @@
 //! - [`rx_stats`]: the receive path's error counters, shared with interrupt handlers;
 //! - [`request_receiver`]: bytes to numbered requests; [`sequence`]: lost requests from their
 //!   numbers;
-//! - [`watchdog`]: the watchdog as the loop sees it, and a flash that feeds it between erases.
+//! - [`watchdog`]: the watchdog as the loop sees it, and a flash that feeds it between erases;
+//! - [`reset_cause`]: the last reset's cause from the chip's reset flags.
 //!
 //! `tests/receive_timeline.rs` runs the receive path against the STM32F405's timeline at 115200
 //! baud, the flash stalls included.
@@ -23,6 +24,7 @@ extern crate std;
 pub mod dma_ring;
 pub mod interrupt_ring;
 pub mod request_receiver;
+pub mod reset_cause;
 pub mod rx_stats;
 pub mod sequence;
 pub mod watchdog;

@@ -9,6 +9,20 @@
 
 use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
 
+/// The STM32F405's IWDG timeout, nominal (LSI at 32 kHz). The LSI runs at 17 to 47 kHz (DS8626,
+/// LSI oscillator characteristics), so the reset comes after 6.8 to 18.8 s
+/// ([`iwdg_timeout_range_ms`]): above the main loop's longest legitimate stall (a 128 KiB sector
+/// erase, 4 s at most, and a checkpoint's programming: 4.26 s; docs/firmware.md, the one-second
+/// budget; `tests/receive_timeline.rs` checks it), and a `Reset` that erases several sectors feeds
+/// it between them ([`FedFlash`]).
+pub const STM32F405_IWDG_TIMEOUT_MS: u32 = 10_000;
+
+/// The IWDG's real timeout, ms, at the LSI's slowest (17 kHz) and fastest (47 kHz) frequency
+/// (DS8626), for a timeout `nominal_ms` set for 32 kHz: (shortest, longest).
+pub const fn iwdg_timeout_range_ms(nominal_ms: u32) -> (u32, u32) {
+    (nominal_ms * 32 / 47, nominal_ms * 32 / 17)
+}
+
 /// Something that must be fed in time. Feeding is a register write: a copyable handle suffices.
 pub trait Watchdog {
     fn feed(&self);

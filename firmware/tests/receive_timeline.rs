@@ -28,6 +28,7 @@ use firmware::dma_ring::{snapshot, DmaFlags, DmaRing, DmaStream};
 use firmware::interrupt_ring::InterruptRing;
 use firmware::request_receiver::RequestReceiver;
 use firmware::rx_stats::{LineErrors, RxStats};
+use firmware::watchdog::{iwdg_timeout_range_ms, STM32F405_IWDG_TIMEOUT_MS};
 use firmware::{DMA_RX_BUFFER_BYTES, INTERRUPT_RX_RING_ENTRIES};
 use link_protocol::frame::MAX_FRAME;
 use link_protocol::{encode_frame, Numbered, Request, SampleMsg};
@@ -271,6 +272,15 @@ fn the_dma_path_receives_every_frame_through_every_worst_case_flash_stall() {
     );
     assert!(out.stats.rx_peak_bytes >= 4 * frame_bytes, "the stalls must have let frames queue up");
     assert!(out.stats.rx_peak_bytes as usize <= DMA_RX_BUFFER_BYTES / 2);
+}
+
+#[test]
+fn the_iwdg_outlasts_the_longest_stall_at_the_fastest_lsi() {
+    let (shortest_ms, longest_ms) = iwdg_timeout_range_ms(STM32F405_IWDG_TIMEOUT_MS);
+    assert_eq!((shortest_ms, longest_ms), (6_808, 18_823));
+    let stall_ms = (STEP_NS + ANSWER_NS + ERASE_MAX_NS + PROGRAM_MAX_NS) / 1_000_000;
+    assert_eq!(stall_ms, 4_271);
+    assert!(u64::from(shortest_ms) > stall_ms);
 }
 
 #[test]

@@ -6,7 +6,7 @@
 //! |---|---|---|
 //! | clocks | HSE crystal (`RINS_HSE_HZ`) and PLL at 168 MHz, the clock security system on; if the crystal has not started within 100 ms, HSI and PLL at 168 MHz instead, said in the log and the status | HSI 16 MHz (QEMU has no RCC model: the PLL and HSE never report ready) |
 //! | link | USART1, PA9 TX / PA10 RX, 115200 8N1, receive and transmit by DMA (`serial.rs`) | the same USART1, receive by interrupt, blocking transmit |
-//! | watchdog | IWDG, [`IWDG_TIMEOUT_MS`] | none (QEMU does not model the IWDG) |
+//! | watchdog | IWDG, `firmware::watchdog::STM32F405_IWDG_TIMEOUT_MS` | none (QEMU does not model the IWDG) |
 //! | reset cause | RCC_CSR's flags | power-on |
 //! | brown-out | the option bytes' BOR level checked at boot (2.7 V wanted; docs/firmware.md) | not modelled |
 //! | cost counter | SysTick at the core clock (a tick is a cycle) | SysTick at QEMU's CPU clock, [`QEMU_CPU_CLOCK_HZ`] |
@@ -26,7 +26,8 @@ mod serial;
 use core::sync::atomic::{AtomicU8, Ordering};
 
 use cortex_m_rt::exception;
-use firmware::watchdog::Watchdog;
+use firmware::reset_cause::ResetFlags;
+use firmware::watchdog::{Watchdog, STM32F405_IWDG_TIMEOUT_MS as IWDG_TIMEOUT_MS};
 use link_protocol::{ClockSource, ResetCause};
 use stm32f4xx_hal::pac;
 use stm32f4xx_hal::prelude::*;
@@ -50,12 +51,6 @@ pub const QEMU_CPU_CLOCK_HZ: u32 = 168_000_000;
 /// about 2 ms (DS8626, HSE oscillator characteristics).
 const HSE_STARTUP_POLLS: u32 = 1_600;
 const HSE_POLL_CYCLES: u32 = 1_000;
-/// The IWDG's timeout, nominal (LSI at 32 kHz). The LSI runs at 17 to 47 kHz (DS8626, LSI
-/// oscillator characteristics), so the reset comes after 6.8 to 18.8 s: above the main loop's
-/// longest legitimate stall (a 128 KiB sector erase, 4 s at most, and a checkpoint's programming:
-/// 4.3 s; docs/firmware.md, the one-second budget), and a `Reset` that erases several sectors
-/// feeds it between them (`firmware::watchdog::FedFlash`).
-pub const IWDG_TIMEOUT_MS: u32 = 10_000;
 /// USART1's interrupt number (RM0090 table 61).
 const USART1_IRQ: i16 = 37;
 
@@ -207,27 +202,20 @@ fn start_crystal(rcc: &pac::RCC) -> bool {
     false
 }
 
-/// Why the chip reset, from RCC_CSR's flags (RM0090 7.3.21), which are then cleared; a cause the
-/// firmware left itself (a clock failure) comes first. A power-on sets the brown-out flag too.
+/// Why the chip reset, from RCC_CSR's flags (RM0090 7.3.21), which are then cleared
+/// (`firmware::reset_cause`, host-tested, orders them); a cause the firmware left itself (a clock
+/// failure) comes first.
 fn reset_cause(rcc: &pac::RCC) -> ResetCause {
     let csr = rcc.csr().read();
     rcc.csr().modify(|_, w| w.rmvf().set_bit());
-    if let Some(cause) = super::reset_mark::take() {
-        return cause;
-    }
-    if csr.wdgrstf().bit_is_set() {
-        ResetCause::Watchdog
-    } else if csr.porrstf().bit_is_set() {
-        ResetCause::PowerOn
-    } else if csr.borrstf().bit_is_set() {
-        ResetCause::BrownOut
-    } else if csr.sftrstf().bit_is_set() {
-        ResetCause::Software
-    } else if csr.padrstf().bit_is_set() {
-        ResetCause::Pin
-    } else {
-        ResetCause::PowerOn
-    }
+    let flags = ResetFlags {
+        watchdog: csr.wdgrstf().bit_is_set(),
+        power_on: csr.porrstf().bit_is_set(),
+        brown_out: csr.borrstf().bit_is_set(),
+        software: csr.sftrstf().bit_is_set(),
+        pin: csr.padrstf().bit_is_set(),
+    };
+    firmware::reset_cause::reset_cause(super::reset_mark::take(), flags)
 }
 
 /// The brown-out reset level in the option bytes (FLASH_OPTCR bits 3:2, RM0090 3.7.1: 00 is
