@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Runs every test of the project on a fresh machine, installing what is missing first:
-#   1. the thumbv7em-none-eabihf Rust target, qemu-system-arm and GNU time (apt), if absent;
+#   1. the thumbv7em-none-eabihf Rust target, flip-link (the firmware's linker, cargo install),
+#      qemu-system-arm and GNU time (apt), if absent;
 #   2. `cargo test --workspace --release`: estimator-core, link-protocol, the firmware's library
-#      on the host (receive rings, the STM32F405's receive timeline), host-sim (including the
-#      QEMU end-to-end tests, which build the firmware for both boards themselves: mps2-an386 and
-#      the STM32F405 on QEMU's netduinoplus2, and the watchdog test's build);
+#      on the host (the checkpoint store, receive rings, the STM32F405's receive timeline),
+#      host-sim (including the QEMU end-to-end tests, which build the firmware for both boards
+#      themselves: mps2-an386 and the STM32F405 on QEMU's netduinoplus2, and the watchdog test's
+#      build);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
 #   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
 #      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
@@ -27,6 +29,10 @@ if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
 fi
 if ! cargo clippy --version >/dev/null 2>&1; then
     rustup component add clippy
+fi
+# The firmware's linker (.cargo/config.toml): puts the stack below the statics.
+if ! command -v flip-link >/dev/null 2>&1; then
+    cargo install --locked flip-link
 fi
 MISSING=""
 if ! command -v qemu-system-arm >/dev/null 2>&1; then MISSING="$MISSING qemu-system-arm"; fi

@@ -1,7 +1,10 @@
-//! The parts of the firmware that do not touch hardware, in a library that also builds for the
-//! host, where `cargo test -p firmware` tests them (the board code and the service loop are the
-//! binary, `main.rs`):
+//! The firmware's hardware-free parts: compiled into the firmware, and for the host too, where
+//! their tests run (`cargo test -p firmware`) and `host-sim flash-life` drives the very same store
+//! code on a model of each board's flash.
 //!
+//! - [`checkpoint_store`]: the estimator's checkpoints in a wear-levelled, power-fail-safe log on
+//!   the board's flash (`sequential-storage`), and when to save one;
+//! - [`flash_layout`]: each board's checkpoint flash: its sectors and the datasheet's timing;
 //! - [`interrupt_ring`]: the receive ring an interrupt handler fills (mps2-an386; the STM32F405
 //!   under QEMU);
 //! - [`dma_ring`]: the reader of a circular DMA receive buffer, with overrun detection (the
@@ -21,7 +24,9 @@
 #[cfg(test)]
 extern crate std;
 
+pub mod checkpoint_store;
 pub mod dma_ring;
+pub mod flash_layout;
 pub mod interrupt_ring;
 pub mod request_receiver;
 pub mod reset_cause;
@@ -33,7 +38,7 @@ pub mod watchdog;
 /// `link_protocol::MAX_SAMPLE_FRAME` = 43 bytes) half of it, the most that may arrive between two
 /// looks of the reader (`dma_ring.rs`), holds 23 s of frames: 5 times the longest time the main
 /// loop is away (a 128 KiB sector erase and a checkpoint's programming at the datasheet's maximum,
-/// 4.25 s, plus a step and an answer; docs/firmware.md, the one-second budget).
+/// 4.26 s, plus a step and an answer; docs/firmware.md, the one-second budget).
 /// `tests/receive_timeline.rs` checks it against that timeline.
 pub const DMA_RX_BUFFER_BYTES: usize = 2048;
 

@@ -8,7 +8,7 @@ use embedded_io::Write;
 use firmware::request_receiver::RequestReceiver;
 use firmware::watchdog::Watchdog;
 use link_protocol::frame::MAX_FRAME;
-use link_protocol::{encode_frame, FrameError, LinkCounters, Numbered, Request, Response};
+use link_protocol::{encode_response_frame, FrameError, LinkCounters, Numbered, Request, Response};
 
 use crate::board::{Receiver, Transmitter};
 
@@ -50,7 +50,7 @@ impl<W: Watchdog> Link<W> {
     /// Hands one response frame, numbered `seq`, to the transmitter (which sends it in the
     /// background where the board can). Returns false if it could not be encoded or written.
     pub fn send(&mut self, seq: u32, response: &Response) -> bool {
-        let Ok(n) = encode_frame(&Numbered { seq, message: *response }, &mut self.frame) else {
+        let Ok(n) = encode_response_frame(seq, response, &mut self.frame) else {
             return false;
         };
         match self.frame.get(..n) {

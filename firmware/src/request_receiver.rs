@@ -32,7 +32,7 @@ impl RequestReceiver {
                 None
             }
             Received::Byte(byte) => {
-                let result = self.frames.push_decode::<Numbered<Request>>(byte)?;
+                let result = self.frames.push_request(byte)?;
                 if let Ok(request) = &result {
                     self.sequence.observe(request.seq);
                 }

@@ -18,9 +18,10 @@ use link_protocol::{Request, ResetCause};
 use qemu_support::*;
 use std::time::{Duration, Instant};
 
-/// The row before which the host sends `Hang`.
-const HANG_AT_ROW: u64 = 300;
-const LOG_S: u32 = 600;
+/// The row before which the host sends `Hang`: after the first checkpoint (300 s of samples, the
+/// default interval), so that the restart restores it.
+const HANG_AT_ROW: u64 = 450;
+const LOG_S: u32 = 900;
 
 #[test]
 fn a_hung_main_loop_is_reset_by_the_watchdog_and_the_stream_carries_on() {

@@ -81,6 +81,19 @@ impl<const N: usize> FrameAccumulator<N> {
     }
 }
 
+impl FrameAccumulator<{ crate::MAX_REQUEST_ENCODED }> {
+    /// [`Self::push_decode`] of a numbered request, compiled here once (not generic): the
+    /// firmware's one decoder, built with this crate's optimisation (size, in the firmware's
+    /// profile) rather than inlined into the caller.
+    #[inline(never)]
+    pub fn push_request(
+        &mut self,
+        byte: u8,
+    ) -> Option<Result<crate::message::Numbered<crate::message::Request>, FrameError>> {
+        self.push_decode(byte)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -137,6 +137,18 @@ pub fn encode_frame<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, 
     Ok(m + 2)
 }
 
+/// [`encode_frame`] of a numbered response, compiled here once (not generic): the firmware's one
+/// encoder, built with this crate's optimisation (size, in the firmware's profile) rather than
+/// inlined into the caller.
+#[inline(never)]
+pub fn encode_response_frame(
+    seq: u32,
+    response: &crate::message::Response,
+    out: &mut [u8],
+) -> Result<usize, EncodeError> {
+    encode_frame(&crate::message::Numbered { seq, message: *response }, out)
+}
+
 /// COBS-decodes a received frame (without its 0x00 delimiters) in place; returns the decoded
 /// length. Strict: an empty frame, a group whose code byte points past the end of the frame (a
 /// truncated frame) and a 0x00 anywhere in the frame are errors, never a shorter message.

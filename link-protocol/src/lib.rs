@@ -80,7 +80,7 @@ pub mod message;
 
 pub use accumulator::FrameAccumulator;
 pub use blocking_writer::BlockingWriter;
-pub use frame::{decode_frame, encode_frame, EncodeError, FrameError};
+pub use frame::{decode_frame, encode_frame, encode_response_frame, EncodeError, FrameError};
 pub use message::{
     ClockSource, Counters, EstimateMsg, LinkCounters, Numbered, RejectedReply, Request, ResetCause, Response,
     SampleMsg, StatusReply, StepReply, UNNUMBERED,

@@ -382,7 +382,7 @@ impl TryFrom<u8> for ResetCause {
 pub enum ClockSource {
     /// The crystal (HSE) through the PLL, as intended.
     Crystal = 0,
-    /// The internal RC oscillator (HSI) through the PLL, because the crystal did not start in
+    /// The internal RC oscillator (HSI, 16 MHz) alone, because the crystal did not start in
     /// time: the baud rate is within the HSI's +-1 % instead of the crystal's ppm.
     InternalFallback = 1,
     /// The board's one fixed clock (mps2-an386), or an emulator's (QEMU).

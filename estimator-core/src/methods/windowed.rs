@@ -211,6 +211,28 @@ impl<const CAP: usize> Windowed<CAP> {
         self.updates
     }
 
+    /// An empty window and a filter of zeros: what an estimator holds before
+    /// [`crate::Estimator::init_in`] resets it to a configuration.
+    pub(crate) fn unconfigured() -> Self {
+        Windowed {
+            window: CorrelationWindow::new(),
+            reference: ReferenceFilter::NEW,
+            kf: ConstantStateKalman::from_parts([0.0; 4], [[0.0; 4]; 4]),
+            updates: 0,
+            entries_since_update: 0,
+            next_pair: 0,
+            residual_mean: [0.0; 4],
+            residual_count: [0; 2],
+            gains: [0.0; 4],
+            product_variance_rad2: [0.0; 2],
+            residual_mean_long: [0.0; 4],
+            residual_power: [0.0; 4],
+            long_count: [0; 2],
+            noise_scale: [0.0; 2],
+            drift_share: [0.0; 2],
+        }
+    }
+
     /// Fresh state: empty window, prior covariance.
     pub fn new(config: &Config) -> Self {
         Windowed {

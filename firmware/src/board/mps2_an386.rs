@@ -14,7 +14,8 @@
 //!   with `-icount shift=0` one tick is exactly 40 instructions.
 //! - Logs: defmt over semihosting (QEMU's stdout). Fatal errors: semihosting exit with status 1.
 //! - Flash for checkpoints: the host file `rins-flash.bin` in QEMU's working directory
-//!   ([`Flash`], `semihosted_flash.rs`), 256-byte pages at 0.5 ms of core clock each.
+//!   ([`Flash`], `semihosted_flash.rs`), laid out as `firmware::flash_layout::MPS2_AN386` (64
+//!   sectors of 4 KiB), each 256-byte page written in the STM32F405's time (4.1 ms of core clock).
 //!
 //! Interrupts are dispatched by number from cortex-m-rt's `DefaultHandler` (this board has no
 //! peripheral access crate, so no vector table of named handlers).
@@ -30,8 +31,10 @@ use heapless::spsc::{Consumer, Producer, Queue};
 use link_protocol::{ClockSource, ResetCause};
 
 pub use super::interrupt_rx::RingReceiver as Receiver;
-pub use super::semihosted_flash::SemihostedFlash as Flash;
 pub use super::systick_cost::CostCounter;
+
+/// The checkpoint flash: the semihosted file, as big as the board's checkpoint region.
+pub type Flash = super::semihosted_flash::SemihostedFlash<{ firmware::flash_layout::MPS2_AN386.region_bytes() as usize }>;
 
 /// Core (and SysTick) clock, Hz.
 pub const CORE_CLOCK_HZ: u32 = 25_000_000;
@@ -103,13 +106,13 @@ impl Board {
             cortex_m::peripheral::NVIC::unmask(Irq(UART0_TX_IRQ));
             cortex_m::interrupt::enable();
         }
+        defmt::info!("mps2-an386: reset cause {}", reset_cause);
         Some(Board {
             tx,
             rx,
             cost: CostCounter::init(peripherals.SYST, CORE_CLOCK_HZ, true),
             flash: if cfg!(feature = "checkpoint") {
-                // 0.5 ms of core clock per 256-byte page, a NOR flash's page program time.
-                Flash::open(CORE_CLOCK_HZ / 2000)
+                Flash::open(CORE_CLOCK_HZ)
             } else {
                 None
             },

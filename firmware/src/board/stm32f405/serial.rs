@@ -260,11 +260,11 @@ impl embedded_io::Write for Transmitter {
                 if let (Some(to), Some(from)) = (buffer.get_mut(..n), buf.get(..n)) {
                     to.copy_from_slice(from);
                 }
-                d.stream.clear_transfer_complete();
-                d.stream.clear_half_transfer();
-                d.stream.clear_transfer_error();
-                d.stream.clear_fifo_error();
-                d.stream.clear_direct_mode_error();
+                // Every flag of stream 7 cleared in one write to DMA2_HIFCR (bits 22 and 24-27:
+                // FIFO error, direct mode error, transfer error, half transfer, complete;
+                // RM0090 10.5.4), as the stream must be before it is enabled again.
+                // SAFETY: a write-1-to-clear register; the bits are stream 7's only.
+                unsafe { (*DMA2::ptr()).hifcr().write(|w| w.bits(0x0F40_0000)) };
                 d.stream.set_number_of_transfers(n as u16);
                 // SAFETY: the buffer holds the bytes to send; the stream sends them to USART1.
                 unsafe { d.stream.enable() };
