@@ -27,9 +27,14 @@ pub mod push;
 pub mod qemu;
 
 use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{is_stdio, LogReader, RowFilter};
-use crate::pipeline::{check_output_is_not_input, default_estimates_path, open_output};
-use crate::replay::sample_of;
+use crate::exit_status::RunEnd;
+use crate::log_csv::{is_stdio, LogLine, LogReader, RowFilter};
+use crate::output_file::{check_not_input, OutputFile};
+use crate::pipeline::{default_estimates_path, inputs_of, load_truth, log_name, truth_rows};
+use crate::replay::{sample_of, GridFollower};
+use crate::report::ReportBuilder;
+use crate::time_stamps::IntervalCheck;
+use crate::timeline::{Timeline, TimelineRow};
 use anyhow::{bail, Context};
 use cost::{CostStats, CostUnit};
 use estimator_core::{Output, RejectReason, SampleError};
@@ -104,6 +109,9 @@ pub struct StreamArgs {
     /// receive buffer holds, from its status; at least 1).
     #[arg(long, value_name = "N", requires = "push", value_parser = clap::value_parser!(u32).range(1..))]
     pub window: Option<u32>,
+    /// Write plots and a self-contained report.html of the stream into DIR (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
 }
 
 /// The firmware, wherever it runs.
@@ -403,7 +411,9 @@ impl Drop for Progress {
 }
 
 /// Streams the log's rows after `resume_after_s` through the target, writing one estimates row
-/// per row. Unreadable rows go through `filter` (skipped and counted, or refused when strict).
+/// per row; `each` sees every row and its answer. Unreadable rows go through `filter` (skipped and
+/// counted, or refused when strict); stamps whose interval makes no sense are refused
+/// ([`IntervalCheck`]).
 pub fn stream_log<R: Read, W: Write>(
     target: &mut Target,
     lines: &mut LogReader<R>,
@@ -411,11 +421,13 @@ pub fn stream_log<R: Read, W: Write>(
     resume_after_s: Option<f64>,
     writer: &mut EstimatesWriter<W>,
     total_bytes: Option<u64>,
+    each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
 ) -> anyhow::Result<StreamSummary> {
     let start = Instant::now();
     let progress = Progress::new(total_bytes);
     let mut cost = CostStats::default();
     let mut rows = 0u64;
+    let mut interval_check = IntervalCheck::new(None);
     while let Some(item) = lines.next() {
         let Some(line) = filter.admit(item, &mut |e| {
             progress.bar.suspend(|| eprintln!("warning: {e} (row skipped)"));
@@ -426,11 +438,13 @@ pub fn stream_log<R: Read, W: Write>(
         if resume_after_s.is_some_and(|t| line.row.time_s <= t) {
             continue;
         }
+        interval_check.observe(line.row.time_s)?;
         let sample = sample_of(&line.row);
         let answer =
             step_remote(target, &SampleMsg::from(&sample)).with_context(|| format!("log line {}", line.line))?;
         cost.add(answer.step_cost_ticks);
         writer.write_step(line.row.time_s, &answer.result)?;
+        each(&line, &answer.result);
         rows += 1;
         progress.update(rows, lines.bytes_read());
     }
@@ -456,7 +470,10 @@ pub fn stream_log<R: Read, W: Write>(
 pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let timeout = Duration::from_secs_f64(args.timeout_s.max(0.001));
     let out = args.out.clone().unwrap_or_else(|| default_estimates_path(&args.log));
-    check_output_is_not_input(&args.log, &out)?;
+    check_not_input(&out, "--out", &inputs_of(&args.log))?;
+    if let Some(dir) = &args.report {
+        crate::trial_report::create_dir(dir)?;
+    }
     let mut lines = LogReader::open(&args.log)?;
     let plain_size = (!is_stdio(&args.log)).then(|| std::fs::metadata(&args.log).ok()).flatten().map(|m| m.len());
     let (mut target, what) = match (&args.qemu, &args.port) {
@@ -484,10 +501,22 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     };
     let resume_after_s = prepare_firmware(&mut target, args.resume, args.reset, &mut info)?;
     let mut writer =
-        EstimatesWriter::new(open_output(&out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
+        EstimatesWriter::new(OutputFile::create(&out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
     // A gzip log's size says nothing of its rows: no time left then.
     let gzip = plain_size.is_some() && lines.is_gzip();
     let total = if gzip { None } else { plain_size };
+    // The report's record of the answers: the truth beside the log, the grid from the stamps.
+    let truth = args.report.as_ref().and_then(|_| load_truth(&args.log, &mut |w| eprintln!("warning: {w}")));
+    let mut judge = truth.as_ref().map(|t| ReportBuilder::new(truth_rows(&t.file, t.generated.as_ref())));
+    let mut grid = GridFollower::new(&estimator_core::Config::default());
+    let mut timeline = args.report.as_ref().map(|_| Timeline::new());
+    let mut each = |line: &LogLine, result: &Result<Output, SampleError>| {
+        if let Some(tl) = timeline.as_mut() {
+            let truth = judge.as_mut().and_then(|j| j.observe(&line.row, result));
+            let placement = grid.follow(line.row.time_s, result);
+            tl.observe(TimelineRow { row: &line.row, result, placement, counters: None, residuals_rad: None, truth });
+        }
+    };
     let filter = RowFilter::new(args.strict);
     let summary = if args.push {
         let options = PushOptions {
@@ -495,16 +524,30 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
             window: args.window.map_or_else(|| PushOptions::default_window(&target.boot_status), |w| w as usize),
             inject: None,
         };
-        stream_log_push(&mut target, &mut lines, filter, resume_after_s, &mut writer, total, &options, &mut info)?
+        stream_log_push(&mut target, &mut lines, filter, resume_after_s, &mut writer, total, &options, &mut info, &mut each)?
     } else {
-        stream_log(&mut target, &mut lines, filter, resume_after_s, &mut writer, total)?
+        stream_log(&mut target, &mut lines, filter, resume_after_s, &mut writer, total, &mut each)?
     };
+    if summary.rows == 0 {
+        // Nothing to write: an earlier estimates file stays as it was.
+        return Err(RunEnd::nothing_read(&log_name(&args.log), summary.unreadable.skipped, summary.unreadable.first.first()).into());
+    }
     writer
         .finish()
-        .with_context(|| format!("{}:0: cannot write", out.display()))?;
+        .with_context(|| format!("{}:0: cannot write", out.display()))?
+        .commit()?;
     drop(target.qemu.take());
     print_summary(&mut info, &args.log, &out, &what, &summary, &target)?;
+    if let (Some(dir), Some(tl)) = (&args.report, &timeline) {
+        let interval_s = grid.interval_s().unwrap_or(1.0);
+        let report = judge.map(|j| j.finish(interval_s));
+        let page = crate::trial_report::write_stream_report(dir, &log_name(&args.log), &what, &summary.final_status, report.as_ref(), tl)?;
+        writeln!(info, "report in {}", page.display())?;
+    }
     info.flush()?;
+    if summary.final_status.estimate.is_none() {
+        return Err(RunEnd::NoEstimate { reason: "the firmware reports no estimate at the end of the log".into() }.into());
+    }
     Ok(())
 }
 

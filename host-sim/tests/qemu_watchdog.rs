@@ -52,7 +52,7 @@ fn a_hung_main_loop_is_reset_by_the_watchdog_and_the_stream_carries_on() {
     let mut lines = LogReader::open(&log).unwrap();
     let mut writer = EstimatesWriter::new(Vec::new()).unwrap();
     let mut info = Vec::new();
-    let summary = stream_log_push(&mut target, &mut lines, RowFilter::new(true), None, &mut writer, None, &options, &mut info)
+    let summary = stream_log_push(&mut target, &mut lines, RowFilter::new(true), None, &mut writer, None, &options, &mut info, &mut |_, _| {})
         .unwrap_or_else(|e| panic!("{e:#}\n{}", String::from_utf8_lossy(&info)));
     let info = String::from_utf8_lossy(&info).into_owned();
     println!("{info}{:?}\nwall {:.1} s, window {window}", summary.link, start.elapsed().as_secs_f64());

@@ -6,9 +6,10 @@
 use super::cost::CostStats;
 use super::{answer_of, describe_exit, LinkSummary, Progress, StreamSummary, Target};
 use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{LogReader, RowFilter};
+use crate::log_csv::{LogLine, LogReader, RowFilter};
 use crate::replay::sample_of;
 use anyhow::{bail, Context};
+use estimator_core::{Output, SampleError};
 use link_protocol::{Request, ResetCause, Response, SampleMsg, StatusReply, MAX_SAMPLE_FRAME};
 use std::collections::VecDeque;
 use std::io::{Read, Write};
@@ -37,8 +38,8 @@ impl PushOptions {
 /// What a request in flight was.
 #[derive(Clone, Copy)]
 enum Sent {
-    /// A sample: its row's time, the message and the log line.
-    Sample { time_s: f64, msg: SampleMsg, line: usize },
+    /// A sample: its log line and the message.
+    Sample { line: LogLine, msg: SampleMsg },
     /// The status asked for after a restart.
     RestartStatus,
     /// The status asked for at the end.
@@ -79,6 +80,7 @@ impl Push {
         writer: &mut EstimatesWriter<W>,
         info: &mut dyn Write,
         deadline: Option<Instant>,
+        each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
     ) -> anyhow::Result<bool> {
         let received = match deadline {
             Some(d) => target.link.receive_until(d),
@@ -106,10 +108,11 @@ impl Push {
                 continue;
             }
             match (sent, answer.message) {
-                (Sent::Sample { time_s, msg, line }, response) => {
-                    let a = answer_of(&msg, response).with_context(|| format!("log line {line}"))?;
+                (Sent::Sample { line, msg }, response) => {
+                    let a = answer_of(&msg, response).with_context(|| format!("log line {}", line.line))?;
                     self.cost.add(a.step_cost_ticks);
-                    writer.write_step(time_s, &a.result)?;
+                    writer.write_step(line.row.time_s, &a.result)?;
+                    each(&line, &a.result);
                     self.link.answered += 1;
                 }
                 (Sent::RestartStatus, Response::Status(s)) => {
@@ -145,6 +148,7 @@ pub fn stream_log_push<R: Read, W: Write>(
     total_bytes: Option<u64>,
     options: &PushOptions,
     info: &mut dyn Write,
+    each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
 ) -> anyhow::Result<StreamSummary> {
     let start = Instant::now();
     let progress = Progress::new(total_bytes);
@@ -177,27 +181,23 @@ pub fn stream_log_push<R: Read, W: Write>(
             let first = *first_time_s.get_or_insert(line.row.time_s);
             let due = start + Duration::from_secs_f64((line.row.time_s - first).max(0.0));
             while Instant::now() < due {
-                push.settle(target, writer, info, Some(due))?;
+                push.settle(target, writer, info, Some(due), each)?;
             }
         }
         while push.samples_in_flight() >= window {
-            push.settle(target, writer, info, None)?;
+            push.settle(target, writer, info, None, each)?;
         }
         let msg = SampleMsg::from(&sample_of(&line.row));
-        let sent = Sent::Sample {
-            time_s: line.row.time_s,
-            msg,
-            line: line.line,
-        };
+        let sent = Sent::Sample { line, msg };
         push.send(target, &Request::Sample(msg), sent)?;
         streamed += 1;
         // Whatever answers are there already, without waiting.
-        while push.settle(target, writer, info, Some(Instant::now()))? {}
+        while push.settle(target, writer, info, Some(Instant::now()), each)? {}
         progress.update(push.link.answered, lines.bytes_read());
     }
     push.send(target, &Request::ReadStatus, Sent::FinalStatus)?;
     let final_status = loop {
-        push.settle(target, writer, info, None)?;
+        push.settle(target, writer, info, None, each)?;
         if let Some(s) = push.final_status {
             break s;
         }
@@ -328,7 +328,7 @@ mod tests {
         let mut info = Vec::new();
         let options = PushOptions { realtime, window, inject: None };
         let summary =
-            stream_log_push(&mut target, &mut lines, RowFilter::new(true), None, &mut writer, None, &options, &mut info)
+            stream_log_push(&mut target, &mut lines, RowFilter::new(true), None, &mut writer, None, &options, &mut info, &mut |_, _| {})
                 .unwrap();
         let out = String::from_utf8(writer.finish().unwrap()).unwrap();
         (summary, out, String::from_utf8(info).unwrap())
