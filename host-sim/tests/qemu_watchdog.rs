@@ -21,7 +21,8 @@ use std::time::{Duration, Instant};
 /// The row before which the host sends `Hang`: after the first checkpoint (300 s of samples, the
 /// default interval), so that the restart restores it.
 const HANG_AT_ROW: u64 = 450;
-const LOG_S: u32 = 900;
+/// Long enough for an estimate at the end (`host-sim estimate` fails without one).
+const LOG_S: u32 = 1800;
 
 #[test]
 fn a_hung_main_loop_is_reset_by_the_watchdog_and_the_stream_carries_on() {
