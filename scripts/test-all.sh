@@ -4,9 +4,11 @@
 #      qemu-system-arm, GNU time, and the ARM C toolchain with newlib (gcc-arm-none-eabi,
 #      libnewlib-arm-none-eabi) for the C examples (apt), if absent;
 #   2. `cargo test --workspace --release`: estimator-core, estimator-ffi (the C library: its API,
-#      and that the checked-in C header is the one its sources generate), link-protocol, host-sim
-#      (including the QEMU end-to-end tests, which build the firmware for both boards themselves:
-#      mps2-an386 and the STM32F405 on QEMU's netduinoplus2);
+#      and that the checked-in C header is the one its sources generate), link-protocol, the
+#      firmware's library on the host (the checkpoint store, receive rings, the STM32F405's receive
+#      timeline), host-sim (including the QEMU end-to-end tests, which build the firmware for both
+#      boards themselves: mps2-an386 and the STM32F405 on QEMU's netduinoplus2, and the watchdog
+#      test's build);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
 #   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
 #      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
@@ -56,7 +58,7 @@ qemu-system-arm --version | head -n 1
 arm-none-eabi-gcc --version | head -n 1
 cargo --version
 
-log "every crate's tests (release): estimator-core, estimator-ffi, link-protocol, host-sim (with the QEMU end-to-end tests), firmware (empty on the host)"
+log "every crate's tests (release): estimator-core, estimator-ffi, link-protocol, firmware (its library on the host), host-sim (with the QEMU end-to-end tests)"
 cargo test --workspace --release
 
 log "estimator-core with f64"
