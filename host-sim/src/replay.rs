@@ -124,12 +124,10 @@ impl StepView<'_> {
 }
 
 /// The sample grid as the estimator sees it, followed beside it from the stamps it accepted: where
-/// each accepted row falls ([`Placement`]), and the clock steps counted.
-///
-/// The core's [`TimeGrid`] counts clock jumps and steps back, but [`Estimator::counters`] does not
-/// report them (its `clock_steps` stays 0). A second grid of the same code, given the same
-/// configuration and the same accepted stamps, places every stamp as the estimator's did, so the
-/// replay counts them here and reports the larger of the two counts.
+/// each accepted row falls ([`Placement`]: a gap, a clock step), which the reports mark row by row,
+/// and the clock steps counted (what a stream, whose answers carry no counters, reports). A second
+/// grid of the same code, given the same configuration and the same accepted stamps, places every
+/// stamp as the estimator's did.
 #[derive(Clone, Debug)]
 pub struct GridFollower {
     grid: TimeGrid,
@@ -224,12 +222,10 @@ where
             est = restart(est, line.row.time_s)?;
         }
     }
-    let mut counters = est.counters();
-    counters.clock_steps = counters.clock_steps.max(grid.clock_steps());
     Ok(Replay {
         rows: count,
         rejected: est.rejected(),
-        counters,
+        counters: est.counters(),
         final_estimate: est.estimate(),
         final_status,
         sample_interval_s: est.sample_interval_s(),

@@ -281,3 +281,20 @@ fn covariance_stays_symmetric_positive_definite_over_two_days() {
         assert!(e.abs() < 0.5, "x{}: {e:.3}", i + 1);
     }
 }
+
+#[test]
+fn clock_steps_are_counted() {
+    let mut est: Estimator = Estimator::new(Config::default()).unwrap();
+    for k in 0..200 {
+        est.step(&sample(k as f64, 3.0)).unwrap();
+    }
+    assert_eq!(est.counters().clock_steps, 0);
+    // A step back of 5 s (more than two intervals) and a jump forwards off the grid (a whole
+    // number of intervals forwards is a gap, not a step of the clock).
+    est.step(&sample(194.0, 3.0)).unwrap();
+    for k in 195..300 {
+        est.step(&sample(k as f64, 3.0)).unwrap();
+    }
+    est.step(&sample(3900.5, 3.0)).unwrap();
+    assert_eq!(est.counters().clock_steps, 2);
+}
