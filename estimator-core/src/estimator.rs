@@ -322,6 +322,9 @@ impl<const CAP: usize> Estimator<CAP> {
                 Status::Converged
             }
             (Status::WarmingUp, Some(_)) => Status::Holding,
+            // A window just full, its first measurement not yet taken (the step that filled it
+            // also removed the first window's last extra entries: its update waits a step).
+            (Status::Estimating, None) => Status::WarmingUp,
             (s, _) => s,
         };
         let estimate = estimate.map(|e| Estimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad });
@@ -442,7 +445,12 @@ impl<const CAP: usize> Estimator<CAP> {
         if s.fill_weight > 0 {
             self.counters.filled = self.counters.filled.saturating_add(1);
         }
-        match self.rotation.observe(s.index, s.rotation_rad, &feed.limits) {
+        let observed = self.rotation.observe(s.index, s.rotation_rad, &feed.limits);
+        if self.rotation.period_samples().is_none() {
+            // The pattern is being learned anew: no window of the old period goes on filling.
+            self.method.forget_period();
+        }
+        match observed {
             Err(fault) => {
                 if !matches!(self.window_status, Status::RotationFault(_)) {
                     let behind = f64::from(self.index.wrapping_sub(s.index));

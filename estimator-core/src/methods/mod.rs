@@ -120,6 +120,15 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
+    /// The rotation pattern was forgotten: the windowed method's window lets go of its period
+    /// ([`crate::methods::Windowed::forget_period`]); the others restart their window when the
+    /// fault is reported and take no sample until the period is known again.
+    pub fn forget_period(&mut self) {
+        if let MethodState::Windowed(m) = self {
+            m.forget_period();
+        }
+    }
+
     /// Whether the method needs a full window of one period before it can update.
     pub fn needs_window(&self) -> bool {
         !matches!(self, MethodState::Traditional(_))

@@ -412,6 +412,17 @@ impl<const CAP: usize> Windowed<CAP> {
         out
     }
 
+    /// The rotation pattern was forgotten (a new one is being learned): the window lets go of the
+    /// old period and of its entries, and keeps the samples from now on, up to its capacity, until
+    /// the new period is known ([`CorrelationWindow::configure`]). Until then it is never full, so
+    /// the filter takes no measurement of a window whose length is not one period.
+    pub fn forget_period(&mut self) {
+        if self.window.is_configured() {
+            self.window.reset();
+            self.entries_since_update = 0;
+        }
+    }
+
     /// Restarts the moving average.
     pub fn restart_window(&mut self) {
         self.window.clear();
