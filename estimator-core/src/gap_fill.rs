@@ -186,21 +186,75 @@ const fn weights_without(skip: i64) -> [Real; 2 * NEIGHBOURS] {
 const ALL_NEIGHBOURS: [Real; 2 * NEIGHBOURS] = weights_without(0);
 const WITHOUT_NEXT: [Real; 2 * NEIGHBOURS] = weights_without(1);
 const WITHOUT_PREVIOUS: [Real; 2 * NEIGHBOURS] = weights_without(-1);
+/// [`ALL_NEIGHBOURS`] with a 0 for the sample itself in the middle (offsets -5 to 5).
+const CENTRED_WEIGHTS: [Real; 2 * NEIGHBOURS + 1] = {
+    let mut w = [0.0; 2 * NEIGHBOURS + 1];
+    let mut i = 0;
+    while i < 2 * NEIGHBOURS {
+        w[if i < NEIGHBOURS { i } else { i + 1 }] = ALL_NEIGHBOURS[i];
+        i += 1;
+    }
+    w
+};
 
 /// Lagrange weights at 0 for the first `n` integer nodes (all distinct, non-zero, within
 /// +-[`NEIGHBOURS`]): `w_i = prod_{m != i} (-x_m) / prod_{m != i} (x_i - x_m)`. Numerator and
 /// denominator are formed in integers (exact: at most 5!^2 and 10!/... below 2^24, so exact in
 /// f32 too, the same values the f32 products gave) and divided once.
+///
+/// Formed from the full set's products (every offset -5 to 5 but 0), divided by the factors of
+/// the offsets missing: exact integer divisions (each a factor of the product), so the same
+/// integers as the products over the nodes present, in `n` times the missing offsets' work
+/// instead of `n^2` (the costliest fill, a neighbour lost beside a filled row, is a step's worst).
+#[inline(never)]
 fn lagrange_at_zero(nodes: &[i32; 2 * NEIGHBOURS], n: usize) -> [Real; 2 * NEIGHBOURS] {
+    const SPAN: i32 = NEIGHBOURS as i32;
+    // The full set's numerator (the product of -y over every offset y) and, for each offset x,
+    // the product of x - y over every other offset y, indexed by x + SPAN.
+    const FULL: (i32, [i32; 2 * NEIGHBOURS + 1]) = {
+        let mut num = 1;
+        let mut y = -SPAN;
+        while y <= SPAN {
+            if y != 0 {
+                num *= -y;
+            }
+            y += 1;
+        }
+        let mut den = [1; 2 * NEIGHBOURS + 1];
+        let mut x = -SPAN;
+        while x <= SPAN {
+            let mut y = -SPAN;
+            while y <= SPAN {
+                if y != 0 && y != x {
+                    den[(x + SPAN) as usize] *= x - y;
+                }
+                y += 1;
+            }
+            x += 1;
+        }
+        (num, den)
+    };
+    let mut present = 0u32;
+    for &x in nodes.iter().take(n) {
+        present |= 1 << (x + SPAN);
+    }
+    let mut missing = [0i32; 2 * NEIGHBOURS];
+    let mut k = 0;
+    let mut num_all = FULL.0;
+    for y in -SPAN..=SPAN {
+        if y != 0 && present & (1 << (y + SPAN)) == 0 && k < missing.len() {
+            missing[k] = y;
+            k += 1;
+            num_all /= -y;
+        }
+    }
     let mut w = [0.0; 2 * NEIGHBOURS];
     for i in 0..n {
-        let mut num: i32 = 1;
-        let mut den: i32 = 1;
-        for m in 0..n {
-            if m != i {
-                num *= -nodes[m];
-                den *= nodes[i] - nodes[m];
-            }
+        let x = nodes[i];
+        let num = num_all / -x;
+        let mut den = FULL.1[(x + SPAN) as usize];
+        for &y in &missing[..k] {
+            den /= x - y;
         }
         w[i] = num as Real / den as Real;
     }
@@ -396,30 +450,6 @@ impl GapFiller {
         }
     }
 
-    /// The sample at `index` (within [`NEIGHBOURS`] of the lost index `k`) if received. `pos` is
-    /// the position of the first held sample after `k`: a sample `o` before `k` sits at `pos + o`
-    /// when nothing between is lost, and nearer `pos` otherwise; one `o` after it at
-    /// `pos + o - 1`, and nearer `pos` otherwise. So a short walk towards `pos` finds it.
-    fn at(&self, index: u32, k: u32, pos: usize) -> Option<&GridSample> {
-        let o = index.wrapping_sub(k) as i32;
-        let (mut p, step) = if o < 0 { (pos as i32 + o, 1) } else { (pos as i32 + o - 1, -1) };
-        for _ in 0..NEIGHBOURS {
-            if p >= 0 {
-                let s = &self.line.get(p as usize)?.sample;
-                let d = s.index.wrapping_sub(index) as i32;
-                if d == 0 {
-                    return Some(s);
-                }
-                // Walked past where it would be: it was lost.
-                if (o < 0 && d > 0) || (o > 0 && d < 0) {
-                    return None;
-                }
-            }
-            p += step;
-        }
-        None
-    }
-
     /// Predicts a present sample from its 10 neighbours, when all are present, and averages the
     /// squared prediction error. Every [`FILL_ERROR_EVERY`]th index only: the mean square of a sea
     /// state needs no more, and the step's cost stays low.
@@ -427,23 +457,25 @@ impl GapFiller {
         if s.index % FILL_ERROR_EVERY != 0 || pos < NEIGHBOURS {
             return;
         }
-        // All ten present: the line holds increasing indices, so they are when the fifth before
-        // and the fifth after are five away; each then sits its offset from `s` in the line.
-        let (Some(first), Some(last)) = (self.line.get(pos - NEIGHBOURS), self.line.get(pos + NEIGHBOURS)) else {
-            return;
-        };
-        let n = NEIGHBOURS as u32;
-        if s.index.wrapping_sub(first.sample.index) != n || last.sample.index.wrapping_sub(s.index) != n {
-            return;
-        }
-        let mut roll = 0.0;
-        let mut pitch = 0.0;
-        for (i, w) in ALL_NEIGHBOURS.iter().enumerate() {
-            let p = if i < NEIGHBOURS { pos - NEIGHBOURS + i } else { pos + i + 1 - NEIGHBOURS };
-            if let Some(h) = self.line.get(p) {
-                roll += w * h.sample.roll_rad;
-                pitch += w * h.sample.pitch_rad;
+        // The eleven held samples centred on `s`, in one pass over the ring's (at most two) runs
+        // of memory: the line holds increasing indices, so all ten neighbours are present when
+        // the first is five before `s` and the last five after. The centre's weight is 0 (adding
+        // 0 changes no sum: the same values as the ten terms alone).
+        let (mut roll, mut pitch) = (0.0, 0.0);
+        let (mut seen, mut first, mut last) = (0usize, 0u32, 0u32);
+        self.line.iter().skip(pos - NEIGHBOURS).take(2 * NEIGHBOURS + 1).for_each(|h| {
+            let w = CENTRED_WEIGHTS.get(seen).copied().unwrap_or(0.0);
+            roll += w * h.sample.roll_rad;
+            pitch += w * h.sample.pitch_rad;
+            if seen == 0 {
+                first = h.sample.index;
             }
+            last = h.sample.index;
+            seen += 1;
+        });
+        let n = NEIGHBOURS as u32;
+        if seen != 2 * NEIGHBOURS + 1 || s.index.wrapping_sub(first) != n || last.wrapping_sub(s.index) != n {
+            return;
         }
         self.error_samples = (self.error_samples + 1).min(FILL_ERROR_SAMPLES);
         let a = 1.0 / self.error_samples as Real;
@@ -453,33 +485,40 @@ impl GapFiller {
     }
 
     /// Fills the lost sample `index` from the present samples within [`NEIGHBOURS`] on each side.
+    #[inline(never)]
     fn fill(&self, index: u32, pos: usize) -> Option<GridSample> {
         let mut nodes = [0i32; 2 * NEIGHBOURS];
         let mut values = [(0.0, 0.0); 2 * NEIGHBOURS];
         let mut n = 0;
         let mut before: Option<(i32, &GridSample)> = None;
         let mut after: Option<(i32, &GridSample)> = None;
+        // The neighbours present, in one pass over the line (increasing indices): one `o` before
+        // `index` sits at most five places before `pos`, one after at most four after it.
+        let mut present = 0u32;
+        let start = pos.saturating_sub(NEIGHBOURS);
+        self.line.iter().skip(start).take(pos + NEIGHBOURS - start).for_each(|h| {
+            let offset = h.sample.index.wrapping_sub(index) as i32;
+            if offset == 0 || offset.unsigned_abs() > NEIGHBOURS as u32 || n >= 2 * NEIGHBOURS {
+                return;
+            }
+            nodes[n] = offset;
+            values[n] = (h.sample.roll_rad, h.sample.pitch_rad);
+            n += 1;
+            present |= 1 << (offset + NEIGHBOURS as i32);
+            if offset < 0 {
+                before = Some((offset, &h.sample));
+            } else if after.is_none() {
+                after = Some((offset, &h.sample));
+            }
+        });
+        // Each missing neighbour raises the fill's variance; `missing` is the last one missing.
         let mut weight = 1u32;
         let mut missing = 0i32;
         for offset in -(NEIGHBOURS as i32)..=(NEIGHBOURS as i32) {
-            if offset == 0 {
-                continue;
-            }
-            let Some(s) = self.at(index.wrapping_add(offset as u32), index, pos) else {
+            if offset != 0 && present & (1 << (offset + NEIGHBOURS as i32)) == 0 {
                 let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR[offset.unsigned_abs() as usize - 1];
                 weight = weight.saturating_mul(factor);
                 missing = offset;
-                continue;
-            };
-            {
-                nodes[n] = offset;
-                values[n] = (s.roll_rad, s.pitch_rad);
-                n += 1;
-                if offset < 0 {
-                    before = Some((offset, s));
-                } else if after.is_none() {
-                    after = Some((offset, s));
-                }
             }
         }
         let ((ob, b), (oa, a)) = (before?, after?);
@@ -518,6 +557,31 @@ impl GapFiller {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The weights from the full set's products equal the products over the nodes present, bit
+    /// for bit, for every subset of the ten offsets.
+    #[test]
+    fn lagrange_weights_from_the_full_set_equal_the_direct_products() {
+        for subset in 1u32..1 << (2 * NEIGHBOURS) {
+            let mut nodes = [0i32; 2 * NEIGHBOURS];
+            let mut n = 0;
+            for (bit, x) in (-(NEIGHBOURS as i32)..=NEIGHBOURS as i32).filter(|x| *x != 0).enumerate() {
+                if subset & (1 << bit) != 0 {
+                    nodes[n] = x;
+                    n += 1;
+                }
+            }
+            let w = lagrange_at_zero(&nodes, n);
+            for i in 0..n {
+                let (mut num, mut den) = (1i32, 1i32);
+                for m in (0..n).filter(|m| *m != i) {
+                    num *= -nodes[m];
+                    den *= nodes[i] - nodes[m];
+                }
+                assert_eq!(w[i].to_bits(), (num as Real / den as Real).to_bits(), "nodes {:?}", &nodes[..n]);
+            }
+        }
+    }
     use crate::math::sin_cos;
 
     #[test]
