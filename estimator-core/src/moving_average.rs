@@ -207,6 +207,11 @@ pub struct Entry {
 }
 
 impl Entry {
+    /// An entry of weight 0: its products are all 0 (what [`CorrelationSums::replace`] takes for
+    /// the side of a change that has no entry).
+    pub const NONE: Entry =
+        Entry { sample: QuantizedSample { roll: 0, pitch: 0, sin_rho: 0, cos_rho: 0, sin_rho_s: 0, cos_rho_s: 0, sin_lat: 0, cos_lat: 0, reference: [0; 4] }, number: 0, weight: 0, fill: FillCode(0) };
+
     /// The fill weight the sums count for this entry.
     pub fn fill_weight(&self) -> u32 {
         self.fill.weight()
@@ -494,40 +499,49 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     }
 
     /// Adds an entry, removing up to [`MAX_REMOVALS_PER_PUSH`] entries older than one period (and
-    /// the oldest when the ring is full); returns how many went. The first entry removed and the
-    /// new one change the sums in one pass ([`CorrelationSums::replace`]).
+    /// the oldest when the ring is full); returns how many went. Every change of the sums is one
+    /// pass of [`CorrelationSums::replace`]: the first entry removed with the new one, any further
+    /// one with an entry of weight 0 (whose products are all 0), and the new one alone, when none
+    /// goes, with an entry of weight 0 in its place. One copy of the products' code in the image,
+    /// and the same exact sums as adding and subtracting apart.
     fn push_entry(&mut self, number: u32, sample: QuantizedSample, fill: FillCode, weight: u8) -> u32 {
         if self.newest.is_none() {
             self.first = number;
         }
         self.newest = Some(number);
         let mut removed = 0;
-        let mut replaced = false;
-        while let Some(oldest) = self.ring.front() {
-            let stale = usize::from((number as u16).wrapping_sub(oldest.number)) >= self.len;
-            // A full ring makes room whatever the budget (only when more than `CAP` numbers are
-            // held, before the period is known).
-            if !(stale && removed < MAX_REMOVALS_PER_PUSH) && !self.ring.is_full() {
+        let mut new = Some(Entry { sample, number: number as u16, weight, fill });
+        loop {
+            // The oldest goes when it is older than one period (a few a push), or to make room
+            // for the new entry in a full ring (only when more than `CAP` numbers are held, before
+            // the period is known).
+            let old = match self.ring.front() {
+                Some(o)
+                    if (new.is_some() && self.ring.is_full())
+                        || (removed < MAX_REMOVALS_PER_PUSH && usize::from((number as u16).wrapping_sub(o.number)) >= self.len) =>
+                {
+                    Some(o)
+                }
+                _ => None,
+            };
+            // The new entry goes in on the first pass (the ring has room: it was not full, or its
+            // oldest goes now).
+            let adding = new.take().filter(|_| old.is_some() || !self.ring.is_full());
+            let going = old.is_some();
+            if !going && adding.is_none() {
                 break;
             }
-            if removed == 0 {
-                self.sums.replace(&oldest.sample, oldest.fill_weight(), oldest.weight, &sample, fill.weight(), weight);
-                replaced = true;
-            } else {
-                self.sums.subtract(&oldest.sample, oldest.fill_weight(), oldest.weight);
+            let (o, a) = (old.unwrap_or(&Entry::NONE), adding.as_ref().unwrap_or(&Entry::NONE));
+            self.sums.replace(&o.sample, o.fill_weight(), o.weight, &a.sample, a.fill_weight(), a.weight);
+            self.sums.count = (self.sums.count + u32::from(adding.is_some())).saturating_sub(u32::from(going));
+            if going {
+                self.ring.pop_front();
+                removed += 1;
             }
-            self.ring.pop_front();
-            removed += 1;
-        }
-        let entry = Entry { sample, number: number as u16, weight, fill };
-        // The ring has room: it was not full, or an entry just went.
-        if self.ring.push_back(entry).is_ok() {
-            if !replaced {
-                self.sums.add(&sample, fill.weight(), weight);
+            if let Some(e) = adding {
+                // Room was made above: this cannot fail.
+                let _ = self.ring.push_back(e);
             }
-        } else if replaced {
-            // Not reached (an entry went, so there was room); kept exact all the same.
-            self.sums.subtract(&sample, fill.weight(), weight);
         }
         if !self.was_full && self.is_full() {
             self.was_full = true;
