@@ -144,14 +144,22 @@ fn corrected_attitude_removes_the_oscillation() {
     assert!(after < 1.0, "oscillation RMS after {after:.3} arcsec");
 }
 
-/// The state budget: 24 KiB for the default capacity (720 window entries: one period of up to
-/// 720 samples without bins) in the firmware's f32, so that its RAM holds it and a checkpoint
-/// buffer. (The f64 build, a precision comparison on the host, stores the same integer ring and
-/// wider floats elsewhere: 25 KiB.)
+/// The state budget: 29 KiB for the default capacity in the firmware's f32: the window's ring of
+/// 720 entries of 32 bytes (one period of up to 720 samples without bins, 22.5 KiB), the gap
+/// filler's delay line of 80 received samples (the taper's look-ahead of 31 rows, the five passed
+/// on last and room for rows that come in a burst, about 5 KiB), the filter and the rest.
+///
+/// What it protects: the estimator lives in the firmware's static RAM, whose budget is 64 KiB on
+/// the STM32F405 (`host-sim/tests/qemu_budgets.rs` checks it on the ELF, with the link's receive
+/// rings, the transmit queue and the checkpoint store's buffers beside the estimator). This bound
+/// keeps the estimator's share below half of it, so that the link's buffers can grow. (It was
+/// 24 KiB while a checkpoint held the whole state; the image now holds what a restart can use,
+/// 840 bytes, and the window refills.) The f64 build, a precision comparison on the host, stores
+/// the same integer ring and wider floats elsewhere: 33 KiB.
 #[test]
-fn estimator_fits_in_24_kib() {
+fn estimator_fits_in_29_kib() {
     let size = core::mem::size_of::<Estimator>();
     println!("size_of::<Estimator>() = {size} bytes; Real = {}", core::any::type_name::<Real>());
-    let budget = if cfg!(feature = "f64") { 25 * 1024 } else { 24 * 1024 };
+    let budget = if cfg!(feature = "f64") { 33 * 1024 } else { 29 * 1024 };
     assert!(size <= budget, "{size} bytes");
 }
