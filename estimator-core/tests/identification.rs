@@ -150,7 +150,7 @@ fn corrected_attitude_removes_the_oscillation() {
 /// on last and room for rows that come in a burst, about 5 KiB), the filter and the rest.
 ///
 /// What it protects: the estimator lives in the firmware's static RAM, whose budget is 64 KiB on
-/// the STM32F405 (`host-sim/tests/qemu_budgets.rs` checks it on the ELF, with the link's receive
+/// the STM32F405 (`host-sim/tests/qemu/qemu_budgets.rs` checks it on the ELF, with the link's receive
 /// rings, the transmit queue and the checkpoint store's buffers beside the estimator). This bound
 /// keeps the estimator's share below half of it, so that the link's buffers can grow. (It was
 /// 24 KiB while a checkpoint held the whole state; the image now holds what a restart can use,

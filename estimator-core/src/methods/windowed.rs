@@ -108,7 +108,7 @@
 //! `n / r` and the share), plus a division per error in every estimate (the lag): the step's
 //! maximum on the Cortex-M4F (MPS2-AN386) went from about 4,720 to 4,760 instructions with the
 //! noise scale and drift share, and to 4,960 with the lag term, 40 below the budget of 5,000
-//! (`host-sim/tests/qemu_budgets.rs`). Computing the lag once per update instead of every step
+//! (`host-sim/tests/qemu/qemu_budgets.rs`). Computing the lag once per update instead of every step
 //! would take most of its 200 back, at the price of four more values in the checkpoint.
 //! Before the first full horizon both stay at their defaults (scale 1, full walk), so the start
 //! is as before.
