@@ -238,24 +238,28 @@ fn lagrange_at_zero(nodes: &[i32; 2 * NEIGHBOURS], n: usize) -> [Real; 2 * NEIGH
     for &x in nodes.iter().take(n) {
         present |= 1 << (x + SPAN);
     }
+    // The offsets missing, and the product of -y over them (never 0: 0 is no offset).
     let mut missing = [0i32; 2 * NEIGHBOURS];
     let mut k = 0;
-    let mut num_all = FULL.0;
+    let mut missing_num = 1i32;
     for y in -SPAN..=SPAN {
         if y != 0 && present & (1 << (y + SPAN)) == 0 && k < missing.len() {
             missing[k] = y;
             k += 1;
-            num_all /= -y;
+            missing_num *= -y;
         }
     }
+    let num_all = FULL.0.wrapping_div(missing_num);
     let mut w = [0.0; 2 * NEIGHBOURS];
     for i in 0..n {
         let x = nodes[i];
-        let num = num_all / -x;
-        let mut den = FULL.1[(x + SPAN) as usize];
+        // The product of x - y over the missing offsets (never 0: x is present).
+        let mut missing_den = 1i32;
         for &y in &missing[..k] {
-            den /= x - y;
+            missing_den *= x - y;
         }
+        let num = num_all.wrapping_div(-x);
+        let den = FULL.1[(x + SPAN) as usize].wrapping_div(missing_den);
         w[i] = num as Real / den as Real;
     }
     w
