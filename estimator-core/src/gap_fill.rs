@@ -516,14 +516,17 @@ impl GapFiller {
             }
         });
         // Each missing neighbour raises the fill's variance; `missing` is the last one missing.
+        // (By the bits of the offsets absent, lowest first: as many passes as neighbours missing.)
         let mut weight = 1u32;
         let mut missing = 0i32;
-        for offset in -(NEIGHBOURS as i32)..=(NEIGHBOURS as i32) {
-            if offset != 0 && present & (1 << (offset + NEIGHBOURS as i32)) == 0 {
-                let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR[offset.unsigned_abs() as usize - 1];
-                weight = weight.saturating_mul(factor);
-                missing = offset;
-            }
+        let all = ((1u32 << (2 * NEIGHBOURS + 1)) - 1) & !(1 << NEIGHBOURS);
+        let mut absent = all & !present;
+        while absent != 0 {
+            let offset = absent.trailing_zeros() as i32 - NEIGHBOURS as i32;
+            absent &= absent - 1;
+            let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR.get(offset.unsigned_abs() as usize - 1).copied().unwrap_or(u32::MAX);
+            weight = weight.saturating_mul(factor);
+            missing = offset;
         }
         let ((ob, b), (oa, a)) = (before?, after?);
         let w = match (n, missing) {

@@ -32,17 +32,20 @@ pub fn round_to_i32(x: Real) -> i32 {
     (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i32
 }
 
-/// Round to nearest, ties to even: `libm::rintf`, bit for bit, in four FPU instructions for
-/// |x| < 2^22 (every value the step rounds; a library call otherwise). Adding 1.5 x 2^23 leaves
-/// no bits below the units, so the FPU's addition rounds `x` to an integer (ties to even), and
-/// subtracting it again is exact; the sign is `x`'s, as `rintf` gives -0 for -0.3.
+/// Round to nearest, ties to even: `libm::rintf`, bit for bit, in a few FPU instructions and no
+/// library code. For |x| < 2^23, adding 2^23 to |x| leaves no bits below the units, so the FPU's
+/// addition rounds |x| to an integer (ties to even, which is symmetric: rounding |x| and giving
+/// it x's sign is rounding x), and subtracting 2^23 again is exact; the sign is put back, as
+/// `rintf` gives -0 for -0.3. From 2^23 on every float is an integer (or infinite, or NaN) and is
+/// its own rounding.
 #[cfg(not(feature = "f64"))]
 pub fn round(x: f32) -> f32 {
-    const SHIFT: f32 = 12_582_912.0;
-    if x.abs() < 4_194_304.0 {
-        ((x + SHIFT) - SHIFT).copysign(x)
+    const TWO_23: f32 = 8_388_608.0;
+    let magnitude = x.abs();
+    if magnitude < TWO_23 {
+        ((magnitude + TWO_23) - TWO_23).copysign(x)
     } else {
-        libm::rintf(x)
+        x
     }
 }
 /// Round to nearest, ties to even.
@@ -153,9 +156,12 @@ mod tests {
             }
             bits = (bits + 331).min(0x7F80_0000);
         }
+        // Every half-integer near 0, and ties where a float has one bit below the units
+        // (2^22 to 2^23) and where it has none (2^23 on).
         for k in -4000..4000 {
-            let x = k as f32 * 0.5;
-            assert_eq!(round(x).to_bits(), libm::rintf(x).to_bits(), "{x}");
+            for x in [k as f32 * 0.5, 4_194_304.0 + k as f32 * 0.5, -4_194_304.0 + k as f32 * 0.5, 8_388_608.0 + k as f32] {
+                assert_eq!(round(x).to_bits(), libm::rintf(x).to_bits(), "{x}");
+            }
         }
         assert!(round(f32::NAN).is_nan());
     }

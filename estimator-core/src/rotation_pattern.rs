@@ -265,7 +265,9 @@ impl RotationMonitor {
         self.last_pass = [[None; 2]; LEVELS];
     }
 
-    /// Forgets the pattern (a pinned period stays) and detects it anew.
+    /// Forgets the pattern (a pinned period stays) and detects it anew. Out of line: one copy for
+    /// its three callers.
+    #[inline(never)]
     fn forget(&mut self) {
         let pinned = if self.pinned { self.period_samples } else { None };
         *self = RotationMonitor::new(pinned);
