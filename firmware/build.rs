@@ -10,7 +10,7 @@
 //!   86400; default 300), written to `OUT_DIR/checkpoint_interval.rs` for the library's
 //!   `checkpoint_store.rs` (for the host too: `host-sim flash-life` takes its default from it);
 //! - the STM32F405's crystal: `RINS_HSE_HZ` (the HSE frequency in Hz, 4 to 26 MHz as the part
-//!   allows; default 8 MHz), written to `OUT_DIR/board_clock.rs` for `board/stm32f405/mod.rs`.
+//!   allows; default 8 MHz), written to `OUT_DIR/board_clock.rs` for `board/stm32f405.rs`.
 use std::path::PathBuf;
 
 /// The checkpoint interval's environment variable, its default and its bounds, s.

@@ -14,7 +14,6 @@ use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 
 pub use estimator_core::estimates_csv::{HEADER, REJECTED_PREFIX};
-const COLUMNS: usize = 13;
 
 /// Writes the estimates CSV, one line per step, as the steps come (nothing is held but the last
 /// estimate and one line's buffer).
@@ -95,70 +94,103 @@ impl EstimateRow {
     }
 }
 
-fn parse_group<const N: usize>(fields: &[&str], names: &[&str]) -> Result<Option<[f64; N]>, String> {
-    if fields.iter().all(|f| f.trim().is_empty()) {
+/// One row as the `csv` crate reads it, columns by the names of [`HEADER`]; an empty field is
+/// `None`.
+#[derive(serde::Deserialize)]
+struct RawRow {
+    time_s: f64,
+    x1_arcsec: Option<f64>,
+    x2_arcsec: Option<f64>,
+    x3_arcsec: Option<f64>,
+    x4_arcsec: Option<f64>,
+    sigma1_arcsec: Option<f64>,
+    sigma2_arcsec: Option<f64>,
+    sigma3_arcsec: Option<f64>,
+    sigma4_arcsec: Option<f64>,
+    status: String,
+    heading_corrected_deg: Option<f64>,
+    roll_corrected_deg: Option<f64>,
+    pitch_corrected_deg: Option<f64>,
+}
+
+/// A group of columns written together (an estimate, its 1-sigma, the corrected attitude): all
+/// present or all empty; one empty among numbers is an error naming its column.
+fn group<const N: usize>(values: [Option<f64>; N], names: [&str; N]) -> Result<Option<[f64; N]>, String> {
+    if values.iter().all(Option::is_none) {
         return Ok(None);
     }
     let mut out = [0.0; N];
-    for i in 0..N {
-        let f = fields[i].trim();
-        out[i] = f.parse().map_err(|_| format!("{}: not a number: {f:?}", names[i]))?;
+    for ((slot, value), name) in out.iter_mut().zip(values).zip(names) {
+        *slot = value.ok_or_else(|| format!("{name}: empty while the rest of its group is not"))?;
     }
     Ok(Some(out))
 }
 
-fn parse_row(line: &str) -> Result<EstimateRow, String> {
-    let fields: Vec<&str> = line.split(',').collect();
-    if fields.len() != COLUMNS {
-        let kind = if fields.len() < COLUMNS { "short" } else { "long" };
-        return Err(format!("{kind} row: {} fields, expected {COLUMNS}", fields.len()));
+impl TryFrom<RawRow> for EstimateRow {
+    type Error = String;
+
+    fn try_from(r: RawRow) -> Result<EstimateRow, String> {
+        Ok(EstimateRow {
+            time_s: r.time_s,
+            x_arcsec: group([r.x1_arcsec, r.x2_arcsec, r.x3_arcsec, r.x4_arcsec], ["x1_arcsec", "x2_arcsec", "x3_arcsec", "x4_arcsec"])?,
+            sigma_arcsec: group(
+                [r.sigma1_arcsec, r.sigma2_arcsec, r.sigma3_arcsec, r.sigma4_arcsec],
+                ["sigma1_arcsec", "sigma2_arcsec", "sigma3_arcsec", "sigma4_arcsec"],
+            )?,
+            status: r.status,
+            corrected_deg: group(
+                [r.heading_corrected_deg, r.roll_corrected_deg, r.pitch_corrected_deg],
+                ["heading_corrected_deg", "roll_corrected_deg", "pitch_corrected_deg"],
+            )?,
+        })
     }
-    let names: Vec<&str> = HEADER.split(',').collect();
-    let time_s = fields[0].trim().parse().map_err(|_| format!("time_s: not a number: {:?}", fields[0]))?;
-    Ok(EstimateRow {
-        time_s,
-        x_arcsec: parse_group(&fields[1..5], &names[1..5])?,
-        sigma_arcsec: parse_group(&fields[5..9], &names[5..9])?,
-        status: fields[9].trim().to_string(),
-        corrected_deg: parse_group(&fields[10..13], &names[10..13])?,
-    })
 }
 
-/// Whether a line carries no data: blank or a `#` comment.
-fn is_comment(line: &str) -> bool {
-    let t = line.trim();
-    t.is_empty() || t.starts_with('#')
-}
-
-/// Checks a header line (whitespace, a `\r` and a UTF-8 BOM around it ignored).
-fn check_header(path: &Path, line_no: usize, line: &str) -> Result<(), LogError> {
-    let got = line.trim_start_matches('\u{feff}').trim();
-    if got != HEADER {
-        return Err(LogError::new(path, line_no, format!("bad header {got:?}, expected {HEADER:?}")));
+/// What the `csv` crate's error says, as one line (the line number is given separately).
+fn describe(e: &csv::Error) -> String {
+    match e.kind() {
+        csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+            let kind = if len < expected_len { "short" } else { "long" };
+            format!("{kind} row: {len} fields, expected {expected_len}")
+        }
+        csv::ErrorKind::Deserialize { err, .. } => match err.field() {
+            Some(i) => format!("{}: {}", HEADER.split(',').nth(i as usize).unwrap_or("?"), err.kind()),
+            None => err.kind().to_string(),
+        },
+        csv::ErrorKind::Io(io) => format!("cannot read: {io}"),
+        csv::ErrorKind::Utf8 { .. } => "not UTF-8".to_string(),
+        _ => e.to_string(),
     }
-    Ok(())
 }
 
-/// Reads an estimates CSV from a buffered reader; `path` names it in errors.
+/// Reads an estimates CSV (the `csv` crate, rows deserialized by column name) from a buffered
+/// reader; `path` names it in errors. Blank lines and `#` comment lines are skipped; whitespace
+/// around fields, a `\r` and a UTF-8 byte-order mark are ignored; the header must be [`HEADER`].
 pub fn read_estimates_from<R: BufRead>(path: &Path, reader: R) -> Result<Vec<EstimateRow>, LogError> {
-    let mut rows = Vec::new();
-    let mut header_seen = false;
-    let mut line_no = 0;
-    for line in reader.lines() {
-        line_no += 1;
-        let line = line.map_err(|e| LogError::new(path, line_no, format!("cannot read: {e}")))?;
-        if is_comment(&line) {
-            continue;
-        }
-        if !header_seen {
-            check_header(path, line_no, &line)?;
-            header_seen = true;
-            continue;
-        }
-        rows.push(parse_row(line.trim_end()).map_err(|m| LogError::new(path, line_no, m))?);
+    let mut csv = csv::ReaderBuilder::new().comment(Some(b'#')).trim(csv::Trim::All).from_reader(reader);
+    let line_of = |e: &csv::Error| e.position().map_or(0, |p| p.line() as usize);
+    let header = csv.byte_headers().map_err(|e| LogError::new(path, line_of(&e), describe(&e)))?.clone();
+    if header.is_empty() {
+        return Err(LogError::new(path, 1, format!("no header, expected {HEADER:?}")));
     }
-    if !header_seen {
-        return Err(LogError::new(path, line_no + 1, format!("no header, expected {HEADER:?}")));
+    let got = header.iter().map(String::from_utf8_lossy).collect::<Vec<_>>().join(",");
+    if got != HEADER {
+        let line = header.position().map_or(1, |p| p.line() as usize);
+        return Err(LogError::new(path, line, format!("bad header {got:?}, expected {HEADER:?}")));
+    }
+    let names = csv::StringRecord::from_byte_record_lossy(header);
+    let mut rows = Vec::new();
+    let mut record = csv::StringRecord::new();
+    loop {
+        match csv.read_record(&mut record) {
+            Ok(false) => break,
+            Ok(true) => {
+                let line = record.position().map_or(0, |p| p.line() as usize);
+                let raw: RawRow = record.deserialize(Some(&names)).map_err(|e| LogError::new(path, line, describe(&e)))?;
+                rows.push(EstimateRow::try_from(raw).map_err(|m| LogError::new(path, line, m))?);
+            }
+            Err(e) => return Err(LogError::new(path, line_of(&e), describe(&e))),
+        }
     }
     Ok(rows)
 }
@@ -216,5 +248,24 @@ mod tests {
         let text = format!("{HEADER}\n0.0,,,,,,,,,warming_up,1,2\n");
         let err = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap_err();
         assert!(err.to_string().starts_with("e.csv:2: short row"), "{err}");
+        let text = format!("{HEADER}\n0.0,1,2,3,,,,,,estimating,1,2,3\n");
+        let err = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap_err();
+        assert_eq!(err.to_string(), "e.csv:2: x4_arcsec: empty while the rest of its group is not");
+        let text = format!("{HEADER}\n0.0,1,2,3,x,,,,,estimating,1,2,3\n");
+        let err = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap_err();
+        assert!(err.to_string().starts_with("e.csv:2: x4_arcsec: "), "{err}");
+        let err = read_estimates_from(Path::new("e.csv"), "time_s,x1\n".as_bytes()).unwrap_err();
+        assert!(err.to_string().starts_with("e.csv:1: bad header"), "{err}");
+        let err = read_estimates_from(Path::new("e.csv"), "".as_bytes()).unwrap_err();
+        assert!(err.to_string().starts_with("e.csv:1: no header"), "{err}");
+    }
+
+    #[test]
+    fn comments_blank_lines_byte_order_mark_and_carriage_returns_are_read_past() {
+        let text = format!("\u{feff}# written by a test\n\n{HEADER}\r\n# a comment\n0.000000,,,,,,,,,warming_up,28.6,-0.5,1.1\r\n\n");
+        let rows = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap();
+        assert_eq!(rows.len(), 1);
+        assert_eq!(rows[0].status, "warming_up");
+        assert_eq!(rows[0].corrected_deg, Some([28.6, -0.5, 1.1]));
     }
 }
