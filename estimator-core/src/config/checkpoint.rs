@@ -9,7 +9,7 @@ use crate::checkpoint::{CheckpointError, Part, R};
 
 impl Config {
     /// Bytes of the part.
-    pub(crate) const CHECKPOINT_LEN: usize = 2 * (1 + 8) + 8 * R + 4;
+    pub(crate) const CHECKPOINT_LEN: usize = 2 * (1 + 8) + 9 * R + 4;
 
     /// Writes the part.
     pub(crate) fn write_checkpoint(&self, w: &mut Writer<'_>) {
@@ -25,6 +25,7 @@ impl Config {
             c.sway_gate_rad,
             c.converged_sigma_rad,
             c.rotation_period_tolerance,
+            c.change_detection_step_rad,
         ] {
             w.real(v);
         }
@@ -47,6 +48,7 @@ impl Config {
             sway_gate_rad: r.real(),
             converged_sigma_rad: r.real(),
             rotation_period_tolerance: r.real(),
+            change_detection_step_rad: r.real(),
             max_filled_gap_samples: r.u32(),
         };
         config.check(CAP).map_err(CheckpointError::InvalidConfig)?;

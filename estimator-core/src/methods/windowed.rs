@@ -113,15 +113,17 @@
 //! Before the first full horizon both stay at their defaults (scale 1, full walk), so the start
 //! is as before.
 
+pub mod change;
 pub(crate) mod checkpoint;
 
 use crate::config::Config;
 use crate::correlation::ReferenceFilter;
 use crate::gap_fill::{FillVariance, GridSample};
-use crate::kalman::ConstantStateKalman;
+use crate::kalman::{ConstantStateKalman, KalmanError};
 use crate::math::sqrt;
 use crate::moving_average::CorrelationWindow;
 use crate::Real;
+use change::{persistence_blocks, Alarm, BlockContext, ChangeDetector};
 
 /// Time constant of the residual average, in rotation periods.
 pub const RESIDUAL_PERIODS: usize = 4;
@@ -135,6 +137,13 @@ pub const LONG_HORIZONS: u32 = 32;
 /// `Config::drift_rad_per_sqrt_s`). Between them the random walk's variance rises linearly.
 pub const BIAS_SHARE_NOISE: Real = 0.35;
 pub const BIAS_SHARE_DRIFT: Real = 0.7;
+
+/// Innovation gate, in standard deviations of a window's residual (see "Innovation gate" in the
+/// module doc).
+pub const GATE_SIGMAS: Real = 5.0;
+
+/// Time constant of the learned spread of the residuals, in horizons of the residual average.
+pub const SPREAD_HORIZONS: u32 = 2;
 
 /// Smallest noise scale applied to the reported 1-sigma (the data may be quieter than
 /// `Config::measurement_sigma_rad` says, but not without bound).
@@ -178,14 +187,32 @@ pub struct Windowed<const CAP: usize> {
     /// Share of the configured random walk's variance applied to each pair's errors, in [0, 1]
     /// (1 until the long averages start).
     drift_share: [Real; 2],
+    /// The detector of changes of the errors ([`change`]).
+    change: ChangeDetector,
+    /// Per pair: its updates wait for a block of residuals after a change was declared (see
+    /// "Changes of the errors" in the module doc).
+    relearning: [bool; 2],
+    /// The estimate when the change was declared, rad: the residuals of that block are formed
+    /// against it.
+    held_x_rad: [Real; 4],
+    /// The usual spread of each channel's residual, rad^2 (mean square, learned).
+    spread_rad2: [Real; 4],
+    /// Residuals learned into it, per pair (saturates at [`SPREAD_HORIZONS`] horizons).
+    spread_count: [u32; 2],
+    /// The filter at the end of the last block of the roll pair in which no channel was in a run
+    /// of the change detector: what it knew before a change began to pull at it.
+    clean_kf: ConstantStateKalman<Real, 4>,
 }
 
-/// The estimate of one step: x1..x4, their 1-sigma, and whether the model is inconsistent.
+/// The estimate of one step: x1..x4, their 1-sigma, whether the model is inconsistent and
+/// whether errors are being learned again after a change.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MethodEstimate {
     pub x_rad: [Real; 4],
     pub sigma_rad: [Real; 4],
     pub mismatch: bool,
+    /// Within one period of a declared change of the errors ([`change`]).
+    pub relearning: bool,
 }
 
 /// The residual check of one step: extra 1-sigma per error and whether the model is inconsistent.
@@ -229,6 +256,12 @@ impl<const CAP: usize> Windowed<CAP> {
             long_count: [0; 2],
             noise_scale: [1.0; 2],
             drift_share: [1.0; 2],
+            change: ChangeDetector::default(),
+            relearning: [false; 2],
+            held_x_rad: [0.0; 4],
+            spread_rad2: [0.0; 4],
+            spread_count: [0; 2],
+            clean_kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
         }
     }
 
@@ -249,12 +282,29 @@ impl<const CAP: usize> Windowed<CAP> {
         self.long_count = [0; 2];
         self.noise_scale = [1.0; 2];
         self.drift_share = [1.0; 2];
+        self.change = ChangeDetector::default();
+        self.relearning = [false; 2];
+        self.held_x_rad = [0.0; 4];
+        self.spread_rad2 = [0.0; 4];
+        self.spread_count = [0; 2];
+        self.clean_kf = ConstantStateKalman::new([config.prior_sigma_rad; 4]);
+    }
+
+    /// The learned mean square of each channel's residual, rad^2 (0 until learned).
+    pub fn residual_spread_rad2(&self) -> &[Real; 4] {
+        &self.spread_rad2
+    }
+
+    /// The detector of changes of the errors.
+    pub fn change_detector(&self) -> &ChangeDetector {
+        &self.change
     }
 
     /// Sets the window to one period of the rotation pattern.
     pub fn configure(&mut self, period_samples: u32) {
         self.window.configure(period_samples);
         self.entries_since_update = 0;
+        self.change.restart_blocks();
     }
 
     /// Adds one sample to the window (its references low-passed on the way, with stage gain
@@ -269,14 +319,13 @@ impl<const CAP: usize> Windowed<CAP> {
     /// Updates the filter with the window's measurement, if the window is full and has new
     /// entries. `interval` is the sample interval, s, `fill_variance` a filled single sample's
     /// error variance of roll and of pitch ([`crate::gap_fill::GapFiller::single_fill_variance`]).
-    pub fn update(&mut self, config: &Config, interval: Real, fill_variance: FillVariance) -> bool {
+    /// Returns the change of the errors this update declared, if any (see [`change`]).
+    pub fn update(&mut self, config: &Config, interval: Real, fill_variance: FillVariance) -> Option<Alarm> {
         if !self.window.is_full() || self.entries_since_update == 0 {
-            return false;
+            return None;
         }
         let pair = usize::from(self.next_pair.min(1));
-        let Some(m) = self.window.sums().measurement_of(pair) else {
-            return false;
-        };
+        let m = self.window.sums().measurement_of(pair)?;
         self.next_pair = 1 - pair as u8;
         let bin = self.window.bin() as Real;
         let elapsed_s = interval * bin * self.entries_since_update as Real;
@@ -290,18 +339,158 @@ impl<const CAP: usize> Windowed<CAP> {
         let r_pitch = r0 + 0.5 * filled * fill_variance.pitch_rad2;
         let r_roll = r0 + 0.5 * filled * fill_variance.roll_rad2;
         self.product_variance_rad2 = [r_pitch, r_roll];
+        if self.relearning[pair] {
+            self.relearn_from_block(pair, &m.rows, &m.z);
+            return None;
+        }
         // Each pair takes every other window, so each of its updates carries two entries' worth.
         let r = 0.5 * self.product_variance_rad2[pair];
-        let mut applied = false;
-        for ch in 2 * pair..2 * pair + 2 {
-            applied |= self.kf.update(&m.rows[ch], m.z[ch], r).is_ok();
+        let detecting = config.change_detection_step_rad > 0.0;
+        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
+        let gate = (detecting && self.spread_count[pair] >= horizon.max(1)).then_some(GATE_SIGMAS);
+        // Whether the measurement was taken (applied, or held out by the gate or the detector's
+        // hold: its residuals still go on to the checks).
+        let (mut applied, mut taken) = (false, false);
+        if self.change.holding() {
+            // A change may be building up: the filter waits.
+            taken = true;
+        } else {
+            for ch in 2 * pair..2 * pair + 2 {
+                match self.kf.update_gated(&m.rows[ch], m.z[ch], r, gate.map(|g| (self.spread_rad2[ch], g))) {
+                    Ok(_) => applied = true,
+                    Err(KalmanError::Gated) => taken = true,
+                    Err(_) => {}
+                }
+            }
+        }
+        if !(applied || taken) {
+            return None;
         }
         if applied {
             self.updates = self.updates.saturating_add(1);
-            self.average_residuals(pair, &m.rows, &m.z);
-            self.learn_noise_and_drift(config, pair);
         }
-        applied
+        let residual = self.average_residuals(pair, &m.rows, &m.z);
+        self.learn_noise_and_drift(config, pair);
+        if !detecting {
+            return None;
+        }
+        self.learn_spread(pair, residual);
+        self.detect_change(config, pair, residual, interval * bin)
+    }
+
+    /// The usual spread of each channel's residuals, learned once the pair's residual average has
+    /// a full horizon: a running mean of the squared residual over [`SPREAD_HORIZONS`] horizons,
+    /// each clipped at the gate (see "Innovation gate" in the module doc).
+    fn learn_spread(&mut self, pair: usize, residual: [Real; 2]) {
+        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2).max(1) as u32;
+        if self.residual_count[pair] < horizon {
+            return;
+        }
+        let learned = self.spread_count[pair];
+        let count = learned.saturating_add(1).min(SPREAD_HORIZONS * horizon);
+        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
+            let e2 = residual[k] * residual[k];
+            let e2 = if learned == 0 { e2 } else { e2.min(GATE_SIGMAS * GATE_SIGMAS * self.spread_rad2[ch]) };
+            self.spread_rad2[ch] += (e2 - self.spread_rad2[ch]) / count as Real;
+        }
+        self.spread_count[pair] = count;
+    }
+
+    /// The model's variance of a block mean of the change detector, rad^2: white products of
+    /// variance `r` give `r (1 - 1/6) / W` (see [`change`]).
+    fn block_floor_rad2(&self, pair: usize) -> Real {
+        self.product_variance_rad2[pair] * (5.0 / 6.0) / self.window.len().max(1) as Real
+    }
+
+    /// Updates of a pair in one block of the change detector: half a period of entries.
+    fn updates_per_block(&self) -> u32 {
+        (self.window.len() as u32 / 4).max(1)
+    }
+
+    /// Passes the pair's residuals to the change detector; when it declares a change, the errors
+    /// that changed are learned again (see "Changes of the errors" in the module doc).
+    fn detect_change(&mut self, config: &Config, pair: usize, residual: [Real; 2], entry_s: Real) -> Option<Alarm> {
+        let block = self.change.accumulate(pair, residual, self.updates_per_block())?;
+        let len = self.window.len() as u32;
+        let horizon = (RESIDUAL_PERIODS as u32 * len / 2).max(1);
+        let ctx = BlockContext {
+            persistence_blocks: persistence_blocks(len, entry_s),
+            floor_rad2: self.block_floor_rad2(pair),
+            step_rad: config.change_detection_step_rad,
+            settled: self.residual_count[pair] >= horizon,
+            armed: self.residual_count.iter().all(|c| *c >= horizon),
+            max_widening_rad: config.prior_sigma_rad,
+        };
+        let was_holding = self.change.holding();
+        let alarm = self.change.test(pair, block, [self.gains[2 * pair], self.gains[2 * pair + 1]], &ctx);
+        if alarm.is_none() && pair == 1 && !self.change.in_run() {
+            self.clean_kf = self.kf.clone();
+        }
+        if self.change.holding() && !was_holding {
+            // The block that started the hold was taken: back to before it.
+            self.kf = self.clean_kf.clone();
+        }
+        let alarm = alarm?;
+        self.relearn(config, &alarm.changed);
+        Some(alarm)
+    }
+
+    /// Starts learning the errors `changed` again: their covariance back to the prior, the
+    /// residual statistics of their pairs (polluted by the step) back to their start, the
+    /// detector's blocks started over; both pairs' updates then wait for one block of residuals
+    /// against the estimate held now ([`Windowed::relearn_from_block`]: a pair updated from a
+    /// single window would take that window's sway for the change, and through the leakage of x1,
+    /// x2 into the roll channels the roll pair's update would move a forgotten x1 or x2). The other
+    /// errors, and the statistics of a pair whose channels showed nothing, keep what they learnt.
+    fn relearn(&mut self, config: &Config, changed: &[bool; 4]) {
+        // Back to before the change began to pull at the filter: through the leakage of x1, x2
+        // into the roll channels, the errors that did not change were pulled too.
+        self.kf = self.clean_kf.clone();
+        self.kf.forget(changed, config.prior_sigma_rad);
+        for pair in 0..2 {
+            if !(changed[2 * pair] || changed[2 * pair + 1]) {
+                continue;
+            }
+            for ch in 2 * pair..2 * pair + 2 {
+                self.residual_mean[ch] = 0.0;
+                self.residual_mean_long[ch] = 0.0;
+                self.residual_power[ch] = 0.0;
+            }
+            self.residual_count[pair] = 0;
+            self.long_count[pair] = 0;
+            self.noise_scale[pair] = 1.0;
+            self.drift_share[pair] = 1.0;
+        }
+        let x = self.kf.state();
+        self.held_x_rad = [x[0], x[1], x[2], x[3]];
+        self.relearning = [true; 2];
+        self.change.restart_blocks();
+    }
+
+    /// An update of a pair while the errors are learned again: its residuals against the estimate
+    /// held since the change are summed over one block of the detector; at the block's end the
+    /// block means are applied as one measurement per channel, of the learned variance of a block
+    /// mean (with the prior's covariance, the filter takes the changed errors from it, as from a
+    /// window at a cold start, but with the block's far smaller sway), and the pair updates from
+    /// windows again from then on.
+    fn relearn_from_block(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) {
+        let held = self.held_x_rad;
+        let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
+        let residual = [z[2 * pair] - fit(2 * pair), z[2 * pair + 1] - fit(2 * pair + 1)];
+        let Some(block) = self.change.accumulate(pair, residual, self.updates_per_block()) else {
+            return;
+        };
+        let floor = self.block_floor_rad2(pair);
+        let mut applied = false;
+        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
+            let target = block[k] + fit(ch);
+            applied |= self.kf.update(&rows[ch], target, self.change.block_variance(ch, floor)).is_ok();
+            self.gains[ch] = rows[ch][ch].abs();
+        }
+        if applied {
+            self.updates = self.updates.saturating_add(1);
+        }
+        self.relearning[pair] = false;
     }
 
     /// The long averages of the residual means of `pair` and what they give: the pair's noise
@@ -332,17 +521,21 @@ impl<const CAP: usize> Windowed<CAP> {
         self.drift_share[pair] = ((share - BIAS_SHARE_NOISE) * (1.0 / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE))).clamp(0.0, 1.0);
     }
 
-    fn average_residuals(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) {
+    /// Averages the pair's post-fit residuals (returned, rad) into the residual means.
+    fn average_residuals(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) -> [Real; 2] {
         let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
         let count = &mut self.residual_count[pair];
         *count = count.saturating_add(1).min(horizon.max(1));
         let alpha = 1.0 / *count as Real;
-        for ch in 2 * pair..2 * pair + 2 {
+        let mut out = [0.0; 2];
+        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
             let fit: Real = (0..4).map(|i| rows[ch][i] * self.kf.state()[i]).sum();
             let residual = z[ch] - fit;
             self.residual_mean[ch] += alpha * (residual - self.residual_mean[ch]);
             self.gains[ch] = rows[ch][ch].abs();
+            out[k] = residual;
         }
+        out
     }
 
     /// The residual check (see the module doc).
@@ -403,9 +596,9 @@ impl<const CAP: usize> Windowed<CAP> {
             } else {
                 0.0
             };
-            let m = model[i].max(lag);
+            let m = model[i].max(lag).max(self.change.widening_rad()[i]);
             sqrt(self.noise_scale[i / 2] * self.kf.covariance()[(i, i)].max(0.0) + m * m)
         });
-        Some(MethodEstimate { x_rad, sigma_rad, mismatch: check.mismatch })
+        Some(MethodEstimate { x_rad, sigma_rad, mismatch: check.mismatch, relearning: self.relearning.iter().any(|r| *r) })
     }
 }

@@ -1,0 +1,287 @@
+//! Changes of the installation errors, detected from the filter's residuals.
+//!
+//! A re-installation or a shock moves the errors by a step `D` at some time `t0`. The filter, whose
+//! memory grows without bound while the errors look constant, barely moves; the step shows in its
+//! post-fit residuals `e = z - H x` instead. This detector decides, from those residuals, that the
+//! errors have changed, and which, so that [`super::Windowed`] can learn them again.
+//!
+//! # What the residual does after a step
+//! Each measurement `z` is the mean over the last window of `W` entries (one rotation period), so
+//! after the step the residual of channel `c` ramps from 0 at `t0` to `(H D)_c` at `t0 + W` and
+//! stays there. For a step of one error `x_i` alone, `(H D)_c` is about `g_c D` on its own channel
+//! `c = i` (`g_c` the channel's gain: 1/2 for x1, x2; `cos L / 2` for x3, x4), so the smallest step
+//! the detector is sized for, `Config::change_detection_step_rad = d`, shifts the residual by
+//! `a_c = g_c d`: 10 arcsec on a pitch channel for the default 20 arcsec.
+//!
+//! # The statistic: block means of the residuals
+//! One residual is the mean of a window and carries the sway's residual of that window: tens of
+//! arcsec at sea (the product of a 6 deg, 10 s sway and the reference, averaged over 480 s, falls
+//! only like `1 / (pi f W)`). Consecutive residuals share `W - 1` of their `W` entries, so they are
+//! no independent tests either. So the residuals are averaged once more, over **blocks of half a
+//! period** of each pair's updates (`W / 4` updates, `W / 2` entries): the block mean `b` weighs the
+//! raw products with a trapezoid `1.5 W` long, whose response to the sway falls like
+//! `1 / (pi f W)(pi f W / 2)`, below an arcsec; consecutive blocks overlap by a third of their
+//! weight and are taken as independent tests (the threshold below has margin for it).
+//!
+//! Under the model, `b` is zero-mean with a variance `s^2` learned from the blocks themselves (a
+//! running mean of `b^2` over [`VARIANCE_BLOCKS`] blocks, each `b^2` clipped at
+//! [`WINSOR_SIGMAS`]^2 `s^2`, so that a step being detected raises it by at most a few tens of
+//! percent), never below the model's: white products of variance `q` give
+//! `s^2 = q (1 - 1/6) / W` (the trapezoid's sum of squared weights). Learning `s` from the data,
+//! not from the configured noise, is what keeps coloured noise and a rough sea from reading as
+//! steps: their block means are larger, and so is `s`. It is learned only once the residual average
+//! has a full horizon (the filter settled), and tested only after [`MIN_VARIANCE_BLOCKS`] blocks.
+//!
+//! # The test: a log-likelihood ratio over a run of blocks
+//! Between "no change" (`b ~ N(0, s^2)`) and "a change of the smallest size" (`b ~ N(+-a, s^2)`),
+//! the log-likelihood ratio of one block is `(+-a b - a^2 / 2) / s^2`, with no square root. Per
+//! channel and direction it is summed over a **run**: consecutive blocks in which it is positive
+//! (the block mean beyond `a / 2`); a block where it is not ends the run and clears the sum (what
+//! a CUSUM does, except that a single block below `a / 2` restarts it: a change is expected to
+//! stay beyond `a / 2`). A change is declared when, for some channel and direction,
+//!
+//! - the sum reaches [`LLR_THRESHOLD`] `= 20`, and
+//! - the run has lasted [`persistence_blocks`] blocks: longer than any passing disturbance.
+//!
+//! **False alarms.** Under "no change", `E[exp(llr)] = 1` for each block, so by Markov's inequality
+//! a run starting at a given block reaches a sum of `h` with probability at most `exp(-h)`,
+//! whatever its length. With 4 channels, 2 directions and a block every half period, a false alarm
+//! comes at most `8 x 2 x (periods a year) x exp(-20)` times a year: 0.0022 for a 480 s period
+//! (one in 460 years of sea time), 0.017 for the shortest period, 60 s (one in 57 years). That
+//! bound holds for Gaussian blocks with the learned `s`; measured on logs with what is not Gaussian
+//! (sway, coloured noise, heel in turns, drifting errors), docs/uncertainty.md.
+//!
+//! **Persistence.** A passing disturbance (a turn's heel, a few minutes of roll offset) biases
+//! every window that contains it: the residuals over `W + D` for a disturbance of `D`, up to four
+//! consecutive blocks for `D = W / 2`. A step never passes. A run must therefore last until a block
+//! lies wholly after the longest disturbance the detector is to ignore, `D = max(W / 2,
+//! `[`PASSING_S`]`)`: `3 + ceil(2 D / W)` blocks, 5 for a 480 s period (2.5 periods). A 20 arcsec
+//! step on a calm sea is detected within about three periods (the ramp of the first block, then
+//! the run); when it is, the window holds only samples from after the step, so the errors can be
+//! learned again from the next update on.
+//!
+//! **Drift.** Errors that drift are followed by the filter with a lag (about 2 arcsec for
+//! 20 arcsec a day); the residual that lag leaves is a fraction of `a / 2`, so a drift never starts
+//! a run.
+//!
+//! # While a change builds up
+//! Until it is declared, the block mean beyond `2 s` widens the reported 1-sigma of the channel's
+//! error by `(|b| - 2 s) / g` (as the residual check does with its longer average), so that the
+//! 1-sigma covers a step from the first block that shows it. And while a channel's block is in a
+//! run and beyond [`HOLD_SIGMAS`]` s` (beyond `a / 2` and significant), the filter holds its
+//! updates: it would otherwise fit what does not fit, and through the leakage of x1, x2 into the
+//! roll channels a step of one pair pulls the other pair's errors too. A disturbance that passes
+//! costs the filter the windows it held; a change is learned again anyway.
+//!
+//! # Cost
+//! Per update two additions; per block and channel two divisions and a dozen multiply-adds, once a
+//! half period: nothing that raises the worst step on the Cortex-M4F by more than a block's test.
+
+use crate::math::sqrt;
+use crate::Real;
+
+/// Sum of the log-likelihood ratio over a run at which a change is declared (see the module doc:
+/// at most `exp(-20) = 2.1e-9` false alarms per block, channel and direction).
+pub const LLR_THRESHOLD: Real = 20.0;
+
+/// Blocks whose block means the variance of a block mean is averaged over (time constant of the
+/// running mean, 32 periods).
+pub const VARIANCE_BLOCKS: u32 = 64;
+
+/// Blocks learned before the first test.
+pub const MIN_VARIANCE_BLOCKS: u32 = 8;
+
+/// A block mean enters the learned variance clipped at this many of its standard deviations.
+pub const WINSOR_SIGMAS: Real = 3.0;
+
+/// A block in a run and beyond this many standard deviations holds the filter's updates.
+pub const HOLD_SIGMAS: Real = 3.0;
+
+/// The longest passing disturbance the detector ignores at any period, s (a turn's heel: a 90 deg
+/// course change at 0.5 deg/s takes 180 s); at least half a period.
+pub const PASSING_S: Real = 300.0;
+
+/// Blocks a run must last before a change is declared, for a window of `window_entries` entries
+/// of `entry_s` seconds each: until a block lies wholly after the longest passing disturbance.
+pub fn persistence_blocks(window_entries: u32, entry_s: Real) -> u32 {
+    let half = (window_entries / 2).max(1) as Real;
+    let passing = (PASSING_S / entry_s).max(half);
+    // ceil without libm: the ratio is positive and small.
+    let ratio = passing / half;
+    let whole = ratio as u32;
+    3 + if (whole as Real) < ratio { whole + 1 } else { whole }
+}
+
+/// What a block is tested against, from the method's state at the block's end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlockContext {
+    /// Blocks a run must last ([`persistence_blocks`]).
+    pub persistence_blocks: u32,
+    /// The model's variance of a block mean, rad^2 (the floor of the learned one).
+    pub floor_rad2: Real,
+    /// The smallest step of an error to detect, rad (`Config::change_detection_step_rad`).
+    pub step_rad: Real,
+    /// Whether the pair's residual average has a full horizon (its blocks are learned from).
+    pub settled: bool,
+    /// Whether both pairs' have (blocks are tested).
+    pub armed: bool,
+    /// The largest widening of a 1-sigma, rad (the prior's).
+    pub max_widening_rad: Real,
+}
+
+/// A change declared: which errors changed, and since how many blocks the residuals showed it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Alarm {
+    /// The errors x1..x4 whose channels were in a run when the change was declared.
+    pub changed: [bool; 4],
+    /// The longest of those runs, in blocks.
+    pub run_blocks: u32,
+}
+
+/// The detector's state (see the module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChangeDetector {
+    /// Sum of each channel's residuals over the current block, rad.
+    block_sum: [Real; 4],
+    /// Updates of each pair in the current block.
+    block_updates: [u32; 2],
+    /// Running mean of each channel's squared block mean (clipped), rad^2.
+    mean_square_rad2: [Real; 4],
+    /// Blocks learned into it, per pair (saturates at [`VARIANCE_BLOCKS`]).
+    learned_blocks: [u32; 2],
+    /// Per channel, for a rise and a fall: the log-likelihood ratio summed over the current run.
+    llr: [[Real; 2]; 4],
+    /// Per channel, for a rise and a fall: blocks in the current run.
+    run: [[u32; 2]; 4],
+    /// Widening of each error's 1-sigma from its channel's last block, rad.
+    widening_rad: [Real; 4],
+    /// Per channel: in a run, with its last block beyond [`HOLD_SIGMAS`] standard deviations.
+    holding: [bool; 4],
+}
+
+impl Default for ChangeDetector {
+    fn default() -> Self {
+        ChangeDetector {
+            block_sum: [0.0; 4],
+            block_updates: [0; 2],
+            mean_square_rad2: [0.0; 4],
+            learned_blocks: [0; 2],
+            llr: [[0.0; 2]; 4],
+            run: [[0; 2]; 4],
+            widening_rad: [0.0; 4],
+            holding: [false; 4],
+        }
+    }
+}
+
+impl ChangeDetector {
+    /// Widening of each error's 1-sigma while a change builds up, rad.
+    pub fn widening_rad(&self) -> &[Real; 4] {
+        &self.widening_rad
+    }
+
+    /// The learned variance of each channel's block mean, rad^2 (0 until learned).
+    pub fn block_variance_rad2(&self) -> &[Real; 4] {
+        &self.mean_square_rad2
+    }
+
+    /// Whether the filter should hold its updates: some channel is in a run whose last block is
+    /// beyond [`HOLD_SIGMAS`] standard deviations (see "While a change builds up").
+    pub fn holding(&self) -> bool {
+        self.holding.iter().any(|h| *h)
+    }
+
+    /// Whether some channel is in a run (its last block beyond half the smallest step's shift).
+    pub fn in_run(&self) -> bool {
+        self.run.iter().flatten().any(|r| *r > 0)
+    }
+
+    /// Starts over on the current blocks and runs (after a change was declared, or the window
+    /// changed its length); keeps the learned variances.
+    pub fn restart_blocks(&mut self) {
+        self.block_sum = [0.0; 4];
+        self.block_updates = [0; 2];
+        self.llr = [[0.0; 2]; 4];
+        self.run = [[0; 2]; 4];
+        self.widening_rad = [0.0; 4];
+        self.holding = [false; 4];
+    }
+
+    /// Adds one update of `pair` (0 pitch, 1 roll): its two channels' post-fit residuals, rad.
+    /// At the end of a block of `updates_per_block` updates, returns the block's means.
+    pub fn accumulate(&mut self, pair: usize, residual_rad: [Real; 2], updates_per_block: u32) -> Option<[Real; 2]> {
+        let pair = pair.min(1);
+        self.block_sum[2 * pair] += residual_rad[0];
+        self.block_sum[2 * pair + 1] += residual_rad[1];
+        self.block_updates[pair] = self.block_updates[pair].saturating_add(1);
+        if self.block_updates[pair] < updates_per_block.max(1) {
+            return None;
+        }
+        let inv_n = 1.0 / self.block_updates[pair] as Real;
+        self.block_updates[pair] = 0;
+        let means = [self.block_sum[2 * pair] * inv_n, self.block_sum[2 * pair + 1] * inv_n];
+        self.block_sum[2 * pair] = 0.0;
+        self.block_sum[2 * pair + 1] = 0.0;
+        Some(means)
+    }
+
+    /// The variance of a block mean of channel `ch` that a block is tested and weighed with, rad^2:
+    /// the learned one, at least `floor_rad2`.
+    pub fn block_variance(&self, ch: usize, floor_rad2: Real) -> Real {
+        self.mean_square_rad2[ch.min(3)].max(floor_rad2)
+    }
+
+    /// Tests a block of `pair` whose means are `block_rad` and learns from it (see the module doc);
+    /// `gains` are the pair's channel gains. Returns the change declared, if any.
+    pub fn test(&mut self, pair: usize, block_rad: [Real; 2], gains: [Real; 2], ctx: &BlockContext) -> Option<Alarm> {
+        let pair = pair.min(1);
+        let learned = self.learned_blocks[pair];
+        let testing = ctx.armed && learned >= MIN_VARIANCE_BLOCKS;
+        let count = learned.saturating_add(1).min(VARIANCE_BLOCKS);
+        let mut declared = false;
+        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
+            let b = block_rad[k];
+            let var = self.block_variance(ch, ctx.floor_rad2);
+            if testing {
+                let a = gains[k] * ctx.step_rad;
+                let inv_var = 1.0 / var;
+                for (dir, sign) in [1.0 as Real, -1.0].into_iter().enumerate() {
+                    let llr = (a * sign * b - 0.5 * a * a) * inv_var;
+                    if llr > 0.0 {
+                        self.llr[ch][dir] += llr;
+                        self.run[ch][dir] = self.run[ch][dir].saturating_add(1);
+                        declared |= self.llr[ch][dir] >= LLR_THRESHOLD && self.run[ch][dir] >= ctx.persistence_blocks;
+                    } else {
+                        self.llr[ch][dir] = 0.0;
+                        self.run[ch][dir] = 0;
+                    }
+                }
+                let in_run = self.run[ch][0] > 0 || self.run[ch][1] > 0;
+                self.holding[ch] = in_run && b * b > HOLD_SIGMAS * HOLD_SIGMAS * var;
+                self.widening_rad[ch] = if b * b > 4.0 * var && gains[k] > 1e-6 {
+                    ((b.abs() - 2.0 * sqrt(var)) / gains[k]).min(ctx.max_widening_rad)
+                } else {
+                    0.0
+                };
+            }
+            if ctx.settled {
+                // The first block has no variance to be clipped against yet.
+                let b2 = if learned == 0 { b * b } else { (b * b).min(WINSOR_SIGMAS * WINSOR_SIGMAS * var) };
+                self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) / count as Real;
+            }
+        }
+        if ctx.settled {
+            self.learned_blocks[pair] = count;
+        }
+        if !declared {
+            return None;
+        }
+        let mut alarm = Alarm { changed: [false; 4], run_blocks: 0 };
+        for ch in 0..4 {
+            let run = self.run[ch][0].max(self.run[ch][1]);
+            alarm.changed[ch] = run > 0;
+            alarm.run_blocks = alarm.run_blocks.max(run);
+        }
+        Some(alarm)
+    }
+}
