@@ -3,7 +3,7 @@
 use crate::estimates_csv::EstimatesWriter;
 use crate::log_csv::{LogError, LogLine, RowFilter};
 use crate::scenario::Row;
-use estimator_core::{Config, ConfigError, Counters, Estimator, Holdup, Output, RejectCounts, RotationSummary, Sample, SampleError};
+use estimator_core::{Config, ConfigError, Counters, ErrorChange, Estimator, Holdup, Output, RejectCounts, RotationSummary, Sample, SampleError};
 use std::io::Write;
 
 /// The estimator type the host runs: the firmware's default capacity.
@@ -33,6 +33,8 @@ pub struct Replay {
     pub rotation: RotationSummary,
     /// What held the estimate back at the end, if anything.
     pub holdup: Option<Holdup>,
+    /// Every change of the installation errors the estimator declared, in order.
+    pub error_changes: Vec<ErrorChange>,
     /// Rows that could not be read and were skipped (with the first few, for the report).
     pub unreadable: RowFilter,
 }
@@ -78,6 +80,18 @@ pub fn pattern_summary(r: &Replay) -> String {
     format!("rotation: {rotation}{pinned}{bins}; sample interval {interval}")
 }
 
+/// A change of the installation errors, for people: e.g. `change of the installation errors
+/// detected at 13440 s (residuals showing it since 12240 s): x1, x3 learned again`.
+pub fn describe_error_change(c: &ErrorChange) -> String {
+    let which: Vec<String> = (0..4).filter(|i| c.relearned[*i]).map(|i| format!("x{}", i + 1)).collect();
+    format!(
+        "change of the installation errors detected at {} s (residuals showing it since {} s): {} learned again",
+        c.detected_s,
+        c.seen_since_s,
+        which.join(", ")
+    )
+}
+
 /// The core's sample for a log row.
 pub fn sample_of(row: &Row) -> Sample {
     Sample::from_degrees(row.time_s, row.rotation_deg, row.platform_deg, row.latitude_deg, row.heading_deg, row.roll_deg, row.pitch_deg)
@@ -120,12 +134,16 @@ where
     let mut next_restart = 0;
     let mut count = 0u64;
     let mut final_status = None;
+    let mut error_changes = Vec::new();
     for item in rows {
         let Some(line) = filter.admit(item, warn)? else { continue };
         let result = est.step(&sample_of(&line.row));
         count += 1;
         if let Ok(out) = &result {
             final_status = Some(out.status);
+            if let Some(change) = est.error_change().filter(|c| c.detected_s == out.time_s) {
+                error_changes.push(change);
+            }
         }
         each(&line, &result)?;
         let mut due = false;
@@ -146,6 +164,7 @@ where
         sample_interval_s: est.sample_interval_s(),
         rotation: est.rotation(),
         holdup: est.progress(),
+        error_changes,
         unreadable: filter,
     })
 }
