@@ -145,6 +145,9 @@ pub const GATE_SIGMAS: Real = 5.0;
 /// Time constant of the learned spread of the residuals, in horizons of the residual average.
 pub const SPREAD_HORIZONS: u32 = 2;
 
+/// A residual enters the learned spread clipped at this many of its standard deviations.
+pub const SPREAD_CLIP_SIGMAS: Real = 3.0;
+
 /// Smallest noise scale applied to the reported 1-sigma (the data may be quieter than
 /// `Config::measurement_sigma_rad` says, but not without bound).
 pub const MIN_NOISE_SCALE: Real = 1.0 / 16.0;
@@ -195,12 +198,18 @@ pub struct Windowed<const CAP: usize> {
     /// The estimate when the change was declared, rad: the residuals of that block are formed
     /// against it.
     held_x_rad: [Real; 4],
+    /// Channel measurements held out by the innovation gate.
+    gated: u32,
+    /// Each error's reported 1-sigma, rad, refreshed with its pair's updates.
+    reported_sigma_rad: [Real; 4],
+    /// Each channel's residual mean beyond the residual check's bound at its pair's last update.
+    channel_mismatch: [bool; 4],
     /// The usual spread of each channel's residual, rad^2 (mean square, learned).
     spread_rad2: [Real; 4],
     /// Residuals learned into it, per pair (saturates at [`SPREAD_HORIZONS`] horizons).
     spread_count: [u32; 2],
-    /// The filter at the end of the last block of the roll pair in which no channel was in a run
-    /// of the change detector: what it knew before a change began to pull at it.
+    /// The filter at the end of the last block of the roll pair that did not hold it (see
+    /// [`change`]): what it knew before a change or a passing disturbance began to pull at it.
     clean_kf: ConstantStateKalman<Real, 4>,
 }
 
@@ -213,13 +222,6 @@ pub struct MethodEstimate {
     pub mismatch: bool,
     /// Within one period of a declared change of the errors ([`change`]).
     pub relearning: bool,
-}
-
-/// The residual check of one step: extra 1-sigma per error and whether the model is inconsistent.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Consistency {
-    pub model_sigma_rad: [Real; 4],
-    pub mismatch: bool,
 }
 
 impl<const CAP: usize> Windowed<CAP> {
@@ -259,6 +261,9 @@ impl<const CAP: usize> Windowed<CAP> {
             change: ChangeDetector::default(),
             relearning: [false; 2],
             held_x_rad: [0.0; 4],
+            gated: 0,
+            reported_sigma_rad: [config.prior_sigma_rad; 4],
+            channel_mismatch: [false; 4],
             spread_rad2: [0.0; 4],
             spread_count: [0; 2],
             clean_kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
@@ -285,9 +290,17 @@ impl<const CAP: usize> Windowed<CAP> {
         self.change = ChangeDetector::default();
         self.relearning = [false; 2];
         self.held_x_rad = [0.0; 4];
+        self.gated = 0;
+        self.reported_sigma_rad = [config.prior_sigma_rad; 4];
+        self.channel_mismatch = [false; 4];
         self.spread_rad2 = [0.0; 4];
         self.spread_count = [0; 2];
         self.clean_kf = ConstantStateKalman::new([config.prior_sigma_rad; 4]);
+    }
+
+    /// Channel measurements the innovation gate held out so far.
+    pub fn gated(&self) -> u32 {
+        self.gated
     }
 
     /// The learned mean square of each channel's residual, rad^2 (0 until learned).
@@ -340,14 +353,17 @@ impl<const CAP: usize> Windowed<CAP> {
         let r_roll = r0 + 0.5 * filled * fill_variance.roll_rad2;
         self.product_variance_rad2 = [r_pitch, r_roll];
         if self.relearning[pair] {
-            self.relearn_from_block(pair, &m.rows, &m.z);
+            if self.relearn_from_block(pair, &m.rows, &m.z) {
+                self.refresh_report(config, 0);
+                self.refresh_report(config, 1);
+            }
             return None;
         }
         // Each pair takes every other window, so each of its updates carries two entries' worth.
         let r = 0.5 * self.product_variance_rad2[pair];
         let detecting = config.change_detection_step_rad > 0.0;
         let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
-        let gate = (detecting && self.spread_count[pair] >= horizon.max(1)).then_some(GATE_SIGMAS);
+        let gate = (detecting && self.spread_count[pair] >= (horizon / RESIDUAL_PERIODS as u32).max(1)).then_some(GATE_SIGMAS);
         // Whether the measurement was taken (applied, or held out by the gate or the detector's
         // hold: its residuals still go on to the checks).
         let (mut applied, mut taken) = (false, false);
@@ -358,7 +374,10 @@ impl<const CAP: usize> Windowed<CAP> {
             for ch in 2 * pair..2 * pair + 2 {
                 match self.kf.update_gated(&m.rows[ch], m.z[ch], r, gate.map(|g| (self.spread_rad2[ch], g))) {
                     Ok(_) => applied = true,
-                    Err(KalmanError::Gated) => taken = true,
+                    Err(KalmanError::Gated) => {
+                        taken = true;
+                        self.gated = self.gated.saturating_add(1);
+                    }
                     Err(_) => {}
                 }
             }
@@ -371,27 +390,30 @@ impl<const CAP: usize> Windowed<CAP> {
         }
         let residual = self.average_residuals(pair, &m.rows, &m.z);
         self.learn_noise_and_drift(config, pair);
-        if !detecting {
-            return None;
-        }
-        self.learn_spread(pair, residual);
-        self.detect_change(config, pair, residual, interval * bin)
+        let alarm = if detecting {
+            self.learn_spread(pair, residual, taken);
+            self.detect_change(config, pair, residual, interval * bin)
+        } else {
+            None
+        };
+        self.refresh_report(config, pair);
+        alarm
     }
 
-    /// The usual spread of each channel's residuals, learned once the pair's residual average has
-    /// a full horizon: a running mean of the squared residual over [`SPREAD_HORIZONS`] horizons,
-    /// each clipped at the gate (see "Innovation gate" in the module doc).
-    fn learn_spread(&mut self, pair: usize, residual: [Real; 2]) {
+    /// The usual spread of each channel's residuals: a running mean of the squared residual over
+    /// [`SPREAD_HORIZONS`] horizons. A residual the gate held out enters clipped at
+    /// [`SPREAD_CLIP_SIGMAS`] and with the weight of a full average, so that a disturbance cannot
+    /// widen the gate it is being held out by (see "Innovation gate" in the module doc).
+    fn learn_spread(&mut self, pair: usize, residual: [Real; 2], gated: bool) {
         let horizon = (RESIDUAL_PERIODS * self.window.len() / 2).max(1) as u32;
-        if self.residual_count[pair] < horizon {
-            return;
-        }
         let learned = self.spread_count[pair];
-        let count = learned.saturating_add(1).min(SPREAD_HORIZONS * horizon);
+        let full = SPREAD_HORIZONS * horizon;
+        let count = learned.saturating_add(1).min(full);
+        let weight = 1.0 / if gated { full } else { count } as Real;
         for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
             let e2 = residual[k] * residual[k];
-            let e2 = if learned == 0 { e2 } else { e2.min(GATE_SIGMAS * GATE_SIGMAS * self.spread_rad2[ch]) };
-            self.spread_rad2[ch] += (e2 - self.spread_rad2[ch]) / count as Real;
+            let e2 = if learned == 0 { e2 } else { e2.min(SPREAD_CLIP_SIGMAS * SPREAD_CLIP_SIGMAS * self.spread_rad2[ch]) };
+            self.spread_rad2[ch] += weight * (e2 - self.spread_rad2[ch]);
         }
         self.spread_count[pair] = count;
     }
@@ -423,12 +445,13 @@ impl<const CAP: usize> Windowed<CAP> {
         };
         let was_holding = self.change.holding();
         let alarm = self.change.test(pair, block, [self.gains[2 * pair], self.gains[2 * pair + 1]], &ctx);
-        if alarm.is_none() && pair == 1 && !self.change.in_run() {
+        if alarm.is_none() && pair == 1 && !self.change.holding() {
             self.clean_kf = self.kf.clone();
         }
         if self.change.holding() && !was_holding {
             // The block that started the hold was taken: back to before it.
             self.kf = self.clean_kf.clone();
+            self.refresh_report(config, 1 - pair);
         }
         let alarm = alarm?;
         self.relearn(config, &alarm.changed);
@@ -465,6 +488,8 @@ impl<const CAP: usize> Windowed<CAP> {
         self.held_x_rad = [x[0], x[1], x[2], x[3]];
         self.relearning = [true; 2];
         self.change.restart_blocks();
+        self.refresh_report(config, 0);
+        self.refresh_report(config, 1);
     }
 
     /// An update of a pair while the errors are learned again: its residuals against the estimate
@@ -473,12 +498,13 @@ impl<const CAP: usize> Windowed<CAP> {
     /// mean (with the prior's covariance, the filter takes the changed errors from it, as from a
     /// window at a cold start, but with the block's far smaller sway), and the pair updates from
     /// windows again from then on.
-    fn relearn_from_block(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) {
+    /// Returns whether the block ended (the filter changed).
+    fn relearn_from_block(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) -> bool {
         let held = self.held_x_rad;
         let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
         let residual = [z[2 * pair] - fit(2 * pair), z[2 * pair + 1] - fit(2 * pair + 1)];
         let Some(block) = self.change.accumulate(pair, residual, self.updates_per_block()) else {
-            return;
+            return false;
         };
         let floor = self.block_floor_rad2(pair);
         let mut applied = false;
@@ -491,6 +517,7 @@ impl<const CAP: usize> Windowed<CAP> {
             self.updates = self.updates.saturating_add(1);
         }
         self.relearning[pair] = false;
+        true
     }
 
     /// The long averages of the residual means of `pair` and what they give: the pair's noise
@@ -538,40 +565,48 @@ impl<const CAP: usize> Windowed<CAP> {
         out
     }
 
-    /// The residual check (see the module doc).
-    pub fn consistency(&self, config: &Config) -> Consistency {
+    /// Refreshes what is reported of the errors of `pair` (after its update, or after anything
+    /// that changed the filter): each error's 1-sigma, the filter's widened by the residual check,
+    /// the lag and the change detector (see the module doc), and whether its channel's residual
+    /// mean is beyond the check's bound. Once per update of the pair, not every step: the other
+    /// pair's report is at most one update old.
+    fn refresh_report(&mut self, config: &Config, pair: usize) {
         // The residual mean of a pair averages `count` updates of two entries each, of per-entry
         // variance `r` (filled samples included); without an update yet, the configured sigma.
         let sigma2 = config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
-        let mut out = Consistency { model_sigma_rad: [0.0; 4], mismatch: false };
-        for ch in 0..4 {
-            let n = (2 * self.residual_count[ch / 2] as usize).max(self.window.len()) as Real;
-            let r = self.product_variance_rad2[ch / 2].max(sigma2);
-            let (mean, s_e2) = (self.residual_mean[ch], r / n);
-            if mean * mean <= 4.0 * s_e2 {
-                // Within 2 sigma: nothing to add, no mismatch (the usual case, without a root).
-                continue;
+        let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
+        let s_e2 = self.product_variance_rad2[pair].max(sigma2) / n;
+        for ch in 2 * pair..2 * pair + 2 {
+            let mean = self.residual_mean[ch];
+            let mut model = 0.0;
+            let mut mismatch = false;
+            // Within 2 sigma: nothing to add, no mismatch (the usual case, without a root).
+            if mean * mean > 4.0 * s_e2 {
+                let s_e = sqrt(s_e2);
+                let excess = (mean.abs() - 2.0 * s_e).max(0.0);
+                // A bias b on a channel of gain g means an error of about b/g, but never more than
+                // the prior says we could not know anyway: near the pole the gain of x3, x4 is
+                // cos L / 2, about 0, and they are unobservable (their filter 1-sigma stays at the
+                // prior).
+                model = if excess <= 0.0 {
+                    0.0
+                } else if self.gains[ch] > 1e-6 {
+                    (excess / self.gains[ch]).min(config.prior_sigma_rad)
+                } else {
+                    config.prior_sigma_rad
+                };
+                mismatch = mean.abs() > 4.0 * s_e;
             }
-            let s_e = sqrt(s_e2);
-            let excess = (self.residual_mean[ch].abs() - 2.0 * s_e).max(0.0);
-            // A bias b on a channel of gain g means an error of about b/g, but never more than the
-            // prior says we could not know anyway: near the pole the gain of x3, x4 is cos L / 2,
-            // about 0, and they are unobservable (their filter 1-sigma stays at the prior).
-            out.model_sigma_rad[ch] = if excess <= 0.0 {
-                0.0
-            } else if self.gains[ch] > 1e-6 {
-                (excess / self.gains[ch]).min(config.prior_sigma_rad)
+            // The persistent residual mean as a state error (a drift's lag), where a drift is seen.
+            let lag = if self.drift_share[pair] > 0.0 && self.gains[ch] > 1e-6 {
+                (self.residual_mean_long[ch] / self.gains[ch]).abs().min(config.prior_sigma_rad)
             } else {
-                config.prior_sigma_rad
+                0.0
             };
-            out.mismatch |= self.residual_mean[ch].abs() > 4.0 * s_e;
+            let m = model.max(lag).max(self.change.widening_rad()[ch]);
+            self.reported_sigma_rad[ch] = sqrt(self.noise_scale[pair] * self.kf.covariance()[(ch, ch)].max(0.0) + m * m);
+            self.channel_mismatch[ch] = mismatch;
         }
-        // Flag only with a full horizon of residuals: the first windows carry sway residuals of
-        // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
-        // stays: it is conservative).
-        let horizon = RESIDUAL_PERIODS * self.window.len() / 2;
-        out.mismatch &= self.residual_count.iter().all(|c| *c as usize >= horizon);
-        out
     }
 
     /// Restarts the moving average.
@@ -582,23 +617,21 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// Current estimate, 1-sigma (the filter's, widened by the residual check) and whether the
     /// residual check reports a model mismatch, once updated.
-    pub fn estimate(&self, config: &Config) -> Option<MethodEstimate> {
+    pub fn estimate(&self, _config: &Config) -> Option<MethodEstimate> {
         if self.updates == 0 {
             return None;
         }
-        let check = self.consistency(config);
-        let model = check.model_sigma_rad;
-        let x_rad = [self.kf.state()[0], self.kf.state()[1], self.kf.state()[2], self.kf.state()[3]];
-        let sigma_rad = core::array::from_fn(|i| {
-            // The persistent residual mean as a state error (a drift's lag), where a drift is seen.
-            let lag = if self.drift_share[i / 2] > 0.0 && self.gains[i] > 1e-6 {
-                (self.residual_mean_long[i] / self.gains[i]).abs().min(config.prior_sigma_rad)
-            } else {
-                0.0
-            };
-            let m = model[i].max(lag).max(self.change.widening_rad()[i]);
-            sqrt(self.noise_scale[i / 2] * self.kf.covariance()[(i, i)].max(0.0) + m * m)
-        });
-        Some(MethodEstimate { x_rad, sigma_rad, mismatch: check.mismatch, relearning: self.relearning.iter().any(|r| *r) })
+        // Flag only with a full horizon of residuals: the first windows carry sway residuals of
+        // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
+        // stays: it is conservative).
+        let horizon = RESIDUAL_PERIODS * self.window.len() / 2;
+        let mismatch = self.channel_mismatch.iter().any(|m| *m) && self.residual_count.iter().all(|c| *c as usize >= horizon);
+        let x = self.kf.state();
+        Some(MethodEstimate {
+            x_rad: [x[0], x[1], x[2], x[3]],
+            sigma_rad: self.reported_sigma_rad,
+            mismatch,
+            relearning: self.relearning.iter().any(|r| *r),
+        })
     }
 }

@@ -244,20 +244,23 @@ impl ChangeDetector {
             let var = self.block_variance(ch, ctx.floor_rad2);
             if testing {
                 let a = gains[k] * ctx.step_rad;
-                let inv_var = 1.0 / var;
-                for (dir, sign) in [1.0 as Real, -1.0].into_iter().enumerate() {
-                    let llr = (a * sign * b - 0.5 * a * a) * inv_var;
-                    if llr > 0.0 {
-                        self.llr[ch][dir] += llr;
-                        self.run[ch][dir] = self.run[ch][dir].saturating_add(1);
-                        declared |= self.llr[ch][dir] >= LLR_THRESHOLD && self.run[ch][dir] >= ctx.persistence_blocks;
-                    } else {
-                        self.llr[ch][dir] = 0.0;
-                        self.run[ch][dir] = 0;
-                    }
+                // At most one direction can gain: the one of the block's sign, when |b| > a / 2.
+                let (dir, other) = if b >= 0.0 { (0, 1) } else { (1, 0) };
+                let llr = (a * b.abs() - 0.5 * a * a) / var;
+                self.llr[ch][other] = 0.0;
+                self.run[ch][other] = 0;
+                if llr > 0.0 {
+                    self.llr[ch][dir] += llr;
+                    self.run[ch][dir] = self.run[ch][dir].saturating_add(1);
+                    declared |= self.llr[ch][dir] >= LLR_THRESHOLD && self.run[ch][dir] >= ctx.persistence_blocks;
+                } else {
+                    self.llr[ch][dir] = 0.0;
+                    self.run[ch][dir] = 0;
                 }
-                let in_run = self.run[ch][0] > 0 || self.run[ch][1] > 0;
-                self.holding[ch] = in_run && b * b > HOLD_SIGMAS * HOLD_SIGMAS * var;
+                // Held while the run is shorter than a passing disturbance can make it; a longer
+                // one is a change (declared) or an inconsistency the filter must work through.
+                let run = self.run[ch][0].max(self.run[ch][1]);
+                self.holding[ch] = run > 0 && run < ctx.persistence_blocks && b * b > HOLD_SIGMAS * HOLD_SIGMAS * var;
                 self.widening_rad[ch] = if b * b > 4.0 * var && gains[k] > 1e-6 {
                     ((b.abs() - 2.0 * sqrt(var)) / gains[k]).min(ctx.max_widening_rad)
                 } else {
