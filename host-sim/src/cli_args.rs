@@ -70,6 +70,11 @@ pub struct TuningArgs {
     /// restarting the moving average (default: the core's, 3; 0 = never fill, at most 3).
     #[arg(long, value_name = "N")]
     pub max_filled_gap_samples: Option<u32>,
+    /// Windowed method: the smallest step of an installation error the change detector is sized
+    /// for, arcsec (default: the core's, 20; 0 turns detection off: a change of the errors is then
+    /// followed only as slowly as the filter's memory allows).
+    #[arg(long, value_name = "ARCSEC")]
+    pub change_detection_arcsec: Option<f64>,
 }
 
 impl TuningArgs {
@@ -85,6 +90,9 @@ impl TuningArgs {
         if let Some(n) = self.max_filled_gap_samples {
             c.max_filled_gap_samples = n;
         }
+        if let Some(a) = self.change_detection_arcsec {
+            c.change_detection_step_rad = arcsec_to_rad(a) as Real;
+        }
         c
     }
 
@@ -99,6 +107,7 @@ impl TuningArgs {
                     " (set by --traditional-drift-arcsec-per-sqrt-s, arcsec/sqrt(s))"
                 }
                 estimator_core::ConfigError::Parameter { name: "max_filled_gap_samples", .. } => " (set by --max-filled-gap-samples)",
+                estimator_core::ConfigError::Parameter { name: "change_detection_step_rad", .. } => " (set by --change-detection-arcsec, arcsec)",
                 _ => "",
             };
             anyhow::bail!("invalid estimator configuration: {e}{option}");

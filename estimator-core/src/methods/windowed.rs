@@ -140,7 +140,7 @@ pub const BIAS_SHARE_DRIFT: Real = 0.7;
 
 /// Innovation gate, in standard deviations of a window's residual (see "Innovation gate" in the
 /// module doc).
-pub const GATE_SIGMAS: Real = 5.0;
+pub const GATE_SIGMAS: Real = 8.0;
 
 /// Time constant of the learned spread of the residuals, in horizons of the residual average.
 pub const SPREAD_HORIZONS: u32 = 2;
@@ -208,9 +208,47 @@ pub struct Windowed<const CAP: usize> {
     spread_rad2: [Real; 4],
     /// Residuals learned into it, per pair (saturates at [`SPREAD_HORIZONS`] horizons).
     spread_count: [u32; 2],
-    /// The filter at the end of the last block of the roll pair that did not hold it (see
-    /// [`change`]): what it knew before a change or a passing disturbance began to pull at it.
-    clean_kf: ConstantStateKalman<Real, 4>,
+    /// Per pair: the filter has held through every update of the current block so far.
+    block_held: [bool; 2],
+    /// Each channel's last block mean, rad, and the rows of the update that ended it.
+    last_block_rad: [Real; 4],
+    last_block_rows: [[Real; 4]; 4],
+    /// Per pair: the filter held through all of its last block.
+    last_block_held: [bool; 2],
+    /// The filter and its residual statistics at the end of the last block of the roll pair that
+    /// did not hold it (see [`change`]): what they knew before a change or a passing disturbance
+    /// began to pull at them.
+    clean: CleanState,
+}
+
+/// A copy of what a change or a passing disturbance pulls at before the change detector sees it:
+/// the filter and the residual statistics learned alongside it (the residual means, the long
+/// averages and what they give).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CleanState {
+    kf: ConstantStateKalman<Real, 4>,
+    residual_mean: [Real; 4],
+    residual_count: [u32; 2],
+    residual_mean_long: [Real; 4],
+    residual_power: [Real; 4],
+    long_count: [u32; 2],
+    noise_scale: [Real; 2],
+    drift_share: [Real; 2],
+}
+
+impl CleanState {
+    fn new(config: &Config) -> Self {
+        CleanState {
+            kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
+            residual_mean: [0.0; 4],
+            residual_count: [0; 2],
+            residual_mean_long: [0.0; 4],
+            residual_power: [0.0; 4],
+            long_count: [0; 2],
+            noise_scale: [1.0; 2],
+            drift_share: [1.0; 2],
+        }
+    }
 }
 
 /// The estimate of one step: x1..x4, their 1-sigma, whether the model is inconsistent and
@@ -266,7 +304,11 @@ impl<const CAP: usize> Windowed<CAP> {
             channel_mismatch: [false; 4],
             spread_rad2: [0.0; 4],
             spread_count: [0; 2],
-            clean_kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
+            block_held: [true; 2],
+            last_block_rad: [0.0; 4],
+            last_block_rows: [[0.0; 4]; 4],
+            last_block_held: [false; 2],
+            clean: CleanState::new(config),
         }
     }
 
@@ -295,7 +337,11 @@ impl<const CAP: usize> Windowed<CAP> {
         self.channel_mismatch = [false; 4];
         self.spread_rad2 = [0.0; 4];
         self.spread_count = [0; 2];
-        self.clean_kf = ConstantStateKalman::new([config.prior_sigma_rad; 4]);
+        self.block_held = [true; 2];
+        self.last_block_rad = [0.0; 4];
+        self.last_block_rows = [[0.0; 4]; 4];
+        self.last_block_held = [false; 2];
+        self.clean = CleanState::new(config);
     }
 
     /// Channel measurements the innovation gate held out so far.
@@ -318,6 +364,8 @@ impl<const CAP: usize> Windowed<CAP> {
         self.window.configure(period_samples);
         self.entries_since_update = 0;
         self.change.restart_blocks();
+        self.block_held = [true; 2];
+        self.last_block_held = [false; 2];
     }
 
     /// Adds one sample to the window (its references low-passed on the way, with stage gain
@@ -388,11 +436,16 @@ impl<const CAP: usize> Windowed<CAP> {
         if applied {
             self.updates = self.updates.saturating_add(1);
         }
-        let residual = self.average_residuals(pair, &m.rows, &m.z);
-        self.learn_noise_and_drift(config, pair);
+        // What the filter held out (the gate, the detector's hold) stays out of the residual
+        // averages too: the check and the learned noise and drift are about the data the filter
+        // took; the detector sees everything.
+        let residual = self.average_residuals(pair, &m.rows, &m.z, applied);
+        if applied {
+            self.learn_noise_and_drift(config, pair);
+        }
         let alarm = if detecting {
             self.learn_spread(pair, residual, taken);
-            self.detect_change(config, pair, residual, interval * bin)
+            self.detect_change(config, pair, residual, &m.rows, interval * bin)
         } else {
             None
         };
@@ -431,8 +484,16 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// Passes the pair's residuals to the change detector; when it declares a change, the errors
     /// that changed are learned again (see "Changes of the errors" in the module doc).
-    fn detect_change(&mut self, config: &Config, pair: usize, residual: [Real; 2], entry_s: Real) -> Option<Alarm> {
+    fn detect_change(&mut self, config: &Config, pair: usize, residual: [Real; 2], rows: &[[Real; 4]; 4], entry_s: Real) -> Option<Alarm> {
+        self.block_held[pair] &= self.change.holding();
         let block = self.change.accumulate(pair, residual, self.updates_per_block())?;
+        // Kept for learning the errors again, should this block declare a change.
+        self.last_block_rad[2 * pair] = block[0];
+        self.last_block_rad[2 * pair + 1] = block[1];
+        self.last_block_rows[2 * pair] = rows[2 * pair];
+        self.last_block_rows[2 * pair + 1] = rows[2 * pair + 1];
+        self.last_block_held[pair] = self.block_held[pair];
+        self.block_held[pair] = true;
         let len = self.window.len() as u32;
         let horizon = (RESIDUAL_PERIODS as u32 * len / 2).max(1);
         let ctx = BlockContext {
@@ -446,16 +507,43 @@ impl<const CAP: usize> Windowed<CAP> {
         let was_holding = self.change.holding();
         let alarm = self.change.test(pair, block, [self.gains[2 * pair], self.gains[2 * pair + 1]], &ctx);
         if alarm.is_none() && pair == 1 && !self.change.holding() {
-            self.clean_kf = self.kf.clone();
+            self.keep_clean_state();
         }
         if self.change.holding() && !was_holding {
             // The block that started the hold was taken: back to before it.
-            self.kf = self.clean_kf.clone();
+            self.restore_clean_state();
             self.refresh_report(config, 1 - pair);
         }
         let alarm = alarm?;
         self.relearn(config, &alarm.changed);
         Some(alarm)
+    }
+
+    /// Keeps a copy of the filter and its residual statistics ([`CleanState`]).
+    fn keep_clean_state(&mut self) {
+        self.clean = CleanState {
+            kf: self.kf.clone(),
+            residual_mean: self.residual_mean,
+            residual_count: self.residual_count,
+            residual_mean_long: self.residual_mean_long,
+            residual_power: self.residual_power,
+            long_count: self.long_count,
+            noise_scale: self.noise_scale,
+            drift_share: self.drift_share,
+        };
+    }
+
+    /// Goes back to the copy of [`Windowed::keep_clean_state`].
+    fn restore_clean_state(&mut self) {
+        let c = &self.clean;
+        self.kf = c.kf.clone();
+        self.residual_mean = c.residual_mean;
+        self.residual_count = c.residual_count;
+        self.residual_mean_long = c.residual_mean_long;
+        self.residual_power = c.residual_power;
+        self.long_count = c.long_count;
+        self.noise_scale = c.noise_scale;
+        self.drift_share = c.drift_share;
     }
 
     /// Starts learning the errors `changed` again: their covariance back to the prior, the
@@ -468,7 +556,7 @@ impl<const CAP: usize> Windowed<CAP> {
     fn relearn(&mut self, config: &Config, changed: &[bool; 4]) {
         // Back to before the change began to pull at the filter: through the leakage of x1, x2
         // into the roll channels, the errors that did not change were pulled too.
-        self.kf = self.clean_kf.clone();
+        self.restore_clean_state();
         self.kf.forget(changed, config.prior_sigma_rad);
         for pair in 0..2 {
             if !(changed[2 * pair] || changed[2 * pair + 1]) {
@@ -488,24 +576,34 @@ impl<const CAP: usize> Windowed<CAP> {
         self.held_x_rad = [x[0], x[1], x[2], x[3]];
         self.relearning = [true; 2];
         self.change.restart_blocks();
+        self.block_held = [true; 2];
         self.refresh_report(config, 0);
         self.refresh_report(config, 1);
     }
 
-    /// An update of a pair while the errors are learned again: its residuals against the estimate
-    /// held since the change are summed over one block of the detector; at the block's end the
-    /// block means are applied as one measurement per channel, of the learned variance of a block
-    /// mean (with the prior's covariance, the filter takes the changed errors from it, as from a
-    /// window at a cold start, but with the block's far smaller sway), and the pair updates from
-    /// windows again from then on.
-    /// Returns whether the block ended (the filter changed).
+    /// An update of a pair while the errors are learned again. Its last block of residuals, when
+    /// the filter held through all of it, was formed against the estimate the filter went back to
+    /// and holds now, and (a change being declared only after a run longer than a passing
+    /// disturbance) from windows wholly after the change began: it is applied at once. Otherwise
+    /// the residuals against the estimate held now are summed over one more block first. Applied
+    /// as one measurement per channel, of the learned variance of a block mean: with the prior's
+    /// covariance the filter takes the changed errors from it, as from a window at a cold start but
+    /// with the block's far smaller sway; the pair updates from windows again from then on.
+    /// Returns whether the block was applied (the filter changed).
     fn relearn_from_block(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) -> bool {
         let held = self.held_x_rad;
-        let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
-        let residual = [z[2 * pair] - fit(2 * pair), z[2 * pair + 1] - fit(2 * pair + 1)];
-        let Some(block) = self.change.accumulate(pair, residual, self.updates_per_block()) else {
-            return false;
+        let (block, rows) = if self.last_block_held[pair] {
+            self.last_block_held[pair] = false;
+            ([self.last_block_rad[2 * pair], self.last_block_rad[2 * pair + 1]], self.last_block_rows)
+        } else {
+            let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
+            let residual = [z[2 * pair] - fit(2 * pair), z[2 * pair + 1] - fit(2 * pair + 1)];
+            let Some(block) = self.change.accumulate(pair, residual, self.updates_per_block()) else {
+                return false;
+            };
+            (block, *rows)
         };
+        let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
         let floor = self.block_floor_rad2(pair);
         let mut applied = false;
         for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
@@ -548,12 +646,15 @@ impl<const CAP: usize> Windowed<CAP> {
         self.drift_share[pair] = ((share - BIAS_SHARE_NOISE) * (1.0 / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE))).clamp(0.0, 1.0);
     }
 
-    /// Averages the pair's post-fit residuals (returned, rad) into the residual means.
-    fn average_residuals(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) -> [Real; 2] {
+    /// The pair's post-fit residuals (returned, rad), averaged into the residual means when
+    /// `average`.
+    fn average_residuals(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4], average: bool) -> [Real; 2] {
         let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
         let count = &mut self.residual_count[pair];
-        *count = count.saturating_add(1).min(horizon.max(1));
-        let alpha = 1.0 / *count as Real;
+        if average {
+            *count = count.saturating_add(1).min(horizon.max(1));
+        }
+        let alpha = if average { 1.0 / *count as Real } else { 0.0 };
         let mut out = [0.0; 2];
         for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
             let fit: Real = (0..4).map(|i| rows[ch][i] * self.kf.state()[i]).sum();
