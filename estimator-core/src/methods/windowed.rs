@@ -215,6 +215,8 @@ pub struct Windowed<const CAP: usize> {
     last_block_rows: [[Real; 4]; 4],
     /// Per pair: the filter held through all of its last block.
     last_block_held: [bool; 2],
+    /// Whether the clean state is to be kept at the next update.
+    clean_state_due: bool,
     /// The filter and its residual statistics at the end of the last block of the roll pair that
     /// did not hold it (see [`change`]): what they knew before a change or a passing disturbance
     /// began to pull at them.
@@ -308,6 +310,7 @@ impl<const CAP: usize> Windowed<CAP> {
             last_block_rad: [0.0; 4],
             last_block_rows: [[0.0; 4]; 4],
             last_block_held: [false; 2],
+            clean_state_due: false,
             clean: CleanState::new(config),
         }
     }
@@ -341,6 +344,7 @@ impl<const CAP: usize> Windowed<CAP> {
         self.last_block_rad = [0.0; 4];
         self.last_block_rows = [[0.0; 4]; 4];
         self.last_block_held = [false; 2];
+        self.clean_state_due = false;
         self.clean = CleanState::new(config);
     }
 
@@ -400,6 +404,9 @@ impl<const CAP: usize> Windowed<CAP> {
         let r_pitch = r0 + 0.5 * filled * fill_variance.pitch_rad2;
         let r_roll = r0 + 0.5 * filled * fill_variance.roll_rad2;
         self.product_variance_rad2 = [r_pitch, r_roll];
+        if core::mem::take(&mut self.clean_state_due) && !self.change.holding() {
+            self.keep_clean_state();
+        }
         if self.relearning[pair] {
             if self.relearn_from_block(pair, &m.rows, &m.z) {
                 self.refresh_report(config, 0);
@@ -487,12 +494,14 @@ impl<const CAP: usize> Windowed<CAP> {
     fn detect_change(&mut self, config: &Config, pair: usize, residual: [Real; 2], rows: &[[Real; 4]; 4], entry_s: Real) -> Option<Alarm> {
         self.block_held[pair] &= self.change.holding();
         let block = self.change.accumulate(pair, residual, self.updates_per_block())?;
-        // Kept for learning the errors again, should this block declare a change.
-        self.last_block_rad[2 * pair] = block[0];
-        self.last_block_rad[2 * pair + 1] = block[1];
-        self.last_block_rows[2 * pair] = rows[2 * pair];
-        self.last_block_rows[2 * pair + 1] = rows[2 * pair + 1];
+        // Kept for learning the errors again, should a change be declared while the filter holds.
         self.last_block_held[pair] = self.block_held[pair];
+        if self.block_held[pair] {
+            self.last_block_rad[2 * pair] = block[0];
+            self.last_block_rad[2 * pair + 1] = block[1];
+            self.last_block_rows[2 * pair] = rows[2 * pair];
+            self.last_block_rows[2 * pair + 1] = rows[2 * pair + 1];
+        }
         self.block_held[pair] = true;
         let len = self.window.len() as u32;
         let horizon = (RESIDUAL_PERIODS as u32 * len / 2).max(1);
@@ -506,9 +515,8 @@ impl<const CAP: usize> Windowed<CAP> {
         };
         let was_holding = self.change.holding();
         let alarm = self.change.test(pair, block, [self.gains[2 * pair], self.gains[2 * pair + 1]], &ctx);
-        if alarm.is_none() && pair == 1 && !self.change.holding() {
-            self.keep_clean_state();
-        }
+        // Kept at the next update: this one has the block's work already.
+        self.clean_state_due |= alarm.is_none() && pair == 1 && !self.change.holding();
         if self.change.holding() && !was_holding {
             // The block that started the hold was taken: back to before it.
             self.restore_clean_state();
@@ -557,6 +565,7 @@ impl<const CAP: usize> Windowed<CAP> {
         // Back to before the change began to pull at the filter: through the leakage of x1, x2
         // into the roll channels, the errors that did not change were pulled too.
         self.restore_clean_state();
+        self.clean_state_due = false;
         self.kf.forget(changed, config.prior_sigma_rad);
         for pair in 0..2 {
             if !(changed[2 * pair] || changed[2 * pair + 1]) {

@@ -238,6 +238,7 @@ impl ChangeDetector {
         let learned = self.learned_blocks[pair];
         let testing = ctx.armed && learned >= MIN_VARIANCE_BLOCKS;
         let count = learned.saturating_add(1).min(VARIANCE_BLOCKS);
+        let weight = 1.0 / count as Real;
         let mut declared = false;
         for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
             let b = block_rad[k];
@@ -270,7 +271,7 @@ impl ChangeDetector {
             if ctx.settled {
                 // The first block has no variance to be clipped against yet.
                 let b2 = if learned == 0 { b * b } else { (b * b).min(WINSOR_SIGMAS * WINSOR_SIGMAS * var) };
-                self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) / count as Real;
+                self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) * weight;
             }
         }
         if ctx.settled {
