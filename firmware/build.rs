@@ -7,14 +7,15 @@
 //! Also fixes two build-time settings, each checked here so that a bad value fails the build with a
 //! message:
 //! - the checkpoint interval: `RINS_CHECKPOINT_INTERVAL_S` (whole seconds of sample time, 1 to
-//!   86400; default 60), written to `OUT_DIR/checkpoint_interval.rs` for `service.rs`;
+//!   86400; default 300), written to `OUT_DIR/checkpoint_interval.rs` for the library's
+//!   `checkpoint_store.rs` (for the host too: `host-sim flash-life` takes its default from it);
 //! - the STM32F405's crystal: `RINS_HSE_HZ` (the HSE frequency in Hz, 4 to 26 MHz as the part
 //!   allows; default 8 MHz), written to `OUT_DIR/board_clock.rs` for `board/stm32f405/mod.rs`.
 use std::path::PathBuf;
 
 /// The checkpoint interval's environment variable, its default and its bounds, s.
 const INTERVAL_VAR: &str = "RINS_CHECKPOINT_INTERVAL_S";
-const INTERVAL_DEFAULT_S: u32 = 60;
+const INTERVAL_DEFAULT_S: u32 = 300;
 const INTERVAL_RANGE_S: std::ops::RangeInclusive<u32> = 1..=86_400;
 /// The STM32F405's HSE crystal: variable, default and the part's range (datasheet: 4 to 26 MHz).
 const HSE_VAR: &str = "RINS_HSE_HZ";
@@ -38,10 +39,6 @@ fn setting(var: &str, default: u32, range: std::ops::RangeInclusive<u32>, what: 
 }
 
 fn main() {
-    // On the host (`cargo test --workspace`) the crate is an empty program: nothing to link.
-    if std::env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("none") {
-        return;
-    }
     let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     let interval_s = setting(
         INTERVAL_VAR,
@@ -54,6 +51,11 @@ fn main() {
          pub const CHECKPOINT_INTERVAL_S: u32 = {interval_s};\n"
     );
     std::fs::write(out.join("checkpoint_interval.rs"), interval).expect("write checkpoint_interval.rs");
+    println!("cargo:rerun-if-changed=build.rs");
+    // On the host (`cargo test --workspace`, host-sim) only the library is used: nothing to link.
+    if std::env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("none") {
+        return;
+    }
     let hse_hz = setting(HSE_VAR, HSE_DEFAULT_HZ, HSE_RANGE_HZ, "the HSE crystal frequency, Hz,");
     let clock = format!(
         "/// The HSE crystal's frequency, Hz (`{HSE_VAR}` at build time, default {HSE_DEFAULT_HZ}).\n\
@@ -89,7 +91,6 @@ fn main() {
     println!("cargo:rerun-if-changed={}", root_memory_x.display());
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed={}", memory_x.display());
-    println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
     println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
 }

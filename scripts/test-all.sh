@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every test of the project on a fresh machine, installing what is missing first:
-#   1. the thumbv7em-none-eabihf Rust target, qemu-system-arm and GNU time (apt), if absent;
+#   1. the thumbv7em-none-eabihf Rust target, flip-link (the firmware's linker, cargo install),
+#      qemu-system-arm and GNU time (apt), if absent;
 #   2. `cargo test --workspace --release`: estimator-core, link-protocol, host-sim (including the
 #      QEMU end-to-end tests, which build the firmware for both boards themselves: mps2-an386 and
 #      the STM32F405 on QEMU's netduinoplus2);
@@ -26,6 +27,10 @@ if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
 fi
 if ! cargo clippy --version >/dev/null 2>&1; then
     rustup component add clippy
+fi
+# The firmware's linker (.cargo/config.toml): puts the stack below the statics.
+if ! command -v flip-link >/dev/null 2>&1; then
+    cargo install --locked flip-link
 fi
 MISSING=""
 if ! command -v qemu-system-arm >/dev/null 2>&1; then MISSING="$MISSING qemu-system-arm"; fi

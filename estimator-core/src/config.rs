@@ -1,6 +1,6 @@
 //! Estimator configuration: a plain struct whose [`Default`] reproduces the paper's setting.
 
-mod checkpoint;
+pub(crate) mod checkpoint;
 
 use crate::code::{from_code, UnknownCode};
 use crate::gap_fill::MAX_FILLABLE_GAP;

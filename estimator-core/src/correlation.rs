@@ -77,8 +77,6 @@
 //! is exact: the sums never drift, and host and target agree bit for bit. The quantization of a
 //! reference is no bias: the same quantized value is used in the measurement and in its row.
 
-mod checkpoint;
-
 use crate::installation::Angles;
 use crate::math::round_to_i32;
 use crate::sample::Attitude;
@@ -121,6 +119,9 @@ pub struct ReferenceFilter {
 }
 
 impl ReferenceFilter {
+    /// Not started.
+    pub const NEW: ReferenceFilter = ReferenceFilter { stages: [[0.0; 4]; 3], started: false };
+
     /// The stage gain for a sample interval: `1 - exp(-dt / tau)`.
     pub fn alpha(interval_s: f64) -> Real {
         (1.0 - libm::exp(-interval_s / REFERENCE_TIME_CONSTANT_S)) as Real
@@ -256,6 +257,11 @@ pub struct CorrelationSums {
     pub sums: [i64; SUMS],
     /// Sum of the entries' fill weights (see [`crate::gap_fill`]).
     pub fill_weight: u32,
+}
+
+impl CorrelationSums {
+    /// Nothing summed.
+    pub const ZERO: CorrelationSums = CorrelationSums { count: 0, sums: [0; SUMS], fill_weight: 0 };
 }
 
 /// An exact sum in the step's float type: its high and low 32 bits converted apart (one FPU

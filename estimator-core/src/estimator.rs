@@ -29,6 +29,8 @@
 
 pub(crate) mod checkpoint;
 
+use core::ptr::addr_of_mut;
+
 use crate::config::{Config, ConfigError, ROTATION_PERIOD_RANGE_S};
 use crate::correlation::ReferenceFilter;
 use crate::gap_fill::{GapFiller, GridSample, SLOTS};
@@ -128,6 +130,53 @@ impl<const CAP: usize> Estimator<CAP> {
         })
     }
 
+    /// Makes a fresh estimator in `slot`, in place, and returns it; or returns why the
+    /// configuration cannot run (and leaves `slot` as it was). The same as [`Estimator::new`],
+    /// without building the state (23.6 KB for the default capacity, most of it the window) on
+    /// the stack and copying it: how a microcontroller, whose stack is a few KiB, makes its
+    /// estimator in a static, and how the C library makes one in the caller's memory. Every field
+    /// is written in place, the window's ring not at all (it is uninitialised until it fills);
+    /// then the state is reset to `config` in place ([`Estimator::reset`]'s way). The firmware's
+    /// start-up stack, measured in QEMU, shows that nothing the size of the state was copied.
+    ///
+    /// ```
+    /// use core::mem::MaybeUninit;
+    /// use estimator_core::{Config, Estimator};
+    /// let mut slot: Box<MaybeUninit<Estimator>> = Box::new(MaybeUninit::uninit());
+    /// let estimator = Estimator::init_in(&mut slot, Config::default())?;
+    /// assert!(estimator.estimate().is_none());
+    /// # Ok::<(), estimator_core::ConfigError>(())
+    /// ```
+    pub fn init_in(slot: &mut core::mem::MaybeUninit<Self>, config: Config) -> Result<&mut Self, ConfigError> {
+        config.check(CAP)?;
+        let p = slot.as_mut_ptr();
+        // SAFETY: every field of `*p` is written (through raw pointers, never read) before `p` is
+        // made a reference; each write stores a small value, or, for the method, the windowed
+        // method's state whose ring is uninitialised (`heapless::Deque::new` stores nothing in it).
+        let estimator = unsafe {
+            addr_of_mut!((*p).config).write(config);
+            addr_of_mut!((*p).method).write(MethodState::Windowed(crate::methods::Windowed::unconfigured()));
+            addr_of_mut!((*p).grid).write(TimeGrid::new(None));
+            addr_of_mut!((*p).index).write(0);
+            addr_of_mut!((*p).feed).write(None);
+            addr_of_mut!((*p).filler).write(GapFiller::new());
+            addr_of_mut!((*p).rotation).write(RotationMonitor::new(None));
+            addr_of_mut!((*p).latitude_trig).write((0.0, 0.0, 1.0));
+            addr_of_mut!((*p).sway).write(SwayMonitor::NEW);
+            addr_of_mut!((*p).gate_open).write(false);
+            addr_of_mut!((*p).window_status).write(Status::DetectingPattern);
+            addr_of_mut!((*p).fault).write(None);
+            addr_of_mut!((*p).rejected).write(RejectCounts::ZERO);
+            addr_of_mut!((*p).counters).write(Counters::ZERO);
+            addr_of_mut!((*p).error_change).write(None);
+            slot.assume_init_mut()
+        };
+        // The windowed method resets in place; another method's state is built by value (see
+        // `MethodState::reset`).
+        estimator.reinit(config)?;
+        Ok(estimator)
+    }
+
     /// Forgets everything learnt (keeps the configuration and the rejection counters). In place:
     /// nothing the size of the estimator passes through the stack.
     pub fn reset(&mut self) {
@@ -180,6 +229,11 @@ impl<const CAP: usize> Estimator<CAP> {
     /// The sample interval, s, once pinned or learned.
     pub fn sample_interval_s(&self) -> Option<f64> {
         self.grid.interval_s()
+    }
+
+    /// The time stamp of the last accepted sample, s.
+    pub fn last_sample_time_s(&self) -> Option<f64> {
+        self.grid.last_stamp_s()
     }
 
     /// The rotation pattern as far as it is known.
@@ -402,6 +456,23 @@ impl<const CAP: usize> Estimator<CAP> {
             self.latitude_trig = (sample.latitude_rad, s, c);
         }
         Angles::new(sample.rotation_rad, sample.platform_rad, (self.latitude_trig.1, self.latitude_trig.2))
+    }
+}
+
+/// The parts, for the checkpoint tests of each part (next to the part's type).
+#[cfg(test)]
+impl<const CAP: usize> Estimator<CAP> {
+    pub(crate) fn grid_for_test(&self) -> TimeGrid {
+        self.grid
+    }
+    pub(crate) fn rotation_for_test(&self) -> RotationMonitor {
+        self.rotation
+    }
+    pub(crate) fn filler_for_test(&self) -> &GapFiller {
+        &self.filler
+    }
+    pub(crate) fn method_for_test(&self) -> &MethodState<CAP> {
+        &self.method
     }
 }
 

@@ -132,6 +132,13 @@ fn lagrange_at_zero(nodes: &[i32; 2 * NEIGHBOURS], n: usize) -> [Real; 2 * NEIGH
 
 impl Default for GapFiller {
     fn default() -> Self {
+        GapFiller::new()
+    }
+}
+
+impl GapFiller {
+    /// An empty delay line, no fill error measured yet.
+    pub const fn new() -> Self {
         GapFiller {
             slots: [None; SLOTS],
             newest: None,

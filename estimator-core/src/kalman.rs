@@ -29,7 +29,7 @@
 
 mod checkpoint;
 
-use nalgebra::{RealField, SMatrix, SVector};
+use nalgebra::{ArrayStorage, RealField, SMatrix, SVector};
 
 /// Why a measurement was not applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -71,6 +71,12 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
             p[(i, i)] = prior_sigma[i] * prior_sigma[i];
         }
         ConstantStateKalman { x: SVector::zeros(), p }
+    }
+
+    /// A filter with states `x` and covariance columns `p` (for constants: the estimator's
+    /// unconfigured state, test fixtures).
+    pub const fn from_parts(x: [T; N], p: [[T; N]; N]) -> Self {
+        ConstantStateKalman { x: SVector::from_array_storage(ArrayStorage([x])), p: SMatrix::from_array_storage(ArrayStorage(p)) }
     }
 
     /// Prediction: states constant, covariance grows by `q` on the diagonal (a random walk).

@@ -17,8 +17,6 @@
 //! (a floating-point running sum accumulates rounding as a random walk: 0.3 arcsec after two days
 //! in `f32`). Each value is rounded once, on the way in.
 
-pub(crate) mod checkpoint;
-
 use heapless::Deque;
 
 use crate::correlation::{CorrelationSums, QuantizedSample};
@@ -182,6 +180,22 @@ pub struct Bin {
     pub fill_weight: u32,
 }
 
+impl Bin {
+    /// Nothing in it.
+    pub const ZERO: Bin = Bin {
+        count: 0,
+        roll_rad: 0.0,
+        pitch_rad: 0.0,
+        latitude_rad: 0.0,
+        reference: [0.0; 4],
+        rotation0_rad: 0.0,
+        rotation_offset_rad: 0.0,
+        rotation_minus_platform0_rad: 0.0,
+        rotation_minus_platform_offset_rad: 0.0,
+        fill_weight: 0,
+    };
+}
+
 /// How one period is held by the window: samples per entry and entries in a full window.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WindowLayout {
@@ -213,13 +227,13 @@ impl WindowLayout {
 
 impl<const CAP: usize> CorrelationWindow<CAP> {
     /// An empty window of one entry per sample over `len` entries (set by [`Self::configure`]).
-    pub fn new() -> Self {
+    pub const fn new() -> Self {
         CorrelationWindow {
             ring: Deque::new(),
-            sums: CorrelationSums::default(),
-            len: CAP.max(1),
+            sums: CorrelationSums::ZERO,
+            len: if CAP > 1 { CAP } else { 1 },
             bin: 1,
-            partial: Bin::default(),
+            partial: Bin::ZERO,
         }
     }
 

@@ -133,6 +133,9 @@ pub struct ErrorChange {
 pub struct RejectCounts(pub [u32; RejectReason::ALL.len()]);
 
 impl RejectCounts {
+    /// Nothing rejected.
+    pub const ZERO: RejectCounts = RejectCounts([0; RejectReason::ALL.len()]);
+
     /// Rejected for `reason`.
     pub fn of(&self, reason: RejectReason) -> u32 {
         self.0[reason as usize]
@@ -161,6 +164,11 @@ pub struct Counters {
     pub window_restarts: u32,
     /// Clock jumps and steps backwards in the time stamps.
     pub clock_steps: u32,
+}
+
+impl Counters {
+    /// Nothing counted.
+    pub const ZERO: Counters = Counters { accepted: 0, filled: 0, window_restarts: 0, clock_steps: 0 };
 }
 
 /// The rotation pattern as far as it is known.

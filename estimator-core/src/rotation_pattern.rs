@@ -190,7 +190,7 @@ impl RotationMonitor {
     }
 
     /// A monitor with the period pinned (in samples) or to be detected.
-    pub fn new(pinned_period_samples: Option<u32>) -> RotationMonitor {
+    pub const fn new(pinned_period_samples: Option<u32>) -> RotationMonitor {
         RotationMonitor {
             period_samples: pinned_period_samples,
             pinned: pinned_period_samples.is_some(),

@@ -77,8 +77,13 @@ impl TimeGrid {
         self.interval_s
     }
 
+    /// The time stamp of the last accepted sample, s.
+    pub fn last_stamp_s(&self) -> Option<f64> {
+        self.last_stamp_s
+    }
+
     /// A grid with the interval pinned (`Some`) or to be learned (`None`).
-    pub fn new(pinned_interval_s: Option<f64>) -> TimeGrid {
+    pub const fn new(pinned_interval_s: Option<f64>) -> TimeGrid {
         TimeGrid {
             interval_s: pinned_interval_s,
             pinned: pinned_interval_s.is_some(),

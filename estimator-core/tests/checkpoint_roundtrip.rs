@@ -1,15 +1,21 @@
-//! Checkpoint and restore, end to end through the public API.
+//! Checkpoint and restore, end to end through the public API. An image keeps what a restart can
+//! use (the filter, what was learned, counters); the window refills after it.
 //!
-//! - `restored_run_is_bit_identical_*`: run a log, checkpoint after a random sample, restore into
-//!   a fresh estimator built with a *different* configuration (which the image replaces), continue:
-//!   every later output is bit-identical to the uninterrupted run, and so is the final image. The
-//!   logs have everything a real one has (jittered stamps, lost rows in short runs that are filled
-//!   and one long outage, rejected rows, a stopped rotation, a clock jump), at 1 Hz and 10 Hz, with
+//! - `restart_*`: run a log, checkpoint after a random sample, restore into a fresh estimator
+//!   built with a *different* configuration (which the image replaces), continue: the restored
+//!   estimator reports the very estimate it was checkpointed with from its first output on,
+//!   holds while its window refills, rejects exactly the rows the uninterrupted run rejects and
+//!   never loses its estimate. (How close it ends to the uninterrupted run depends on how much
+//!   the filter still had to learn at the cut: measured on a realistic cut below.) The logs
+//!   have everything a real one has (jittered stamps, lost rows in short runs that are filled and
+//!   one long outage, rejected rows, a stopped rotation, a clock jump), at 1 Hz and 10 Hz, with
 //!   any rotation scheme, pinned or learned interval and period, with and without the sway gate.
-//! - `every_phase_is_cut_and_restored`: the same logs cut after *every* sample (state and image
-//!   equal after the round trip), and continued bit-identically from the first cut of each phase:
-//!   interval being learned, period being detected, features being learned, filled gaps waiting in
-//!   the delay line, a bin being filled, a rotation fault, holding, estimating.
+//! - `every_phase_is_cut_and_restored`: the same logs cut after *every* sample (the restored
+//!   estimate, counters and image equal the running one's), and continued from the first cut of
+//!   each phase: interval being learned, period being detected, features being learned, filled
+//!   gaps waiting in the delay line, a bin being filled, a rotation fault, holding, estimating.
+//! - `a_power_cut_with_lost_rows_costs_almost_nothing`: 20,000 s of a sea log, a cut, 200 s of
+//!   rows lost, the rest: the end within 0.1 arcsec of the uncut run.
 //! - every single-bit flip of an image is refused and changes nothing; garbage and truncations are
 //!   refused; an image of the previous format version is refused with the version error.
 
@@ -123,30 +129,6 @@ fn other(config: &Config) -> Config {
     }
 }
 
-/// Every bit of a step's result (floats by their bit patterns).
-fn fingerprint(r: &Result<Output, SampleError>) -> Vec<u64> {
-    match r {
-        Err(e) => vec![u64::MAX, e.reason() as u64],
-        Ok(o) => {
-            let mut v = vec![o.time_s.to_bits(), u64::from(o.status.code())];
-            let mut push = |x: Real| v.push(x.to_bits() as u64);
-            push(o.corrected.heading_rad);
-            push(o.corrected.roll_rad);
-            push(o.corrected.pitch_rad);
-            match o.estimate {
-                None => v.push(u64::MAX - 1),
-                Some(e) => {
-                    for i in 0..4 {
-                        v.push(e.x_rad[i].to_bits() as u64);
-                        v.push(e.sigma_rad[i].to_bits() as u64);
-                    }
-                }
-            }
-            v
-        }
-    }
-}
-
 fn image<const C: usize>(est: &Estimator<C>) -> Vec<u8> {
     let mut buf = vec![0u8; Estimator::<C>::CHECKPOINT_LEN];
     assert_eq!(est.checkpoint(&mut buf), Ok(buf.len()));
@@ -161,28 +143,49 @@ fn restored<const C: usize>(buf: &[u8], config: &Config) -> Estimator<C> {
 }
 
 /// The outputs of an uninterrupted run.
-fn reference<const C: usize>(config: Config, samples: &[Sample]) -> (Vec<Vec<u64>>, Estimator<C>) {
+fn reference<const C: usize>(config: Config, samples: &[Sample]) -> (Vec<Result<Output, SampleError>>, Estimator<C>) {
     let mut est = Estimator::<C>::new(config).unwrap();
-    let out = samples.iter().map(|s| fingerprint(&est.step(s))).collect();
+    let out = samples.iter().map(|s| est.step(s)).collect();
     (out, est)
 }
 
-/// Cut after sample `cut`, restore into a fresh estimator of another configuration, continue:
-/// every output and the final state bit-identical to the uninterrupted run.
-fn check_cut<const C: usize>(config: Config, samples: &[Sample], cut: usize, reference: &(Vec<Vec<u64>>, Estimator<C>)) {
+/// Cut after sample `cut`, restore into a fresh estimator of another configuration, continue (see
+/// the module doc for what must hold).
+fn check_cut<const C: usize>(
+    config: Config,
+    samples: &[Sample],
+    cut: usize,
+    reference: &(Vec<Result<Output, SampleError>>, Estimator<C>),
+) {
     let mut first = Estimator::<C>::new(config).unwrap();
     for s in &samples[..=cut] {
         first.step(s).ok();
     }
     let buf = image(&first);
-    drop(first);
+    let at_cut = first.estimate();
     let mut resumed = restored::<C>(&buf, &config);
     assert_eq!(resumed.config(), &config);
+    assert_eq!(resumed.estimate(), at_cut, "cut {cut}");
+    assert_eq!(resumed.counters(), first.counters(), "cut {cut}");
+    assert_eq!(image(&resumed), buf, "cut {cut}: the restored state writes another image");
+    drop(first);
+    let mut had_estimate = at_cut.is_some();
     for (k, s) in samples.iter().enumerate().skip(cut + 1) {
-        assert_eq!(fingerprint(&resumed.step(s)), reference.0[k], "cut {cut}: output {k} differs");
+        let out = resumed.step(s);
+        match (&out, &reference.0[k]) {
+            (Err(a), Err(b)) => assert_eq!(a.reason(), b.reason(), "cut {cut}: row {k} rejected for another reason"),
+            (Ok(o), Ok(_)) => {
+                if k == cut + 1 && had_estimate {
+                    // The first answer after the restart carries the checkpoint's estimate.
+                    assert_eq!(o.estimate, at_cut, "cut {cut}: row {k}");
+                    assert!(!matches!(o.status, Status::Estimating | Status::Converged), "cut {cut}: {:?} at once", o.status);
+                }
+                assert!(!had_estimate || o.estimate.is_some(), "cut {cut}: row {k} lost the estimate");
+                had_estimate |= o.estimate.is_some();
+            }
+            (a, b) => panic!("cut {cut}: row {k}: {a:?} where the uncut run gives {b:?}"),
+        }
     }
-    assert_eq!(image(&resumed), image(&reference.1), "cut {cut}: final state differs");
-    assert_eq!(resumed.counters(), reference.1.counters());
 }
 
 fn plan(i: u8, seed: u64) -> Plan {
@@ -205,7 +208,7 @@ proptest! {
     /// 1 Hz with bins of 3 and 10 Hz with bins of 15, random scheme and configuration; one cut in
     /// four among the first samples, where the interval is learned.
     #[test]
-    fn restored_run_is_bit_identical_short_period(
+    fn restart_short_period(
         rate in 0u8..2,
         c in 0u8..32,
         seed in any::<u64>(),
@@ -227,7 +230,7 @@ proptest! {
 
     /// The default estimator (720 entries) and configuration, 1 Hz, 480 s period: five periods.
     #[test]
-    fn restored_run_is_bit_identical_default_capacity(m in 0u8..3, seed in any::<u64>(), at in 0.0f64..1.0) {
+    fn restart_default_capacity(m in 0u8..3, seed in any::<u64>(), at in 0.0f64..1.0) {
         let plan = Plan { interval_s: 1.0, period_s: 480.0, scheme: Scheme::OneWay(1.0), periods: 5.0, seed };
         let log = log(plan);
         let config = Config::with_method(Method::try_from(m).unwrap());
@@ -292,8 +295,8 @@ fn phases_of(est: &Estimator<CAP>, out: &Result<Output, SampleError>, log: &Log,
     phases
 }
 
-/// Cut after every sample: the restored state and its image equal the running one's. Continue
-/// bit-identically from the first cut of each phase, and from one in its middle.
+/// Cut after every sample: the restored estimate, counters and image equal the running one's.
+/// Continue from the first cut of each phase, and from one in its middle.
 #[test]
 fn every_phase_is_cut_and_restored() {
     for (rate, seed, c) in [(0u8, 3u64, 0u8), (1, 8, 12), (0, 7, 1), (1, 4, 17)] {
@@ -307,7 +310,8 @@ fn every_phase_is_cut_and_restored() {
             let out = est.step(s);
             let buf = image(&est);
             let back = restored::<CAP>(&buf, &config);
-            assert!(back == est, "{plan:?} {config:?}: row {row} restores another state");
+            assert_eq!(back.estimate(), est.estimate(), "{plan:?} {config:?}: row {row}");
+            assert_eq!(back.counters(), est.counters(), "{plan:?} {config:?}: row {row}");
             assert_eq!(image(&back), buf, "{plan:?}: row {row}");
             for phase in phases_of(&est, &out, &log, row) {
                 cuts[phase as usize].push(row);
@@ -371,7 +375,8 @@ fn every_bit_flip_is_refused_and_changes_nothing() {
     }
     assert!(target == before);
     target.restore(good).unwrap();
-    assert!(target == *est);
+    assert_eq!(image(&target), *good);
+    assert_eq!(target.estimate(), est.estimate());
 }
 
 /// Running estimators of the default capacity, one per method, and their images.
@@ -425,25 +430,22 @@ fn an_image_of_the_previous_format_version_is_refused_as_such() {
     let mut target: Estimator = Estimator::new(Config::with_method(Method::Traditional)).unwrap();
     let before = target.clone();
     let mut old = good.clone();
-    old[4..6].copy_from_slice(&3u16.to_le_bytes());
+    old[4..6].copy_from_slice(&5u16.to_le_bytes());
     let n = old.len();
     let crc = crc32(&old[..n - 4]);
     old[n - 4..].copy_from_slice(&crc.to_le_bytes());
     let err = target.restore(&old).unwrap_err();
-    assert_eq!(err, CheckpointError::Version { found: 3, expected: 4 });
-    assert_eq!(VERSION, 4);
+    assert_eq!(err, CheckpointError::Version { found: 5, expected: 6 });
+    assert_eq!(VERSION, 6);
     assert!(err.to_string().contains("older firmware"), "{err}");
     assert!(target == before);
     target.restore(good).unwrap();
-    assert!(target == *est);
+    assert_eq!(target.estimate(), est.estimate());
 }
 
 #[test]
-fn default_image_size_is_documented_and_fits_six_flash_pages_with_the_slot_header() {
-    #[cfg(not(feature = "f64"))]
-    assert_eq!(CHECKPOINT_LEN, 23_384);
-    // The firmware stores a 16-byte slot header before the image, in 4 KiB erase blocks.
-    assert!(16 + CHECKPOINT_LEN <= 6 * 4096);
+fn an_image_is_at_most_2_kib_and_a_longer_buffer_is_fine() {
+    assert!(CHECKPOINT_LEN <= 2048);
     let est: Estimator = Estimator::new(Config::default()).unwrap();
     let mut big = vec![0xAAu8; CHECKPOINT_LEN + 100];
     assert_eq!(est.checkpoint(&mut big), Ok(CHECKPOINT_LEN));
@@ -480,7 +482,7 @@ fn header_errors_are_typed() {
     b[6] = 8 / (std::mem::size_of::<Real>() as u8 / 4); // the other float width
     assert_eq!(target.restore(&b), Err(CheckpointError::RealWidthMismatch(b[6])));
     let mut b = good.clone();
-    b[12..16].copy_from_slice(&((CHECKPOINT_LEN - 4) as u32).to_le_bytes());
+    b[8..12].copy_from_slice(&((CHECKPOINT_LEN - 4) as u32).to_le_bytes());
     assert_eq!(
         target.restore(&b),
         Err(CheckpointError::LengthMismatch { expected: CHECKPOINT_LEN, found: CHECKPOINT_LEN - 4 })
@@ -489,11 +491,52 @@ fn header_errors_are_typed() {
     let n = b.len();
     b[n - 1] ^= 0x80;
     assert!(matches!(target.restore(&b), Err(CheckpointError::CrcMismatch { .. })));
-    // An image of a smaller estimator.
-    let small = Estimator::<CAP>::new(Config::default()).unwrap();
-    assert_eq!(target.restore(&image(&small)), Err(CheckpointError::CapacityMismatch(CAP as u32)));
     assert!(target == before);
 
     target.restore(good).unwrap();
-    assert!(target == *est);
+    assert_eq!(target.estimate(), est.estimate());
+}
+
+/// An image fits any ring capacity: the window is not in it.
+#[test]
+fn an_image_of_another_ring_capacity_restores() {
+    let (est, good) = &default_sources()[0];
+    let mut small = Estimator::<CAP>::new(Config::default()).unwrap();
+    small.restore(good).unwrap();
+    // The same filter (the 1-sigma's residual check counts the window's entries, which differ).
+    assert_eq!(small.estimate().map(|e| e.x_rad), est.estimate().map(|e| e.x_rad));
+    assert_eq!(image(&small), *good);
+}
+
+/// A realistic power cut: 20,000 s of a 1 Hz sea log with the default estimator, the checkpoint
+/// of the last sample before the cut, 200 s of rows lost while the board is off (the navigation
+/// computer keeps sending), then the rest of a 30,000 s log: at the end every error is within
+/// 0.1 arcsec of the uncut run's, and the first answer after the restart carries the estimate.
+#[test]
+fn a_power_cut_with_lost_rows_costs_almost_nothing() {
+    use estimator_core::units::rad_to_arcsec;
+    let mut signal = Signal::new([200.0, -150.0, 300.0, -250.0], 40.0);
+    signal.noise_arcsec = 5.0;
+    let samples: Vec<Sample> = (0..30_000).map(|k| signal.sample(f64::from(k))).collect();
+    let (_, uncut) = reference::<720>(Config::default(), &samples);
+    let mut before: Estimator = Estimator::new(Config::default()).unwrap();
+    for s in &samples[..20_000] {
+        before.step(s).unwrap();
+    }
+    let buf = image(&before);
+    let at_cut = before.estimate();
+    drop(before);
+    let mut after: Estimator = Estimator::new(Config::default()).unwrap();
+    after.restore(&buf).unwrap();
+    let first = after.step(&samples[20_200]).unwrap();
+    assert_eq!(first.estimate, at_cut);
+    assert_eq!(first.status, Status::Holding);
+    for s in &samples[20_201..] {
+        after.step(s).unwrap();
+    }
+    let (a, b) = (after.estimate().unwrap(), uncut.estimate().unwrap());
+    for i in 0..4 {
+        let d = rad_to_arcsec(f64::from(a.x_rad[i]) - f64::from(b.x_rad[i]));
+        assert!(d.abs() < 0.1, "x{}: {d:.3} arcsec from the uncut run", i + 1);
+    }
 }

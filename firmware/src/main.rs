@@ -4,9 +4,11 @@
 //! - [`board`]: the hardware (UART as `embedded_io`, the cost counter, logging, fatal exit), one
 //!   module per board, chosen by a cargo feature (`board-mps2-an386`, `board-stm32f405`);
 //! - [`link`]: frames in and out (the codec itself is the `link-protocol` crate);
-//! - [`service`]: request in, `estimator-core` step, response out;
-//! - [`checkpoint_store`]: the estimator's checkpoint in two alternating flash slots;
+//! - [`service`]: request in, `estimator-core` step, response out, checkpoints when due;
 //! - [`stack`]: stack painting for the high-water mark; [`fault`]: panic and hard-fault handlers.
+//!
+//! The checkpoint store itself is hardware-free and lives in the crate's library
+//! (`firmware::checkpoint_store`, tested on the host).
 //!
 //! This file wires them together, announces `Ready` on the link and runs the loop. The protocol is
 //! in docs/link-protocol.md.
@@ -19,9 +21,6 @@
 
 #[cfg(target_os = "none")]
 mod board;
-#[cfg(target_os = "none")]
-#[cfg_attr(not(feature = "checkpoint"), allow(dead_code))]
-mod checkpoint_store;
 #[cfg(target_os = "none")]
 mod fault;
 #[cfg(target_os = "none")]
@@ -36,7 +35,9 @@ use core::mem::MaybeUninit;
 #[cfg(target_os = "none")]
 use cortex_m_rt::entry;
 #[cfg(target_os = "none")]
-use estimator_core::{Config, ConfigError, Estimator};
+use estimator_core::{Config, Estimator};
+#[cfg(all(target_os = "none", feature = "checkpoint"))]
+use firmware::checkpoint_store::{StoreBuffers, CHECKPOINT_INTERVAL_S};
 #[cfg(target_os = "none")]
 use link_protocol::Response;
 
@@ -47,17 +48,6 @@ fn main() {
     std::process::exit(2);
 }
 
-/// Builds the estimator into its static slot. Out of line: `Estimator::new` returns the 23.6 KB
-/// state by value and the copy into the slot needs a temporary, which should not stay in `main`'s
-/// frame for ever.
-#[cfg(target_os = "none")]
-#[inline(never)]
-fn init_estimator(
-    slot: &'static mut MaybeUninit<Result<Estimator, ConfigError>>,
-) -> &'static mut Result<Estimator, ConfigError> {
-    slot.write(Estimator::new(Config::default()))
-}
-
 #[cfg(target_os = "none")]
 #[entry]
 fn main() -> ! {
@@ -66,45 +56,31 @@ fn main() -> ! {
         defmt::error!("board already initialised");
         board::fatal()
     };
-    // The estimator's state lives in .bss; the result of `new` is written straight into it rather
-    // than built on main's stack and copied.
-    static mut ESTIMATOR: MaybeUninit<Result<Estimator, ConfigError>> = MaybeUninit::uninit();
+    // The estimator's state lives in .bss (uninitialised) and is made there, in place: nothing of
+    // its 23.6 KB passes through the stack.
+    static mut ESTIMATOR: MaybeUninit<Estimator> = MaybeUninit::uninit();
     // SAFETY: `main` runs once and is the only code that names ESTIMATOR.
     let slot = unsafe { &mut *core::ptr::addr_of_mut!(ESTIMATOR) };
-    let estimator = match init_estimator(slot) {
-        Ok(e) => e,
-        Err(_) => {
-            defmt::error!("default configuration rejected by the core");
-            board::fatal()
-        }
+    let Ok(estimator) = Estimator::init_in(slot, Config::default()) else {
+        defmt::error!("default configuration rejected by the core");
+        board::fatal()
     };
-    // The newest checkpoint the core accepts, if the board has flash holding one.
+    // The checkpoint store on the board's flash, and the newest checkpoint restored from it. Its
+    // buffers (an image and the log's item) are a static too, off the stack.
     #[cfg(feature = "checkpoint")]
-    static mut IMAGE: [u8; checkpoint_store::IMAGE_BYTES] = [0; checkpoint_store::IMAGE_BYTES];
+    static mut STORE_BUFFERS: StoreBuffers = StoreBuffers::new();
     #[cfg(feature = "checkpoint")]
-    // SAFETY: `main` runs once and is the only code that names IMAGE.
-    let image = unsafe { &mut *core::ptr::addr_of_mut!(IMAGE) };
+    // SAFETY: `main` runs once and is the only code that names STORE_BUFFERS.
+    let buffers = unsafe { &mut *core::ptr::addr_of_mut!(STORE_BUFFERS) };
     #[cfg(feature = "checkpoint")]
-    let persistence = board.flash.map(|flash| {
-        let mut store = checkpoint_store::CheckpointStore::new(flash);
-        let restored = store.restore(estimator, image);
-        match restored {
-            Some(t) => defmt::info!("restored the checkpoint of {=f64} s", t),
-            None => defmt::info!("no checkpoint to restore"),
-        }
-        service::Persistence {
-            store,
-            image,
-            last_s: restored,
-        }
-    });
+    let persistence = board.flash.and_then(|flash| service::Persistence::open(flash, buffers, estimator));
+    #[cfg(feature = "checkpoint")]
+    defmt::info!("checkpoint every {=u32} s of sample time", CHECKPOINT_INTERVAL_S);
     #[cfg(not(feature = "checkpoint"))]
     let persistence = None;
     let boot_stack_peak_bytes = stack::peak_bytes();
     // Paint again: from here on the high-water mark is the service loop's own.
     stack::paint();
-    #[cfg(feature = "checkpoint")]
-    defmt::info!("checkpoint every {=u32} s of sample time", service::CHECKPOINT_INTERVAL_S);
     defmt::info!(
         "estimator firmware up: protocol {=u8}, estimator state {=usize} bytes, stack {=u32} bytes, {=u32} used by the start-up",
         link_protocol::PROTOCOL_VERSION,

@@ -6,20 +6,51 @@ use link_protocol::{
     Counters, EstimateMsg, FrameError, RejectedReply, Request, Response, StatusReply, StepReply, PROTOCOL_VERSION,
 };
 
+use estimator_core::checkpoint::CheckpointError;
+use firmware::checkpoint_store::{CheckpointStore, Restored, SaveSchedule, StoreBuffers, CHECKPOINT_INTERVAL_S};
+
 use crate::board::{CostCounter, Flash};
-use crate::checkpoint_store::{CheckpointStore, IMAGE_BYTES};
 use crate::stack;
 
-// `CHECKPOINT_INTERVAL_S`: 60 s, or `RINS_CHECKPOINT_INTERVAL_S` when the firmware was built
-// (checked and written by build.rs).
-include!(concat!(env!("OUT_DIR"), "/checkpoint_interval.rs"));
+/// Where checkpoints go, and when.
+pub struct Persistence {
+    store: CheckpointStore<'static, Flash>,
+    schedule: SaveSchedule,
+}
 
-/// Where checkpoints go: the store and the scratch image.
-pub struct Persistence<'a> {
-    pub store: CheckpointStore<Flash>,
-    pub image: &'a mut [u8; IMAGE_BYTES],
-    /// Time of the last checkpoint (or of the first sample, before there is one).
-    pub last_s: Option<f64>,
+#[cfg_attr(not(feature = "checkpoint"), allow(dead_code))]
+impl Persistence {
+    /// The store on `flash`, working in `buffers` (sectors a power cut left half-erased are erased
+    /// again first), with the newest checkpoint restored into `estimator`; `None` (logged) if the
+    /// flash is unusable.
+    pub fn open(flash: Flash, buffers: &'static mut StoreBuffers, estimator: &mut Estimator) -> Option<Persistence> {
+        let mut store = match CheckpointStore::new(flash, buffers) {
+            Ok(store) => store,
+            Err(error) => {
+                defmt::error!("no checkpoints: {}", error);
+                return None;
+            }
+        };
+        if store.re_erased() > 0 {
+            defmt::warn!("{=u32} flash sector(s) left half-erased by a power cut, erased again", store.re_erased());
+        }
+        let restored = store.restore(estimator);
+        match restored {
+            Ok(Restored::Image { time_s: Some(t) }) => defmt::info!("restored the checkpoint of {=f64} s", t),
+            Ok(Restored::Image { time_s: None }) => defmt::info!("restored a checkpoint taken before any sample"),
+            Ok(Restored::Nothing) => defmt::info!("no checkpoint to restore"),
+            Ok(Restored::Forgotten) => defmt::info!("no checkpoint to restore (the last one was reset)"),
+            Ok(Restored::Refused(CheckpointError::Version { found, expected })) => defmt::warn!(
+                "checkpoint of format version {=u16} refused (this firmware reads {=u16}), starting afresh",
+                found,
+                expected
+            ),
+            Ok(Restored::Refused(_)) => defmt::warn!("checkpoint refused by the core (damaged or foreign), starting afresh"),
+            Err(error) => defmt::error!("checkpoints unreadable, starting afresh: {}", error),
+        }
+        let schedule = SaveSchedule::new(f64::from(CHECKPOINT_INTERVAL_S), store.time_s());
+        Some(Persistence { store, schedule })
+    }
 }
 
 /// The estimator, the cost counter, the link counters and the checkpoints.
@@ -28,7 +59,7 @@ pub struct Service<'a> {
     cost: CostCounter,
     bad_frames: Counters,
     boot_stack_peak_bytes: u32,
-    persistence: Option<Persistence<'a>>,
+    persistence: Option<Persistence>,
 }
 
 impl<'a> Service<'a> {
@@ -36,7 +67,7 @@ impl<'a> Service<'a> {
         estimator: &'a mut Estimator,
         cost: CostCounter,
         boot_stack_peak_bytes: u32,
-        persistence: Option<Persistence<'a>>,
+        persistence: Option<Persistence>,
     ) -> Self {
         Service {
             estimator,
@@ -47,18 +78,13 @@ impl<'a> Service<'a> {
         }
     }
 
-    /// Saves a checkpoint when `CHECKPOINT_INTERVAL_S` of sample time has passed since the last.
+    /// Saves a checkpoint when one is due after the sample at `time_s` ([`SaveSchedule`]).
     fn maybe_checkpoint(&mut self, time_s: f64) {
         let Some(p) = self.persistence.as_mut() else { return };
-        match p.last_s {
-            None => p.last_s = Some(time_s),
-            Some(last) if time_s - last >= f64::from(CHECKPOINT_INTERVAL_S) => {
-                p.last_s = Some(time_s);
-                if let Err(error) = p.store.save(self.estimator, time_s, p.image) {
-                    defmt::error!("checkpoint at {=f64} s not saved: {}", time_s, error);
-                }
+        if p.schedule.due(time_s) {
+            if let Err(error) = p.store.save(self.estimator) {
+                defmt::error!("checkpoint at {=f64} s not saved: {}", time_s, error);
             }
-            Some(_) => {}
         }
     }
 
@@ -90,7 +116,7 @@ impl<'a> Service<'a> {
                 // forget. If the flash fails, the Status still shows the checkpoint's time, which
                 // tells the host that the reset is incomplete.
                 if let Some(p) = self.persistence.as_mut() {
-                    p.last_s = None;
+                    p.schedule.restart();
                     if let Err(error) = p.store.invalidate() {
                         defmt::error!("checkpoints not invalidated by the reset: {}", error);
                     }
@@ -122,8 +148,8 @@ impl<'a> Service<'a> {
             boot_stack_peak_bytes: self.boot_stack_peak_bytes,
             stack_peak_bytes: stack::peak_bytes(),
             stack_size_bytes: stack::size_bytes(),
-            checkpoint_time_s: self.persistence.as_ref().and_then(|p| p.store.time_s),
-            checkpoints_saved: self.persistence.as_ref().map_or(0, |p| p.store.saved),
+            checkpoint_time_s: self.persistence.as_ref().and_then(|p| p.store.time_s()),
+            checkpoints_saved: self.persistence.as_ref().map_or(0, |p| p.store.saved()),
         }
     }
 }

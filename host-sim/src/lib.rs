@@ -4,6 +4,8 @@ pub mod cli_args;
 pub mod compare;
 pub mod estimates_csv;
 pub mod figures;
+pub mod flash_life;
+pub mod flash_model;
 pub mod log_csv;
 pub mod monte_carlo;
 pub mod pipeline;

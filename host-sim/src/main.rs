@@ -39,6 +39,10 @@ enum Command {
     Compare(CompareArgs),
     /// Stream a log through the firmware over its link.
     Stream(host_sim::stream::StreamArgs),
+    /// How long a board's checkpoint flash lasts: N days of a sea log through the firmware's own
+    /// checkpoint store on a model of the board's flash; prints the erases of each sector, the
+    /// stalls a save causes and the flash life.
+    FlashLife(host_sim::flash_life::FlashLifeArgs),
 }
 
 #[derive(clap::Args, Debug)]
@@ -77,7 +81,8 @@ struct EstimateArgs {
     #[command(flatten)]
     timing: TimingArgs,
     /// Checkpoint the estimator after the rows at these times, drop it and restore a fresh one
-    /// from the bytes (the estimates must not change).
+    /// from the bytes, as after a power cut right after a save: the estimates go on from the
+    /// checkpoint's while the window refills (docs/reliability.md).
     #[arg(long, value_name = "T1,T2,...", value_delimiter = ',')]
     restart_at: Vec<f64>,
 }
@@ -255,6 +260,7 @@ fn main() {
         Command::MonteCarlo(a) => cmd_monte_carlo(a),
         Command::Compare(a) => cmd_compare(a),
         Command::Stream(a) => host_sim::stream::run(a),
+        Command::FlashLife(a) => host_sim::flash_life::run(a),
     };
     if let Err(e) = result {
         // The reader went away: stop quietly, as command-line tools do.

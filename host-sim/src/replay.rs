@@ -117,7 +117,8 @@ where
 /// (which writes it, reports it...); nothing per row is kept. Unreadable rows go through `filter`
 /// (skipped and counted, `warn` told; or refused when strict). After the first row at or after
 /// each of `restart_at_s` (ascending) the estimator is checkpointed, dropped and restored from the
-/// bytes: a power cycle with a saved state. The outputs must not change.
+/// bytes: a power cut right after a save. The estimates go on from the checkpoint's while the
+/// window refills (see `estimator_core::checkpoint`).
 pub fn replay_each<I, F>(
     rows: I,
     config: Config,

@@ -1,49 +1,26 @@
-//! Power cuts, on both boards: the firmware (each board's build) saves a checkpoint every 60 s of
-//! sample time into two alternating flash slots (a host file under QEMU). QEMU is killed at random
-//! points, once provably in the middle of a save; each time it is restarted on the same flash, the
-//! host resumes streaming after the checkpoint the firmware restored, and at the end the estimates
-//! equal those of the uninterrupted run (required: within 1 arcsec).
+//! Power cuts, on both boards: the firmware (each board's build) saves a checkpoint every 300 s of
+//! sample time into its checkpoint log (a host file under QEMU). QEMU is killed at random points,
+//! once provably in the middle of a save (the flash file has grown by part of an item); each time
+//! it is restarted on the same flash, restores a checkpoint, and the host resumes streaming after
+//! it. The host mirrors the firmware: the same core, the same save schedule
+//! (`firmware::checkpoint_store::SaveSchedule`), restored from its own image of the checkpoint the
+//! firmware reports. At the end the firmware's estimate equals the mirror's bit for bit, and is
+//! within 1 arcsec of the uninterrupted run's.
 
 mod qemu_support;
 
+use estimator_core::checkpoint::CHECKPOINT_LEN;
 use estimator_core::units::rad_to_arcsec;
-use estimator_core::Config;
+use estimator_core::{Config, Estimate};
+use firmware::checkpoint_store::{SaveSchedule, CHECKPOINT_INTERVAL_S};
 use host_sim::log_csv::read_log;
 use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::{Request, SampleMsg};
 use qemu_support::*;
+use std::collections::BTreeMap;
 use std::path::Path;
-use std::time::Duration;
-
-const INTERVAL_S: f64 = 60.0;
-
-/// Bytes of a checkpoint slot in the board's flash: the 16-byte header and the core's image,
-/// rounded up to the flash's erase blocks (4 KiB on mps2-an386; on the STM32F405 one 128 KiB
-/// sector, which its QEMU flash file keeps too).
-fn slot_bytes(board: Board) -> usize {
-    let erase = match board {
-        Board::Mps2An386 => 4096,
-        Board::Stm32f405 => 128 * 1024,
-    };
-    (16 + estimator_core::checkpoint::CHECKPOINT_LEN).div_ceil(erase) * erase
-}
-
-/// Whether each of the two slots starts with the store's magic.
-fn slots_valid(flash: &Path, board: Board) -> [bool; 2] {
-    let slot_bytes = slot_bytes(board);
-    use std::io::{Read, Seek, SeekFrom};
-    let Ok(mut file) = std::fs::File::open(flash) else {
-        return [false, false];
-    };
-    let mut valid = |slot: usize| {
-        let mut magic = [0u8; 4];
-        file.seek(SeekFrom::Start((slot * slot_bytes) as u64)).is_ok()
-            && file.read_exact(&mut magic).is_ok()
-            && &magic == b"RCKP"
-    };
-    [valid(0), valid(1)]
-}
+use std::time::{Duration, Instant};
 
 struct Rng(u32);
 impl Rng {
@@ -55,124 +32,142 @@ impl Rng {
     }
 }
 
-#[test]
-fn mps2_an386_power_cuts_at_random_points_and_mid_write_lose_nothing() {
-    power_cuts_at_random_points_and_mid_write_lose_nothing(Board::Mps2An386);
+fn file_len(path: &Path) -> u64 {
+    std::fs::metadata(path).map_or(0, |m| m.len())
+}
+
+/// The host's mirror of the firmware: the same core and save schedule, and an image of every
+/// checkpoint it saved, by the time of its last sample.
+struct Mirror {
+    estimator: HostEstimator,
+    schedule: SaveSchedule,
+    images: BTreeMap<u64, Vec<u8>>,
+}
+
+impl Mirror {
+    fn new() -> Mirror {
+        Mirror {
+            estimator: HostEstimator::new(Config::default()).unwrap(),
+            schedule: SaveSchedule::new(f64::from(CHECKPOINT_INTERVAL_S), None),
+            images: BTreeMap::new(),
+        }
+    }
+
+    /// Steps a sample; true if the firmware saves a checkpoint after it.
+    fn step(&mut self, msg: &SampleMsg) -> bool {
+        let Ok(output) = self.estimator.step(&msg.into()) else { return false };
+        let saves = self.schedule.due(output.time_s);
+        if saves {
+            let mut image = vec![0u8; CHECKPOINT_LEN];
+            self.estimator.checkpoint(&mut image).unwrap();
+            self.images.insert(output.time_s.to_bits(), image);
+        }
+        saves
+    }
+
+    /// What the firmware does at boot: restore the checkpoint of `time_s`, or start afresh.
+    fn boot(&mut self, time_s: Option<f64>) {
+        self.estimator = HostEstimator::new(Config::default()).unwrap();
+        if let Some(t) = time_s {
+            let image = self.images.get(&t.to_bits()).unwrap_or_else(|| panic!("the firmware restored a checkpoint of {t} s it never saved"));
+            self.estimator.restore(image).unwrap();
+        }
+        self.schedule = SaveSchedule::new(f64::from(CHECKPOINT_INTERVAL_S), time_s);
+    }
 }
 
 #[test]
-fn stm32f405_power_cuts_at_random_points_and_mid_write_lose_nothing() {
-    power_cuts_at_random_points_and_mid_write_lose_nothing(Board::Stm32f405);
+fn mps2_an386_power_cuts_at_random_points_and_mid_save_lose_nothing_but_time() {
+    power_cuts(Board::Mps2An386);
 }
 
-fn power_cuts_at_random_points_and_mid_write_lose_nothing(board: Board) {
+#[test]
+fn stm32f405_power_cuts_at_random_points_and_mid_save_lose_nothing_but_time() {
+    power_cuts(Board::Stm32f405);
+}
+
+fn power_cuts(board: Board) {
     let elf = firmware_elf(board);
     let dir = scratch(&format!("power-cut-{}", board.name()));
     let log = paper_log(&dir, 6000);
     let lines = read_log(&log).unwrap();
-    let mut host = HostEstimator::new(Config::default()).unwrap();
-    for l in &lines {
-        host.step(&sample_of(&l.row)).unwrap();
+    let msgs: Vec<SampleMsg> = lines.iter().map(|l| SampleMsg::from(&sample_of(&l.row))).collect();
+    let mut uncut = HostEstimator::new(Config::default()).unwrap();
+    for m in &msgs {
+        uncut.step(&m.into()).unwrap();
     }
-    let reference = host.estimate().unwrap();
     let flash_dir = dir.join("flash");
     std::fs::create_dir_all(&flash_dir).unwrap();
     let flash = flash_dir.join("rins-flash.bin");
 
     let mut rng = Rng(0x9E37_79B9);
-    let (mut cuts, mut mid_write_cuts, mut attempts) = (0u32, 0u32, 0u32);
-    // The last sample sent whose step may have run (answered, or sent just before a cut).
-    let mut last_sent_s: Option<f64> = None;
-    let final_estimate = loop {
-        let mut target =
-            Target::boot_qemu(&elf, board.machine(), None, Some(&flash_dir), Duration::from_secs(10)).unwrap();
+    let mut mirror = Mirror::new();
+    let (mut cuts, mut mid_save_cuts, mut attempts) = (0u32, 0u32, 0u32);
+    let final_estimate: Estimate = loop {
+        let mut target = Target::boot_qemu(&elf, board.machine(), None, Some(&flash_dir), Duration::from_secs(10)).unwrap();
         let resume = target.boot_status.checkpoint_time_s;
-        if let (Some(r), Some(done)) = (resume, last_sent_s) {
-            assert!(
-                r <= done,
-                "restored a checkpoint ({r} s) from after the last sample sent ({done} s)"
-            );
-        }
-        let start = lines
-            .iter()
-            .position(|l| resume.is_none_or(|t| l.row.time_s > t))
-            .unwrap();
-        // The firmware's rule: a save when 60 s have passed since the last (or since its first sample).
-        let mut last_save_s = resume;
-        // Three cuts after 30..400 random rows; then cuts at saves (sent, not waited for) until one
-        // lands inside a save; then one more random cut; then the rest of the log.
-        let want_mid_write = mid_write_cuts == 0 && cuts >= 3;
-        let stop_after = if want_mid_write {
+        mirror.boot(resume);
+        let start = msgs.iter().position(|m| resume.is_none_or(|t| m.time_s > t)).unwrap();
+        // Four cuts after 100..700 random rows; then cuts at saves (sent, not waited for) until
+        // one lands inside a save; then one more random cut; then the rest of the log.
+        let want_mid_save = mid_save_cuts == 0 && cuts >= 4;
+        let stop_after = if want_mid_save {
             Some(1)
-        } else if cuts < 4 + mid_write_cuts && lines.len() - start > 600 {
-            Some(30 + rng.below(370) as usize)
+        } else if cuts < 5 + mid_save_cuts && msgs.len() - start > 1000 {
+            Some(100 + rng.below(600) as usize)
         } else {
             None
         };
-        let mut sent = 0usize;
         let mut answer = None;
         let mut cut = false;
-        for line in &lines[start..] {
-            let msg = SampleMsg::from(&sample_of(&line.row));
-            let t = line.row.time_s;
-            let saves = last_save_s.is_some_and(|s| t - s >= INTERVAL_S);
-            match last_save_s {
-                None => last_save_s = Some(t),
-                Some(_) if saves => last_save_s = Some(t),
-                _ => {}
-            }
-            if let Some(n) = stop_after {
-                if sent >= n && (!want_mid_write || (saves && slots_valid(&flash, board) == [true, true])) {
-                    if want_mid_write {
-                        // Send the sample whose step saves, and cut the power while it writes.
-                        attempts += 1;
-                        target.link.send(&Request::Sample(msg)).unwrap();
-                        last_sent_s = Some(t);
-                        // Watch the flash file: once a slot's header is erased the save is under way;
-                        // cut the power a random 0..3 ms into it (a save takes about 60 ms of core time).
-                        let deadline = std::time::Instant::now() + Duration::from_millis(50);
-                        while slots_valid(&flash, board) == [true, true] && std::time::Instant::now() < deadline {}
-                        std::thread::sleep(Duration::from_micros(rng.below(3000) as u64));
+        for (sent, msg) in msgs[start..].iter().enumerate() {
+            let saves = mirror.step(msg);
+            if stop_after.is_some_and(|n| sent >= n) && (!want_mid_save || saves) {
+                if want_mid_save {
+                    // Send the sample whose step saves, and cut the power while the save writes.
+                    attempts += 1;
+                    let before = file_len(&flash);
+                    target.link.send(&Request::Sample(*msg)).unwrap();
+                    // Once the file grows the save is under way (its item is appended, 256 bytes
+                    // at a time, each 4.1 ms of the board's clock); cut 0..1 ms after that.
+                    let deadline = Instant::now() + Duration::from_millis(500);
+                    while file_len(&flash) == before && Instant::now() < deadline {}
+                    std::thread::sleep(Duration::from_micros(u64::from(rng.below(1000))));
+                    let grown = {
+                        drop(target);
+                        file_len(&flash) - before
+                    };
+                    // A whole item is the image, the key and the log's item header, padded.
+                    if grown > 0 && (grown as usize) < CHECKPOINT_LEN {
+                        mid_save_cuts += 1;
+                        println!("cut {}: in the middle of a save ({grown} of its bytes written)", cuts + 1);
+                    } else {
+                        println!("cut {}: at a save, {grown} bytes written", cuts + 1);
                     }
+                } else {
+                    println!("cut {}: after {sent} rows from {resume:?} s", cuts + 1);
                     drop(target);
-                    cut = true;
-                    break;
                 }
+                cut = true;
+                break;
             }
-            answer = Some(step_remote(&mut target, &msg).unwrap());
-            last_sent_s = Some(t);
-            sent += 1;
+            answer = Some(step_remote(&mut target, msg).unwrap());
         }
         if cut {
             cuts += 1;
-            if want_mid_write && slots_valid(&flash, board) != [true, true] {
-                mid_write_cuts += 1;
-                println!("cut {cuts}: in the middle of a save (slots {:?})", slots_valid(&flash, board));
-            } else {
-                println!("cut {cuts}: after {sent} rows from {resume:?} s");
-            }
-            assert!(attempts < 5, "no cut landed inside a save in {attempts} attempts");
+            assert!(attempts < 8, "no cut landed inside a save in {attempts} attempts");
             continue;
         }
         let output = answer.expect("rows were streamed").result.unwrap();
         break output.estimate.unwrap();
     };
-    assert!(
-        mid_write_cuts == 1 && cuts >= 5,
-        "{cuts} cuts, {mid_write_cuts} mid-write"
-    );
+    assert!(mid_save_cuts == 1 && cuts >= 6, "{cuts} cuts, {mid_save_cuts} in a save");
+    let mirrored = mirror.estimator.estimate().unwrap();
+    let reference = uncut.estimate().unwrap();
+    assert_eq!(final_estimate, mirrored, "the firmware's estimate differs from the host's mirror of its restarts");
     for i in 0..4 {
-        let diff = rad_to_arcsec((final_estimate.x_rad[i] - reference.x_rad[i]) as f64).abs();
-        println!(
-            "x{}: {} rad after power cuts, {} rad uninterrupted",
-            i + 1,
-            final_estimate.x_rad[i],
-            reference.x_rad[i]
-        );
-        assert!(
-            diff <= 1.0,
-            "x{} differs by {diff} arcsec from the uninterrupted run",
-            i + 1
-        );
+        let diff = rad_to_arcsec(f64::from(final_estimate.x_rad[i] - reference.x_rad[i])).abs();
+        println!("x{}: {diff:.3} arcsec from the uninterrupted run after {cuts} power cuts", i + 1);
+        assert!(diff <= 1.0, "x{} differs by {diff} arcsec from the uninterrupted run", i + 1);
     }
 }

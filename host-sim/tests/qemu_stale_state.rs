@@ -25,7 +25,7 @@ fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
     let first = paper_log(&dir, 600);
     // Another trial: other errors, other seed.
     let second = dir.join("second.csv");
-    host_sim(&["generate", "--scenario", "paper", "--seed", "2", "--duration", "600", "--errors-arcsec", "-100,50,-200,120", "--out", s(&second)]);
+    host_sim(&["generate", "--scenario", "paper", "--seed", "2", "--duration", "1500", "--errors-arcsec", "-100,50,-200,120", "--out", s(&second)]);
     let flash = dir.join("flash");
     std::fs::create_dir_all(&flash).unwrap();
 
@@ -38,7 +38,7 @@ fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert_eq!(refused.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("already holds an estimator state") && stderr.contains("checkpoint of 540 s"), "{stderr}");
+    assert!(stderr.contains("already holds an estimator state") && stderr.contains("checkpoint of 300 s"), "{stderr}");
     assert!(stderr.contains("--reset") && stderr.contains("--resume"), "{stderr}");
     assert!(!refused_out.exists(), "a refused stream writes no estimates");
 
@@ -48,22 +48,26 @@ fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
     assert!(out.contains("reset the firmware: it forgot"), "{out}");
     assert_eq!(std::fs::read(&expected).unwrap(), std::fs::read(&streamed).unwrap(), "--reset must give exactly `estimate`'s estimates");
 
-    // The flash now holds the second log's checkpoint (540 s): --resume streams the rows after it.
+    // The flash now holds the second log's checkpoint (1200 s): --resume streams the rows after it.
     let resumed = dir.join("resumed.csv");
     let out = host_sim(&["stream", "--qemu", s(&elf), s(&second), "--flash-dir", s(&flash), "--resume", "--out", s(&resumed)]);
-    assert!(out.contains("resuming after the firmware's checkpoint of 540 s"), "{out}");
-    assert!(out.contains(": 59 rows streamed"), "{out}");
-    // The resumed rows are the uninterrupted run's rows from 541 s on (a restore is exact).
-    let tail: Vec<String> = std::fs::read_to_string(&expected).unwrap().lines().skip(1 + 541).map(String::from).collect();
-    let got: Vec<String> = std::fs::read_to_string(&resumed).unwrap().lines().skip(1).map(String::from).collect();
-    assert_eq!(got, tail);
+    assert!(out.contains("resuming after the firmware's checkpoint of 1200 s"), "{out}");
+    assert!(out.contains(": 299 rows streamed"), "{out}");
+    // The first resumed row carries the estimate the uninterrupted run had at 1200 s (the
+    // checkpoint's), while the window refills.
+    let estimate = |line: &str| line.split(',').skip(1).take(8).collect::<Vec<_>>().join(",");
+    let at_cut = std::fs::read_to_string(&expected).unwrap().lines().nth(1 + 1200).map(estimate).unwrap();
+    let first = std::fs::read_to_string(&resumed).unwrap().lines().nth(1).map(String::from).unwrap();
+    assert!(first.starts_with("1201.000000,") && !at_cut.starts_with(','), "{first}");
+    assert_eq!(estimate(&first), at_cut);
+    assert!(first.contains(",holding,"), "{first}");
 }
 
 #[test]
 fn reset_erases_the_checkpoints_so_a_power_cut_cannot_bring_the_state_back() {
     let elf = firmware_elf(Board::Mps2An386);
     let dir = scratch("reset-erases");
-    let log = paper_log(&dir, 300);
+    let log = paper_log(&dir, 700);
     let lines = read_log(&log).unwrap();
     let flash = dir.join("flash");
     std::fs::create_dir_all(&flash).unwrap();
@@ -71,12 +75,12 @@ fn reset_erases_the_checkpoints_so_a_power_cut_cannot_bring_the_state_back() {
 
     let mut target = boot();
     assert!(!holds_state(&target.boot_status), "a fresh flash holds nothing");
-    for line in &lines[..200] {
+    for line in &lines[..650] {
         step_remote(&mut target, &SampleMsg::from(&sample_of(&line.row))).unwrap();
     }
     drop(target); // power cut
     let mut target = boot();
-    assert_eq!(target.boot_status.checkpoint_time_s, Some(180.0), "saves at 60, 120, 180 s: the newest is restored");
+    assert_eq!(target.boot_status.checkpoint_time_s, Some(600.0), "saves at 300 and 600 s: the newest is restored");
     assert!(holds_state(&target.boot_status));
     let after = match target.request(&Request::Reset).unwrap() {
         Response::Status(s) => s,

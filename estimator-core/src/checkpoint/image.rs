@@ -2,18 +2,16 @@
 //! image (the layout is in the module doc of [`crate::checkpoint`]).
 
 use super::wire::{Reader, Writer};
-use super::{checkpoint_len, crc32, ensure, CheckpointError, CRC_LEN, HEADER_LEN, MAGIC, R, VERSION};
+use super::{crc32, ensure, CheckpointError, CHECKPOINT_LEN, CRC_LEN, HEADER_LEN, MAGIC, R, VERSION};
 use crate::config::Method;
 
-/// Writes the header of an image of `len` bytes for an estimator of ring capacity `cap` running
-/// `method`.
-pub(crate) fn write_header(w: &mut Writer<'_>, method: Method, cap: usize, len: usize) {
+/// Writes the header of an image of an estimator running `method`.
+pub(crate) fn write_header(w: &mut Writer<'_>, method: Method) {
     w.bytes(&MAGIC);
     w.u16(VERSION);
     w.u8(R as u8);
     w.u8(method as u8);
-    w.usize(cap);
-    w.usize(len);
+    w.usize(CHECKPOINT_LEN);
 }
 
 /// Writes the CRC of everything before it into the last [`CRC_LEN`] bytes of `image`.
@@ -25,11 +23,10 @@ pub(crate) fn seal(image: &mut [u8]) {
     }
 }
 
-/// Checks the header of an image for ring capacity `cap` (magic, version, float width, capacity,
-/// length), the CRC and the method code; returns the image (`buf[..checkpoint_len(cap)]`) and
-/// its method.
-pub(crate) fn verified_image(buf: &[u8], cap: usize) -> Result<(&[u8], Method), CheckpointError> {
-    let len = checkpoint_len(cap);
+/// Checks the header of an image (magic, version, float width, length), the CRC and the method
+/// code; returns the image (`buf[..CHECKPOINT_LEN]`) and its method.
+pub(crate) fn verified_image(buf: &[u8]) -> Result<(&[u8], Method), CheckpointError> {
+    let len = CHECKPOINT_LEN;
     let Some(header) = buf.get(..HEADER_LEN) else {
         return Err(CheckpointError::BufferTooSmall { needed: HEADER_LEN, available: buf.len() });
     };
@@ -40,8 +37,6 @@ pub(crate) fn verified_image(buf: &[u8], cap: usize) -> Result<(&[u8], Method), 
     let real_bytes = r.u8();
     ensure(usize::from(real_bytes) == R, CheckpointError::RealWidthMismatch(real_bytes))?;
     let method_code = r.u8();
-    let capacity = r.u32();
-    ensure(capacity as usize == cap, CheckpointError::CapacityMismatch(capacity))?;
     let found = r.u32() as usize;
     ensure(found == len, CheckpointError::LengthMismatch { expected: len, found })?;
     let Some(image) = buf.get(..len) else {

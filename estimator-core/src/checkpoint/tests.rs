@@ -1,8 +1,8 @@
-//! What the checkpoint tests share: a running estimator of each method, its image, tampering
-//! with one part of an image, and the check that a tampered image is refused with the estimator
-//! untouched. The tests of each part are next to the part (`<module>/checkpoint.rs`); here are
-//! the tests of the frame: CRC, lengths, flags, codes and padding in the bytes. The end-to-end
-//! properties (bit-identical continuation from every phase, every bit flip refused) are in
+//! What the checkpoint tests share (a running estimator of each method, its image, a part written
+//! and read back, the check that a tampered image is refused with the estimator untouched) and the
+//! tests of the frame: CRC, length, method code, padding, and the golden image that pins the
+//! format. The tests of each part are next to the part (`<module>/checkpoint.rs`); the end-to-end
+//! properties (a restart from every phase, every bit flip refused) are in
 //! `tests/checkpoint_roundtrip.rs`.
 
 use super::wire::{Reader, Writer};
@@ -16,22 +16,6 @@ use std::vec::Vec;
 
 /// The estimator the tests checkpoint: a ring of 64 entries.
 pub(crate) type Est = Estimator<64>;
-
-#[test]
-fn crc32_matches_the_standard_check_value() {
-    assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
-    assert_eq!(crc32(b""), 0);
-}
-
-#[test]
-fn default_image_is_23384_bytes_with_f32() {
-    #[cfg(not(feature = "f64"))]
-    assert_eq!(CHECKPOINT_LEN, 23_384);
-    #[cfg(feature = "f64")]
-    assert_eq!(CHECKPOINT_LEN, 24_416);
-    assert_eq!(Estimator::<720>::CHECKPOINT_LEN, CHECKPOINT_LEN);
-    assert_eq!(CHECKPOINT_LEN % 4, 0);
-}
 
 /// A 1 Hz log: a one-way rotation of 120 s (two samples a bin in a ring of 64), 2 deg of roll
 /// sway, eq (2) for known errors; every 97th sample lost (filled) from sample 300 on.
@@ -65,9 +49,21 @@ pub(crate) fn running(method: Method) -> Est {
 
 /// The image of `est`.
 pub(crate) fn image_of<const CAP: usize>(est: &Estimator<CAP>) -> Vec<u8> {
-    let mut buf = vec![0u8; Estimator::<CAP>::CHECKPOINT_LEN];
+    let mut buf = vec![0u8; CHECKPOINT_LEN];
     assert_eq!(est.checkpoint(&mut buf), Ok(buf.len()));
     buf
+}
+
+/// `part` written (exactly [`Stored::LEN`] bytes, or the test fails) and read back with `context`.
+pub(crate) fn written_and_read<T: Stored>(part: &T, context: T::Context<'_>) -> Result<T, CheckpointError> {
+    let mut buf = vec![0u8; T::LEN];
+    let mut w = Writer::new(&mut buf, 0);
+    part.write(&mut w);
+    assert_eq!(w.pos(), T::LEN, "{} writes {} bytes, its LEN says {}", core::any::type_name::<T>(), w.pos(), T::LEN);
+    let mut r = Reader::new(&buf, 0);
+    let back = T::read(&mut r, context);
+    assert!(back.is_err() || r.pos() == T::LEN, "{} reads {} bytes", core::any::type_name::<T>(), r.pos());
+    back
 }
 
 /// Makes the CRC of a tampered image valid again.
@@ -85,30 +81,27 @@ pub(crate) fn refused(buf: &[u8], expected: CheckpointError) {
     assert_eq!(target, before);
 }
 
-/// The image with the part at `offset` read with `read`, changed with `edit`, written back with
-/// `write` and resealed: an image whose CRC is valid and whose part holds what `edit` made of it.
-pub(crate) fn tampered_part<T>(
-    image: &[u8],
-    offset: usize,
-    read: impl FnOnce(&mut Reader<'_>) -> T,
-    edit: impl FnOnce(&mut T),
-    write: impl FnOnce(&T, &mut Writer<'_>),
-) -> Vec<u8> {
-    let mut part = read(&mut Reader::new(image, offset));
-    edit(&mut part);
-    let mut out = image.to_vec();
-    write(&part, &mut Writer::new(&mut out, offset));
-    reseal(&mut out);
-    out
-}
-
-/// Writes a `u32` into an image at `pos`.
-pub(crate) fn put_u32(b: &mut [u8], pos: usize, v: u32) {
-    b[pos..pos + 4].copy_from_slice(&v.to_le_bytes());
+#[test]
+fn crc32_matches_the_standard_check_value() {
+    assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+    assert_eq!(crc32(b""), 0);
 }
 
 #[test]
-fn bad_flags_codes_unused_bytes_and_padding_are_refused() {
+fn image_length() {
+    // At most 2 KiB, the same for every ring capacity, a multiple of 4.
+    #[cfg(not(feature = "f64"))]
+    assert_eq!(CHECKPOINT_LEN, 860);
+    #[cfg(feature = "f64")]
+    assert_eq!(CHECKPOINT_LEN, 1000);
+    assert!(CHECKPOINT_LEN <= 2048);
+    assert_eq!(Estimator::<720>::CHECKPOINT_LEN, CHECKPOINT_LEN);
+    assert_eq!(Est::CHECKPOINT_LEN, CHECKPOINT_LEN);
+    assert_eq!(CHECKPOINT_LEN % 4, 0);
+}
+
+#[test]
+fn bad_method_codes_and_padding_are_refused() {
     use CheckpointError::*;
     let est = running(Method::Traditional);
     let good = image_of(&est);
@@ -118,36 +111,75 @@ fn bad_flags_codes_unused_bytes_and_padding_are_refused() {
         reseal(&mut b);
         b
     };
-    let running_at = RUNNING_OFFSET;
-    // Padding after the traditional method's state.
-    refused(&edit(good.len() - 10, 1), UnusedNotZero(Part::Padding));
-    // An absent pinned period with a non-zero value.
-    assert_eq!(good[HEADER_LEN], 0);
-    refused(&edit(HEADER_LEN + 3, 1), UnusedNotZero(Part::Config));
-    // The feed interval's presence flag (after the grid index) set to 2.
-    refused(&edit(running_at + 4, 2), InvalidValue(Part::Estimator));
-    // Status and fault codes.
-    refused(&edit(running_at + 14 + R, 10), InvalidValue(Part::Status));
-    refused(&edit(running_at + 15 + R, 4), InvalidValue(Part::Fault));
-    refused(&edit(running_at + 15 + R, 0x10), InvalidValue(Part::Fault));
-    // No fault, but a time for it.
-    refused(&edit(running_at + 16 + R, 1), UnusedNotZero(Part::Fault));
+    // Padding after the traditional method's state, and at the end of the image.
+    refused(&edit(good.len() - CRC_LEN - 100, 1), UnusedNotZero(Part::Padding));
+    refused(&edit(good.len() - 1 - CRC_LEN, 1), UnusedNotZero(Part::Padding));
     // Unknown method code.
     refused(&edit(7, 9), UnknownMethod(9));
 
     // And the genuine image restores into an estimator of another method, method and all.
     let mut target = running(Method::Windowed);
     target.restore(&good).unwrap();
-    assert_eq!(target, est);
+    assert_eq!(target.config().method, Method::Traditional);
+    assert_eq!(target.estimate(), est.estimate());
+    assert_eq!(image_of(&target), good);
 }
 
 #[test]
 fn errors_say_what_to_do_with_an_old_image() {
     use std::string::ToString;
-    let old = CheckpointError::Version { found: 2, expected: VERSION }.to_string();
+    let old = CheckpointError::Version { found: 4, expected: VERSION }.to_string();
     assert!(old.contains("older firmware") && old.contains("discarded"), "{old}");
     let new = CheckpointError::Version { found: VERSION + 1, expected: VERSION }.to_string();
     assert!(new.contains("newer firmware"), "{new}");
-    let e: &dyn core::error::Error = &CheckpointError::Inconsistent(Part::WindowSums);
-    assert_eq!(e.to_string(), "checkpoint window running sums: inconsistent values");
+    let e: &dyn core::error::Error = &CheckpointError::Inconsistent(Part::TimeGrid);
+    assert_eq!(e.to_string(), "checkpoint sample grid: inconsistent values");
 }
+
+/// The golden image of format version 6 (`f32`): the image [`running`]`(Method::Windowed)`
+/// wrote when the format was made. A change of the format (a field added, dropped, reordered or
+/// re-encoded) fails this test: bump [`VERSION`] and make a new golden image (print
+/// `image_of(&running(Method::Windowed))` as hex), with the state it must decode to.
+#[cfg(not(feature = "f64"))]
+const GOLDEN_V6: &str = concat!(
+    "52494543060004005c0300000000000000000000000000000000000000001fdd9e3b7cc90f38fede793281a6173d0000",
+    "0000000000002eada2360ad7233c7958cb3803000000b302000001000000000000f03f01000000000000000000db514a",
+    "3912bf1e3ab80200000000000000000000000000000000000000000000b8020000040000000000000000000000000000",
+    "00000000000000000000000000000001000000000000f03f00010000000000d88540000000000000f03f000000000000",
+    "f03f000000000000f03f000000000000f03f000000000000f03f000000000000f03f000000000000f03f000000000000",
+    "f03f080000000000000000588540ab02000000000000017800000000010100000000000131488e3f0000000000000000",
+    "000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000",
+    "000000000000000000000000000000000000000000000000000000000000000001000000000000000000000000000000",
+    "000000000180000000e80fc9400000000000000000010000000000fd3425320d4ddb2a9f000000dc000000b8977e3ad2",
+    "2a3fba5c809c3af54011ba2e46bd2d8a85eba902a38f2d485009ad8a85eba99092c22d262b0a2d1a5a942d02a38f2d26",
+    "2b0a2d27c66e2e5ef112aa485009ad1a5a942d5ef112aadc6b6c2e7aea15367934c0b53691afb68cfb7235006e000000",
+    "6e000000645c903dfe6a8e3dca6c593dca6c593d7d852130320727300000000000000000000000000000000000000000",
+    "00000000000000000000000000000000000000000000803f0000803f0000803f0000803f2aa69b360ad09d362cee1938",
+    "1704f6360000000000000000000000000000000000fca08631720d8f31f47a5d2d62e2322d6e0000006e000000000000",
+    "000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000",
+    "000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000",
+    "000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000000",
+    "000000000000000000000000000000000000000000000000000000000000000000000000000000004539c9ee",
+);
+
+#[cfg(not(feature = "f64"))]
+#[test]
+fn the_golden_image_decodes_to_its_state_and_is_written_back_byte_for_byte() {
+    assert_eq!(VERSION, 6, "a new format version needs a golden image of its own");
+    let golden: Vec<u8> = (0..GOLDEN_V6.len() / 2).map(|i| u8::from_str_radix(&GOLDEN_V6[2 * i..2 * i + 2], 16).unwrap()).collect();
+    assert_eq!(golden.len(), CHECKPOINT_LEN);
+    let est = Est::from_checkpoint(&golden).expect("the golden image restores");
+    assert_eq!(image_of(&est), golden, "restored and written again, the golden image changed");
+    // What the bytes mean: the configuration, the grid, the pattern, the counters, the filter.
+    assert_eq!(est.config(), &Config::with_method(Method::Windowed));
+    assert_eq!(est.sample_interval_s(), Some(1.0));
+    assert_eq!(est.last_sample_time_s(), Some(699.0));
+    assert_eq!(est.rotation().period_s, Some(120.0));
+    let c = est.counters();
+    assert_eq!((c.accepted, c.filled, c.window_restarts, c.clock_steps), (696, 4, 0, 0));
+    // The filter's states and 1-sigma, bit for bit.
+    let e = est.estimate().expect("an estimate");
+    assert_eq!(e.x_rad.map(f32::to_bits), [981_374_904, 3_124_701_906, 983_335_004, 3_121_692_917]);
+    assert_eq!(e.sigma_rad.map(f32::to_bits), [916_170_282, 916_312_074, 941_223_468, 922_092_567]);
+}
+

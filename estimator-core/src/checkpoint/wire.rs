@@ -22,9 +22,13 @@ impl<'a> Writer<'a> {
     }
 
     /// Bytes written so far, from the start of the buffer.
-    #[cfg(test)]
     pub(crate) fn pos(&self) -> usize {
         self.pos
+    }
+
+    /// Moves on by `n` bytes, leaving them as they are (zero in a fresh image).
+    pub(crate) fn skip(&mut self, n: usize) {
+        self.pos += n;
     }
 
     pub(crate) fn bytes(&mut self, b: &[u8]) {
@@ -45,19 +49,14 @@ impl<'a> Writer<'a> {
     pub(crate) fn u16(&mut self, v: u16) {
         self.bytes(&v.to_le_bytes());
     }
-    pub(crate) fn i16(&mut self, v: i16) {
-        self.bytes(&v.to_le_bytes());
-    }
     pub(crate) fn u32(&mut self, v: u32) {
-        self.bytes(&v.to_le_bytes());
-    }
-    pub(crate) fn i32(&mut self, v: i32) {
         self.bytes(&v.to_le_bytes());
     }
     /// A `usize` that fits in 32 bits (lengths and indices of windows of at most `CAP` entries).
     pub(crate) fn usize(&mut self, v: usize) {
         self.u32(u32::try_from(v).unwrap_or(u32::MAX));
     }
+    #[cfg_attr(not(feature = "paper-method"), allow(dead_code))]
     pub(crate) fn i64(&mut self, v: i64) {
         self.bytes(&v.to_le_bytes());
     }
@@ -95,8 +94,9 @@ impl<'a> Reader<'a> {
         self.pos
     }
 
-    pub(crate) fn seek(&mut self, pos: usize) {
-        self.pos = pos;
+    /// Moves on by `n` bytes without reading them.
+    pub(crate) fn skip(&mut self, n: usize) {
+        self.pos += n;
     }
 
     pub(crate) fn array<const N: usize>(&mut self) -> [u8; N] {
@@ -116,15 +116,10 @@ impl<'a> Reader<'a> {
     pub(crate) fn u16(&mut self) -> u16 {
         u16::from_le_bytes(self.array())
     }
-    pub(crate) fn i16(&mut self) -> i16 {
-        i16::from_le_bytes(self.array())
-    }
     pub(crate) fn u32(&mut self) -> u32 {
         u32::from_le_bytes(self.array())
     }
-    pub(crate) fn i32(&mut self) -> i32 {
-        i32::from_le_bytes(self.array())
-    }
+    #[cfg_attr(not(feature = "paper-method"), allow(dead_code))]
     pub(crate) fn i64(&mut self) -> i64 {
         i64::from_le_bytes(self.array())
     }

@@ -1,18 +1,29 @@
-//! The configuration part (the method code is in the header).
+//! The configuration part (the method code is in the header): `rotation_period_s` (optional
+//! f64), `sample_interval_s` (optional f64), `prior_sigma_rad`, `measurement_sigma_rad`,
+//! `drift_rad_per_sqrt_s`, `traditional_sigma_rad`, `traditional_drift_rad_per_sqrt_s`,
+//! `sway_gate_rad`, `converged_sigma_rad`, `rotation_period_tolerance`,
+//! `change_detection_step_rad` (`R` each), `max_filled_gap_samples` (u32).
 //!
-//! Checked: [`Config::check`] for this capacity, which bounds every value (ranges of the pinned
-//! period and interval, sigmas, random walks, the gap that may be filled).
+//! Checked: [`Config::check`] for the estimator's ring capacity, which bounds every value (ranges
+//! of the pinned period and interval, sigmas, random walks, the gap that may be filled).
 
 use super::{Config, Method};
 use crate::checkpoint::wire::{Reader, Writer};
-use crate::checkpoint::{CheckpointError, Part, R};
+use crate::checkpoint::{CheckpointError, Part, Stored, R};
 
-impl Config {
-    /// Bytes of the part.
-    pub(crate) const CHECKPOINT_LEN: usize = 2 * (1 + 8) + 9 * R + 4;
+/// What reading the configuration needs: the method the header names and the ring capacity of
+/// the estimator restoring it.
+#[derive(Clone, Copy)]
+pub(crate) struct ConfigContext {
+    pub(crate) method: Method,
+    pub(crate) capacity: usize,
+}
 
-    /// Writes the part.
-    pub(crate) fn write_checkpoint(&self, w: &mut Writer<'_>) {
+impl Stored for Config {
+    const LEN: usize = 2 * (1 + 8) + 9 * R + 4;
+    type Context<'a> = ConfigContext;
+
+    fn write(&self, w: &mut Writer<'_>) {
         let c = self;
         w.option(c.rotation_period_s, 0.0, |w, v| w.f64(v));
         w.option(c.sample_interval_s, 0.0, |w, v| w.f64(v));
@@ -32,12 +43,11 @@ impl Config {
         w.u32(c.max_filled_gap_samples);
     }
 
-    /// Reads the configuration of a `CAP` estimator running `method` and checks it.
-    pub(crate) fn read_checkpoint<const CAP: usize>(r: &mut Reader<'_>, method: Method) -> Result<Config, CheckpointError> {
+    fn read(r: &mut Reader<'_>, cx: ConfigContext) -> Result<Config, CheckpointError> {
         let rotation_period_s = r.option(Part::Config, |r| Ok(r.f64()))?;
         let sample_interval_s = r.option(Part::Config, |r| Ok(r.f64()))?;
         let config = Config {
-            method,
+            method: cx.method,
             rotation_period_s,
             sample_interval_s,
             prior_sigma_rad: r.real(),
@@ -51,7 +61,7 @@ impl Config {
             change_detection_step_rad: r.real(),
             max_filled_gap_samples: r.u32(),
         };
-        config.check(CAP).map_err(CheckpointError::InvalidConfig)?;
+        config.check(cx.capacity).map_err(CheckpointError::InvalidConfig)?;
         Ok(config)
     }
 }

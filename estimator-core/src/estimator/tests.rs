@@ -211,6 +211,25 @@ fn reinit_equals_new() {
 }
 
 #[test]
+fn init_in_equals_new_and_refuses_what_new_refuses() {
+    use crate::config::Method;
+    use core::mem::MaybeUninit;
+    for method in [Method::Windowed, Method::Paper, Method::Traditional] {
+        let config = Config { rotation_period_s: Some(300.0), sway_gate_rad: 0.01, ..Config::with_method(method) };
+        let mut slot: std::boxed::Box<MaybeUninit<Estimator>> = std::boxed::Box::new(MaybeUninit::uninit());
+        let est = Estimator::init_in(&mut slot, config).unwrap();
+        assert!(*est == Estimator::new(config).unwrap(), "{method:?}");
+        // And it runs as one.
+        for k in 0..700 {
+            est.step(&sample(k as f64, 3.0)).unwrap();
+        }
+    }
+    let mut slot: std::boxed::Box<MaybeUninit<Estimator>> = std::boxed::Box::new(MaybeUninit::uninit());
+    let bad = Config { rotation_period_s: Some(4000.0), ..Config::default() };
+    assert_eq!(Estimator::init_in(&mut slot, bad).err(), Some(ConfigError::RotationPeriod { value_s: 4000.0 }));
+}
+
+#[test]
 fn reset_forgets_all_but_the_configuration_and_rejections() {
     let config = Config { rotation_period_s: Some(300.0), ..Config::default() };
     let mut est: Estimator = Estimator::new(config).unwrap();

@@ -1,5 +1,5 @@
 //! A Kalman filter in a checkpoint image, in the filter's own float type (`Real`, or `f64` for the
-//! paper method's filters; the layout: the module doc of [`crate::checkpoint`]).
+//! paper method's filters): the `N` states, then the `N x N` covariance row by row.
 //!
 //! Checked: every state finite and within [`MAX_STATE`]; every covariance element finite, the
 //! variances within the bound the caller gives; the covariance exactly symmetric and positive
@@ -7,18 +7,14 @@
 
 use super::ConstantStateKalman;
 use crate::checkpoint::wire::{Float, Reader, Writer};
-use crate::checkpoint::{ensure, CheckpointError, Part, MAX_STATE};
-use nalgebra::RealField;
+use crate::checkpoint::{ensure, CheckpointError, Part, Stored, MAX_STATE};
 
-impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
-    /// Bytes of the filter in an image.
-    pub(crate) const CHECKPOINT_LEN: usize = core::mem::size_of::<T>() * (N + N * N);
+/// Read with the largest variance allowed (see [`crate::checkpoint::MAX_VARIANCE`]).
+impl<T: Float, const N: usize> Stored for ConstantStateKalman<T, N> {
+    const LEN: usize = core::mem::size_of::<T>() * (N + N * N);
+    type Context<'a> = f64;
 
-    /// Writes the filter.
-    pub(crate) fn write_checkpoint(&self, w: &mut Writer<'_>)
-    where
-        T: Float,
-    {
+    fn write(&self, w: &mut Writer<'_>) {
         for i in 0..N {
             w.float(self.x[i]);
         }
@@ -29,12 +25,9 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         }
     }
 
-    /// Reads a filter and checks it: states within [`MAX_STATE`], variances within
-    /// `max_variance`, covariance symmetric positive definite.
-    pub(crate) fn read_checkpoint(r: &mut Reader<'_>, max_variance: f64) -> Result<Self, CheckpointError>
-    where
-        T: Float,
-    {
+    /// States within [`MAX_STATE`], variances within `max_variance`, covariance symmetric
+    /// positive definite.
+    fn read(r: &mut Reader<'_>, max_variance: f64) -> Result<Self, CheckpointError> {
         let mut kf = Self::new([T::zero(); N]);
         for i in 0..N {
             let v: T = r.float();
@@ -57,17 +50,8 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::vec;
 
-    /// A filter written and read back with variances up to `max_variance`.
-    fn written_and_read<T: Float, const N: usize>(
-        kf: &ConstantStateKalman<T, N>,
-        max_variance: f64,
-    ) -> Result<ConstantStateKalman<T, N>, CheckpointError> {
-        let mut buf = vec![0u8; ConstantStateKalman::<T, N>::CHECKPOINT_LEN];
-        kf.write_checkpoint(&mut Writer::new(&mut buf, 0));
-        ConstantStateKalman::read_checkpoint(&mut Reader::new(&buf, 0), max_variance)
-    }
+    use crate::checkpoint::tests::written_and_read;
 
     /// A filter after a few updates: states and a full covariance.
     fn updated<T: Float, const N: usize>(prior: T) -> ConstantStateKalman<T, N> {

@@ -15,7 +15,7 @@
 //! approximately; the `a0 (1 - cos rho)/(w_r t)` transient of a constant attitude error is not
 //! modelled at all. `host-sim` reports what it achieves.
 
-mod checkpoint;
+pub(crate) mod checkpoint;
 
 use crate::config::Config;
 use crate::correlation::products;

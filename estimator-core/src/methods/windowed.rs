@@ -239,6 +239,18 @@ pub struct CleanState {
 }
 
 impl CleanState {
+    /// A filter of zeros (see [`Windowed::unconfigured`]).
+    const UNCONFIGURED: CleanState = CleanState {
+        kf: ConstantStateKalman::from_parts([0.0; 4], [[0.0; 4]; 4]),
+        residual_mean: [0.0; 4],
+        residual_count: [0; 2],
+        residual_mean_long: [0.0; 4],
+        residual_power: [0.0; 4],
+        long_count: [0; 2],
+        noise_scale: [0.0; 2],
+        drift_share: [0.0; 2],
+    };
+
     fn new(config: &Config) -> Self {
         CleanState {
             kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
@@ -280,6 +292,42 @@ impl<const CAP: usize> Windowed<CAP> {
         self.updates
     }
 
+    /// An empty window and a filter of zeros: what an estimator holds before
+    /// [`crate::Estimator::init_in`] resets it to a configuration.
+    pub(crate) fn unconfigured() -> Self {
+        Windowed {
+            window: CorrelationWindow::new(),
+            reference: ReferenceFilter::NEW,
+            kf: ConstantStateKalman::from_parts([0.0; 4], [[0.0; 4]; 4]),
+            updates: 0,
+            entries_since_update: 0,
+            next_pair: 0,
+            residual_mean: [0.0; 4],
+            residual_count: [0; 2],
+            gains: [0.0; 4],
+            product_variance_rad2: [0.0; 2],
+            residual_mean_long: [0.0; 4],
+            residual_power: [0.0; 4],
+            long_count: [0; 2],
+            noise_scale: [0.0; 2],
+            drift_share: [0.0; 2],
+            change: ChangeDetector::NEW,
+            relearning: [false; 2],
+            held_x_rad: [0.0; 4],
+            gated: 0,
+            reported_sigma_rad: [0.0; 4],
+            channel_mismatch: [false; 4],
+            spread_rad2: [0.0; 4],
+            spread_count: [0; 2],
+            block_held: [true; 2],
+            last_block_rad: [0.0; 4],
+            last_block_rows: [[0.0; 4]; 4],
+            last_block_held: [false; 2],
+            clean_state_due: false,
+            clean: CleanState::UNCONFIGURED,
+        }
+    }
+
     /// Fresh state: empty window, prior covariance.
     pub fn new(config: &Config) -> Self {
         Windowed {
@@ -298,7 +346,7 @@ impl<const CAP: usize> Windowed<CAP> {
             long_count: [0; 2],
             noise_scale: [1.0; 2],
             drift_share: [1.0; 2],
-            change: ChangeDetector::default(),
+            change: ChangeDetector::NEW,
             relearning: [false; 2],
             held_x_rad: [0.0; 4],
             gated: 0,
@@ -332,7 +380,7 @@ impl<const CAP: usize> Windowed<CAP> {
         self.long_count = [0; 2];
         self.noise_scale = [1.0; 2];
         self.drift_share = [1.0; 2];
-        self.change = ChangeDetector::default();
+        self.change = ChangeDetector::NEW;
         self.relearning = [false; 2];
         self.held_x_rad = [0.0; 4];
         self.gated = 0;

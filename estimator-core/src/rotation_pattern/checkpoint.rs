@@ -1,5 +1,13 @@
 //! The rotation monitor part ([`RotationMonitor`]): the period, the learned features and
-//! everything the monitor times passes and learns a cycle with.
+//! everything the monitor times passes and learns a cycle with: period (optional u32, samples),
+//! pinned (flag), features (optional: direction i8, reverses flag, longest dwell u32), reference
+//! angles (optional `R`), side of each reference angle ([`LEVELS`] x i8), last pass of each
+//! reference angle and direction ([`LEVELS`] x 2 optional u32), the timing pass (optional:
+//! reference angle u8, direction u8), previous sample (optional: index u32, rotation angle `R`),
+//! short mean increment `R`, its steps u32, the cycle being learned (start: optional u32, net
+//! rotation `R`), dwell run u32, longest dwell u32, first direction i8, reversed flag, reversed
+//! run u32. A restored monitor forgets its sample history ([`RotationMonitor::restart`], as after
+//! any long gap): what it learned stays.
 //!
 //! Checked: a period between 2 and [`MAX_PERIOD_SAMPLES`] samples; pinned only with a period the
 //! configuration pins; directions and sides -1, 0 or 1; the timing pass naming one of the
@@ -10,7 +18,7 @@
 
 use super::{Features, RotationMonitor, LEVELS, SHORT_STEPS};
 use crate::checkpoint::wire::{Reader, Writer};
-use crate::checkpoint::{ensure, within, CheckpointError, Part, R};
+use crate::checkpoint::{ensure, within, CheckpointError, Part, Stored, R};
 use crate::config::Config;
 use crate::sample::MAX_WRAPPED_ANGLE_RAD;
 use crate::Real;
@@ -20,13 +28,11 @@ use crate::Real;
 /// overflows.
 pub(crate) const MAX_PERIOD_SAMPLES: u32 = 1 << 24;
 
-impl RotationMonitor {
-    /// Bytes of the part.
-    pub(crate) const CHECKPOINT_LEN: usize =
-        5 + 1 + 7 + (1 + R) + LEVELS + LEVELS * 2 * 5 + 3 + (5 + R) + R + 4 + 5 + R + 4 + 4 + 1 + 1 + 4;
+impl Stored for RotationMonitor {
+    const LEN: usize = 5 + 1 + 7 + (1 + R) + LEVELS + LEVELS * 2 * 5 + 3 + (5 + R) + R + 4 + 5 + R + 4 + 4 + 1 + 1 + 4;
+    type Context<'a> = &'a Config;
 
-    /// Writes the part.
-    pub(crate) fn write_checkpoint(&self, w: &mut Writer<'_>) {
+    fn write(&self, w: &mut Writer<'_>) {
         let m = self;
         w.option(m.period_samples, 0, |w, v| w.u32(v));
         w.flag(m.pinned);
@@ -63,8 +69,7 @@ impl RotationMonitor {
         w.u32(m.reversed_run);
     }
 
-    /// Reads and checks the part of an image whose configuration is `config`.
-    pub(crate) fn read_checkpoint(r: &mut Reader<'_>, config: &Config) -> Result<RotationMonitor, CheckpointError> {
+    fn read(r: &mut Reader<'_>, config: &Config) -> Result<RotationMonitor, CheckpointError> {
         const P: Part = Part::RotationMonitor;
         let invalid = CheckpointError::InvalidValue(P);
         let direction = |d: i8| (-1..=1).contains(&d);
@@ -118,40 +123,39 @@ impl RotationMonitor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::checkpoint::tests::{image_of, refused, running, tampered_part};
-    use crate::checkpoint::ROTATION_OFFSET;
+    use crate::checkpoint::tests::{running, written_and_read};
     use crate::config::Method;
     use CheckpointError::*;
 
+    const P: Part = Part::RotationMonitor;
+
     #[test]
     fn a_tampered_rotation_monitor_is_refused_with_a_typed_error() {
-        let image = image_of(&running(Method::Windowed));
+        let est = running(Method::Windowed);
         let config = Config::with_method(Method::Windowed);
-        let read = |r: &mut Reader<'_>| RotationMonitor::read_checkpoint(r, &config).unwrap();
         // What the tampering reaches: the monitor has learned the pattern and times passes.
-        let m = read(&mut Reader::new(&image, ROTATION_OFFSET));
+        let m = est.rotation_for_test();
         assert!(m.features.is_some() && m.timing_pass.is_some() && m.period_samples == Some(120));
-        let tampered = |edit: &dyn Fn(&mut RotationMonitor)| {
-            tampered_part(&image, ROTATION_OFFSET, read, edit, RotationMonitor::write_checkpoint)
+        let with = |edit: &dyn Fn(&mut RotationMonitor)| {
+            let mut t = m;
+            edit(&mut t);
+            written_and_read(&t, &config)
         };
-        refused(&tampered(&|m| m.timing_pass = Some((8, 0))), InvalidValue(P));
-        refused(&tampered(&|m| m.timing_pass = Some((1, 2))), InvalidValue(P));
-        refused(&tampered(&|m| m.level_side[2] = 2), InvalidValue(P));
-        refused(&tampered(&|m| m.period_samples = Some(1)), InvalidValue(P));
-        refused(&tampered(&|m| m.short_steps = 5), InvalidValue(P));
-        refused(&tampered(&|m| m.levels_rad = Some(Real::NAN)), InvalidValue(P));
-        refused(&tampered(&|m| m.previous = Some((3, 7.0))), InvalidValue(P));
+        assert_eq!(with(&|_| {}), Ok(m));
+        assert_eq!(with(&|m| m.timing_pass = Some((8, 0))), Err(InvalidValue(P)));
+        assert_eq!(with(&|m| m.timing_pass = Some((1, 2))), Err(InvalidValue(P)));
+        assert_eq!(with(&|m| m.level_side[2] = 2), Err(InvalidValue(P)));
+        assert_eq!(with(&|m| m.period_samples = Some(1)), Err(InvalidValue(P)));
+        assert_eq!(with(&|m| m.short_steps = 5), Err(InvalidValue(P)));
+        assert_eq!(with(&|m| m.levels_rad = Some(Real::NAN)), Err(InvalidValue(P)));
+        assert_eq!(with(&|m| m.previous = Some((3, 7.0))), Err(InvalidValue(P)));
         // Pinned, while the configuration detects the period.
-        refused(&tampered(&|m| m.pinned = true), Inconsistent(P));
+        assert_eq!(with(&|m| m.pinned = true), Err(Inconsistent(P)));
         let bad_direction = |m: &mut RotationMonitor| {
             if let Some(f) = &mut m.features {
                 f.direction = 3;
             }
         };
-        refused(&tampered(&bad_direction), InvalidValue(Part::Features));
-        // The window must match the period (it is laid out for 120 samples).
-        refused(&tampered(&|m| m.period_samples = Some(122)), Inconsistent(Part::WindowIndices));
+        assert_eq!(with(&bad_direction), Err(InvalidValue(Part::Features)));
     }
-
-    const P: Part = Part::RotationMonitor;
 }

@@ -1,5 +1,7 @@
 //! The sample grid part ([`TimeGrid`]): the interval as pinned or learned, and what it is learned
-//! and refined from.
+//! and refined from: interval (optional f64), pinned (flag), the previous accepted stamp, i.e.
+//! the time of the last sample (optional f64), the learning steps ([`LEARNING_STEPS`] x f64),
+//! steps learned (u32), mean one-interval step (f64), steps in that mean (u32), clock steps (u32).
 //!
 //! Checked: the interval positive and finite; pinned exactly when the configuration pins the
 //! interval, and then equal to it; the stamp finite; every learning step and the refinement's sum
@@ -9,15 +11,14 @@
 
 use super::{TimeGrid, LEARNING_STEPS, REFINEMENT_STEPS};
 use crate::checkpoint::wire::{Reader, Writer};
-use crate::checkpoint::{ensure, CheckpointError, Part};
+use crate::checkpoint::{ensure, CheckpointError, Part, Stored};
 use crate::config::Config;
 
-impl TimeGrid {
-    /// Bytes of the part.
-    pub(crate) const CHECKPOINT_LEN: usize = 9 + 1 + 9 + LEARNING_STEPS * 8 + 4 + 8 + 4 + 4;
+impl Stored for TimeGrid {
+    const LEN: usize = 9 + 1 + 9 + LEARNING_STEPS * 8 + 4 + 8 + 4 + 4;
+    type Context<'a> = &'a Config;
 
-    /// Writes the part.
-    pub(crate) fn write_checkpoint(&self, w: &mut Writer<'_>) {
+    fn write(&self, w: &mut Writer<'_>) {
         let g = self;
         w.option(g.interval_s, 0.0, |w, v| w.f64(v));
         w.flag(g.pinned);
@@ -31,8 +32,7 @@ impl TimeGrid {
         w.u32(g.clock_steps);
     }
 
-    /// Reads and checks the part of an image whose configuration is `config`.
-    pub(crate) fn read_checkpoint(r: &mut Reader<'_>, config: &Config) -> Result<TimeGrid, CheckpointError> {
+    fn read(r: &mut Reader<'_>, config: &Config) -> Result<TimeGrid, CheckpointError> {
         let invalid = CheckpointError::InvalidValue(Part::TimeGrid);
         let g = TimeGrid {
             interval_s: r.option(Part::TimeGrid, |r| Ok(r.f64()))?,
@@ -61,24 +61,25 @@ impl TimeGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::checkpoint::tests::{image_of, refused, running, tampered_part};
-    use crate::checkpoint::TIME_GRID_OFFSET;
+    use crate::checkpoint::tests::{running, written_and_read};
     use crate::config::Method;
     use CheckpointError::*;
 
     #[test]
     fn a_tampered_grid_is_refused_with_a_typed_error() {
-        let image = image_of(&running(Method::Windowed));
+        let est = running(Method::Windowed);
         let config = Config::with_method(Method::Windowed);
-        let tampered = |edit: &dyn Fn(&mut TimeGrid)| {
-            let read = |r: &mut Reader<'_>| TimeGrid::read_checkpoint(r, &config).unwrap();
-            tampered_part(&image, TIME_GRID_OFFSET, read, edit, TimeGrid::write_checkpoint)
+        let with = |edit: &dyn Fn(&mut TimeGrid)| {
+            let mut g = est.grid_for_test();
+            edit(&mut g);
+            written_and_read(&g, &config)
         };
-        refused(&tampered(&|g| g.interval_s = Some(-1.0)), InvalidValue(Part::TimeGrid));
-        refused(&tampered(&|g| g.last_stamp_s = Some(f64::INFINITY)), InvalidValue(Part::TimeGrid));
-        refused(&tampered(&|g| g.learning_steps[3] = f64::NAN), InvalidValue(Part::TimeGrid));
-        refused(&tampered(&|g| g.learned = 9), InvalidValue(Part::TimeGrid));
+        assert_eq!(with(&|_| {}), Ok(est.grid_for_test()));
+        assert_eq!(with(&|g| g.interval_s = Some(-1.0)), Err(InvalidValue(Part::TimeGrid)));
+        assert_eq!(with(&|g| g.last_stamp_s = Some(f64::INFINITY)), Err(InvalidValue(Part::TimeGrid)));
+        assert_eq!(with(&|g| g.learning_steps[3] = f64::NAN), Err(InvalidValue(Part::TimeGrid)));
+        assert_eq!(with(&|g| g.learned = 9), Err(InvalidValue(Part::TimeGrid)));
         // Pinned, while the configuration learns the interval.
-        refused(&tampered(&|g| g.pinned = true), Inconsistent(Part::TimeGrid));
+        assert_eq!(with(&|g| g.pinned = true), Err(Inconsistent(Part::TimeGrid)));
     }
 }

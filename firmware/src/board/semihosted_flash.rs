@@ -1,25 +1,27 @@
 //! A NOR flash emulated by the host file `rins-flash.bin` in QEMU's working directory
 //! (semihosting), behind the `embedded_storage` NOR flash traits: where the checkpoints go under
 //! QEMU, whose boards have no flash controller to program (mps2-an386 has none; netduinoplus2's is
-//! a stub). 256 KiB (two STM32F405 sectors of 128 KiB, the largest layout a board maps onto it), 4 KiB
-//! erase blocks, 4-byte writes; bytes past the end of the file read as
-//! erased (0xFF). Writes overwrite (the checkpoint store always erases first).
+//! a stub). `CAPACITY` bytes (each board's checkpoint region, `firmware::flash_layout`), 4 KiB
+//! erase blocks, 4-byte writes; bytes past the end of the file read as erased (0xFF). Writes
+//! replace the bytes (the store writes only erased flash). Not modelled: a torn write (a write
+//! reaches the file whole, page by page) and any stall.
 
 use embedded_storage::nor_flash::{NorFlash, NorFlashErrorKind, ReadNorFlash};
 
-pub struct SemihostedFlash {
+pub struct SemihostedFlash<const CAPACITY: usize> {
     file: semihosting::fs::File,
     page_program_cycles: u32,
 }
 
-impl SemihostedFlash {
-    const CAPACITY: usize = 256 * 1024;
+impl<const CAPACITY: usize> SemihostedFlash<CAPACITY> {
     const PATH: &'static core::ffi::CStr = c"rins-flash.bin";
 
-    /// Opens (or creates) the file. Every 256-byte page written then takes `page_program_cycles`
-    /// of core clock (a NOR flash's program time), so that a save lasts about as long as on a real
-    /// part and a power cut can land between any two pages.
-    pub fn open(page_program_cycles: u32) -> Option<SemihostedFlash> {
+    /// Opens (or creates) the file. Every 256-byte page written then takes the time the
+    /// STM32F405 takes to program 256 bytes at x8 (16 us a byte, typical: 4.1 ms) of a core clock
+    /// of `core_clock_hz`, so that a save lasts about as long as on the chip and a power cut can
+    /// land between any two pages; an erase, written as pages of 0xFF, lasts as long per page.
+    pub fn open(core_clock_hz: u32) -> Option<Self> {
+        let page_program_cycles = (u64::from(core_clock_hz) * 4096 / 1_000_000) as u32;
         use semihosting::fs::File;
         let file = File::options()
             .read(true)
@@ -41,13 +43,12 @@ impl SemihostedFlash {
         })
     }
 
-    #[allow(clippy::manual_is_multiple_of)] // is_multiple_of needs Rust 1.87; the workspace says 1.85
     fn check(offset: u32, len: usize, align: usize) -> Result<(), NorFlashErrorKind> {
         let end = offset as usize + len;
-        if offset as usize % align != 0 || len % align != 0 {
+        if !(offset as usize).is_multiple_of(align) || !len.is_multiple_of(align) {
             return Err(NorFlashErrorKind::NotAligned);
         }
-        if end > Self::CAPACITY {
+        if end > CAPACITY {
             return Err(NorFlashErrorKind::OutOfBounds);
         }
         Ok(())
@@ -67,11 +68,11 @@ impl SemihostedFlash {
     }
 }
 
-impl embedded_storage::nor_flash::ErrorType for SemihostedFlash {
+impl<const CAPACITY: usize> embedded_storage::nor_flash::ErrorType for SemihostedFlash<CAPACITY> {
     type Error = NorFlashErrorKind;
 }
 
-impl ReadNorFlash for SemihostedFlash {
+impl<const CAPACITY: usize> ReadNorFlash for SemihostedFlash<CAPACITY> {
     const READ_SIZE: usize = 1;
 
     fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), NorFlashErrorKind> {
@@ -96,11 +97,11 @@ impl ReadNorFlash for SemihostedFlash {
     }
 
     fn capacity(&self) -> usize {
-        Self::CAPACITY
+        CAPACITY
     }
 }
 
-impl NorFlash for SemihostedFlash {
+impl<const CAPACITY: usize> NorFlash for SemihostedFlash<CAPACITY> {
     const WRITE_SIZE: usize = 4;
     const ERASE_SIZE: usize = 4096;
 

@@ -184,3 +184,21 @@ pub fn step_cost(stdout: &str) -> (f64, f64) {
     );
     (words[3].parse().expect(line), words[6].parse().expect(line))
 }
+
+/// The largest start-up stack the firmware may use, bytes: it makes its estimator and restores
+/// its checkpoint in place.
+pub const START_UP_STACK_BUDGET_BYTES: u64 = 4096;
+
+/// `(start-up peak, service loop peak, stack size)`, bytes, from `host-sim stream`'s
+/// `stack (painted): ...` line.
+pub fn stack_peaks(stdout: &str) -> (u64, u64, u64) {
+    let line = stdout
+        .lines()
+        .find(|l| l.contains("stack (painted)"))
+        .unwrap_or_else(|| panic!("no stack line in:\n{stdout}"));
+    let numbers: Vec<u64> = line.split_whitespace().filter_map(|w| w.parse().ok()).collect();
+    assert_eq!(numbers.len(), 3, "{line}");
+    let (boot, service, size) = (numbers[0], numbers[1], numbers[2]);
+    assert!(boot > 0 && service > 0 && boot < size && service < size, "painting measured nothing: {line}");
+    (boot, service, size)
+}

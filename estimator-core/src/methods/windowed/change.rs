@@ -77,6 +77,8 @@
 //! Per update two additions; per block and channel two divisions and a dozen multiply-adds, once a
 //! half period: nothing that raises the worst step on the Cortex-M4F by more than a block's test.
 
+pub(crate) mod checkpoint;
+
 use crate::math::sqrt;
 use crate::Real;
 
@@ -161,20 +163,23 @@ pub struct ChangeDetector {
 
 impl Default for ChangeDetector {
     fn default() -> Self {
-        ChangeDetector {
-            block_sum: [0.0; 4],
-            block_updates: [0; 2],
-            mean_square_rad2: [0.0; 4],
-            learned_blocks: [0; 2],
-            llr: [[0.0; 2]; 4],
-            run: [[0; 2]; 4],
-            widening_rad: [0.0; 4],
-            holding: [false; 4],
-        }
+        Self::NEW
     }
 }
 
 impl ChangeDetector {
+    /// Nothing learned, nothing accumulated.
+    pub const NEW: ChangeDetector = ChangeDetector {
+        block_sum: [0.0; 4],
+        block_updates: [0; 2],
+        mean_square_rad2: [0.0; 4],
+        learned_blocks: [0; 2],
+        llr: [[0.0; 2]; 4],
+        run: [[0; 2]; 4],
+        widening_rad: [0.0; 4],
+        holding: [false; 4],
+    };
+
     /// Widening of each error's 1-sigma while a change builds up, rad.
     pub fn widening_rad(&self) -> &[Real; 4] {
         &self.widening_rad

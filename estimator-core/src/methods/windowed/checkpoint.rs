@@ -1,20 +1,31 @@
-//! The windowed method's state in a checkpoint image (its layout: the module doc of
-//! [`crate::checkpoint`]).
+//! The windowed method in a checkpoint image: what it learned, not its window. In order: updates
+//! (u32), the Kalman filter (`x` 4 `R`, `P` 16 `R` row-major), residual means (4 `R`), the pair the
+//! next update takes (u8: 0 pitch, 1 roll), residuals averaged per pair (2 x u32), channel gains
+//! (4 `R`), the per-product variances of the pitch and roll channels (2 `R`), the long means of
+//! the residual means (4 `R`) and of their powers (4 `R`), the residual means in the long
+//! averages per pair (2 x u32), the noise scale and the drift share per pair (2 + 2 `R`); then
+//! what the report and the change detector need: each error's reported 1-sigma (4 `R`), a flag
+//! byte (bits 0-3: each channel's residual mean beyond the check's bound; bits 4-5: the pitch and
+//! roll pair learning their errors again after a change), the estimate they are learned against
+//! (4 `R`), the learned spread of each channel's residual (4 `R`) and the residuals learned into
+//! it per pair (2 x u32), and the change detector's part (`change/checkpoint.rs`). The window, the
+//! low-pass of its references, the entries since the last update and the detector's blocks are
+//! not kept: the next period of samples refills them (the window restarts, as after a long gap).
+//! The state the detector goes back to while a change builds up is the restored one.
 //!
 //! Checked: the Kalman filter (see [`crate::kalman`]); residual means and their long means within
 //! [`MAX_RESIDUAL`]; gains within `[0, 4]` (a gain is the magnitude of a window mean of products
 //! of sines and cosines, minus a product of two such means); the per-product variances within
 //! [`MAX_PRODUCT_VARIANCE_RAD2`]; powers and noise scales within [`MAX_NOISE_SCALE`]; drift shares
-//! within `[0, 1]`; the low-pass stages within +-1; the window (see [`crate::moving_average`]),
-//! whose layout must be the one the rotation period gives once it is known.
+//! within `[0, 1]`; the pair 0 or 1; the reported 1-sigma finite and not negative; the flag
+//! byte's unused bits zero; the estimate learned against within [`MAX_STATE`]; the spreads within
+//! [`MAX_RESIDUAL`]^2.
 
+use super::change::checkpoint::BlockVariance;
 use super::Windowed;
 use crate::checkpoint::wire::{Reader, Writer};
-use crate::checkpoint::{ensure, within, within_non_negative, CheckpointError, Part, MAX_RESIDUAL, R};
-use crate::correlation::ReferenceFilter;
+use crate::checkpoint::{ensure, within, within_non_negative, CheckpointError, Part, Stored, MAX_RESIDUAL, MAX_STATE, R};
 use crate::kalman::ConstantStateKalman;
-use crate::moving_average::checkpoint::{correlation_window_len, expected_correlation};
-use crate::moving_average::CorrelationWindow;
 use crate::Real;
 
 /// Largest residual power and noise scale restored: a residual mean of [`MAX_RESIDUAL`] over the
@@ -26,26 +37,106 @@ const MAX_NOISE_SCALE: Real = 1.0e30;
 /// of the fill variances (each below (4.1 x 90 deg)^2, times the saturated fill weight).
 const MAX_PRODUCT_VARIANCE_RAD2: Real = 1.0e7;
 
-/// Bytes of the state of a method with a ring of `cap` entries.
-pub(crate) const fn checkpoint_len(cap: usize) -> usize {
-    4 + 4
-        + ConstantStateKalman::<Real, 4>::CHECKPOINT_LEN
-        + 4 * R
-        + (1 + 8)
-        + 4 * R
-        + 2 * R
-        + (8 * R + 8 + 4 * R)
-        + ReferenceFilter::CHECKPOINT_LEN
-        + correlation_window_len(cap)
+/// What a restart keeps of the windowed method (the fields of [`Windowed`] of the same names).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Learned {
+    updates: u32,
+    kf: ConstantStateKalman<Real, 4>,
+    residual_mean: [Real; 4],
+    next_pair: u8,
+    residual_count: [u32; 2],
+    gains: [Real; 4],
+    product_variance_rad2: [Real; 2],
+    residual_mean_long: [Real; 4],
+    residual_power: [Real; 4],
+    long_count: [u32; 2],
+    noise_scale: [Real; 2],
+    drift_share: [Real; 2],
+    reported_sigma_rad: [Real; 4],
+    channel_mismatch: [bool; 4],
+    relearning: [bool; 2],
+    held_x_rad: [Real; 4],
+    spread_rad2: [Real; 4],
+    spread_count: [u32; 2],
+    change: BlockVariance,
 }
 
 impl<const CAP: usize> Windowed<CAP> {
-    /// Writes the state.
-    pub(crate) fn write_checkpoint(&self, w: &mut Writer<'_>) {
+    /// What a restart keeps.
+    pub(crate) fn learned(&self) -> Learned {
+        Learned {
+            updates: self.updates,
+            kf: self.kf.clone(),
+            residual_mean: self.residual_mean,
+            next_pair: self.next_pair,
+            residual_count: self.residual_count,
+            gains: self.gains,
+            product_variance_rad2: self.product_variance_rad2,
+            residual_mean_long: self.residual_mean_long,
+            residual_power: self.residual_power,
+            long_count: self.long_count,
+            noise_scale: self.noise_scale,
+            drift_share: self.drift_share,
+            reported_sigma_rad: self.reported_sigma_rad,
+            channel_mismatch: self.channel_mismatch,
+            relearning: self.relearning,
+            held_x_rad: self.held_x_rad,
+            spread_rad2: self.spread_rad2,
+            spread_count: self.spread_count,
+            change: self.change.learned(),
+        }
+    }
+
+    /// Takes over what a restart keeps (into a fresh state, at restore); the window stays empty.
+    pub(crate) fn keep_learned(&mut self, l: Learned) {
+        self.updates = l.updates;
+        self.kf = l.kf;
+        self.residual_mean = l.residual_mean;
+        self.next_pair = l.next_pair;
+        self.residual_count = l.residual_count;
+        self.gains = l.gains;
+        self.product_variance_rad2 = l.product_variance_rad2;
+        self.residual_mean_long = l.residual_mean_long;
+        self.residual_power = l.residual_power;
+        self.long_count = l.long_count;
+        self.noise_scale = l.noise_scale;
+        self.drift_share = l.drift_share;
+        self.reported_sigma_rad = l.reported_sigma_rad;
+        self.channel_mismatch = l.channel_mismatch;
+        self.relearning = l.relearning;
+        self.held_x_rad = l.held_x_rad;
+        self.spread_rad2 = l.spread_rad2;
+        self.spread_count = l.spread_count;
+        self.change.keep_learned(l.change);
+        // What the detector goes back to, should a change build up before the next block.
+        self.keep_clean_state();
+    }
+}
+
+/// Read with the largest variance allowed (see [`crate::checkpoint::MAX_VARIANCE`]).
+impl Stored for Learned {
+    const LEN: usize = 4
+        + ConstantStateKalman::<Real, 4>::LEN
+        + 4 * R
+        + 1
+        + 8
+        + 4 * R
+        + 2 * R
+        + 8 * R
+        + 8
+        + 4 * R
+        + 4 * R
+        + 1
+        + 4 * R
+        + 4 * R
+        + 8
+        + BlockVariance::LEN;
+    type Context<'a> = f64;
+
+    fn write(&self, w: &mut Writer<'_>) {
         let m = self;
         w.u32(m.updates);
-        w.u32(m.entries_since_update);
-        m.kf.write_checkpoint(w);
+        m.kf.write(w);
         for v in m.residual_mean {
             w.real(v);
         }
@@ -53,10 +144,7 @@ impl<const CAP: usize> Windowed<CAP> {
         for c in m.residual_count {
             w.u32(c);
         }
-        for v in m.gains {
-            w.real(v);
-        }
-        for v in m.product_variance_rad2 {
+        for v in m.gains.into_iter().chain(m.product_variance_rad2) {
             w.real(v);
         }
         for v in m.residual_mean_long.into_iter().chain(m.residual_power) {
@@ -65,108 +153,109 @@ impl<const CAP: usize> Windowed<CAP> {
         for c in m.long_count {
             w.u32(c);
         }
-        for v in m.noise_scale.into_iter().chain(m.drift_share) {
+        for v in m.noise_scale.into_iter().chain(m.drift_share).chain(m.reported_sigma_rad) {
             w.real(v);
         }
-        m.reference.write_checkpoint(w);
-        m.window.write_checkpoint(w);
+        let bits = m.channel_mismatch.iter().chain(&m.relearning).enumerate().fold(0u8, |b, (i, f)| b | (u8::from(*f) << i));
+        w.u8(bits);
+        for v in m.held_x_rad.into_iter().chain(m.spread_rad2) {
+            w.real(v);
+        }
+        for c in m.spread_count {
+            w.u32(c);
+        }
+        m.change.write(w);
     }
 
-    /// Reads and checks the state for a rotation period of `period_samples`, if known, and
-    /// variances up to `max_variance`. With `dst`, also writes it there.
-    pub(crate) fn read_checkpoint(
-        r: &mut Reader<'_>,
-        mut dst: Option<&mut Self>,
-        period_samples: Option<u32>,
-        max_variance: f64,
-    ) -> Result<(), CheckpointError> {
+    fn read(r: &mut Reader<'_>, max_variance: f64) -> Result<Learned, CheckpointError> {
         let updates = r.u32();
-        let entries_since_update = r.u32();
-        let kf = ConstantStateKalman::read_checkpoint(r, max_variance)?;
+        let kf = ConstantStateKalman::read(r, max_variance)?;
         let residual_mean: [Real; 4] = core::array::from_fn(|_| r.real());
         let next_pair = r.u8();
         ensure(next_pair <= 1, CheckpointError::InvalidValue(Part::Residuals))?;
-        let residual_count = [r.u32(), r.u32()];
-        let gains: [Real; 4] = core::array::from_fn(|_| r.real());
-        let product_variance_rad2: [Real; 2] = core::array::from_fn(|_| r.real());
-        let residual_mean_long: [Real; 4] = core::array::from_fn(|_| r.real());
-        let residual_power: [Real; 4] = core::array::from_fn(|_| r.real());
-        let long_count = [r.u32(), r.u32()];
-        let noise_scale: [Real; 2] = core::array::from_fn(|_| r.real());
-        let drift_share: [Real; 2] = core::array::from_fn(|_| r.real());
-        let reference = ReferenceFilter::read_checkpoint(r)?;
-        // Variances: at most a filled sample's (a sum of 1 rad sigmas and 90 deg fills) per product.
-        let in_range = residual_mean.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
-            && gains.iter().all(|g| within_non_negative(*g, 4.0))
-            && product_variance_rad2.iter().all(|v| within_non_negative(*v, MAX_PRODUCT_VARIANCE_RAD2))
-            && residual_mean_long.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
-            && residual_power.iter().chain(&noise_scale).all(|v| within_non_negative(*v, MAX_NOISE_SCALE))
-            && drift_share.iter().all(|v| within_non_negative(*v, 1.0));
+        let m = Learned {
+            updates,
+            kf,
+            residual_mean,
+            next_pair,
+            residual_count: [r.u32(), r.u32()],
+            gains: core::array::from_fn(|_| r.real()),
+            product_variance_rad2: core::array::from_fn(|_| r.real()),
+            residual_mean_long: core::array::from_fn(|_| r.real()),
+            residual_power: core::array::from_fn(|_| r.real()),
+            long_count: [r.u32(), r.u32()],
+            noise_scale: core::array::from_fn(|_| r.real()),
+            drift_share: core::array::from_fn(|_| r.real()),
+            reported_sigma_rad: core::array::from_fn(|_| r.real()),
+            channel_mismatch: [false; 4],
+            relearning: [false; 2],
+            held_x_rad: [0.0; 4],
+            spread_rad2: [0.0; 4],
+            spread_count: [0; 2],
+            change: BlockVariance::default(),
+        };
+        let bits = r.u8();
+        let mut m = Learned {
+            channel_mismatch: core::array::from_fn(|i| bits & (1 << i) != 0),
+            relearning: core::array::from_fn(|i| bits & (1 << (4 + i)) != 0),
+            held_x_rad: core::array::from_fn(|_| r.real()),
+            spread_rad2: core::array::from_fn(|_| r.real()),
+            spread_count: [r.u32(), r.u32()],
+            ..m
+        };
+        m.change = BlockVariance::read(r, ())?;
+        ensure(bits & 0xC0 == 0, CheckpointError::InvalidValue(Part::Residuals))?;
+        let in_range = m.residual_mean.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
+            && m.gains.iter().all(|g| within_non_negative(*g, 4.0))
+            && m.product_variance_rad2.iter().all(|v| within_non_negative(*v, MAX_PRODUCT_VARIANCE_RAD2))
+            && m.residual_mean_long.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
+            && m.residual_power.iter().chain(&m.noise_scale).all(|v| within_non_negative(*v, MAX_NOISE_SCALE))
+            && m.drift_share.iter().all(|v| within_non_negative(*v, 1.0))
+            && m.reported_sigma_rad.iter().all(|v| within_non_negative(*v, Real::MAX))
+            && m.spread_rad2.iter().all(|v| within_non_negative(*v, (MAX_RESIDUAL * MAX_RESIDUAL) as Real));
         ensure(in_range, CheckpointError::InvalidValue(Part::Residuals))?;
-        CorrelationWindow::read_checkpoint(
-            r,
-            dst.as_deref_mut().map(|m| &mut m.window),
-            expected_correlation::<CAP>(period_samples),
-        )?;
-        if let Some(m) = dst {
-            m.updates = updates;
-            m.entries_since_update = entries_since_update;
-            m.kf = kf;
-            m.residual_mean = residual_mean;
-            m.next_pair = next_pair;
-            m.residual_count = residual_count;
-            m.gains = gains;
-            m.product_variance_rad2 = product_variance_rad2;
-            m.residual_mean_long = residual_mean_long;
-            m.residual_power = residual_power;
-            m.long_count = long_count;
-            m.noise_scale = noise_scale;
-            m.drift_share = drift_share;
-            m.reference = reference;
-        }
-        Ok(())
+        let held_in_range = m.held_x_rad.iter().all(|v| within(*v, MAX_STATE as Real));
+        ensure(held_in_range, CheckpointError::InvalidValue(Part::ChangeDetector))?;
+        Ok(m)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::checkpoint::tests::{image_of, refused, reseal, running, tampered_part, Est};
-    use crate::checkpoint::METHOD_OFFSET;
-    use crate::config::{Config, Method};
+    use crate::checkpoint::tests::{running, written_and_read};
+    use crate::config::Method;
+    use crate::methods::MethodState;
     use CheckpointError::*;
-
-    fn read_windowed(r: &mut Reader<'_>) -> Windowed<64> {
-        let mut m = Windowed::new(&Config::with_method(Method::Windowed));
-        Windowed::read_checkpoint(r, Some(&mut m), Some(120), f64::INFINITY).unwrap();
-        m
-    }
 
     #[test]
     fn a_tampered_windowed_state_is_refused_with_a_typed_error() {
-        let base = running(Method::Windowed);
-        let image = image_of(&base);
-        let tampered = |edit: &dyn Fn(&mut Windowed<64>)| {
-            tampered_part(&image, METHOD_OFFSET, read_windowed, edit, Windowed::write_checkpoint)
+        let est = running(Method::Windowed);
+        let MethodState::Windowed(m) = est.method_for_test() else { unreachable!() };
+        let base = m.learned();
+        let with = |edit: &dyn Fn(&mut Learned)| {
+            let mut t = base.clone();
+            edit(&mut t);
+            written_and_read(&t, 1e12)
         };
-        refused(&tampered(&|m| m.gains[3] = -0.5), InvalidValue(Part::Residuals));
-        refused(&tampered(&|m| m.gains[1] = Real::NAN), InvalidValue(Part::Residuals));
-        refused(&tampered(&|m| m.next_pair = 2), InvalidValue(Part::Residuals));
-        refused(&tampered(&|m| m.drift_share[0] = 1.5), InvalidValue(Part::Residuals));
+        assert_eq!(with(&|_| {}), Ok(base.clone()));
+        assert_eq!(with(&|m| m.gains[3] = -0.5), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.gains[1] = Real::NAN), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.next_pair = 2), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.drift_share[0] = 1.5), Err(InvalidValue(Part::Residuals)));
         // Regression, fuzz target `checkpoint_restore`: finite but absurd residuals and gains
         // (a flipped top byte) were accepted and overflowed the outputs.
-        refused(&tampered(&|m| m.residual_mean[2] = 1e30), InvalidValue(Part::Residuals));
-        refused(&tampered(&|m| m.gains[0] = 1e30), InvalidValue(Part::Residuals));
+        assert_eq!(with(&|m| m.residual_mean[2] = 1e30), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.gains[0] = 1e30), Err(InvalidValue(Part::Residuals)));
         // A zero gain (a window whose reference does not move) is a state the estimator can be in.
-        let zero_gain = tampered(&|m| m.gains[3] = 0.0);
-        assert!(Est::from_checkpoint(&zero_gain).is_ok());
-
-        // The Kalman filter's checks (see `kalman/checkpoint.rs`) apply to the method's: a NaN
-        // state in the image.
-        let mut b = image.clone();
-        let x2 = METHOD_OFFSET + 8 + 2 * R;
-        b[x2..x2 + R].copy_from_slice(&Real::NAN.to_le_bytes());
-        reseal(&mut b);
-        refused(&b, InvalidValue(Part::KalmanState));
+        assert!(with(&|m| m.gains[3] = 0.0).is_ok());
+        // What the report and the change detector keep.
+        assert_eq!(with(&|m| m.reported_sigma_rad[1] = -1e-6), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.reported_sigma_rad[2] = Real::INFINITY), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.spread_rad2[0] = -1e-9), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.held_x_rad[3] = 1e9), Err(InvalidValue(Part::ChangeDetector)));
+        assert!(with(&|m| m.relearning = [true, false]).is_ok());
+        // The Kalman filter's checks (see `kalman/checkpoint.rs`) apply to the method's.
+        assert_eq!(with(&|m| m.kf = ConstantStateKalman::new([Real::NAN; 4])), Err(InvalidValue(Part::KalmanCovariance)));
     }
 }

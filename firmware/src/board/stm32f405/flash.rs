@@ -1,17 +1,14 @@
-//! Where the checkpoints go: on silicon, flash sectors 10 and 11 (the last two, 128 KiB each, one
-//! checkpoint slot per sector, erased and programmed through stm32f4xx-hal's `embedded_storage` NOR
-//! flash); under QEMU, whose flash interface is a stub that never programs anything, the host file
-//! `rins-flash.bin` ([`SemihostedFlash`], as on mps2-an386). `boards/stm32f405/memory.x` ends the
-//! code's FLASH region before sector 10, so the linker never puts code there.
+//! Where the checkpoints go: on silicon, flash sectors 5-11 (seven of 128 KiB, every sector after
+//! the code's, `firmware::flash_layout::STM32F405`), erased and programmed through stm32f4xx-hal's
+//! `embedded_storage` NOR flash (x8: a byte at a time); under QEMU, whose flash interface is a stub
+//! that never programs anything, the host file `rins-flash.bin` ([`SemihostedFlash`], as on
+//! mps2-an386) of the same size. `boards/stm32f405/memory.x` ends the code's FLASH region at the
+//! end of sector 4, so the linker never puts code in the checkpoint sectors.
 //!
-//! Why those sectors: an image is 23.4 KB, more than one of the 16 KiB sectors 1-3, and a slot
-//! must be whole erase blocks that the other slot does not share.
-//!
-//! Timing on silicon, from the STM32F405 datasheet (not measured): a 128 KiB sector erase takes
-//! 1-2 s at 3.3 V (x32 parallelism), byte programming 16 us a byte, so a save (one erase, 23.4 KB)
-//! takes 1.4-2.4 s, once per checkpoint interval (60 s by default). The core stalls on instruction
-//! fetches from flash meanwhile; the host is waiting for the answer to the sample that triggered
-//! the save, so no byte arrives (the host's link timeout is 10 s).
+//! Timing on silicon, from the STM32F405 datasheet (not measured; `firmware::flash_layout` and
+//! docs/firmware.md): a save programs about 860 bytes (16 us typical, 100 us maximum each: 14 ms
+//! and 86 ms); one save in about 170 also erases a 128 KiB sector first (2 s typical, 4 s
+//! maximum). The core stalls on instruction fetches from flash meanwhile.
 
 use core::ptr::addr_of;
 
@@ -21,16 +18,15 @@ use embedded_storage::nor_flash::{
 use stm32f4xx_hal::flash::FlashExt;
 use stm32f4xx_hal::pac;
 
+use firmware::flash_layout::STM32F405;
+
 use super::super::semihosted_flash::SemihostedFlash;
 use super::Environment;
 
-/// Checkpoint region: flash sectors 10 and 11, as offsets from the start of flash (0x0800_0000).
-const REGION_OFFSET: u32 = 0xC_0000;
-const REGION_BYTES: usize = 2 * SECTOR_BYTES;
-const SECTOR_BYTES: usize = 128 * 1024;
-/// Under QEMU: core cycles (instructions) per 256-byte page written, the same as on mps2-an386,
-/// so that a save lasts as many instructions there and a power cut lands inside one as often.
-const QEMU_PAGE_PROGRAM_CYCLES: u32 = 12_500;
+/// Checkpoint region: flash sectors 5-11, as offsets from the start of flash (0x0800_0000).
+const REGION_OFFSET: u32 = STM32F405.region_offset;
+const REGION_BYTES: usize = STM32F405.region_bytes() as usize;
+const SECTOR_BYTES: usize = STM32F405.sector_bytes as usize;
 
 extern "C" {
     /// End of the read-only data in flash, from cortex-m-rt's `link.x`.
@@ -40,14 +36,14 @@ extern "C" {
 /// The checkpoint store's flash on this board.
 pub enum Flash {
     Internal(InternalFlash),
-    Semihosted(SemihostedFlash),
+    Semihosted(SemihostedFlash<REGION_BYTES>),
 }
 
 impl Flash {
     pub fn open(environment: Environment, flash: pac::FLASH) -> Option<Flash> {
         match environment {
             Environment::Silicon => InternalFlash::new(flash).map(Flash::Internal),
-            Environment::Qemu => SemihostedFlash::open(QEMU_PAGE_PROGRAM_CYCLES).map(Flash::Semihosted),
+            Environment::Qemu => SemihostedFlash::open(super::QEMU_CPU_CLOCK_HZ).map(Flash::Semihosted),
         }
     }
 }
@@ -95,8 +91,8 @@ impl NorFlash for Flash {
     }
 }
 
-/// Flash sectors 10 and 11 as a 256 KiB NOR flash with 128 KiB erase blocks (offset 0 =
-/// 0x080C_0000).
+/// Flash sectors 5-11 as an 896 KiB NOR flash with 128 KiB erase blocks (offset 0 =
+/// 0x0802_0000).
 /// Unlocked only for the length of one erase or write.
 pub struct InternalFlash {
     flash: pac::FLASH,
@@ -118,9 +114,8 @@ impl InternalFlash {
         Some(InternalFlash { flash })
     }
 
-    #[allow(clippy::manual_is_multiple_of)] // is_multiple_of needs Rust 1.87; the workspace says 1.85
     fn check(offset: u32, len: usize, align: usize) -> Result<u32, NorFlashErrorKind> {
-        if offset as usize % align != 0 || len % align != 0 {
+        if !(offset as usize).is_multiple_of(align) || !len.is_multiple_of(align) {
             return Err(NorFlashErrorKind::NotAligned);
         }
         if offset as usize + len > REGION_BYTES {

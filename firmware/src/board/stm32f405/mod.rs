@@ -8,7 +8,7 @@
 //! | link | USART1, PA9 TX / PA10 RX, 115200 8N1 (`serial.rs`) | the same USART1 (QEMU's first `-serial`) |
 //! | cost counter | SysTick at the core clock (a tick is a cycle) | SysTick at QEMU's CPU clock, [`QEMU_CPU_CLOCK_HZ`] |
 //! | logs (defmt) | RTT, for a debug probe (`logger.rs`) | semihosting, QEMU's stdout |
-//! | checkpoints | flash sectors 1 and 2 (`flash.rs`) | the host file `rins-flash.bin` (semihosting) |
+//! | checkpoints | flash sectors 5-11 (`flash.rs`) | the host file `rins-flash.bin` (semihosting) |
 //! | fatal error | reset (`SCB::sys_reset`) after the log has had time to drain | QEMU exits with status 1 |
 //!
 //! Nothing of this was run on silicon: the silicon column is written from the reference manual
