@@ -25,8 +25,8 @@
 //!
 //! Under the model, `b` is zero-mean with a variance `s^2` learned from the blocks themselves (a
 //! running mean of `b^2` over [`VARIANCE_BLOCKS`] blocks, each `b^2` clipped at
-//! [`WINSOR_SIGMAS`]^2 `s^2`, so that a step being detected raises it by at most a few tens of
-//! percent), never below the model's: white products of variance `q` give
+//! [`WINSOR_SIGMAS`]^2 `s^2`; a block that holds the filter, below, is left out: disturbances an
+//! hour apart would otherwise raise `s` without bound), never below the model's: white products of variance `q` give
 //! `s^2 = q (1 - 1/6) / W` (the trapezoid's sum of squared weights). Learning `s` from the data,
 //! not from the configured noise, is what keeps coloured noise and a rough sea from reading as
 //! steps: their block means are larger, and so is `s`. It is learned only once the residual average
@@ -273,13 +273,14 @@ impl ChangeDetector {
                     0.0
                 };
             }
-            if ctx.settled {
+            // A block that holds the filter is a disturbance or a change, not the blocks' noise.
+            if ctx.settled && !self.holding[ch] {
                 // The first block has no variance to be clipped against yet.
                 let b2 = if learned == 0 { b * b } else { (b * b).min(WINSOR_SIGMAS * WINSOR_SIGMAS * var) };
                 self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) * weight;
             }
         }
-        if ctx.settled {
+        if ctx.settled && !(self.holding[2 * pair] || self.holding[2 * pair + 1]) {
             self.learned_blocks[pair] = count;
         }
         if !declared {
@@ -292,5 +293,139 @@ impl ChangeDetector {
             alarm.run_blocks = alarm.run_blocks.max(run);
         }
         Some(alarm)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Gaussian numbers from a seeded LCG (Box-Muller), for blocks of noise.
+    struct Noise(u64);
+
+    impl Noise {
+        fn uniform(&mut self) -> f64 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        }
+
+        fn gaussian(&mut self) -> f64 {
+            let (u, v) = (self.uniform(), self.uniform());
+            libm::sqrt(-2.0 * libm::log(u)) * libm::cos(2.0 * core::f64::consts::PI * v)
+        }
+    }
+
+    const SIGMA: Real = 1e-6;
+    const GAIN: Real = 0.5;
+
+    /// A context for blocks of 1-sigma [`SIGMA`] and a smallest step 20 times as large (a shift
+    /// of 10 sigma at gain 1/2), both pairs settled.
+    fn context(persistence_blocks: u32) -> BlockContext {
+        BlockContext {
+            persistence_blocks,
+            floor_rad2: 0.0,
+            step_rad: 20.0 * SIGMA,
+            settled: true,
+            armed: true,
+            max_widening_rad: 1.0,
+        }
+    }
+
+    /// Feeds `blocks` block means of channel 0 (`shift(k) + noise`, channel 1 noise only), one
+    /// block per call of `test`; returns the block at which a change was declared, if any.
+    fn run(d: &mut ChangeDetector, blocks: usize, shift: impl Fn(usize) -> Real, noise: &mut Noise, ctx: &BlockContext) -> Option<(usize, Alarm)> {
+        for k in 0..blocks {
+            let b = [shift(k) + SIGMA * noise.gaussian() as Real, SIGMA * noise.gaussian() as Real];
+            if let Some(alarm) = d.test(0, b, [GAIN, GAIN], ctx) {
+                return Some((k, alarm));
+            }
+        }
+        None
+    }
+
+    fn learned(noise: &mut Noise, ctx: &BlockContext) -> ChangeDetector {
+        let mut d = ChangeDetector::NEW;
+        assert_eq!(run(&mut d, 200, |_| 0.0, noise, ctx), None);
+        d
+    }
+
+    #[test]
+    fn persistence_outlasts_a_passing_disturbance() {
+        // 480 entries of 1 s: a turn of up to 300 s (more than half a period): 3 + 2 blocks.
+        assert_eq!(persistence_blocks(480, 1.0), 5);
+        // Long periods: half a period is the longer; short ones: 300 s is.
+        assert_eq!(persistence_blocks(3600, 1.0), 4);
+        assert_eq!(persistence_blocks(60, 1.0), 13);
+        // Bins of 2 samples: the same time.
+        assert_eq!(persistence_blocks(240, 2.0), 5);
+    }
+
+    #[test]
+    fn noise_alone_is_never_declared_and_its_variance_is_learned() {
+        let ctx = context(5);
+        let mut noise = Noise(3);
+        let mut d = learned(&mut noise, &ctx);
+        // 20,000 more blocks (the blocks of four years at a 480 s period, per channel): nothing.
+        assert_eq!(run(&mut d, 20_000, |_| 0.0, &mut noise, &ctx), None);
+        let learned_sigma = libm::sqrtf(d.block_variance(0, 0.0) as f32) as Real;
+        // A mean square of 64 blocks (clipped at 3 sigma: 97 % of the variance): within 25 %.
+        assert!((learned_sigma / SIGMA - 1.0).abs() < 0.25, "{learned_sigma}");
+        assert!(!d.holding() && !d.in_run());
+    }
+
+    #[test]
+    fn a_step_is_declared_once_its_run_has_lasted_the_persistence() {
+        let ctx = context(5);
+        let mut noise = Noise(5);
+        let mut d = learned(&mut noise, &ctx);
+        // A step of the smallest size (a shift of 10 sigma): declared at the 5th block, with the
+        // filter held from the first.
+        let shift = GAIN * ctx.step_rad;
+        let mut held = 0;
+        let mut declared = None;
+        for k in 0..10 {
+            let b = [shift + SIGMA * noise.gaussian() as Real, SIGMA * noise.gaussian() as Real];
+            if let Some(alarm) = d.test(0, b, [GAIN, GAIN], &ctx) {
+                declared = Some((k, alarm));
+                break;
+            }
+            held += usize::from(d.holding());
+            // While it builds up, the 1-sigma of x1 is widened to more than half the step: the
+            // error is within 2 sigma.
+            assert!(d.widening_rad()[0] > 0.5 * ctx.step_rad, "{}", d.widening_rad()[0]);
+        }
+        let (k, alarm) = declared.expect("declared");
+        assert_eq!(k, 4);
+        assert_eq!(held, 4);
+        assert_eq!(alarm, Alarm { changed: [true, false, false, false], run_blocks: 5 });
+    }
+
+    #[test]
+    fn a_change_smaller_than_half_the_step_or_a_passing_one_is_never_declared() {
+        let ctx = context(5);
+        let mut noise = Noise(7);
+        let mut d = learned(&mut noise, &ctx);
+        // A drift's lag: a persistent shift of 0.4 of the smallest step's.
+        let lag = 0.4 * GAIN * ctx.step_rad;
+        assert_eq!(run(&mut d, 2_000, |_| lag, &mut noise, &ctx), None);
+        // A disturbance of 4 blocks, 100 times the step's shift, every 20 blocks: held while it
+        // lasts, never declared.
+        let mut d = learned(&mut noise, &ctx);
+        let pulse = |k: usize| if k % 20 < 4 { 100.0 * GAIN * ctx.step_rad } else { 0.0 };
+        assert_eq!(run(&mut d, 2_000, pulse, &mut noise, &ctx), None);
+        // The block variance stayed that of the noise: the blocks that held are left out.
+        let learned_sigma = libm::sqrtf(d.block_variance(0, 0.0) as f32) as Real;
+        assert!(learned_sigma < 2.0 * SIGMA, "{learned_sigma}");
+    }
+
+    #[test]
+    fn nothing_is_tested_before_the_variance_is_learned() {
+        let mut d = ChangeDetector::NEW;
+        let mut ctx = context(5);
+        ctx.armed = false;
+        let shift = 10.0 * ctx.step_rad;
+        let mut noise = Noise(9);
+        assert_eq!(run(&mut d, 50, |_| shift, &mut noise, &ctx), None);
+        assert!(!d.in_run() && !d.holding());
     }
 }
