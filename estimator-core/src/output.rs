@@ -28,8 +28,9 @@ pub enum Status {
     /// frozen (or none yet).
     DetectingPattern,
     /// The residuals showed a step of the installation errors (a re-installation, a shock): the
-    /// errors that changed are being learned again, their 1-sigma widened to match, for one
-    /// rotation period from the detection; then `estimating` again. When and which:
+    /// errors that changed are learned again (from the residuals that showed the change, at
+    /// once, or from the next half period of them), their 1-sigma from the learning; said for
+    /// one rotation period from the detection, then `estimating` again. When and which:
     /// [`crate::Estimator::error_change`].
     ErrorsChanged,
 }

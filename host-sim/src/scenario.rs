@@ -87,9 +87,9 @@ pub struct Mismatch {
     /// 1-sigma of a first-order Gauss-Markov (coloured) attitude noise, arcsec, time constant 60 s.
     pub coloured_noise_arcsec: f64,
     /// Heel in turns, deg: course changes of [`TURN_DEG`] at [`TURN_RATE_DEG_S`] every
-    /// [`TURN_EVERY_S`] (the first half that after the start), alternately to starboard and to
-    /// port, the ship heeling outward by this much while it turns (a frigate at 15 m/s heels some
-    /// 3 deg in a standard-rate turn). Truth files without it: no turns.
+    /// [`TURN_EVERY_S`] from [`FIRST_TURN_S`] on, alternately to starboard and to port, the ship
+    /// heeling outward by this much while it turns (a frigate at 15 m/s heels some 3 deg in a
+    /// standard-rate turn). Truth files without it: no turns.
     #[serde(default)]
     pub heel_in_turns_deg: f64,
 }
@@ -100,6 +100,9 @@ pub const TURN_DEG: f64 = 90.0;
 pub const TURN_RATE_DEG_S: f64 = 0.5;
 /// Time from one turn's start to the next's, s.
 pub const TURN_EVERY_S: f64 = 3600.0;
+/// Start of the first turn, s: two hours in, once the estimator has settled (a turn before that
+/// costs it accuracy for hours: docs/uncertainty.md).
+pub const FIRST_TURN_S: f64 = 2.0 * TURN_EVERY_S;
 /// Time the heel takes to build up and to die away at the start and the end of a turn, s.
 pub const TURN_HEEL_RAMP_S: f64 = 20.0;
 
@@ -108,12 +111,11 @@ fn turns_deg(heel_deg: f64, t: f64) -> (f64, f64) {
     if heel_deg == 0.0 {
         return (0.0, 0.0);
     }
-    let first = 2.0 * TURN_EVERY_S;
-    if t < first {
+    if t < FIRST_TURN_S {
         return (0.0, 0.0);
     }
-    let k = ((t - first) / TURN_EVERY_S).floor();
-    let into = t - first - k * TURN_EVERY_S;
+    let k = ((t - FIRST_TURN_S) / TURN_EVERY_S).floor();
+    let into = t - FIRST_TURN_S - k * TURN_EVERY_S;
     let duration = TURN_DEG / TURN_RATE_DEG_S;
     // Turns alternate: to starboard (heading up), then back to port.
     let starboard = (k as i64) % 2 == 0;

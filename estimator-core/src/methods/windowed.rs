@@ -198,6 +198,9 @@ pub struct Windowed<const CAP: usize> {
     /// The estimate when the change was declared, rad: the residuals of that block are formed
     /// against it.
     held_x_rad: [Real; 4],
+    /// Window entries still to come in the period after a change was declared, while which the
+    /// status says so (not kept by a checkpoint).
+    changed_entries: u32,
     /// Channel measurements held out by the innovation gate.
     gated: u32,
     /// Each error's reported 1-sigma, rad, refreshed with its pair's updates.
@@ -272,7 +275,8 @@ pub struct MethodEstimate {
     pub x_rad: [Real; 4],
     pub sigma_rad: [Real; 4],
     pub mismatch: bool,
-    /// Within one period of a declared change of the errors ([`change`]).
+    /// Within one period of a declared change of the errors, or still learning them again
+    /// ([`change`]).
     pub relearning: bool,
 }
 
@@ -314,6 +318,7 @@ impl<const CAP: usize> Windowed<CAP> {
             change: ChangeDetector::NEW,
             relearning: [false; 2],
             held_x_rad: [0.0; 4],
+            changed_entries: 0,
             gated: 0,
             reported_sigma_rad: [0.0; 4],
             channel_mismatch: [false; 4],
@@ -349,6 +354,7 @@ impl<const CAP: usize> Windowed<CAP> {
             change: ChangeDetector::NEW,
             relearning: [false; 2],
             held_x_rad: [0.0; 4],
+            changed_entries: 0,
             gated: 0,
             reported_sigma_rad: [config.prior_sigma_rad; 4],
             channel_mismatch: [false; 4],
@@ -383,6 +389,7 @@ impl<const CAP: usize> Windowed<CAP> {
         self.change = ChangeDetector::NEW;
         self.relearning = [false; 2];
         self.held_x_rad = [0.0; 4];
+        self.changed_entries = 0;
         self.gated = 0;
         self.reported_sigma_rad = [config.prior_sigma_rad; 4];
         self.channel_mismatch = [false; 4];
@@ -442,6 +449,7 @@ impl<const CAP: usize> Windowed<CAP> {
         self.next_pair = 1 - pair as u8;
         let bin = self.window.bin() as Real;
         let elapsed_s = interval * bin * self.entries_since_update as Real;
+        self.changed_entries = self.changed_entries.saturating_sub(self.entries_since_update);
         self.entries_since_update = 0;
         let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
         let (qp, qr) = (q * self.drift_share[0], q * self.drift_share[1]);
@@ -570,7 +578,14 @@ impl<const CAP: usize> Windowed<CAP> {
             self.restore_clean_state();
             self.refresh_report(config, 1 - pair);
         }
-        let alarm = alarm?;
+        let mut alarm = alarm?;
+        // The roll channels carry the leakage of x1 and x2: a change of those can hide a change
+        // of x3 or x4 on their channels (their shifts cancel), so x3 and x4 are learned again
+        // with any change. The pitch channels see x1 and x2 alone.
+        if alarm.changed[0] || alarm.changed[1] {
+            alarm.changed[2] = true;
+            alarm.changed[3] = true;
+        }
         self.relearn(config, &alarm.changed);
         Some(alarm)
     }
@@ -632,6 +647,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let x = self.kf.state();
         self.held_x_rad = [x[0], x[1], x[2], x[3]];
         self.relearning = [true; 2];
+        self.changed_entries = self.window.len() as u32;
         self.change.restart_blocks();
         self.block_held = [true; 2];
         self.refresh_report(config, 0);
@@ -789,7 +805,7 @@ impl<const CAP: usize> Windowed<CAP> {
             x_rad: [x[0], x[1], x[2], x[3]],
             sigma_rad: self.reported_sigma_rad,
             mismatch,
-            relearning: self.relearning.iter().any(|r| *r),
+            relearning: self.changed_entries > 0 || self.relearning.iter().any(|r| *r),
         })
     }
 }

@@ -93,6 +93,9 @@ pub const VARIANCE_BLOCKS: u32 = 64;
 /// Blocks learned before the first test.
 pub const MIN_VARIANCE_BLOCKS: u32 = 8;
 
+/// Largest lag-one correlation of the blocks taken into the run's variance (a factor of 19 at most).
+pub const MAX_BLOCK_CORRELATION: Real = 0.9;
+
 /// A block mean enters the learned variance clipped at this many of its standard deviations.
 pub const WINSOR_SIGMAS: Real = 3.0;
 
@@ -149,6 +152,11 @@ pub struct ChangeDetector {
     block_updates: [u32; 2],
     /// Running mean of each channel's squared block mean (clipped), rad^2.
     mean_square_rad2: [Real; 4],
+    /// Running mean of the product of each channel's block mean and the one before (clipped),
+    /// rad^2: the lag-one covariance.
+    lag_product_rad2: [Real; 4],
+    /// Each channel's previous block mean, rad.
+    previous_block_rad: [Real; 4],
     /// Blocks learned into it, per pair (saturates at [`VARIANCE_BLOCKS`]).
     learned_blocks: [u32; 2],
     /// Per channel, for a rise and a fall: the log-likelihood ratio summed over the current run.
@@ -173,6 +181,8 @@ impl ChangeDetector {
         block_sum: [0.0; 4],
         block_updates: [0; 2],
         mean_square_rad2: [0.0; 4],
+        lag_product_rad2: [0.0; 4],
+        previous_block_rad: [0.0; 4],
         learned_blocks: [0; 2],
         llr: [[0.0; 2]; 4],
         run: [[0; 2]; 4],
@@ -196,6 +206,11 @@ impl ChangeDetector {
         self.holding.iter().any(|h| *h)
     }
 
+    #[doc(hidden)]
+    pub fn debug_runs(&self) -> ([[Real; 2]; 4], [[u32; 2]; 4]) {
+        (self.llr, self.run)
+    }
+
     /// Whether some channel is in a run (its last block beyond half the smallest step's shift).
     pub fn in_run(&self) -> bool {
         self.run.iter().flatten().any(|r| *r > 0)
@@ -210,6 +225,7 @@ impl ChangeDetector {
         self.run = [[0; 2]; 4];
         self.widening_rad = [0.0; 4];
         self.holding = [false; 4];
+        self.previous_block_rad = [0.0; 4];
     }
 
     /// Adds one update of `pair` (0 pitch, 1 roll): its two channels' post-fit residuals, rad.
@@ -250,9 +266,13 @@ impl ChangeDetector {
             let var = self.block_variance(ch, ctx.floor_rad2);
             if testing {
                 let a = gains[k] * ctx.step_rad;
+                // The run's blocks are not independent: the long-run variance of an AR(1) of the
+                // learned lag-one correlation (see "Correlated blocks" in the module doc).
+                let rho = (self.lag_product_rad2[ch] / var).clamp(0.0, MAX_BLOCK_CORRELATION);
+                let run_var = var * (1.0 + rho) / (1.0 - rho);
                 // At most one direction can gain: the one of the block's sign, when |b| > a / 2.
                 let (dir, other) = if b >= 0.0 { (0, 1) } else { (1, 0) };
-                let llr = (a * b.abs() - 0.5 * a * a) / var;
+                let llr = (a * b.abs() - 0.5 * a * a) / run_var;
                 self.llr[ch][other] = 0.0;
                 self.run[ch][other] = 0;
                 if llr > 0.0 {
@@ -278,7 +298,13 @@ impl ChangeDetector {
                 // The first block has no variance to be clipped against yet.
                 let b2 = if learned == 0 { b * b } else { (b * b).min(WINSOR_SIGMAS * WINSOR_SIGMAS * var) };
                 self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) * weight;
+                // The product with the previous block, both clipped alike: the lag-one covariance.
+                if learned > 0 {
+                    let product = (b * self.previous_block_rad[ch]).clamp(-WINSOR_SIGMAS * WINSOR_SIGMAS * var, WINSOR_SIGMAS * WINSOR_SIGMAS * var);
+                    self.lag_product_rad2[ch] += (product - self.lag_product_rad2[ch]) * weight;
+                }
             }
+            self.previous_block_rad[ch] = b;
         }
         if ctx.settled && !(self.holding[2 * pair] || self.holding[2 * pair + 1]) {
             self.learned_blocks[pair] = count;

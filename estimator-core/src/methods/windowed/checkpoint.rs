@@ -37,7 +37,8 @@ const MAX_NOISE_SCALE: Real = 1.0e30;
 /// of the fill variances (each below (4.1 x 90 deg)^2, times the saturated fill weight).
 const MAX_PRODUCT_VARIANCE_RAD2: Real = 1.0e7;
 
-/// What a restart keeps of the windowed method (the fields of [`Windowed`] of the same names).
+/// What a restart keeps of the windowed method (the fields of [`Windowed`] of the same names; the
+/// period during which the status says the errors changed is not kept).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Learned {
     updates: u32,
