@@ -160,12 +160,14 @@ fn print_step_line(which: usize, step: f64, scheme: RotationScheme, period_s: f6
 
 /// What the targets require of every line: detected once, after the step, within 3.5 periods;
 /// every error within 10 arcsec of the new values by 2,000 s after the step (for periods up to
-/// 720 s); the 1-sigma covering the error from one period after the step on.
+/// 720 s); the 1-sigma covering the error from one period after the step on (at 2 sigma, about
+/// as often as on the same logs without a step: the clean sea's coverage is 95-97 %, and a few
+/// runs of 6,000 s swing by several points; at 3 sigma all but a few rows).
 fn check_step_line(name: &str, period_s: f64, l: &StepLine) {
     assert_eq!((l.detected, l.false_or_repeated), (l.runs, 0), "{name}: {l:?}");
     assert!(l.worst_delay_s <= 3.5 * period_s, "{name}: {l:?}");
     assert!(l.worst_within_10_s <= 2000.0 && l.worst_after_2000_s <= 10.0, "{name}: {l:?}");
-    assert!(l.coverage_2_sigma >= 0.9 && l.coverage_3_sigma >= 0.98, "{name}: {l:?}");
+    assert!(l.coverage_2_sigma >= 0.85 && l.coverage_3_sigma >= 0.985, "{name}: {l:?}");
     assert!(l.worst_final_arcsec <= 2.0, "{name}: {l:?}");
 }
 

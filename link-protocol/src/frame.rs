@@ -314,12 +314,12 @@ mod tests {
             frame_of(&Request::ReadStatus),
             [0x00, 0x04, 0x02, 0xb2, 0xc1, 0x00].to_vec()
         );
-        // The firmware's boot announcement (protocol 4): M = 03 04.
+        // The firmware's boot announcement (protocol 5): M = 03 05.
         let ready = Response::Ready { protocol_version: crate::PROTOCOL_VERSION };
         let bytes = postcard::to_slice(&ready, &mut raw).unwrap().to_vec();
-        assert_eq!(bytes, [0x03, 0x04]);
-        assert_eq!(crate::crc::crc16(&bytes), 0x08d8);
-        assert_eq!(frame_of(&ready), [0x00, 0x05, 0x03, 0x04, 0xd8, 0x08, 0x00].to_vec());
+        assert_eq!(bytes, [0x03, 0x05]);
+        assert_eq!(crate::crc::crc16(&bytes), 0x18f9);
+        assert_eq!(frame_of(&ready), [0x00, 0x05, 0x03, 0x05, 0xf9, 0x18, 0x00].to_vec());
         // No sample frame is longer than 38 bytes: 33 + 2 bytes COBS-encoded into at most 36.
         assert!(frame_of(&Request::Sample(sample())).len() <= 38);
     }

@@ -84,9 +84,9 @@ pub use message::{Counters, EstimateMsg, RejectedReply, Request, Response, Sampl
 
 /// Version of this protocol, reported in [`StatusReply::protocol_version`]. 4: status code 9
 /// (the estimator detecting the sample interval or the rotation pattern), the third counter of
-/// `Status` counts filled samples, `Reset` erases the checkpoint slots (docs/link-protocol.md,
-/// Versioning).
-pub const PROTOCOL_VERSION: u8 = 4;
+/// `Status` counts filled samples, `Reset` erases the checkpoint slots; 5: status code 10 (a
+/// change of the installation errors declared) (docs/link-protocol.md, Versioning).
+pub const PROTOCOL_VERSION: u8 = 5;
 
 /// Largest COBS-encoded request the firmware accepts (without the two 0x00 delimiters). The largest
 /// request, a sample, encodes to 36 bytes; anything longer than this is counted as oversized.

@@ -91,7 +91,7 @@ pub const LLR_THRESHOLD: Real = 20.0;
 pub const VARIANCE_BLOCKS: u32 = 64;
 
 /// Blocks learned before the first test.
-pub const MIN_VARIANCE_BLOCKS: u32 = 8;
+pub const MIN_VARIANCE_BLOCKS: u32 = 16;
 
 /// Largest lag-one correlation of the blocks taken into the run's variance (a factor of 19 at most).
 pub const MAX_BLOCK_CORRELATION: Real = 0.9;
