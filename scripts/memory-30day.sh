@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Peak memory of `host-sim estimate` replaying a 30-day log (2,592,000 rows, about 200 MB of CSV)
-# with its accuracy table (a minimal truth file beside it): the estimator reads and writes as it
-# goes, so the peak must not grow with the log. Fails above 64 MB (LIMIT_MB to change it).
+# with its accuracy table (a minimal truth file beside it) and its report (`--report`: plots and
+# report.html): the estimator reads and writes as it goes and the report keeps a bounded record,
+# so the peak must not grow with the log. Fails above 64 MB (LIMIT_MB to change it).
 # Measured with GNU time's "Maximum resident set size" (`/usr/bin/time -v`).
 # Usage: bash scripts/memory-30day.sh
 set -euo pipefail
@@ -20,7 +21,7 @@ trap 'rm -rf "$DIR"' EXIT
 "$BIN" generate --scenario paper --duration 2592000 --out "$DIR/trial.csv"
 # The survey's errors only (the generated truth file would regenerate the whole scenario in memory).
 echo '{"x_arcsec": [200, -150, 300, -250]}' > "$DIR/trial.truth.json"
-/usr/bin/time -v "$BIN" estimate "$DIR/trial.csv" --out "$DIR/trial.estimates.csv" > "$DIR/summary.txt" 2> "$DIR/time.txt"
+/usr/bin/time -v "$BIN" estimate "$DIR/trial.csv" --out "$DIR/trial.estimates.csv" --report "$DIR/report" > "$DIR/summary.txt" 2> "$DIR/time.txt"
 head -n 1 "$DIR/summary.txt"
 grep -A 6 '^accuracy against the truth' "$DIR/summary.txt" || true
 rows="$(($(wc -l < "$DIR/trial.estimates.csv") - 1))"
@@ -29,6 +30,10 @@ wall="$(awk -F': ' '/Elapsed \(wall clock\) time/ {print $2}' "$DIR/time.txt")"
 echo "30-day replay: $rows estimates rows, peak resident memory $((peak_kb / 1024)) MB ($peak_kb KB), wall $wall"
 if [ "$rows" -ne 2592000 ]; then
     echo "expected 2592000 estimates rows" >&2
+    exit 1
+fi
+if [ ! -s "$DIR/report/report.html" ]; then
+    echo "no report written" >&2
     exit 1
 fi
 if [ "$peak_kb" -gt $((LIMIT_MB * 1024)) ]; then

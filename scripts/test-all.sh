@@ -1,14 +1,23 @@
 #!/usr/bin/env bash
 # Runs every test of the project on a fresh machine, installing what is missing first:
 #   1. the thumbv7em-none-eabihf Rust target, flip-link (the firmware's linker, cargo install),
-#      qemu-system-arm and GNU time (apt), if absent;
-#   2. `cargo test --workspace --release`: estimator-core, link-protocol, host-sim (including the
-#      QEMU end-to-end tests, which build the firmware for both boards themselves: mps2-an386 and
-#      the STM32F405 on QEMU's netduinoplus2);
+#      qemu-system-arm, GNU time, and the ARM C toolchain with newlib (gcc-arm-none-eabi,
+#      libnewlib-arm-none-eabi) for the C examples (apt), if absent;
+#   2. `cargo test --workspace --release`: estimator-core, estimator-ffi (the C library: its API,
+#      and that the checked-in C header is the one its sources generate), link-protocol, the
+#      firmware's library on the host (the checkpoint store, receive rings, the STM32F405's receive
+#      timeline), host-sim (including the QEMU end-to-end tests, which build the firmware for both
+#      boards themselves: mps2-an386 and the STM32F405 on QEMU's netduinoplus2, and the watchdog
+#      test's build);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
 #   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
 #      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
-#   5. clippy on the firmware (each board) and the link code, which deny every panicking construct;
+#   5. clippy on the firmware (each board), the link code and the C library, which deny every
+#      panicking construct;
+#   5b. the C examples: examples/c/replay.c on a short log with every kind of bad row, built with
+#      the host's cc and with arm-none-eabi-gcc for a Cortex-M4F run in QEMU, both estimates
+#      CSVs byte-identical to `host-sim estimate`'s (scripts/c-example.sh); the 1 Hz navigation
+#      loop examples/c/nav_loop.c in QEMU (scripts/c-nav-loop.sh);
 #   6. the 30-day replay's peak memory (scripts/memory-30day.sh: at most 64 MB, GNU time);
 #   7. that the tests left no trace: `git status --porcelain` at the end equals the one at the start.
 # Usage: bash scripts/test-all.sh
@@ -35,6 +44,9 @@ fi
 MISSING=""
 if ! command -v qemu-system-arm >/dev/null 2>&1; then MISSING="$MISSING qemu-system-arm"; fi
 if [ ! -x /usr/bin/time ]; then MISSING="$MISSING time"; fi
+if ! command -v arm-none-eabi-gcc >/dev/null 2>&1 || [ ! -f /usr/lib/arm-none-eabi/newlib/rdimon.specs ]; then
+    MISSING="$MISSING gcc-arm-none-eabi libnewlib-arm-none-eabi"
+fi
 if [ -n "$MISSING" ]; then
     SUDO=""
     if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
@@ -43,9 +55,10 @@ if [ -n "$MISSING" ]; then
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q $MISSING
 fi
 qemu-system-arm --version | head -n 1
+arm-none-eabi-gcc --version | head -n 1
 cargo --version
 
-log "every crate's tests (release): estimator-core, link-protocol, host-sim (with the QEMU end-to-end tests), firmware (empty on the host)"
+log "every crate's tests (release): estimator-core, estimator-ffi, link-protocol, firmware (its library on the host), host-sim (with the QEMU end-to-end tests)"
 cargo test --workspace --release
 
 log "estimator-core with f64"
@@ -56,11 +69,43 @@ cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-d
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
 
-log "no panicking path on the link: clippy's deny(unwrap_used, expect_used, indexing_slicing, panic)"
-# The firmware, link-protocol and estimator-core deny these lints in their sources; only clippy
+log "no panicking path on the link or through the C API: clippy's deny(unwrap_used, expect_used, indexing_slicing, panic)"
+# The firmware, link-protocol, estimator-ffi and estimator-core deny these lints in their sources; only clippy
 # enforces them, so it runs here (warnings of other lints do not fail the run).
 cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware
 cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405
+cargo clippy -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware
+
+log "the C library: examples/c/replay.c on the host and on a Cortex-M4F in QEMU, byte-identical to host-sim estimate"
+# A 1500 s sea log with Unix stamps, jitter and lost rows, then everything a trial's export may
+# hold: comments, a byte-order mark, \r\n line ends, a blank line, spaces around cells, an
+# unreadable cell, a truncated row, a repeated row and a NaN (rejected by the estimator).
+C_DIR="$(mktemp -d)"
+target/release/host-sim generate --scenario sea --duration 1500 --drop-fraction 0.01 --time-offset 1.7e9 \
+    --time-jitter 0.02 --out "$C_DIR/clean.csv" > /dev/null
+awk 'BEGIN { ORS = "\r\n" }
+    function cell(k, v,   f, n, i) { n = split($0, f, ","); f[k] = v; $0 = f[1]; for (i = 2; i <= n; i++) $0 = $0 "," f[i] }
+    NR == 1 { print "# exported by the trial recorder"; print ""; printf "\xef\xbb\xbf"; print; next }
+    NR == 300 { print "# operator: heading reference changed" }
+    NR == 400 { cell(6, "x") }
+    NR == 500 { print prev }
+    NR == 600 { cell(6, "nan") }
+    NR == 700 { print "   " }
+    NR == 800 { gsub(/,/, " , ") }
+    NR == 900 { $0 = substr($0, 1, 40) }
+    { print; prev = $0 }' "$C_DIR/clean.csv" > "$C_DIR/trial.csv"
+target/release/host-sim estimate "$C_DIR/trial.csv" --out "$C_DIR/host-sim.csv" > /dev/null
+bash scripts/c-example.sh "$C_DIR/trial.csv" "$C_DIR/c-host.csv"
+bash scripts/c-example.sh --qemu "$C_DIR/trial.csv" "$C_DIR/c-qemu.csv"
+# The comparison covers estimates and rejected rows, not only the warm-up.
+grep -q ',rejected_non_finite,' "$C_DIR/host-sim.csv" && grep -Eq ',(estimating|converged),' "$C_DIR/host-sim.csv"
+cmp "$C_DIR/host-sim.csv" "$C_DIR/c-host.csv"
+cmp "$C_DIR/host-sim.csv" "$C_DIR/c-qemu.csv"
+echo "host and Cortex-M4F (QEMU): $(($(wc -l < "$C_DIR/c-qemu.csv") - 1)) rows, byte-identical to host-sim estimate"
+rm -rf "$C_DIR"
+# The 1 Hz navigation loop of docs/c-api.md on the Cortex-M4F: finds known errors within 1 arcsec
+# through a power cut and a restored checkpoint; prints the library's flash, RAM and stack.
+bash scripts/c-nav-loop.sh
 
 log "peak memory of a 30-day replay"
 bash scripts/memory-30day.sh

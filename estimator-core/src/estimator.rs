@@ -308,6 +308,9 @@ impl<const CAP: usize> Estimator<CAP> {
         };
         self.grid.accept(sample.time_s, placement);
         self.counters.accepted = self.counters.accepted.saturating_add(1);
+        if placement == Placement::ClockStep {
+            self.counters.clock_steps = self.counters.clock_steps.saturating_add(1);
+        }
         let angles = self.angles(sample);
         self.sway.observe(sample.attitude.roll_rad);
         if !self.gate_open && self.sway.opens(self.config.sway_gate_rad) {

@@ -88,6 +88,7 @@ pub mod checkpoint;
 pub mod code;
 pub mod config;
 pub mod correlation;
+pub mod estimates_csv;
 pub mod estimator;
 pub mod gap_fill;
 pub mod installation;

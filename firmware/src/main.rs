@@ -39,7 +39,20 @@ use estimator_core::{Config, Estimator};
 #[cfg(all(target_os = "none", feature = "checkpoint"))]
 use firmware::checkpoint_store::{StoreBuffers, CHECKPOINT_INTERVAL_S};
 #[cfg(target_os = "none")]
-use link_protocol::Response;
+use link_protocol::{Response, UNNUMBERED};
+#[cfg(all(target_os = "none", feature = "test-hang"))]
+use link_protocol::{Numbered, Request};
+
+/// The watchdog test's build (feature `test-hang`): the main loop stops for good, as a firmware
+/// bug would stop it (here: waiting for an event that never comes); interrupts go on, the watchdog
+/// is no longer fed and must reset the chip.
+#[cfg(all(target_os = "none", feature = "test-hang"))]
+fn hang() -> ! {
+    defmt::warn!("Hang received: the main loop stops (test build); the watchdog must reset");
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
 
 /// On the host: the firmware is not built; say how to build it.
 #[cfg(not(target_os = "none"))]
@@ -73,7 +86,12 @@ fn main() -> ! {
     // SAFETY: `main` runs once and is the only code that names STORE_BUFFERS.
     let buffers = unsafe { &mut *core::ptr::addr_of_mut!(STORE_BUFFERS) };
     #[cfg(feature = "checkpoint")]
-    let persistence = board.flash.and_then(|flash| service::Persistence::open(flash, buffers, estimator));
+    let watchdog = board.watchdog;
+    #[cfg(feature = "checkpoint")]
+    let persistence = board.flash.and_then(|flash| {
+        // The store feeds the watchdog before every erase block and write (`FedFlash`).
+        service::Persistence::open(firmware::watchdog::FedFlash::new(flash, watchdog), buffers, estimator)
+    });
     #[cfg(feature = "checkpoint")]
     defmt::info!("checkpoint every {=u32} s of sample time", CHECKPOINT_INTERVAL_S);
     #[cfg(not(feature = "checkpoint"))]
@@ -88,21 +106,34 @@ fn main() -> ! {
         stack::size_bytes(),
         boot_stack_peak_bytes
     );
-    let mut link = link::Link::new(board.uart);
+    let mut link = link::Link::new(board.tx, board.rx, board.watchdog);
     // The host sends nothing before this: a serial port drops bytes that arrive before it is
     // enabled (QEMU's STM32 USART does), and the start-up above can take a while.
-    if !link.send(&Response::Ready {
-        protocol_version: link_protocol::PROTOCOL_VERSION,
-    }) {
+    if !link.send(
+        UNNUMBERED,
+        &Response::Ready {
+            protocol_version: link_protocol::PROTOCOL_VERSION,
+        },
+    ) {
         defmt::error!("Ready could not be sent");
     }
-    let mut service = service::Service::new(estimator, board.cost, boot_stack_peak_bytes, persistence);
+    let mut service = service::Service::new(
+        estimator,
+        board.cost,
+        boot_stack_peak_bytes,
+        persistence,
+        board.reset_cause,
+        board.clock_source,
+    );
     loop {
         match link.receive() {
+            #[cfg(feature = "test-hang")]
+            Ok(Numbered { message: Request::Hang, .. }) => hang(),
             Ok(request) => {
-                let response = service.handle(&request);
-                if !link.send(&response) {
-                    defmt::error!("response could not be sent");
+                if let Some(response) = service.handle(&request.message, link.counters()) {
+                    if !link.send(request.seq, &response) {
+                        defmt::error!("response could not be sent");
+                    }
                 }
             }
             Err(error) => {

@@ -3,7 +3,8 @@
 
 use estimator_core::{Estimator, Output, Sample, SampleError};
 use link_protocol::{
-    Counters, EstimateMsg, FrameError, RejectedReply, Request, Response, StatusReply, StepReply, PROTOCOL_VERSION,
+    ClockSource, Counters, EstimateMsg, FrameError, LinkCounters, RejectedReply, Request, ResetCause, Response,
+    StatusReply, StepReply, PROTOCOL_VERSION,
 };
 
 use estimator_core::checkpoint::CheckpointError;
@@ -60,6 +61,8 @@ pub struct Service<'a> {
     bad_frames: Counters,
     boot_stack_peak_bytes: u32,
     persistence: Option<Persistence>,
+    reset_cause: ResetCause,
+    clock_source: ClockSource,
 }
 
 impl<'a> Service<'a> {
@@ -68,6 +71,8 @@ impl<'a> Service<'a> {
         cost: CostCounter,
         boot_stack_peak_bytes: u32,
         persistence: Option<Persistence>,
+        reset_cause: ResetCause,
+        clock_source: ClockSource,
     ) -> Self {
         Service {
             estimator,
@@ -75,6 +80,8 @@ impl<'a> Service<'a> {
             bad_frames: Counters::default(),
             boot_stack_peak_bytes,
             persistence,
+            reset_cause,
+            clock_source,
         }
     }
 
@@ -93,9 +100,10 @@ impl<'a> Service<'a> {
         self.bad_frames.count_bad_frame(error);
     }
 
-    /// The response to one request.
-    pub fn handle(&mut self, request: &Request) -> Response {
-        match request {
+    /// The response to one request (`None`: no answer; the request is counted as a bad frame);
+    /// `link`: the receive path's counters, for the status.
+    pub fn handle(&mut self, request: &Request, link: LinkCounters) -> Option<Response> {
+        Some(match request {
             Request::Sample(msg) => {
                 let sample = Sample::from(msg);
                 let start = self.cost.stamp();
@@ -121,10 +129,15 @@ impl<'a> Service<'a> {
                         defmt::error!("checkpoints not invalidated by the reset: {}", error);
                     }
                 }
-                Response::Status(self.status())
+                Response::Status(self.status(link))
             }
-            Request::ReadStatus => Response::Status(self.status()),
-        }
+            Request::ReadStatus => Response::Status(self.status(link)),
+            // Only a test build acts on it (main.rs); here it is no request.
+            Request::Hang => {
+                self.count_bad_frame(FrameError::Message);
+                return None;
+            }
+        })
     }
 
     fn counters(&self) -> Counters {
@@ -134,7 +147,7 @@ impl<'a> Service<'a> {
         }
     }
 
-    fn status(&self) -> StatusReply {
+    fn status(&self, link: LinkCounters) -> StatusReply {
         let counters = self.estimator.counters();
         StatusReply {
             protocol_version: PROTOCOL_VERSION,
@@ -150,6 +163,9 @@ impl<'a> Service<'a> {
             stack_size_bytes: stack::size_bytes(),
             checkpoint_time_s: self.persistence.as_ref().and_then(|p| p.store.time_s()),
             checkpoints_saved: self.persistence.as_ref().map_or(0, |p| p.store.saved()),
+            link,
+            reset_cause: self.reset_cause as u8,
+            clock_source: self.clock_source as u8,
         }
     }
 }

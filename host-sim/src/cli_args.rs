@@ -116,6 +116,15 @@ impl TuningArgs {
     }
 }
 
+/// Lets every option of `cmd` and of its subcommands that takes a value take a negative number
+/// (`--duration -100`, `--latitude -35`): the option's own check then says what is wrong with it,
+/// where clap alone would take `-100` for an unknown option.
+pub fn accept_negative_numbers(cmd: clap::Command) -> clap::Command {
+    let names: Vec<String> = cmd.get_subcommands().map(|c| c.get_name().to_string()).collect();
+    let cmd = cmd.mut_args(|arg| if arg.get_action().takes_values() && !arg.is_positional() { arg.allow_negative_numbers(true) } else { arg });
+    names.iter().fold(cmd, |cmd, name| cmd.mut_subcommand(name, accept_negative_numbers))
+}
+
 /// Longest log the generator is asked for, s (30 days: 2.6 million rows, about 200 MB of CSV).
 pub const MAX_DURATION_S: f64 = 30.0 * 86_400.0;
 

@@ -1,28 +1,20 @@
 //! The estimates CSV (output), one row per input row; format in `docs/log-format.md`.
 //!
-//! Header [`HEADER`]. Fixed, deterministic formatting so that the replay path and the firmware
-//! stream path write byte-identical files from the same [`Output`]s:
-//! - `time_s`: 6 decimals;
-//! - `x*_arcsec`, `sigma*_arcsec`: 4 decimals, empty while there is no estimate;
-//! - `status`: [`estimator_core::Status::name`], or `rejected_<reason>` with
-//!   [`RejectReason::name`](estimator_core::RejectReason::name) for an input row the core rejected;
-//! - `*_corrected_deg`: 9 decimals (heading in [-180, 180]); empty on a rejected row.
-//!
-//! A rejected row carries the estimate held on board at that moment: a rejected sample leaves the
-//! estimator untouched, so that is the estimate of the last [`Output`], which the writer remembers.
+//! The rows are formatted by [`estimator_core::estimates_csv`], the same code the C library's
+//! `rins_format_row` runs, so that the replay path, the firmware stream path and a C program
+//! write byte-identical files from the same [`Output`]s. A rejected row carries the estimate held
+//! on board at that moment: a rejected sample leaves the estimator untouched, so that is the
+//! estimate of the last [`Output`], which the writer remembers.
 
 use crate::log_csv::LogError;
-use estimator_core::units::{rad_to_arcsec, RAD_PER_DEG};
+use estimator_core::estimates_csv::{write_output, write_rejected};
 use estimator_core::{Estimate, Output, SampleError};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 
-/// The estimates CSV header.
-pub const HEADER: &str = "time_s,x1_arcsec,x2_arcsec,x3_arcsec,x4_arcsec,sigma1_arcsec,sigma2_arcsec,sigma3_arcsec,sigma4_arcsec,status,heading_corrected_deg,roll_corrected_deg,pitch_corrected_deg";
+pub use estimator_core::estimates_csv::{HEADER, REJECTED_PREFIX};
 const COLUMNS: usize = 13;
-/// Prefix of the status of a rejected row.
-pub const REJECTED_PREFIX: &str = "rejected_";
 
 /// Writes the estimates CSV, one line per step, as the steps come (nothing is held but the last
 /// estimate and one line's buffer).
@@ -32,118 +24,18 @@ pub struct EstimatesWriter<W: Write> {
     line: String,
 }
 
-/// Appends `format!("{value:.decimals}")`, byte for byte, for `decimals <= 9`.
-///
-/// The standard formatter's exact mode falls back to big-number arithmetic for most of the values
-/// this file holds, which made formatting most of the replay's time. Here: a finite `f64` is
-/// exactly `m * 2^e`; for `e < 0` the scaled value `m * 10^decimals / 2^-e` is computed exactly in
-/// `u128` (`m < 2^53`, `10^9 < 2^30`) and rounded half to even on the exact remainder, which is
-/// what the standard formatter does (pinned by `fixed_formatting_equals_the_standard_formatter`).
-/// Anything else (integers beyond 2^53, tiny, non-finite values) goes to the standard formatter.
-fn push_fixed(line: &mut String, value: f64, decimals: usize) {
-    use std::fmt::Write as _;
-    const POW10: [u128; 10] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000, 100_000_000, 1_000_000_000];
-    let bits = value.to_bits();
-    let exponent = ((bits >> 52) & 0x7ff) as i32;
-    let fraction = bits & ((1u64 << 52) - 1);
-    let (mantissa, shift) = if exponent == 0 { (fraction, 1074) } else { (fraction | (1u64 << 52), 1075 - exponent) };
-    if decimals > 9 || exponent == 0x7ff || !(1..=110).contains(&shift) {
-        let _ = write!(line, "{value:.decimals$}");
-        return;
-    }
-    let scaled = mantissa as u128 * POW10[decimals];
-    let mut q = scaled >> shift;
-    let rem = scaled - (q << shift);
-    let half = 1u128 << (shift - 1);
-    if rem > half || (rem == half && q & 1 == 1) {
-        q += 1;
-    }
-    let Ok(q) = u64::try_from(q) else {
-        let _ = write!(line, "{value:.decimals$}");
-        return;
-    };
-    if value.is_sign_negative() {
-        line.push('-');
-    }
-    let unit = POW10[decimals] as u64;
-    push_digits(line, q / unit, 1);
-    if decimals > 0 {
-        line.push('.');
-        push_digits(line, q % unit, decimals);
-    }
-}
-
-/// Appends `n` in decimal, zero-padded to at least `width` digits.
-fn push_digits(line: &mut String, mut n: u64, width: usize) {
-    let mut digits = [b'0'; 20];
-    let mut start = digits.len();
-    while n > 0 || digits.len() - start < width {
-        start -= 1;
-        digits[start] = b'0' + (n % 10) as u8;
-        n /= 10;
-    }
-    line.extend(digits[start..].iter().map(|&d| d as char));
-}
-
-fn push_estimate(line: &mut String, estimate: Option<&Estimate>) {
-    match estimate {
-        Some(e) => {
-            for v in e.x_rad.iter().chain(e.sigma_rad.iter()) {
-                line.push(',');
-                push_fixed(line, rad_to_arcsec(*v as f64), 4);
-            }
-        }
-        None => line.push_str(",,,,,,,,"),
-    }
-}
-
-/// `{:.6}` of a time, byte for byte. Whole seconds (nearly every log row) are written as an
-/// integer and `.000000`.
-fn push_time(line: &mut String, time_s: f64) {
-    if time_s.fract() == 0.0 && time_s.abs() < 9.0e15 && !(time_s == 0.0 && time_s.is_sign_negative()) {
-        if time_s < 0.0 {
-            line.push('-');
-        }
-        push_digits(line, time_s.abs() as u64, 1);
-        line.push_str(".000000");
-    } else {
-        push_fixed(line, time_s, 6);
-    }
-}
-
-fn push_output(line: &mut String, out: &Output) {
-    push_time(line, out.time_s);
-    push_estimate(line, out.estimate.as_ref());
-    let c = &out.corrected;
-    let deg = |rad: estimator_core::Real| rad as f64 / RAD_PER_DEG;
-    line.push(',');
-    line.push_str(out.status.name());
-    for v in [c.heading_rad, c.roll_rad, c.pitch_rad] {
-        line.push(',');
-        push_fixed(line, deg(v), 9);
-    }
-}
-
-fn push_rejected(line: &mut String, time_s: f64, reason: &SampleError, held: Option<&Estimate>) {
-    push_time(line, time_s);
-    push_estimate(line, held);
-    line.push(',');
-    line.push_str(REJECTED_PREFIX);
-    line.push_str(reason.reason().name());
-    line.push_str(",,,");
-}
-
 /// One row for a step's output (no newline).
 pub fn format_output(out: &Output) -> String {
     let mut line = String::new();
-    push_output(&mut line, out);
+    // Writing into a `String` cannot fail.
+    let _ = write_output(&mut line, out);
     line
 }
 
 /// One row for a rejected input row (no newline): its time, the held estimate, the reason.
 pub fn format_rejected(time_s: f64, reason: &SampleError, held: Option<&Estimate>) -> String {
     let mut line = String::new();
-    push_rejected(&mut line, time_s, reason, held);
+    let _ = write_rejected(&mut line, time_s, reason.reason(), held);
     line
 }
 
@@ -166,7 +58,7 @@ impl<W: Write> EstimatesWriter<W> {
     pub fn write_output(&mut self, out: &Output) -> std::io::Result<()> {
         self.held = out.estimate;
         self.line.clear();
-        push_output(&mut self.line, out);
+        let _ = write_output(&mut self.line, out);
         self.line.push('\n');
         self.out.write_all(self.line.as_bytes())
     }
@@ -174,7 +66,7 @@ impl<W: Write> EstimatesWriter<W> {
     /// Writes the row of a rejected sample.
     pub fn write_rejected(&mut self, time_s: f64, reason: &SampleError) -> std::io::Result<()> {
         self.line.clear();
-        push_rejected(&mut self.line, time_s, reason, self.held.as_ref());
+        let _ = write_rejected(&mut self.line, time_s, reason.reason(), self.held.as_ref());
         self.line.push('\n');
         self.out.write_all(self.line.as_bytes())
     }
@@ -317,46 +209,6 @@ mod tests {
         assert!(rows[2].is_rejected());
         assert_eq!(rows[2].corrected_deg, None);
         assert_eq!(rows[2].x_arcsec, rows[1].x_arcsec);
-    }
-
-    #[test]
-    fn times_are_written_as_the_float_formatter_writes_them() {
-        for t in [0.0, -0.0, 1.0, 172_799.0, -3.0, 0.5, 1e-7, 123_456.000_000_4, 8.9e15, 9.1e15, 1e300, f64::NAN, f64::INFINITY] {
-            let mut fast = String::new();
-            push_time(&mut fast, t);
-            assert_eq!(fast, format!("{t:.6}"), "{t}");
-        }
-    }
-
-    #[test]
-    fn fixed_formatting_equals_the_standard_formatter() {
-        // xorshift64*: the same values on every run.
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        let mut next = || {
-            state ^= state >> 12;
-            state ^= state << 25;
-            state ^= state >> 27;
-            state.wrapping_mul(0x2545_F491_4F6C_DD1D)
-        };
-        let mut values = vec![0.0, -0.0, 0.5, 1.5, 2.5, -2.5, 0.125, 0.375, 1e-5, -1e-5, 0.00005, 0.00015, 1e300, -1e-300, 5e-324, f64::NAN, f64::INFINITY, 9.007_199_254_740_993e15];
-        for _ in 0..100_000 {
-            let r = next();
-            // Random bit patterns between 2^-64 and 2^64, arcsec-like and degree-like values.
-            values.push(f64::from_bits((r & 0x800f_ffff_ffff_ffff) | ((1023 - 64 + (r >> 52) % 128) << 52)));
-            values.push(((r >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 2000.0);
-            values.push(((r >> 40) as f32 / (1u32 << 24) as f32 - 0.5) as f64 * 57.295_779_513_082_32);
-            // Exact ties at each number of decimals: k + 1/2 units of the last place.
-            let k = (r >> 44) as f64;
-            values.push((k + 0.5) / 16.0);
-        }
-        let mut fast = String::new();
-        for v in values {
-            for decimals in [0, 4, 6, 9] {
-                fast.clear();
-                push_fixed(&mut fast, v, decimals);
-                assert_eq!(fast, format!("{v:.decimals$}"), "{v:e} to {decimals} decimals");
-            }
-        }
     }
 
     #[test]

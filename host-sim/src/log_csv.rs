@@ -1,12 +1,16 @@
 //! The attitude log (input) and the truth file of generated logs; formats in `docs/log-format.md`.
 //!
 //! # Reading
-//! With the `csv` crate and serde: the header names the columns, which are matched **by name**
-//! (any order; other columns ignored; spaces around names and values, a UTF-8 byte-order mark and
-//! `\r\n` line ends tolerated). Lines starting with `#` and blank lines are skipped. A gzip stream
-//! is decompressed on the fly (recognised by its magic bytes); `-` is standard input. `nan`, `inf`
-//! and `-inf` (any case) parse to non-finite values and are passed through: the core rejects such
-//! samples and counts them.
+//! With the `csv` crate: the header names the columns, which are matched **by name** (any order;
+//! other columns ignored; case, spaces for underscores, spaces around names and values, a UTF-8
+//! byte-order mark and `\r\n` line ends tolerated: `Time S` is `time_s`). The separator is the one
+//! of `,`, `;` and tab that splits the header line into the most fields. Lines starting with `#` and
+//! blank lines are skipped. A gzip stream is decompressed on the fly (recognised by its magic
+//! bytes); `-` is standard input. `nan`, `inf` and `-inf` (any case) parse to non-finite values and
+//! are passed through: the core rejects such samples and counts them.
+//!
+//! The time is one column of [`TimeColumn::ALL`] (`time_s`, `time_ms` or `time_utc`; the first
+//! present is used), read by [`TimeColumn::parse`]: seconds, milliseconds or ISO 8601 / RFC 3339.
 //!
 //! A header without one of the seven columns is a fatal [`LogError`]. A row that cannot be read (a
 //! cell that is not a number, a blank cell, a missing cell) is a [`LogError`] with
@@ -19,15 +23,19 @@
 //! same `f64`: a generated log read back gives bit-identical rows.
 
 use crate::scenario::{Row, ScenarioParams};
+use crate::time_stamps::TimeColumn;
 use serde::{Deserialize, Serialize};
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Read, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
 /// The attitude log's header as `generate` writes it.
 pub const HEADER: &str = "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg";
-/// The columns a log must have (in any order).
+/// The columns a log must have (in any order); the time may also be `time_ms` or `time_utc`
+/// ([`TimeColumn`]).
 pub const COLUMNS: [&str; 7] = ["time_s", "rotation_deg", "platform_deg", "latitude_deg", "heading_deg", "roll_deg", "pitch_deg"];
+/// The separators a log may use; the one that splits the header into the most fields is used.
+pub const SEPARATORS: [u8; 3] = [b',', b';', b'\t'];
 /// The name that stands for standard input (and, for outputs, standard output).
 pub const STDIO: &str = "-";
 
@@ -60,18 +68,6 @@ impl LogError {
 pub struct LogLine {
     pub line: usize,
     pub row: Row,
-}
-
-/// One row as serde reads it, by column name.
-#[derive(Deserialize)]
-struct RowRecord {
-    time_s: f64,
-    rotation_deg: f64,
-    platform_deg: f64,
-    latitude_deg: f64,
-    heading_deg: f64,
-    roll_deg: f64,
-    pitch_deg: f64,
 }
 
 /// Whether `path` names standard input / output.
@@ -132,12 +128,141 @@ impl<R> LineCounter<R> {
     }
 }
 
+/// How many bytes at most are looked at for the header line, to choose the separator.
+const HEADER_SCAN_BYTES: usize = 1 << 16;
+
+/// Reads the start of `reader` up to the first line that is neither blank nor a comment (or
+/// [`HEADER_SCAN_BYTES`], or the end), and picks the separator from that line ([`separator_of`]).
+/// Returns the separator and the bytes read, which go back in front of the rest.
+fn scan_header<R: Read>(reader: &mut R) -> std::io::Result<(u8, Vec<u8>)> {
+    let mut head = Vec::new();
+    let mut chunk = [0u8; 4096];
+    loop {
+        if let Some(line) = header_line(&head) {
+            return Ok((separator_of(line), head));
+        }
+        if head.len() >= HEADER_SCAN_BYTES {
+            return Ok((b',', head));
+        }
+        let n = match reader.read(&mut chunk) {
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if n == 0 {
+            // The whole input is shorter: its last line may be the header, without a line end.
+            let line = head.split(|b| *b == b'\n').map(trim_line).find(|l| is_content(l)).unwrap_or(&[]);
+            return Ok((separator_of(line), head));
+        }
+        head.extend_from_slice(&chunk[..n]);
+    }
+}
+
+/// A line without its byte-order mark, `\r` and surrounding spaces.
+fn trim_line(line: &[u8]) -> &[u8] {
+    let line = line.strip_prefix("\u{feff}".as_bytes()).unwrap_or(line);
+    line.trim_ascii()
+}
+
+/// Whether a (trimmed) line carries data: not blank, not a `#` comment.
+fn is_content(line: &[u8]) -> bool {
+    !line.is_empty() && line[0] != b'#'
+}
+
+/// The first complete line of `head` that carries data, if `head` holds one.
+fn header_line(head: &[u8]) -> Option<&[u8]> {
+    let mut lines = head.split(|b| *b == b'\n');
+    // The last piece has no line end yet: it may be incomplete.
+    let complete = head.iter().filter(|b| **b == b'\n').count();
+    lines.by_ref().take(complete).map(trim_line).find(|l| is_content(l))
+}
+
+/// The separator of [`SEPARATORS`] that occurs most often in `line` outside double quotes (`,` on
+/// a tie or when none occurs).
+pub fn separator_of(line: &[u8]) -> u8 {
+    let mut counts = [0usize; SEPARATORS.len()];
+    let mut quoted = false;
+    for &b in line {
+        if b == b'"' {
+            quoted = !quoted;
+        } else if !quoted {
+            if let Some(i) = SEPARATORS.iter().position(|s| *s == b) {
+                counts[i] += 1;
+            }
+        }
+    }
+    let best = (0..SEPARATORS.len()).fold(0, |best, i| if counts[i] > counts[best] { i } else { best });
+    SEPARATORS[best]
+}
+
+/// A header name as it is matched: trimmed, without a byte-order mark, lower case, every run of
+/// spaces and underscores one underscore (`Time S`, `TIME_S` and `time  s` are `time_s`).
+pub fn normalize_column_name(name: &str) -> String {
+    let name = name.trim_start_matches('\u{feff}').trim().to_lowercase();
+    let mut out = String::with_capacity(name.len());
+    for c in name.chars() {
+        if c == ' ' || c == '_' {
+            if !out.ends_with('_') {
+                out.push('_');
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// Where the seven values of a row are: the time column and its kind, then the six angles'
+/// columns in [`COLUMNS`] order; and the names as the header writes them.
+#[derive(Clone, Debug)]
+struct Layout {
+    time: TimeColumn,
+    index: [usize; 7],
+    names: [String; 7],
+}
+
+impl Layout {
+    /// Finds every column in a header (see [`normalize_column_name`]).
+    fn of(header: &[String]) -> Result<Layout, String> {
+        let normalized: Vec<String> = header.iter().map(|n| normalize_column_name(n)).collect();
+        let find = |want: &str| -> Result<Option<usize>, String> {
+            let mut found = normalized.iter().enumerate().filter(|(_, n)| *n == want).map(|(i, _)| i);
+            match (found.next(), found.next()) {
+                (Some(_), Some(_)) => Err(format!("column {want:?} appears twice in the header")),
+                (first, _) => Ok(first),
+            }
+        };
+        let mut time = None;
+        for column in TimeColumn::ALL {
+            if let Some(i) = find(column.name())? {
+                time.get_or_insert((column, i));
+            }
+        }
+        let missing = |want: &str| {
+            let times: Vec<String> = TimeColumn::ALL.iter().skip(1).map(|c| format!("{:?}", c.name())).collect();
+            let or_time = if want == COLUMNS[0] { format!(" (or {})", times.join(", ")) } else { String::new() };
+            let header: Vec<&str> = header.iter().map(|n| n.trim_start_matches('\u{feff}')).collect();
+            format!("no column {want:?}{or_time} in the header {:?} (needs {})", header.join(","), COLUMNS.join(","))
+        };
+        let Some((time, time_index)) = time else { return Err(missing(COLUMNS[0])) };
+        let mut index = [time_index; 7];
+        for (k, want) in COLUMNS.iter().enumerate().skip(1) {
+            index[k] = find(want)?.ok_or_else(|| missing(want))?;
+        }
+        let names = index.map(|i| header[i].trim_start_matches('\u{feff}').trim().to_string());
+        Ok(Layout { time, index, names })
+    }
+}
+
 /// Streams the rows of an attitude log.
 pub struct LogReader<R: Read> {
     path: PathBuf,
-    csv: csv::Reader<LineCounter<R>>,
-    headers: Option<csv::ByteRecord>,
+    csv: csv::Reader<LineCounter<std::io::Chain<std::io::Cursor<Vec<u8>>, R>>>,
+    layout: Option<Layout>,
     record: csv::ByteRecord,
+    separator: u8,
+    /// Why the start of the log could not be read (told at the first row).
+    scan_error: Option<std::io::Error>,
     failed: bool,
     gzip: bool,
 }
@@ -152,15 +277,20 @@ impl LogReader<Box<dyn Read + Send>> {
 
 impl<R: Read> LogReader<R> {
     /// Reads a log from any reader; `path` names it in errors.
-    pub fn new(path: &Path, reader: R) -> Self {
+    pub fn new(path: &Path, mut reader: R) -> Self {
+        let (separator, head, scan_error) = match scan_header(&mut reader) {
+            Ok((separator, head)) => (separator, head, None),
+            Err(e) => (b',', Vec::new(), Some(e)),
+        };
         let csv = csv::ReaderBuilder::new()
             .has_headers(false)
             .flexible(true)
             .trim(csv::Trim::All)
+            .delimiter(separator)
             .comment(Some(b'#'))
             .buffer_capacity(1 << 16)
-            .from_reader(LineCounter { inner: reader, offset: 0, ahead: Default::default(), passed: 0 });
-        LogReader { path: path.to_path_buf(), csv, headers: None, record: csv::ByteRecord::new(), failed: false, gzip: false }
+            .from_reader(LineCounter { inner: std::io::Cursor::new(head).chain(reader), offset: 0, ahead: Default::default(), passed: 0 });
+        LogReader { path: path.to_path_buf(), csv, layout: None, record: csv::ByteRecord::new(), separator, scan_error, failed: false, gzip: false }
     }
 
     /// Bytes of (decompressed) log read so far.
@@ -171,6 +301,16 @@ impl<R: Read> LogReader<R> {
     /// Whether the log was opened from a gzip file.
     pub fn is_gzip(&self) -> bool {
         self.gzip
+    }
+
+    /// The separator found in the header line.
+    pub fn separator(&self) -> u8 {
+        self.separator
+    }
+
+    /// The time column used, once the header is read.
+    pub fn time_column(&self) -> Option<TimeColumn> {
+        self.layout.as_ref().map(|l| l.time)
     }
 
     fn fail(&mut self, e: LogError) -> Option<Result<LogLine, LogError>> {
@@ -184,45 +324,29 @@ impl<R: Read> LogReader<R> {
         self.csv.get_mut().line_of_record_ending_at(end)
     }
 
-    /// Checks the header: every column of [`COLUMNS`] exactly once.
-    fn check_header(&self) -> Result<(), String> {
-        let names: Vec<String> = self.record.iter().map(|f| String::from_utf8_lossy(f).trim_start_matches('\u{feff}').to_string()).collect();
-        for want in COLUMNS {
-            match names.iter().filter(|n| *n == want).count() {
-                1 => {}
-                0 => return Err(format!("no column {want:?} in the header {:?} (needs {})", names.join(","), COLUMNS.join(","))),
-                _ => return Err(format!("column {want:?} appears twice in the header")),
-            }
+    /// The current record as a row, or why it is unreadable.
+    fn parse_row(&self, layout: &Layout) -> Result<Row, String> {
+        let missing: Vec<&str> = COLUMNS.iter().zip(&layout.index).filter(|(_, i)| **i >= self.record.len()).map(|(c, _)| *c).collect();
+        if !missing.is_empty() {
+            return Err(format!("short row: {} fields, no {}", self.record.len(), missing.join(", ")));
         }
-        Ok(())
-    }
-
-    /// Why the current record cannot be read as a row.
-    fn row_error(&self, e: &csv::DeserializeError) -> String {
-        let headers = self.headers.as_ref();
-        let named = e.field().and_then(|i| Some((headers?.get(i as usize)?, self.record.get(i as usize)?)));
-        match (e.kind(), named) {
-            (csv::DeserializeErrorKind::ParseFloat(_), Some((name, value))) => {
-                let (name, value) = (String::from_utf8_lossy(name), String::from_utf8_lossy(value));
-                if value.is_empty() {
+        let cell = |k: usize| String::from_utf8_lossy(self.record.get(layout.index[k]).unwrap_or_default());
+        let time_s = layout.time.parse(&cell(0)).map_err(|m| format!("{}: {m}", layout.names[0]))?;
+        let mut v = [0.0; 6];
+        for (k, slot) in v.iter_mut().enumerate() {
+            let text = cell(k + 1);
+            *slot = text.parse().map_err(|_| {
+                let name = &layout.names[k + 1];
+                if text.is_empty() {
                     format!("{name}: blank cell")
+                } else if text.replace(',', ".").parse::<f64>().is_ok() {
+                    format!("{name}: not a number: {text:?} (a decimal comma? numbers need a decimal point)")
                 } else {
-                    format!("{name}: not a number: {value:?}")
+                    format!("{name}: not a number: {text:?}")
                 }
-            }
-            _ => {
-                let missing: Vec<&str> = COLUMNS
-                    .iter()
-                    .copied()
-                    .filter(|c| headers.and_then(|h| h.iter().position(|n| n == c.as_bytes())).is_none_or(|i| i >= self.record.len()))
-                    .collect();
-                if missing.is_empty() {
-                    e.to_string()
-                } else {
-                    format!("short row: {} fields, no {}", self.record.len(), missing.join(", "))
-                }
-            }
+            })?;
         }
+        Ok(Row { time_s, rotation_deg: v[0], platform_deg: v[1], latitude_deg: v[2], heading_deg: v[3], roll_deg: v[4], pitch_deg: v[5] })
     }
 }
 
@@ -233,10 +357,13 @@ impl<R: Read> Iterator for LogReader<R> {
         if self.failed {
             return None;
         }
+        if let Some(e) = self.scan_error.take() {
+            return self.fail(LogError::new(&self.path, 1, format!("cannot read: {e}")));
+        }
         loop {
             match self.csv.read_byte_record(&mut self.record) {
                 Ok(true) => {}
-                Ok(false) if self.headers.is_none() => {
+                Ok(false) if self.layout.is_none() => {
                     let line = self.line();
                     return self.fail(LogError::new(&self.path, line, format!("no header, expected the columns {HEADER:?}")));
                 }
@@ -250,46 +377,22 @@ impl<R: Read> Iterator for LogReader<R> {
             if self.record.len() == 1 && self.record.get(0).is_some_and(|f| f.is_empty()) {
                 continue;
             }
-            let Some(headers) = &self.headers else {
-                if let Err(m) = self.check_header() {
-                    let line = self.line();
-                    return self.fail(LogError::new(&self.path, line, format!("bad header: {m}")));
-                }
-                let mut names = self.record.clone();
-                // A byte-order mark before the first name.
-                if let Some(first) = names.get(0) {
-                    if let Some(stripped) = first.strip_prefix("\u{feff}".as_bytes()) {
-                        let mut fixed = csv::ByteRecord::new();
-                        fixed.push_field(stripped);
-                        names.iter().skip(1).for_each(|f| fixed.push_field(f));
-                        names = fixed;
+            let Some(layout) = &self.layout else {
+                let header: Vec<String> = self.record.iter().map(|f| String::from_utf8_lossy(f).into_owned()).collect();
+                match Layout::of(&header) {
+                    Ok(layout) => self.layout = Some(layout),
+                    Err(m) => {
+                        let line = self.line();
+                        return self.fail(LogError::new(&self.path, line, format!("bad header: {m}")));
                     }
                 }
-                self.headers = Some(names);
                 continue;
             };
-            let parsed = self.record.deserialize::<RowRecord>(Some(headers));
+            let parsed = self.parse_row(layout);
             let line = self.line();
             return Some(match parsed {
-                Ok(r) => Ok(LogLine {
-                    line,
-                    row: Row {
-                        time_s: r.time_s,
-                        rotation_deg: r.rotation_deg,
-                        platform_deg: r.platform_deg,
-                        latitude_deg: r.latitude_deg,
-                        heading_deg: r.heading_deg,
-                        roll_deg: r.roll_deg,
-                        pitch_deg: r.pitch_deg,
-                    },
-                }),
-                Err(e) => {
-                    let message = match e.kind() {
-                        csv::ErrorKind::Deserialize { err, .. } => self.row_error(err),
-                        _ => e.to_string(),
-                    };
-                    Err(LogError::unreadable_row(&self.path, line, message))
-                }
+                Ok(row) => Ok(LogLine { line, row }),
+                Err(message) => Err(LogError::unreadable_row(&self.path, line, message)),
             });
         }
     }
@@ -395,14 +498,16 @@ where
     w.flush()
 }
 
-/// Writes rows as an attitude log file.
-pub fn write_log<I>(path: &Path, rows: I) -> Result<(), LogError>
+/// Writes rows as an attitude log file (through a temporary file beside it, renamed when complete:
+/// [`crate::output_file`]).
+pub fn write_log<I>(path: &Path, rows: I) -> anyhow::Result<()>
 where
     I: IntoIterator,
     I::Item: std::borrow::Borrow<Row>,
 {
-    let file = File::create(path).map_err(|e| LogError::new(path, 0, format!("cannot create: {e}")))?;
-    write_log_to(BufWriter::new(file), rows).map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))
+    let mut out = crate::output_file::OutputFile::create(path)?;
+    write_log_to(&mut out, rows).map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))?;
+    out.commit()
 }
 
 /// The truth file of a generated log: the installation errors and every scenario parameter.
@@ -427,10 +532,10 @@ pub fn truth_path(log_path: &Path) -> PathBuf {
     stem.with_file_name(name)
 }
 
-/// Writes the truth file.
-pub fn write_truth(path: &Path, truth: &Truth) -> Result<(), LogError> {
+/// Writes the truth file (through a temporary file beside it).
+pub fn write_truth(path: &Path, truth: &Truth) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(truth).map_err(|e| LogError::new(path, 0, format!("cannot encode: {e}")))?;
-    std::fs::write(path, text + "\n").map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))
+    crate::output_file::write_bytes(path, (text + "\n").as_bytes())
 }
 
 /// A truth file as read: the errors, and the scenario when `generate` wrote it.
@@ -496,6 +601,50 @@ mod tests {
         let plain = rows(&format!("{HEADER}\n0,1,2,40,4,5,6\n1,1.75,2,40,4,5.5,6.5\n"));
         let shuffled = rows(" pitch_deg , speed_kn,roll_deg,heading_deg,latitude_deg,platform_deg,rotation_deg,time_s,flags\n6,12.5,5,4,40,2,1,0,ok\n6.5,12.5,5.5,4,40,2,1.75,1,\n");
         assert_eq!(plain, shuffled);
+    }
+
+    #[test]
+    fn header_names_in_any_case_with_spaces_and_any_separator_read_the_same() {
+        let plain = rows(&format!("{HEADER}\n0,1,2,40,4,5,6\n1,1.75,2,40,4,5.5,6.5\n"));
+        let variants = [
+            "TIME_S,Rotation_Deg,PLATFORM DEG,Latitude Deg,heading  deg,Roll_deg, pitch_DEG \n0,1,2,40,4,5,6\n1,1.75,2,40,4,5.5,6.5\n",
+            "# a ; comment, with \t separators\nTime S;Rotation Deg;Platform Deg;Latitude Deg;Heading Deg;Roll Deg;Pitch Deg\n0;1;2;40;4;5;6\n1;1.75;2;40;4;5.5;6.5\n",
+            "time_s\trotation_deg\tplatform_deg\tlatitude_deg\theading_deg\troll_deg\tpitch_deg\n0\t1\t2\t40\t4\t5\t6\n1\t1.75\t2\t40\t4\t5.5\t6.5\n",
+        ];
+        let values = |lines: Vec<LogLine>| lines.into_iter().map(|l| l.row).collect::<Vec<_>>();
+        for text in variants {
+            assert_eq!(values(rows(text)), values(plain.clone()), "{text}");
+        }
+        assert_eq!(separator_of(b"a;b;c,d"), b';');
+        assert_eq!(separator_of(b"\"a;b\",c"), b',', "separators inside quotes do not count");
+        assert_eq!(normalize_column_name("\u{feff} Time__ S "), "time_s");
+        let twice = parse("time_s,Roll Deg,roll_deg,rotation_deg,platform_deg,latitude_deg,heading_deg,pitch_deg\n");
+        assert!(twice[0].as_ref().unwrap_err().to_string().contains("\"roll_deg\" appears twice"), "{:?}", twice[0]);
+    }
+
+    #[test]
+    fn time_in_milliseconds_or_utc_reads_as_seconds() {
+        let plain = rows(&format!("{HEADER}\n1700000000,1,2,40,4,5,6\n1700000001.5,1.75,2,40,4,5.5,6.5\n"));
+        let ms = rows("time_ms,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n1700000000000,1,2,40,4,5,6\n1700000001500,1.75,2,40,4,5.5,6.5\n");
+        let utc = rows("Time UTC;rotation_deg;platform_deg;latitude_deg;heading_deg;roll_deg;pitch_deg\n2023-11-14T22:13:20Z;1;2;40;4;5;6\n2023-11-14 22:13:21.5;1.75;2;40;4;5.5;6.5\n");
+        let iso_in_seconds = rows(&format!("{HEADER}\n2023-11-14T22:13:20Z,1,2,40,4,5,6\n2023-11-15T00:13:21.500+02:00,1.75,2,40,4,5.5,6.5\n"));
+        assert_eq!(ms, plain);
+        assert_eq!(utc, plain);
+        assert_eq!(iso_in_seconds, plain);
+        let mut reader = LogReader::new(Path::new("t.csv"), "time_utc,time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n2023-11-14T22:13:20Z,5,1,2,40,4,5,6\n".as_bytes());
+        assert_eq!(reader.next().unwrap().unwrap().row.time_s, 5.0, "time_s is used before time_utc");
+        assert_eq!(reader.time_column(), Some(TimeColumn::Seconds));
+        let missing = parse("time,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n");
+        let e = missing[0].as_ref().unwrap_err().to_string();
+        assert!(e.contains("no column \"time_s\" (or \"time_ms\", \"time_utc\")"), "{e}");
+    }
+
+    #[test]
+    fn a_decimal_comma_is_named_as_the_likely_cause() {
+        let items = parse("time_s;rotation_deg;platform_deg;latitude_deg;heading_deg;roll_deg;pitch_deg\n0;1;2;40;4;0,5;6\n");
+        let e = items[0].as_ref().unwrap_err();
+        assert!(e.row);
+        assert_eq!(e.to_string(), "t.csv:2: roll_deg: not a number: \"0,5\" (a decimal comma? numbers need a decimal point)");
     }
 
     #[test]

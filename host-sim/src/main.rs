@@ -1,12 +1,13 @@
 //! `host-sim`: scenario generator, log replay, reports and plots. `host-sim --help` lists the commands.
 
 use anyhow::Context;
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Method, RejectReason};
 use host_sim::cli_args::{method_label, LogShapeArgs, MethodArg, RecorderArgs, ScenarioArg, ScenarioOverrides, SchemeList, TimingArgs, TuningArgs};
 use host_sim::log_csv::{self, LogError, Truth};
-use host_sim::pipeline::{default_estimates_path, estimate_log, load_truth, truth_rows, EstimateOptions};
+use host_sim::exit_status::{RunEnd, HELP as EXIT_HELP};
+use host_sim::pipeline::{default_estimates_path, estimate_log, inputs_of, load_truth, log_name, truth_rows, EstimateOptions};
 use host_sim::recorder::{recorded_rows, Recorder};
 use host_sim::replay::{Replay, Step};
 use host_sim::report::{format_accuracy, format_rms, Report, TruthRows};
@@ -26,22 +27,29 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Generate an attitude log and its truth file (FILE.truth.json beside it).
+    #[command(after_help = EXIT_HELP)]
     Generate(GenerateArgs),
     /// Replay an attitude log through the estimator, write the estimates CSV, print the final
     /// estimates, the rejected rows and (with FILE.truth.json beside the log) the accuracy table.
     /// Formats: docs/log-format.md.
+    #[command(after_help = EXIT_HELP)]
     Estimate(EstimateArgs),
     /// Generate + estimate with every method + report + plots, in one go.
+    #[command(after_help = EXIT_HELP)]
     Run(RunArgs),
     /// Many independent runs in parallel: error statistics at 2000 ... 86400 s.
+    #[command(after_help = EXIT_HELP)]
     MonteCarlo(MonteCarloArgs),
     /// Every method on every scenario over several seeds: a markdown table for docs/results.md.
+    #[command(after_help = EXIT_HELP)]
     Compare(CompareArgs),
     /// Stream a log through the firmware over its link.
+    #[command(after_help = EXIT_HELP)]
     Stream(host_sim::stream::StreamArgs),
     /// How long a board's checkpoint flash lasts: N days of a sea log through the firmware's own
     /// checkpoint store on a model of the board's flash; prints the erases of each sector, the
     /// stalls a save causes and the flash life.
+    #[command(after_help = EXIT_HELP)]
     FlashLife(host_sim::flash_life::FlashLifeArgs),
 }
 
@@ -85,6 +93,11 @@ struct EstimateArgs {
     /// checkpoint's while the window refills (docs/reliability.md).
     #[arg(long, value_name = "T1,T2,...", value_delimiter = ',')]
     restart_at: Vec<f64>,
+    /// Write plots (estimates with 1-sigma, error against the truth, status timeline, attitude
+    /// before and after compensation, residuals) and a self-contained report.html into DIR
+    /// (created if missing).
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -107,6 +120,10 @@ struct RunArgs {
     /// Skip the plots.
     #[arg(long)]
     no_plots: bool,
+    /// Write the report of our method's run (its plots and the paper's figures) and a
+    /// self-contained report.html into DIR (created if missing).
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -130,9 +147,13 @@ struct MonteCarloArgs {
     tuning: TuningArgs,
     #[command(flatten)]
     spread: SpreadArgs,
-    /// Write the summary as JSON.
+    /// Write the summary as JSON (with the scenario, method, seeds and command).
     #[arg(long, value_name = "summary.json")]
     out: Option<PathBuf>,
+    /// Write the error percentiles and 2-sigma coverage over time (PNG) and a self-contained
+    /// report.html into DIR (created if missing).
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -252,7 +273,11 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 }
 
 fn main() {
-    let cli = Cli::parse();
+    let matches = host_sim::cli_args::accept_negative_numbers(Cli::command()).get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     let result = match &cli.command {
         Command::Generate(a) => cmd_generate(a),
         Command::Estimate(a) => cmd_estimate(a),
@@ -267,8 +292,9 @@ fn main() {
         if is_broken_pipe(&e) {
             std::process::exit(0);
         }
-        eprintln!("error: {e:#}");
-        std::process::exit(1);
+        let (message, status) = host_sim::exit_status::report(&e);
+        eprintln!("{message}");
+        std::process::exit(status);
     }
 }
 
@@ -298,10 +324,18 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     anyhow::ensure!(restart_at.iter().all(|t| t.is_finite()), "--restart-at needs finite times");
     restart_at.sort_by(f64::total_cmp);
     a.timing.check()?;
-    let options = EstimateOptions { config: a.timing.pin(a.tuning.checked_config(method)?), restart_at_s: restart_at.clone(), strict: a.strict };
+    if let Some(dir) = &a.report {
+        host_sim::trial_report::check_dir(dir, &inputs_of(&a.log))?;
+    }
+    let options = EstimateOptions {
+        config: a.timing.pin(a.tuning.checked_config(method)?),
+        restart_at_s: restart_at.clone(),
+        strict: a.strict,
+        timeline: a.report.is_some(),
+    };
     let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
     let rows = truth.as_ref().map(|t| truth_rows(&t.file, t.generated.as_ref()));
-    let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_, _| {})?;
+    let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_| {})?;
     // The summary goes where the estimates do not.
     let mut info: Box<dyn Write> = if log_csv::is_stdio(&out) { Box::new(std::io::stderr()) } else { Box::new(std::io::stdout().lock()) };
     if !restart_at.is_empty() {
@@ -312,8 +346,24 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     if let Some(rep) = &est.report {
         print_report(&mut info, method, rep)?;
     }
+    if let (Some(dir), Some(tl)) = (&a.report, &est.timeline) {
+        let page = host_sim::trial_report::write_replay_report(dir, &log_name(&a.log), method_label(method), &est.replay, est.report.as_ref(), tl, vec![])?;
+        writeln!(info, "report in {}", page.display())?;
+    }
     info.flush()?;
-    Ok(())
+    no_estimate_end(&est.replay)
+}
+
+/// The end of a replay without an estimate (exit status 4, the reason on standard error).
+fn no_estimate_end(r: &Replay) -> anyhow::Result<()> {
+    if r.final_estimate.is_some() {
+        return Ok(());
+    }
+    let reason = match r.holdup {
+        Some(h) => format!("{h} at the end of the log"),
+        None => format!("no row accepted ({} rejected)", r.rejected.total()),
+    };
+    Err(RunEnd::NoEstimate { reason }.into())
 }
 
 fn print_summary(w: &mut dyn Write, log: &Path, method: Method, r: &Replay, out: &str) -> std::io::Result<()> {
@@ -374,6 +424,9 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     let dir = a.out_dir.clone().unwrap_or_else(|| PathBuf::from(format!("out/{}-{}", params.scenario.name(), params.seed)));
     std::fs::create_dir_all(&dir).with_context(|| format!("{}:0: cannot create directory", dir.display()))?;
     let log = dir.join(format!("{}.csv", params.scenario.name()));
+    if let Some(report_dir) = &a.report {
+        host_sim::trial_report::check_dir(report_dir, &inputs_of(&log))?;
+    }
     let generated = generate(&params);
     let logged = recorded_rows(&params.recording, params.seed, &generated.rows);
     log_csv::write_log(&log, &logged)?;
@@ -382,54 +435,75 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     println!("wrote {} ({} rows) and its truth file", log.display(), logged.len());
     let mut runs: Vec<(Method, Vec<Step>)> = Vec::new();
     let mut reports: Vec<(Method, Report)> = Vec::new();
+    let mut ours = None;
     let mut stdout = std::io::stdout().lock();
     for method in [Method::Windowed, Method::Paper, Method::Traditional] {
         let out = dir.join(format!("{}.estimates.{}.csv", params.scenario.name(), method.name()));
-        let options = EstimateOptions { config: a.tuning.config(method), restart_at_s: vec![], strict: true };
+        let timeline = a.report.is_some() && method == Method::Windowed;
+        let options = EstimateOptions { config: a.tuning.config(method), restart_at_s: vec![], strict: true, timeline };
         let mut steps = Vec::with_capacity(generated.rows.len());
         let rows = TruthRows::Generated { rows: &generated.rows, truth: &generated.truth, time_offset_s: params.recording.time_offset_s };
-        let est = estimate_log(&log, &out, &options, Some(rows), &mut warn_row, &mut |line, result| {
-            steps.push(Step { time_s: line.row.time_s, result: *result })
+        let est = estimate_log(&log, &out, &options, Some(rows), &mut warn_row, &mut |view| {
+            steps.push(Step { time_s: view.line.row.time_s, result: *view.result })
         })?;
         print_summary(&mut stdout, &log, method, &est.replay, &out.display().to_string())?;
-        let rep = est.report.context("a report against the generated truth")?;
+        let rep = est.report.clone().context("a report against the generated truth")?;
         print_report(&mut stdout, method, &rep)?;
         writeln!(stdout)?;
         runs.push((method, steps));
         reports.push((method, rep));
+        if timeline {
+            ours = Some(est);
+        }
     }
     drop(stdout);
     println!("side by side ({} scenario, seed {}):", params.scenario.name(), params.seed);
     let side: Vec<(&str, &Report)> = reports.iter().map(|(m, r)| (method_label(*m), r)).collect();
-    print!("{}", host_sim::report::format_side_by_side(&side));
+    let side_by_side = host_sim::report::format_side_by_side(&side);
+    print!("{side_by_side}");
+    // The figures index the truth by sample instant: stamps moved back onto it.
+    let grid = |t: f64| params.recording.sample_time_s(t, params.sample_interval_s).unwrap_or(f64::NAN);
+    let on_grid: Vec<(Method, Vec<Step>)> = runs
+        .iter()
+        .map(|(m, steps)| {
+            let moved = steps
+                .iter()
+                .map(|s| {
+                    let mut s = *s;
+                    s.time_s = grid(s.time_s);
+                    if let Ok(o) = &mut s.result {
+                        o.time_s = grid(o.time_s);
+                    }
+                    s
+                })
+                .collect();
+            (*m, moved)
+        })
+        .collect();
+    let steps: Vec<(&str, &[Step])> = on_grid.iter().map(|(m, s)| (m.name(), s.as_slice())).collect();
+    let window = (params.rotation_period_s / params.sample_interval_s).round() as usize;
+    let grid_rows: Vec<_> = logged.iter().map(|r| host_sim::scenario::Row { time_s: grid(r.time_s), ..*r }).collect();
+    let paper_figures =
+        |into: &Path| host_sim::figures::write_figures(into, &grid_rows, &generated.truth, &params.errors_arcsec, params.sample_interval_s, window, &steps);
     if !a.no_plots {
-        // The figures index the truth by sample instant: stamps moved back onto it.
-        let grid = |t: f64| params.recording.sample_time_s(t, params.sample_interval_s).unwrap_or(f64::NAN);
-        let on_grid: Vec<(Method, Vec<Step>)> = runs
-            .iter()
-            .map(|(m, steps)| {
-                let moved = steps
-                    .iter()
-                    .map(|s| {
-                        let mut s = *s;
-                        s.time_s = grid(s.time_s);
-                        if let Ok(o) = &mut s.result {
-                            o.time_s = grid(o.time_s);
-                        }
-                        s
-                    })
-                    .collect();
-                (*m, moved)
-            })
-            .collect();
-        let steps: Vec<(&str, &[Step])> = on_grid.iter().map(|(m, s)| (m.name(), s.as_slice())).collect();
-        let window = (params.rotation_period_s / params.sample_interval_s).round() as usize;
-        let grid_rows: Vec<_> = logged.iter().map(|r| host_sim::scenario::Row { time_s: grid(r.time_s), ..*r }).collect();
-        let files = host_sim::figures::write_figures(&dir, &grid_rows, &generated.truth, &params.errors_arcsec, params.sample_interval_s, window, &steps)?;
         println!("plots:");
-        for f in files {
+        for f in paper_figures(&dir)? {
             println!("  {}", f.display());
         }
+    }
+    if let (Some(report_dir), Some(est)) = (&a.report, &ours) {
+        use host_sim::html_report::{Block, Figure, Section};
+        host_sim::trial_report::create_dir(report_dir)?;
+        let figures = paper_figures(report_dir)?;
+        let mut paper = Section::new("The paper's figures, from this run");
+        for path in figures {
+            let caption = host_sim::figures::caption_of(&path);
+            paper = paper.with(Block::Figure(Figure { path, caption }));
+        }
+        let extra = vec![Section::new("The three methods side by side").with(Block::Code(side_by_side)), paper];
+        let tl = est.timeline.as_ref().context("our method's timeline")?;
+        let page = host_sim::trial_report::write_replay_report(report_dir, &log.display().to_string(), method_label(Method::Windowed), &est.replay, est.report.as_ref(), tl, extra)?;
+        println!("report in {}", page.display());
     }
     Ok(())
 }
@@ -443,37 +517,84 @@ fn thread_pool(threads: Option<usize>) -> anyhow::Result<rayon::ThreadPool> {
     Ok(b.build()?)
 }
 
+/// A progress bar of `len` steps on standard error when it is a terminal (hidden otherwise).
+fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!("{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{eta}} left")) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
+}
+
 fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.runs >= 1, "--runs must be at least 1");
     let draw = a.spread.draw(a.scenario.into(), a.scheme, a.seed)?;
+    draw.check_duration()?;
     let method: Method = a.method.into();
     let config = a.tuning.config(method);
-    let bar = indicatif::ProgressBar::new(a.runs as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} runs, eta {eta}").map_err(|e| anyhow::anyhow!("{e}"))?,
-    );
+    if let Some(dir) = &a.report {
+        host_sim::trial_report::create_dir(dir)?;
+    }
+    let duration_s = draw.params(0).duration_s;
+    let times = host_sim::monte_carlo::tracked_times_s(duration_s);
+    let bar = progress_bar(a.runs as u64, "runs");
     let start = std::time::Instant::now();
     let pool = thread_pool(a.threads)?;
-    let results = pool.install(|| run_all(&draw, config, a.runs, &MC_TIMES_S, &|| bar.inc(1)))?;
+    let results = pool.install(|| run_all(&draw, config, a.runs, &times, &|| bar.inc(1)))?;
     bar.finish_and_clear();
     let elapsed = start.elapsed().as_secs_f64();
-    let summary = summarize(&results);
+    let over_time = summarize(&results);
+    let summary = over_time.at_times(&MC_TIMES_S);
+    let description = host_sim::compare::describe(&draw);
     println!(
-        "monte carlo: scenario {} ({}), method {}, {} runs of {:.0} s in {:.1} s ({} threads)",
+        "monte carlo: scenario {} ({description}), method {}, {} runs of {duration_s:.0} s in {elapsed:.1} s ({} threads)",
         draw.kind.name(),
-        host_sim::compare::describe(&draw),
         method.name(),
         a.runs,
-        draw.params(0).duration_s,
-        elapsed,
         pool.current_num_threads()
     );
     println!("absolute error |x_hat - x| over runs, arcsec:");
-    print!("{}", format_summary(&summary));
+    let table = format_summary(&summary);
+    print!("{table}");
+    let command = host_sim::html_report::command_line();
     if let Some(out) = &a.out {
-        let text = serde_json::to_string_pretty(&summary)?;
-        std::fs::write(out, text + "\n").with_context(|| format!("{}:0: cannot write", out.display()))?;
+        let json = host_sim::monte_carlo::StudyJson {
+            scenario: draw.kind.name().to_string(),
+            method: method.name().to_string(),
+            scheme: draw.scheme.name().to_string(),
+            description: description.clone(),
+            duration_s,
+            master_seed: draw.seed,
+            run_seeds: (0..a.runs).map(|i| draw.run_seed(i)).collect(),
+            command: command.clone(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            summary: summary.clone(),
+            over_time: over_time.clone(),
+        };
+        let text = serde_json::to_string_pretty(&json)?;
+        host_sim::output_file::write_bytes(out, (text + "\n").as_bytes())?;
         println!("summary in {}", out.display());
+    }
+    if let Some(dir) = &a.report {
+        let facts = vec![
+            ("scenario".to_string(), draw.kind.name().to_string()),
+            ("draw".into(), description.clone()),
+            ("method".into(), method_label(method).to_string()),
+            ("rotation scheme".into(), draw.scheme.name().to_string()),
+            ("runs".into(), format!("{} of {duration_s:.0} s", a.runs)),
+            ("master seed".into(), draw.seed.to_string()),
+            ("wall time".into(), format!("{elapsed:.1} s on {} threads", pool.current_num_threads())),
+        ];
+        let study = host_sim::trial_report::MonteCarloStudy { description, facts, summary: &over_time, table };
+        let page = host_sim::trial_report::write_monte_carlo_report(dir, &study)?;
+        println!("report in {}", page.display());
+    }
+    if summary.no_estimate() {
+        return Err(RunEnd::NoEstimate { reason: format!("no run reached an estimate by the table's times ({} s and after)", MC_TIMES_S[0]) }.into());
     }
     Ok(())
 }
@@ -516,4 +637,29 @@ fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every option that takes a value, of every command, takes a negative number too (the
+    /// option's own check then names what is wrong with it).
+    #[test]
+    fn every_option_takes_a_negative_number() {
+        fn walk(cmd: &clap::Command, missing: &mut Vec<String>) {
+            for arg in cmd.get_arguments() {
+                if arg.get_action().takes_values() && !arg.is_positional() && !arg.is_allow_negative_numbers_set() {
+                    missing.push(format!("{} --{}", cmd.get_name(), arg.get_id()));
+                }
+            }
+            cmd.get_subcommands().for_each(|c| walk(c, missing));
+        }
+        let mut missing = Vec::new();
+        let mut cmd = host_sim::cli_args::accept_negative_numbers(Cli::command());
+        cmd.build();
+        walk(&cmd, &mut missing);
+        assert!(missing.is_empty(), "{missing:?}");
+        assert!(cmd.get_subcommands().count() >= 6);
+    }
 }

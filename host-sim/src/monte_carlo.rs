@@ -17,6 +17,43 @@ use serde::Serialize;
 /// Report times of the Monte Carlo summary, s (those inside the run are used).
 pub const MC_TIMES_S: [f64; 6] = [2_000.0, 5_000.0, 10_000.0, 20_000.0, 45_000.0, 86_400.0];
 
+/// Points of the statistics over time drawn in the report (and written in the JSON's `over_time`).
+pub const PLOT_POINTS: usize = 80;
+
+/// The times tracked in each run: the table's ([`MC_TIMES_S`]) and [`PLOT_POINTS`] evenly spaced
+/// over the run for the plot, ascending.
+pub fn tracked_times_s(duration_s: f64) -> Vec<f64> {
+    let step = duration_s / PLOT_POINTS as f64;
+    let mut times: Vec<f64> = (1..=PLOT_POINTS).map(|k| (k as f64 * step).round()).chain(MC_TIMES_S).filter(|t| *t > 0.0).collect();
+    times.sort_by(f64::total_cmp);
+    times.dedup();
+    times
+}
+
+/// Why a Monte Carlo study cannot give its table.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum StudyError {
+    /// The runs end before the table's first time.
+    #[error(
+        "--duration {duration_s} s ends before the table's first time, {first_s} s: nothing to report \
+         (a first estimate takes about two rotation periods, {two_periods_s} s here, after the sample interval is learned); \
+         give --duration {first_s} or more"
+    )]
+    TooShort { duration_s: f64, first_s: f64, two_periods_s: f64 },
+}
+
+impl Draw {
+    /// Checks that the runs are long enough for the table.
+    pub fn check_duration(&self) -> Result<(), StudyError> {
+        let p = self.params(0);
+        let first_s = MC_TIMES_S[0];
+        if p.duration_s < first_s {
+            return Err(StudyError::TooShort { duration_s: p.duration_s, first_s, two_periods_s: 2.0 * p.rotation_period_s });
+        }
+        Ok(())
+    }
+}
+
 /// Why a Monte Carlo draw cannot make its scenarios.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ScenarioError {
@@ -249,6 +286,48 @@ pub struct Summary {
     pub coverage_2sigma: Vec<f64>,
 }
 
+impl Summary {
+    /// The statistics at those of its times that are in `times_s`.
+    pub fn at_times(&self, times_s: &[f64]) -> Summary {
+        let keep: Vec<usize> = (0..self.times_s.len()).filter(|&k| times_s.contains(&self.times_s[k])).collect();
+        Summary {
+            runs: self.runs,
+            times_s: keep.iter().map(|&k| self.times_s[k]).collect(),
+            median_abs_error_arcsec: keep.iter().map(|&k| self.median_abs_error_arcsec[k]).collect(),
+            p95_abs_error_arcsec: keep.iter().map(|&k| self.p95_abs_error_arcsec[k]).collect(),
+            max_abs_error_arcsec: keep.iter().map(|&k| self.max_abs_error_arcsec[k]).collect(),
+            share_within_10_arcsec: keep.iter().map(|&k| self.share_within_10_arcsec[k]).collect(),
+            coverage_2sigma: keep.iter().map(|&k| self.coverage_2sigma[k]).collect(),
+        }
+    }
+
+    /// Whether no run had an estimate at any of the times.
+    pub fn no_estimate(&self) -> bool {
+        self.median_abs_error_arcsec.iter().all(|m| m.iter().all(|v| v.is_infinite()))
+    }
+}
+
+/// What `monte-carlo --out` writes: the study (scenario, method, scheme, every run's seed, the
+/// command and the tool's version), the table's statistics (at the top level, as before) and the
+/// same at [`PLOT_POINTS`] times over the runs (`over_time`).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct StudyJson {
+    pub scenario: String,
+    pub method: String,
+    pub scheme: String,
+    /// The draw in words (latitudes, sway, mismatch, recorder...).
+    pub description: String,
+    pub duration_s: f64,
+    pub master_seed: u64,
+    /// The seed of each run, in order (`generate --seed S` with the draw's spreads gives run i).
+    pub run_seeds: Vec<u64>,
+    pub command: String,
+    pub version: String,
+    #[serde(flatten)]
+    pub summary: Summary,
+    pub over_time: Summary,
+}
+
 /// Share of the (run, error) pairs at report time `k` whose |error| is within twice the reported
 /// 1-sigma. A run without an estimate at that time counts as four pairs outside.
 pub fn coverage_2sigma(results: &[Accuracy], k: usize) -> f64 {
@@ -326,6 +405,35 @@ mod tests {
         let e = outages.check().unwrap_err();
         assert!(matches!(e, ScenarioError::Recorder(RecorderError::OutagesDoNotFit { count: 100, .. })), "{e:?}");
         assert!(e.to_string().starts_with("--outages: 100 outages"), "{e}");
+    }
+
+    #[test]
+    fn a_study_shorter_than_the_first_report_time_is_refused() {
+        let short = Draw { duration_s: Some(1500.0), ..Draw::new(ScenarioKind::Paper, 1) };
+        let e = short.check_duration().unwrap_err();
+        assert_eq!(e, StudyError::TooShort { duration_s: 1500.0, first_s: 2000.0, two_periods_s: 960.0 });
+        assert!(e.to_string().contains("give --duration 2000 or more"), "{e}");
+        assert_eq!(Draw { duration_s: Some(2000.0), ..short }.check_duration(), Ok(()));
+    }
+
+    #[test]
+    fn tracked_times_hold_the_table_times_and_an_even_grid() {
+        let t = tracked_times_s(20_000.0);
+        assert!(MC_TIMES_S.iter().all(|m| t.contains(m)));
+        assert!(t.windows(2).all(|w| w[0] < w[1]));
+        assert!(t.contains(&250.0) && t.contains(&20_000.0), "{t:?}");
+        let s = Summary {
+            runs: 1,
+            times_s: vec![250.0, 2000.0],
+            median_abs_error_arcsec: vec![[f64::INFINITY; 4], [1.0; 4]],
+            p95_abs_error_arcsec: vec![[f64::INFINITY; 4], [2.0; 4]],
+            max_abs_error_arcsec: vec![[f64::INFINITY; 4], [3.0; 4]],
+            share_within_10_arcsec: vec![0.0, 1.0],
+            coverage_2sigma: vec![0.0, 1.0],
+        };
+        let table = s.at_times(&MC_TIMES_S);
+        assert_eq!((table.times_s, table.p95_abs_error_arcsec), (vec![2000.0], vec![[2.0; 4]]));
+        assert!(!s.no_estimate() && s.at_times(&[250.0]).no_estimate());
     }
 
     #[test]

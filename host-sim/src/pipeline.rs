@@ -3,14 +3,15 @@
 //! parameters is the exception: its scenario is regenerated in memory).
 
 use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{self, is_stdio, read_ahead, LogError, LogLine, LogReader, RowFilter, TruthFile};
-use crate::replay::{replay_each, Replay, ReplayError};
+use crate::exit_status::RunEnd;
+use crate::log_csv::{self, is_stdio, read_ahead, LogError, RowFilter, TruthFile};
+use crate::output_file::{check_not_input, Input, OutputFile};
+use crate::replay::{replay_each, Replay, ReplayError, StepView};
 use crate::report::{Report, ReportBuilder, TruthRows};
 use crate::scenario::{generate, Generated};
+use crate::timeline::{Timeline, TimelineRow};
 use anyhow::Context;
-use estimator_core::{Config, Output, SampleError};
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use estimator_core::Config;
 use std::path::{Path, PathBuf};
 
 /// A replayed log.
@@ -18,6 +19,8 @@ pub struct Estimated {
     pub replay: Replay,
     /// Against the truth, when there was one.
     pub report: Option<Report>,
+    /// What the report draws, when asked for ([`EstimateOptions::timeline`]).
+    pub timeline: Option<Timeline>,
 }
 
 /// `<dir>/<stem>.estimates.csv` beside the log (`trial.csv` and `trial.csv.gz` give
@@ -31,29 +34,21 @@ pub fn default_estimates_path(log: &Path) -> PathBuf {
     stem.with_file_name(name)
 }
 
-/// Refuses an output that is the input itself (the log would be overwritten while read).
-pub fn check_output_is_not_input(log: &Path, out: &Path) -> anyhow::Result<()> {
-    if is_stdio(log) || is_stdio(out) {
-        return Ok(());
+/// The inputs of a run on `log`: the log itself and its truth file (none for standard input).
+pub fn inputs_of(log: &Path) -> Vec<Input> {
+    if is_stdio(log) {
+        return vec![];
     }
-    let same = match (std::fs::metadata(log), std::fs::metadata(out)) {
-        (Ok(a), Ok(b)) => {
-            use std::os::unix::fs::MetadataExt;
-            a.dev() == b.dev() && a.ino() == b.ino()
-        }
-        _ => false,
-    };
-    anyhow::ensure!(!same, "{}:0: --out names the log itself; it would be overwritten while it is read", out.display());
-    Ok(())
+    vec![Input { path: log.to_path_buf(), what: "the log itself" }, Input { path: log_csv::truth_path(log), what: "the log's truth file" }]
 }
 
-/// Opens the estimates output: a file, or standard output for `-`.
-pub fn open_output(out: &Path) -> Result<Box<dyn Write>, LogError> {
-    if is_stdio(out) {
-        return Ok(Box::new(BufWriter::with_capacity(1 << 16, std::io::stdout().lock())));
+/// The name of a log in messages.
+pub fn log_name(log: &Path) -> String {
+    if is_stdio(log) {
+        "standard input".to_string()
+    } else {
+        log.display().to_string()
     }
-    let file = File::create(out).map_err(|e| LogError::new(out, 0, format!("cannot create: {e}")))?;
-    Ok(Box::new(BufWriter::with_capacity(1 << 16, file)))
 }
 
 /// The truth beside a log: the file, and its scenario regenerated when it names one.
@@ -107,41 +102,66 @@ pub struct EstimateOptions {
     pub restart_at_s: Vec<f64>,
     /// Refuse the log at its first unreadable row (default: skip and count it).
     pub strict: bool,
+    /// Keep a [`Timeline`] for a report.
+    pub timeline: bool,
 }
 
 /// Reads the log as it goes, replays it, writes the estimates CSV to `out` (`-`: standard output)
 /// and, with `truth`, builds the report. `warn` is told each unreadable row skipped (the first
-/// few); `each` sees every row and its result (e.g. to keep them for plots).
+/// few); `each` sees every row as the replay saw it (e.g. to keep them for plots).
+///
+/// The estimates go to a temporary file renamed over `out` at the end ([`OutputFile`]): a run
+/// that fails, or reads no row at all ([`RunEnd::NothingRead`]), leaves an earlier file as it was.
+/// Neither the log nor its truth file is ever `out`.
 pub fn estimate_log(
     log: &Path,
     out: &Path,
     options: &EstimateOptions,
     truth: Option<TruthRows<'_>>,
     warn: &mut dyn FnMut(&LogError),
-    each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
+    each: &mut dyn FnMut(&StepView),
 ) -> anyhow::Result<Estimated> {
-    check_output_is_not_input(log, out)?;
-    let lines = LogReader::open(log)?;
-    let mut writer = EstimatesWriter::new(open_output(out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
+    check_not_input(out, "--out", &inputs_of(log))?;
+    let lines = log_csv::LogReader::open(log)?;
+    let mut writer = EstimatesWriter::new(OutputFile::create(out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
     let mut report = truth.map(ReportBuilder::new);
+    let mut timeline = options.timeline.then(Timeline::new);
     let replay = read_ahead(lines, |lines| {
-        replay_each(lines, options.config, &options.restart_at_s, RowFilter::new(options.strict), warn, |line, result| {
-            writer.write_step(line.row.time_s, result).map_err(ReplayError::Write)?;
-            if let Some(r) = report.as_mut() {
-                r.observe(&line.row, result);
+        replay_each(lines, options.config, &options.restart_at_s, RowFilter::new(options.strict), warn, |view| {
+            let row = &view.line.row;
+            writer.write_step(row.time_s, view.result).map_err(ReplayError::Write)?;
+            let truth = report.as_mut().and_then(|r| r.observe(row, view.result));
+            if let Some(t) = timeline.as_mut() {
+                t.observe(TimelineRow {
+                    row,
+                    result: view.result,
+                    placement: view.placement,
+                    counters: Some(view.estimator.counters()),
+                    residuals_rad: view.residuals_rad(),
+                    truth,
+                });
             }
-            each(line, result);
+            each(view);
             Ok(())
         })
+    })
+    .map_err(|e| match e {
+        ReplayError::Interval(i) => anyhow::anyhow!("{}: {i}", log_name(log)),
+        ReplayError::Write(io) => anyhow::Error::new(io).context(format!("{}:0: cannot write", out.display())),
+        other => other.into(),
     })?;
-    writer.finish().with_context(|| format!("{}:0: cannot write", out.display()))?;
+    if replay.rows == 0 {
+        // Nothing to write: an earlier estimates file stays as it was.
+        return Err(RunEnd::nothing_read(&log_name(log), replay.unreadable.skipped, replay.unreadable.first.first()).into());
+    }
+    writer.finish().with_context(|| format!("{}:0: cannot write", out.display()))?.commit()?;
     // The interval the estimator used (pinned or learned; 1 s if it never learned one).
     let interval_s = replay.sample_interval_s.unwrap_or(1.0);
-    Ok(Estimated { replay, report: report.map(|r| r.finish(interval_s)) })
+    Ok(Estimated { replay, report: report.map(|r| r.finish(interval_s)), timeline })
 }
 
 /// [`estimate_log`] with no truth, no restarts, unreadable rows skipped: the benchmark's path.
 pub fn estimate_file(log: &Path, out: &Path, config: Config) -> anyhow::Result<Estimated> {
     let options = EstimateOptions { config, ..EstimateOptions::default() };
-    estimate_log(log, out, &options, None, &mut |_| {}, &mut |_, _| {})
+    estimate_log(log, out, &options, None, &mut |_| {}, &mut |_| {})
 }

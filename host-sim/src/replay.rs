@@ -3,7 +3,11 @@
 use crate::estimates_csv::EstimatesWriter;
 use crate::log_csv::{LogError, LogLine, RowFilter};
 use crate::scenario::Row;
-use estimator_core::{Config, ConfigError, Counters, ErrorChange, Estimator, Holdup, Output, RejectCounts, RotationSummary, Sample, SampleError};
+use crate::time_stamps::{IntervalCheck, IntervalError};
+use estimator_core::time_grid::{Placement, TimeGrid};
+use estimator_core::{
+    Config, ConfigError, Counters, ErrorChange, Estimator, Holdup, Output, Real, RejectCounts, RotationSummary, Sample, SampleError,
+};
 use std::io::Write;
 
 /// The estimator type the host runs: the firmware's default capacity.
@@ -42,12 +46,15 @@ pub struct Replay {
 /// Why a replay stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum ReplayError {
-    #[error("{0}")]
+    #[error(transparent)]
     Log(#[from] LogError),
     #[error("invalid estimator configuration: {0}")]
     Config(ConfigError),
-    #[error("cannot write estimates: {0}")]
+    #[error("cannot write estimates")]
     Write(#[from] std::io::Error),
+    /// The log's time stamps step by an interval that makes no sense.
+    #[error(transparent)]
+    Interval(#[from] IntervalError),
     #[error("checkpoint at {time_s} s: {message}")]
     Checkpoint { time_s: f64, message: String },
 }
@@ -61,14 +68,22 @@ fn restart(est: HostEstimator, time_s: f64) -> Result<HostEstimator, ReplayError
     HostEstimator::from_checkpoint(&buf[..n]).map_err(fail)
 }
 
+/// A learned value for people, to 4 significant digits (the learned values carry the recorder's
+/// clock error, 1e-6 s on 1 s), trailing zeros of the decimals dropped: `1000`, `1`, `0.1`, `479.9`.
+pub fn significant_4(v: f64) -> String {
+    let digits = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+    let text = format!("{v:.digits$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
 /// What was learned of the log's timing, for people: e.g. `rotation: reciprocating, period 720 s;
 /// sample interval 1 s`.
 pub fn pattern_summary(r: &Replay) -> String {
-    let round = |v: f64| {
-        // The learned values carry the recorder's clock error (1e-6 s on 1 s): 4 significant digits.
-        let digits = (3 - v.abs().log10().floor() as i32).max(0) as usize;
-        format!("{v:.digits$}").trim_end_matches('0').trim_end_matches('.').to_string()
-    };
+    let round = significant_4;
     let rotation = match (r.rotation.kind, r.rotation.period_s) {
         (Some(kind), Some(p)) => format!("{}, period {} s", kind.name(), round(p)),
         (None, Some(p)) => format!("period {} s (shape not yet learned)", round(p)),
@@ -97,6 +112,71 @@ pub fn sample_of(row: &Row) -> Sample {
     Sample::from_degrees(row.time_s, row.rotation_deg, row.platform_deg, row.latitude_deg, row.heading_deg, row.roll_deg, row.pitch_deg)
 }
 
+/// One row as the replay saw it: handed to the caller of [`replay_each`] after each step.
+pub struct StepView<'a> {
+    pub line: &'a LogLine,
+    pub result: &'a Result<Output, SampleError>,
+    /// Where an accepted row fell on the sample grid (lost samples before it, a clock step).
+    pub placement: Option<Placement>,
+    /// The estimator after this row.
+    pub estimator: &'a HostEstimator,
+}
+
+impl StepView<'_> {
+    /// The windowed method's post-fit residuals of the current window, rad, per correlation
+    /// channel (pitch x sin, pitch x cos, roll x sin, roll x cos): `z - H x` with `z`, `H` the
+    /// window's measurement ([`estimator_core::correlation::CorrelationSums::measurement`]) and `x`
+    /// the filter's state: what eq (2) with the current estimate leaves unexplained in the
+    /// window's correlations. `None` for the other methods and before the filter's first update.
+    pub fn residuals_rad(&self) -> Option<[Real; 4]> {
+        let w = self.estimator.windowed()?;
+        if w.updates() == 0 || !w.window().is_full() {
+            return None;
+        }
+        let m = w.window().sums().measurement()?;
+        let x = w.filter().state();
+        Some(core::array::from_fn(|ch| m.z[ch] - (0..4).map(|i| m.rows[ch][i] * x[i]).sum::<Real>()))
+    }
+}
+
+/// The sample grid as the estimator sees it, followed beside it from the stamps it accepted: where
+/// each accepted row falls ([`Placement`]: a gap, a clock step), which the reports mark row by row,
+/// and the clock steps counted (what a stream, whose answers carry no counters, reports). A second
+/// grid of the same code, given the same configuration and the same accepted stamps, places every
+/// stamp as the estimator's did.
+#[derive(Clone, Debug)]
+pub struct GridFollower {
+    grid: TimeGrid,
+    clock_steps: u32,
+}
+
+impl GridFollower {
+    pub fn new(config: &Config) -> GridFollower {
+        GridFollower { grid: TimeGrid::new(config.sample_interval_s), clock_steps: 0 }
+    }
+
+    /// A row's result: where an accepted row fell; `None` for a rejected one.
+    pub fn follow(&mut self, time_s: f64, result: &Result<Output, SampleError>) -> Option<Placement> {
+        result.as_ref().ok()?;
+        let placement = self.grid.place(time_s).ok()?;
+        self.grid.accept(time_s, placement);
+        if placement == Placement::ClockStep {
+            self.clock_steps = self.clock_steps.saturating_add(1);
+        }
+        Some(placement)
+    }
+
+    /// The sample interval, s, as the estimator pins or learns it.
+    pub fn interval_s(&self) -> Option<f64> {
+        self.grid.interval_s()
+    }
+
+    /// Clock jumps and steps back seen.
+    pub fn clock_steps(&self) -> u32 {
+        self.clock_steps
+    }
+}
+
 /// Runs rows through a fresh estimator; writes one estimates row per input row when `writer` is
 /// given. Any unreadable row is an error.
 pub fn replay<I, W>(rows: I, config: Config, writer: Option<&mut EstimatesWriter<W>>) -> Result<Replay, ReplayError>
@@ -105,9 +185,9 @@ where
     W: Write,
 {
     let mut writer = writer;
-    replay_each(rows, config, &[], RowFilter::new(true), &mut |_| {}, |line, result| {
+    replay_each(rows, config, &[], RowFilter::new(true), &mut |_| {}, |view| {
         if let Some(w) = writer.as_deref_mut() {
-            w.write_step(line.row.time_s, result)?;
+            w.write_step(view.line.row.time_s, view.result)?;
         }
         Ok(())
     })
@@ -115,10 +195,12 @@ where
 
 /// Steps the estimator through `rows` as they come and hands each row and its result to `each`
 /// (which writes it, reports it...); nothing per row is kept. Unreadable rows go through `filter`
-/// (skipped and counted, `warn` told; or refused when strict). After the first row at or after
-/// each of `restart_at_s` (ascending) the estimator is checkpointed, dropped and restored from the
-/// bytes: a power cut right after a save. The estimates go on from the checkpoint's while the
-/// window refills (see `estimator_core::checkpoint`).
+/// (skipped and counted, `warn` told; or refused when strict). The first stamps are checked
+/// ([`IntervalCheck`]: an interval that makes no sense for a RINS, or contradicts the pinned one,
+/// stops the replay before any estimate). After the first row at or after each of `restart_at_s`
+/// (ascending) the estimator is checkpointed, dropped and restored from the bytes: a power cut
+/// right after a save. The estimates go on from the checkpoint's while the window refills (see
+/// `estimator_core::checkpoint`).
 pub fn replay_each<I, F>(
     rows: I,
     config: Config,
@@ -129,15 +211,18 @@ pub fn replay_each<I, F>(
 ) -> Result<Replay, ReplayError>
 where
     I: IntoIterator<Item = Result<LogLine, LogError>>,
-    F: FnMut(&LogLine, &Result<Output, SampleError>) -> Result<(), ReplayError>,
+    F: FnMut(&StepView) -> Result<(), ReplayError>,
 {
     let mut est = HostEstimator::new(config).map_err(ReplayError::Config)?;
     let mut next_restart = 0;
     let mut count = 0u64;
     let mut final_status = None;
     let mut error_changes = Vec::new();
+    let mut interval_check = IntervalCheck::new(config.sample_interval_s);
+    let mut grid = GridFollower::new(&config);
     for item in rows {
         let Some(line) = filter.admit(item, warn)? else { continue };
+        interval_check.observe(line.row.time_s)?;
         let result = est.step(&sample_of(&line.row));
         count += 1;
         if let Ok(out) = &result {
@@ -146,7 +231,8 @@ where
                 error_changes.push(change);
             }
         }
-        each(&line, &result)?;
+        let placement = grid.follow(line.row.time_s, &result);
+        each(&StepView { line: &line, result: &result, placement, estimator: &est })?;
         let mut due = false;
         while next_restart < restart_at_s.len() && line.row.time_s >= restart_at_s[next_restart] {
             next_restart += 1;
@@ -168,4 +254,20 @@ where
         error_changes,
         unreadable: filter,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn learned_values_keep_their_whole_digits() {
+        // 1000 was printed as "1": the zeros of a whole number were trimmed as if decimals.
+        assert_eq!(significant_4(1000.0), "1000");
+        assert_eq!(significant_4(720.0), "720");
+        assert_eq!(significant_4(1.000_000_3), "1");
+        assert_eq!(significant_4(0.100_000_2), "0.1");
+        assert_eq!(significant_4(479.93), "479.9");
+        assert_eq!(significant_4(12_345.6), "12346");
+    }
 }

@@ -260,6 +260,28 @@ impl RmsAccumulator {
     }
 }
 
+/// The oscillation eq (2) puts into the attitude of `row` for installation errors `x_arcsec`,
+/// deg (heading, roll, pitch), from the core's rows ([`estimator_core::installation::Angles`]).
+pub fn oscillation_deg(row: &Row, x_arcsec: &[f64; 4]) -> [f64; 3] {
+    use estimator_core::installation::Angles;
+    use estimator_core::units::{arcsec_to_rad, wrap_deg, RAD_PER_DEG};
+    use estimator_core::Real;
+    let rad = |deg: f64| (wrap_deg(deg) * RAD_PER_DEG) as Real;
+    let lat = row.latitude_deg * RAD_PER_DEG;
+    let angles = Angles::new(rad(row.rotation_deg), rad(row.platform_deg), (lat.sin() as Real, lat.cos() as Real));
+    let d = angles.oscillation(&x_arcsec.map(|x| arcsec_to_rad(x) as Real));
+    [d.heading_rad, d.roll_rad, d.pitch_rad].map(|r| r as f64 / RAD_PER_DEG)
+}
+
+/// The truth a log row was judged against.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TruthAt {
+    /// The installation errors in force, arcsec.
+    pub errors_arcsec: [f64; 4],
+    /// The oscillation of eq (2) in the row's attitude, deg (heading, roll, pitch).
+    pub oscillation_deg: [f64; 3],
+}
+
 /// Index of the truth row for a log time (the generator writes one row per interval from 0).
 pub fn truth_index(time_s: f64, interval_s: f64, len: usize) -> Option<usize> {
     if !time_s.is_finite() || time_s < 0.0 {
@@ -331,17 +353,17 @@ impl<'a> ReportBuilder<'a> {
         Some(k)
     }
 
-    /// One log row and the estimator's result for it.
-    pub fn observe(&mut self, row: &Row, result: &Result<Output, SampleError>) {
+    /// One log row and the estimator's result for it; returns the truth it was judged against.
+    pub fn observe(&mut self, row: &Row, result: &Result<Output, SampleError>) -> Option<TruthAt> {
         if let Ok(out) = result {
             self.held = out.estimate;
         }
-        let truth_errors = match self.truth {
-            TruthRows::Constant(x) => x,
+        let (truth_errors, oscillation_deg) = match self.truth {
+            TruthRows::Constant(x) => (x, oscillation_deg(row, &x)),
             TruthRows::Generated { rows, truth, time_offset_s } => {
                 let t = row.time_s - time_offset_s;
-                let Some(k) = self.nearest(rows, t) else { return };
-                let Some(tr) = truth.get(k) else { return };
+                let k = self.nearest(rows, t)?;
+                let tr = truth.get(k)?;
                 if let Ok(out) = result {
                     if out.estimate.is_some() && self.rms_all.is_none() {
                         self.rms_all = Some(RmsAccumulator::new(t));
@@ -354,7 +376,7 @@ impl<'a> ReportBuilder<'a> {
                         acc.add(t, &res, tr);
                     }
                 }
-                tr.errors_arcsec
+                (tr.errors_arcsec, tr.oscillation_deg)
             }
         };
         let offset_s = match self.truth {
@@ -362,6 +384,7 @@ impl<'a> ReportBuilder<'a> {
             TruthRows::Constant(_) => 0.0,
         };
         self.tracker.observe(row.time_s - offset_s, self.held.as_ref(), &truth_errors);
+        Some(TruthAt { errors_arcsec: truth_errors, oscillation_deg })
     }
 
     /// The report; `interval_s` is the log's sample interval.
@@ -387,42 +410,71 @@ fn fmt_time(t: Option<f64>) -> String {
     t.map(|t| format!("{t:.0} s")).unwrap_or_else(|| "not within at end".to_string())
 }
 
-/// The accuracy table as text (markdown).
-pub fn format_accuracy(a: &Accuracy) -> String {
-    let mut s = String::new();
-    s.push_str("| x | ");
-    for p in &a.points {
-        s.push_str(&format!("{:.0} s: % / arcsec | ", p.time_s));
-    }
-    s.push_str("within 0.5 % from | within 10 arcsec from |\n|---|");
-    for _ in &a.points {
-        s.push_str("---|");
-    }
-    s.push_str("---|---|\n");
-    for i in 0..4 {
-        s.push_str(&format!("| x{} | ", i + 1));
-        for p in &a.points {
-            match (p.percent, p.error_arcsec) {
-                (Some(pc), Some(e)) => match pc[i] {
-                    Some(p) => s.push_str(&format!("{p:.3} % / {:.2} | ", e[i].abs())),
-                    None => s.push_str(&format!("- / {:.2} | ", e[i].abs())),
-                },
-                _ => s.push_str("no estimate | "),
-            }
-        }
-        s.push_str(&format!("{} | {} |\n", fmt_time(a.within_percent_from_s[i]), fmt_time(a.within_arcsec_from_s[i])));
+/// A table's head and rows, as text cells.
+pub type Table = (Vec<String>, Vec<Vec<String>>);
+
+/// A table as markdown, one line a row, cells followed by ` | ` as the tool prints them.
+pub fn markdown(head: &[String], rows: &[Vec<String>]) -> String {
+    let line = |cells: &[String]| format!("| {} |\n", cells.join(" | "));
+    let mut s = line(head);
+    s.push('|');
+    s.push_str(&"---|".repeat(head.len()));
+    s.push('\n');
+    for r in rows {
+        s.push_str(&line(r));
     }
     s
 }
 
+/// The accuracy table: per error, the percentage and absolute error at each report time and the
+/// settling times.
+pub fn accuracy_table(a: &Accuracy) -> Table {
+    let mut head = vec!["x".to_string()];
+    head.extend(a.points.iter().map(|p| format!("{:.0} s: % / arcsec", p.time_s)));
+    head.push("within 0.5 % from".into());
+    head.push("within 10 arcsec from".into());
+    let rows = (0..4)
+        .map(|i| {
+            let mut row = vec![format!("x{}", i + 1)];
+            for p in &a.points {
+                row.push(match (p.percent, p.error_arcsec) {
+                    (Some(pc), Some(e)) => match pc[i] {
+                        Some(p) => format!("{p:.3} % / {:.2}", e[i].abs()),
+                        None => format!("- / {:.2}", e[i].abs()),
+                    },
+                    _ => "no estimate".to_string(),
+                });
+            }
+            row.push(fmt_time(a.within_percent_from_s[i]));
+            row.push(fmt_time(a.within_arcsec_from_s[i]));
+            row
+        })
+        .collect();
+    (head, rows)
+}
+
+/// The accuracy table as text (markdown).
+pub fn format_accuracy(a: &Accuracy) -> String {
+    let (head, rows) = accuracy_table(a);
+    markdown(&head, &rows)
+}
+
+/// The title of an attitude RMS table.
+pub fn rms_title(label: &str, r: &AttitudeRms) -> String {
+    format!("attitude error of eq (2), RMS arcsec, {label} ({:.0}-{:.0} s, {} rows)", r.from_s, r.to_s, r.rows)
+}
+
+/// The attitude RMS table: before and after compensation, per axis.
+pub fn rms_table(r: &AttitudeRms) -> Table {
+    let head = ["", "heading", "roll", "pitch"].map(String::from).to_vec();
+    let row = |name: &str, v: &[f64; 3]| vec![name.to_string(), format!("{:.2}", v[0]), format!("{:.2}", v[1]), format!("{:.2}", v[2])];
+    (head, vec![row("before compensation", &r.before_arcsec), row("after compensation", &r.after_arcsec)])
+}
+
 /// The attitude RMS table as text (markdown).
 pub fn format_rms(label: &str, r: &AttitudeRms) -> String {
-    let mut s = format!("attitude error of eq (2), RMS arcsec, {label} ({:.0}-{:.0} s, {} rows):\n", r.from_s, r.to_s, r.rows);
-    s.push_str("| | heading | roll | pitch |\n|---|---|---|---|\n");
-    let f = |v: &[f64; 3]| format!("{:.2} | {:.2} | {:.2}", v[0], v[1], v[2]);
-    s.push_str(&format!("| before compensation | {} |\n", f(&r.before_arcsec)));
-    s.push_str(&format!("| after compensation | {} |\n", f(&r.after_arcsec)));
-    s
+    let (head, rows) = rms_table(r);
+    format!("{}:\n{}", rms_title(label, r), markdown(&head, &rows))
 }
 
 /// Methods side by side (one line each): largest percentage error of the four at each report
@@ -578,6 +630,25 @@ mod tests {
         assert_eq!(r.accuracy.points[0].error_arcsec.map(|e| e.map(f64::abs).iter().fold(0.0, |m: f64, v| m.max(*v)) < 1e-3), Some(true));
         assert_eq!(r.accuracy.within_percent_from_s, [Some(1000.5); 4]);
         assert_eq!(r.accuracy.within_arcsec_from_s, [Some(1000.5); 4]);
+    }
+
+    #[test]
+    fn the_cores_oscillation_of_eq_2_is_the_generators() {
+        // The oscillation a constant truth file puts into each row, from the core's rows, against
+        // the generator's own eq (2), over a one-way and a reciprocating log.
+        for scheme in [crate::rotation_scheme::RotationScheme::Continuous, crate::rotation_scheme::RotationScheme::Reciprocating] {
+            let mut p = crate::scenario::ScenarioParams::new(crate::scenario::ScenarioKind::Sea, 3);
+            p.duration_s = 2000.0;
+            p.scheme = scheme;
+            let g = crate::scenario::generate(&p);
+            for (row, truth) in g.rows.iter().zip(&g.truth) {
+                let ours = oscillation_deg(row, &truth.errors_arcsec);
+                for (a, (o, t)) in ours.iter().zip(&truth.oscillation_deg).enumerate() {
+                    let diff_arcsec = (o - t).abs() * 3600.0;
+                    assert!(diff_arcsec < 1e-3, "{scheme:?} t = {}: axis {a} off by {diff_arcsec} arcsec", row.time_s);
+                }
+            }
+        }
     }
 
     #[test]

@@ -1,7 +1,13 @@
-//! `host-sim stream`: feeds an attitude log to the firmware over its framed serial link, one
-//! sample per request, as fast as the firmware answers, and writes the estimates CSV from the
-//! firmware's answers with the same writer as `host-sim estimate` (so the two files can be compared
-//! byte for byte). With `--qemu FIRMWARE.elf` it boots the firmware in QEMU first
+//! `host-sim stream`: feeds an attitude log to the firmware over its framed serial link and writes
+//! the estimates CSV from the firmware's answers with the same writer as `host-sim estimate` (so
+//! the two files can be compared byte for byte). By default one sample per request, each sent when
+//! the last is answered; with `--push` without waiting for answers (up to a window of frames the
+//! firmware's receive buffer holds, [`PushOptions`]), as fast as the link takes or, with
+//! `--realtime`, at the log's own rate, as a navigation computer sends. Every request is numbered
+//! (link protocol 5) and every answer matched to its request by its number; a request whose answer
+//! never comes (lost on the line, or in a firmware restart) is counted as lost and its row left out
+//! of the estimates. The summary ends with
+//! `frames sent N, answered N, lost N, overruns N` and the firmware's link counters. With `--qemu FIRMWARE.elf` it boots the firmware in QEMU first
 //! ([`qemu`]; `--machine` names the board the image was built for) and waits for the firmware's
 //! `Ready` announcement before its first request; with `--port DEVICE --baud N` it talks to a board
 //! over a serial port.
@@ -17,18 +23,25 @@
 
 pub mod cost;
 pub mod link;
+pub mod push;
 pub mod qemu;
 
 use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{is_stdio, LogReader, RowFilter};
-use crate::pipeline::{check_output_is_not_input, default_estimates_path, open_output};
-use crate::replay::sample_of;
+use crate::exit_status::RunEnd;
+use crate::log_csv::{is_stdio, LogLine, LogReader, RowFilter};
+use crate::output_file::{check_not_input, OutputFile};
+use crate::pipeline::{default_estimates_path, inputs_of, load_truth, log_name, truth_rows};
+use crate::replay::{sample_of, GridFollower};
+use crate::report::ReportBuilder;
+use crate::time_stamps::IntervalCheck;
+use crate::timeline::{Timeline, TimelineRow};
 use anyhow::{bail, Context};
 use cost::{CostStats, CostUnit};
 use estimator_core::{Output, RejectReason, SampleError};
 use link::FirmwareLink;
 use link_protocol::frame::FrameError;
-use link_protocol::{Counters, Request, Response, SampleMsg, StatusReply, PROTOCOL_VERSION};
+use link_protocol::{ClockSource, Counters, Request, ResetCause, Response, SampleMsg, StatusReply, PROTOCOL_VERSION};
+use push::{stream_log_push, PushOptions};
 use qemu::{Machine, Qemu};
 use std::io::{IsTerminal, Read, Write};
 use std::path::{Path, PathBuf};
@@ -84,6 +97,21 @@ pub struct StreamArgs {
     /// Refuse the log at its first unreadable row (default: skip it, count it, report its line).
     #[arg(long)]
     pub strict: bool,
+    /// Send samples without waiting for their answers (answers matched by their numbers), up to
+    /// --window frames unanswered; as fast as the link takes them unless --realtime.
+    #[arg(long)]
+    pub push: bool,
+    /// With --push: send each sample at the log's own rate (its time stamps), as a navigation
+    /// computer does, instead of as fast as the link takes them.
+    #[arg(long, requires = "push")]
+    pub realtime: bool,
+    /// With --push: most frames sent and not yet answered (default: what half the firmware's
+    /// receive buffer holds, from its status; at least 1).
+    #[arg(long, value_name = "N", requires = "push", value_parser = clap::value_parser!(u32).range(1..))]
+    pub window: Option<u32>,
+    /// Write plots and a self-contained report.html of the stream into DIR (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
 }
 
 /// The firmware, wherever it runs.
@@ -105,8 +133,10 @@ impl Target {
         timeout: Duration,
     ) -> anyhow::Result<Target> {
         let (qemu, stream) = Qemu::boot(elf, machine, defmt_log, flash_dir)?;
-        stream.set_read_timeout(Some(timeout))?;
-        let mut link = FirmwareLink::new(Box::new(stream));
+        let reader = stream.try_clone()?;
+        // Only how often the reader thread looks whether the link is still wanted.
+        reader.set_read_timeout(Some(READER_POLL))?;
+        let mut link = FirmwareLink::new(Box::new(reader), Box::new(stream), timeout);
         let mut qemu = Some(qemu);
         // A serial port drops what arrives before the firmware has enabled it (QEMU's STM32 USART
         // does): nothing is sent before the firmware says it is ready.
@@ -127,7 +157,11 @@ impl Target {
             .timeout(timeout)
             .open()
             .with_context(|| format!("cannot open serial port {device} at {baud} baud"))?;
-        let link = FirmwareLink::new(Box::new(port));
+        let mut reader = port
+            .try_clone()
+            .with_context(|| format!("cannot open serial port {device} a second time for reading"))?;
+        reader.set_timeout(READER_POLL)?;
+        let link = FirmwareLink::new(Box::new(reader), Box::new(port), timeout);
         Target::hello(link, None, |hz| CostUnit::BoardCycles { counter_hz: hz })
     }
 
@@ -169,6 +203,9 @@ impl Target {
     }
 }
 
+/// How often the link's reader thread wakes to see whether the link is still wanted.
+const READER_POLL: Duration = Duration::from_millis(500);
+
 fn check_protocol(firmware: u8) -> anyhow::Result<()> {
     if firmware != PROTOCOL_VERSION {
         bail!("firmware speaks protocol {firmware}, host-sim speaks {PROTOCOL_VERSION}");
@@ -176,7 +213,7 @@ fn check_protocol(firmware: u8) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn describe_exit(qemu: &mut Option<Qemu>) -> String {
+pub(crate) fn describe_exit(qemu: &mut Option<Qemu>) -> String {
     match qemu {
         Some(q) => match q.exited() {
             Some(status) => format!(
@@ -199,7 +236,13 @@ pub struct Answer {
 
 /// Sends one sample and decodes its answer; errors if the answer is not about this sample.
 pub fn step_remote(target: &mut Target, msg: &SampleMsg) -> anyhow::Result<Answer> {
-    match target.request(&Request::Sample(*msg))? {
+    let response = target.request(&Request::Sample(*msg))?;
+    answer_of(msg, response)
+}
+
+/// The answer to the sample `msg` from its response; errors if it is not about this sample.
+pub(crate) fn answer_of(msg: &SampleMsg, response: Response) -> anyhow::Result<Answer> {
+    match response {
         Response::Step(r) => {
             if r.time_s.to_bits() != msg.time_s.to_bits() {
                 bail!("answer for time {} to the sample of time {}", r.time_s, msg.time_s);
@@ -231,10 +274,27 @@ pub fn step_remote(target: &mut Target, msg: &SampleMsg) -> anyhow::Result<Answe
     }
 }
 
+/// What happened on the link during a stream.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LinkSummary {
+    /// Sample frames sent.
+    pub sent: u64,
+    /// Of them, answered.
+    pub answered: u64,
+    /// Of them, never answered (lost on the line or in a firmware restart).
+    pub lost: u64,
+    /// Times the firmware announced `Ready` in the middle of the stream (it restarted).
+    pub restarts: u32,
+}
+
 /// What a stream did.
 #[derive(Clone, Debug)]
 pub struct StreamSummary {
+    /// Rows answered (and written).
     pub rows: u64,
+    pub link: LinkSummary,
+    /// The firmware's status after each restart in the stream (reset cause, restored checkpoint).
+    pub restart_status: Vec<StatusReply>,
     pub cost: CostStats,
     pub final_status: StatusReply,
     pub wall: Duration,
@@ -309,14 +369,14 @@ pub fn prepare_firmware(target: &mut Target, resume: bool, reset: bool, info: &m
 }
 
 /// Progress on standard error, only when it is a terminal (rows, rate, time left).
-struct Progress {
-    bar: indicatif::ProgressBar,
+pub(crate) struct Progress {
+    pub(crate) bar: indicatif::ProgressBar,
     start: Instant,
 }
 
 impl Progress {
     /// `total_bytes`: the log's size when known (a plain file), for the time left.
-    fn new(total_bytes: Option<u64>) -> Progress {
+    pub(crate) fn new(total_bytes: Option<u64>) -> Progress {
         let bar = if !std::io::stderr().is_terminal() {
             indicatif::ProgressBar::hidden()
         } else if let Some(n) = total_bytes {
@@ -335,7 +395,7 @@ impl Progress {
         Progress { bar, start: Instant::now() }
     }
 
-    fn update(&self, rows: u64, bytes: u64) {
+    pub(crate) fn update(&self, rows: u64, bytes: u64) {
         if rows % 256 == 0 && !self.bar.is_hidden() {
             let rate = rows as f64 / self.start.elapsed().as_secs_f64().max(1e-9);
             self.bar.set_position(bytes);
@@ -351,7 +411,9 @@ impl Drop for Progress {
 }
 
 /// Streams the log's rows after `resume_after_s` through the target, writing one estimates row
-/// per row. Unreadable rows go through `filter` (skipped and counted, or refused when strict).
+/// per row; `each` sees every row and its answer. Unreadable rows go through `filter` (skipped and
+/// counted, or refused when strict); stamps whose interval makes no sense are refused
+/// ([`IntervalCheck`]).
 pub fn stream_log<R: Read, W: Write>(
     target: &mut Target,
     lines: &mut LogReader<R>,
@@ -359,11 +421,13 @@ pub fn stream_log<R: Read, W: Write>(
     resume_after_s: Option<f64>,
     writer: &mut EstimatesWriter<W>,
     total_bytes: Option<u64>,
+    each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
 ) -> anyhow::Result<StreamSummary> {
     let start = Instant::now();
     let progress = Progress::new(total_bytes);
     let mut cost = CostStats::default();
     let mut rows = 0u64;
+    let mut interval_check = IntervalCheck::new(None);
     while let Some(item) = lines.next() {
         let Some(line) = filter.admit(item, &mut |e| {
             progress.bar.suspend(|| eprintln!("warning: {e} (row skipped)"));
@@ -374,11 +438,13 @@ pub fn stream_log<R: Read, W: Write>(
         if resume_after_s.is_some_and(|t| line.row.time_s <= t) {
             continue;
         }
+        interval_check.observe(line.row.time_s)?;
         let sample = sample_of(&line.row);
         let answer =
             step_remote(target, &SampleMsg::from(&sample)).with_context(|| format!("log line {}", line.line))?;
         cost.add(answer.step_cost_ticks);
         writer.write_step(line.row.time_s, &answer.result)?;
+        each(&line, &answer.result);
         rows += 1;
         progress.update(rows, lines.bytes_read());
     }
@@ -386,6 +452,13 @@ pub fn stream_log<R: Read, W: Write>(
     let final_status = target.status()?;
     Ok(StreamSummary {
         rows,
+        link: LinkSummary {
+            sent: rows,
+            answered: rows,
+            lost: 0,
+            restarts: 0,
+        },
+        restart_status: Vec::new(),
         cost,
         final_status,
         wall: start.elapsed(),
@@ -397,7 +470,10 @@ pub fn stream_log<R: Read, W: Write>(
 pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let timeout = Duration::from_secs_f64(args.timeout_s.max(0.001));
     let out = args.out.clone().unwrap_or_else(|| default_estimates_path(&args.log));
-    check_output_is_not_input(&args.log, &out)?;
+    check_not_input(&out, "--out", &inputs_of(&args.log))?;
+    if let Some(dir) = &args.report {
+        crate::trial_report::create_dir(dir)?;
+    }
     let mut lines = LogReader::open(&args.log)?;
     let plain_size = (!is_stdio(&args.log)).then(|| std::fs::metadata(&args.log).ok()).flatten().map(|m| m.len());
     let (mut target, what) = match (&args.qemu, &args.port) {
@@ -425,17 +501,53 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     };
     let resume_after_s = prepare_firmware(&mut target, args.resume, args.reset, &mut info)?;
     let mut writer =
-        EstimatesWriter::new(open_output(&out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
+        EstimatesWriter::new(OutputFile::create(&out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
     // A gzip log's size says nothing of its rows: no time left then.
     let gzip = plain_size.is_some() && lines.is_gzip();
     let total = if gzip { None } else { plain_size };
-    let summary = stream_log(&mut target, &mut lines, RowFilter::new(args.strict), resume_after_s, &mut writer, total)?;
+    // The report's record of the answers: the truth beside the log, the grid from the stamps.
+    let truth = args.report.as_ref().and_then(|_| load_truth(&args.log, &mut |w| eprintln!("warning: {w}")));
+    let mut judge = truth.as_ref().map(|t| ReportBuilder::new(truth_rows(&t.file, t.generated.as_ref())));
+    let mut grid = GridFollower::new(&estimator_core::Config::default());
+    let mut timeline = args.report.as_ref().map(|_| Timeline::new());
+    let mut each = |line: &LogLine, result: &Result<Output, SampleError>| {
+        if let Some(tl) = timeline.as_mut() {
+            let truth = judge.as_mut().and_then(|j| j.observe(&line.row, result));
+            let placement = grid.follow(line.row.time_s, result);
+            tl.observe(TimelineRow { row: &line.row, result, placement, counters: None, residuals_rad: None, truth });
+        }
+    };
+    let filter = RowFilter::new(args.strict);
+    let summary = if args.push {
+        let options = PushOptions {
+            realtime: args.realtime,
+            window: args.window.map_or_else(|| PushOptions::default_window(&target.boot_status), |w| w as usize),
+            inject: None,
+        };
+        stream_log_push(&mut target, &mut lines, filter, resume_after_s, &mut writer, total, &options, &mut info, &mut each)?
+    } else {
+        stream_log(&mut target, &mut lines, filter, resume_after_s, &mut writer, total, &mut each)?
+    };
+    if summary.rows == 0 {
+        // Nothing to write: an earlier estimates file stays as it was.
+        return Err(RunEnd::nothing_read(&log_name(&args.log), summary.unreadable.skipped, summary.unreadable.first.first()).into());
+    }
     writer
         .finish()
-        .with_context(|| format!("{}:0: cannot write", out.display()))?;
+        .with_context(|| format!("{}:0: cannot write", out.display()))?
+        .commit()?;
     drop(target.qemu.take());
     print_summary(&mut info, &args.log, &out, &what, &summary, &target)?;
+    if let (Some(dir), Some(tl)) = (&args.report, &timeline) {
+        let interval_s = grid.interval_s().unwrap_or(1.0);
+        let report = judge.map(|j| j.finish(interval_s));
+        let page = crate::trial_report::write_stream_report(dir, &log_name(&args.log), &what, &summary.final_status, report.as_ref(), tl)?;
+        writeln!(info, "report in {}", page.display())?;
+    }
     info.flush()?;
+    if summary.final_status.estimate.is_none() {
+        return Err(RunEnd::NoEstimate { reason: "the firmware reports no estimate at the end of the log".into() }.into());
+    }
     Ok(())
 }
 
@@ -492,5 +604,25 @@ fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &Stre
             st.checkpoints_saved
         )?;
     }
+    let l = &st.link;
+    writeln!(
+        w,
+        "  firmware's link: {} lost frames, {} UART overruns, {} buffer overruns, {} framing errors, {} noise errors; receive buffer peak {} of {} bytes",
+        l.lost_frames, l.uart_overruns, l.buffer_overruns, l.framing_errors, l.noise_errors, l.rx_peak_bytes, l.rx_buffer_bytes
+    )?;
+    let cause = ResetCause::try_from(st.reset_cause).map_or("unknown", |c| c.name());
+    let clock = ClockSource::try_from(st.clock_source).map_or("unknown", |c| c.name());
+    writeln!(w, "  firmware's last reset: {cause}; clock: {clock}")?;
+    if s.link.restarts > 0 {
+        writeln!(w, "  the firmware restarted {} times during the stream", s.link.restarts)?;
+    }
+    writeln!(
+        w,
+        "frames sent {}, answered {}, lost {}, overruns {}",
+        s.link.sent,
+        s.link.answered,
+        s.link.lost,
+        st.link.overruns()
+    )?;
     writeln!(w, "{}", target.unit.summary(&s.cost))
 }

@@ -1,10 +1,12 @@
 //! End to end through QEMU, on both boards: a scenario streamed through the firmware by
 //! `host-sim stream --qemu ELF --machine M` gives an estimates CSV byte-identical to
 //! `host-sim estimate` on the same log, and final estimates within 10 arcsec of the truth:
-//! 50000 s through the mps2-an386 image, 20000 s through the STM32F405 image on netduinoplus2; and
-//! a real log's shape (reciprocating rotation, 2 % of rows lost, jittered Unix time stamps) through
-//! the mps2-an386 image: the rotation pattern and the interval learned, the gaps filled, on the
-//! target bit for bit as on the host.
+//! 50000 s through the mps2-an386 image, one sample per answer; 20000 s through the STM32F405
+//! image on netduinoplus2 in push mode (`--push`: frames sent without waiting for answers, queued
+//! in the firmware's receive ring, matched by their numbers: every frame answered, none lost, no
+//! overrun); and a real log's shape (reciprocating rotation, 2 % of rows lost, jittered Unix time
+//! stamps) through the mps2-an386 image in push mode: the rotation pattern and the interval
+//! learned, the gaps filled, on the target bit for bit as on the host.
 
 mod qemu_support;
 
@@ -17,11 +19,11 @@ use std::time::Instant;
 fn stream_of_50000_s_through_mps2_an386_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth() {
     let dir = scratch("e2e-mps2-an386");
     let log = paper_log(&dir, 50_000);
-    stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(Board::Mps2An386, &log);
+    stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(Board::Mps2An386, &log, false);
 }
 
 #[test]
-fn reciprocating_log_with_2_percent_loss_and_jittered_unix_stamps_through_mps2_an386_is_byte_identical() {
+fn reciprocating_log_with_2_percent_loss_and_jittered_unix_stamps_pushed_through_mps2_an386_is_byte_identical() {
     let dir = scratch("e2e-lossy-mps2-an386");
     let log = generated_log(
         &dir,
@@ -31,33 +33,31 @@ fn reciprocating_log_with_2_percent_loss_and_jittered_unix_stamps_through_mps2_a
             "--drop-fraction", "0.02", "--time-offset", "1700000000", "--time-jitter", "0.02",
         ],
     );
-    stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(Board::Mps2An386, &log);
+    stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(Board::Mps2An386, &log, true);
 }
 
 #[test]
-fn stream_of_20000_s_through_stm32f405_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth() {
+fn stream_of_20000_s_pushed_through_stm32f405_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth() {
     let dir = scratch("e2e-stm32f405");
     let log = paper_log(&dir, 20_000);
-    stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(Board::Stm32f405, &log);
+    stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(Board::Stm32f405, &log, true);
 }
 
-/// Streams `log` (in a scratch directory, whose files the caller's guard removes) through the board.
-fn stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(board: Board, log: &std::path::Path) {
+/// Streams `log` (in a scratch directory, whose files the caller's guard removes) through the
+/// board, one sample per answer or (`push`) without waiting for answers.
+fn stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(board: Board, log: &std::path::Path, push: bool) {
     let elf = firmware_elf(board);
     let dir = log.parent().unwrap();
     let (log_s, est_s, stream_s) = (log.to_str().unwrap(), dir.join("estimate.csv"), dir.join("stream.csv"));
     host_sim(&["estimate", log_s, "--out", est_s.to_str().unwrap()]);
     let start = Instant::now();
-    let out = host_sim(&[
-        "stream",
-        "--qemu",
-        elf.to_str().unwrap(),
-        "--machine",
-        board.machine().name(),
-        log_s,
-        "--out",
-        stream_s.to_str().unwrap(),
-    ]);
+    let elf_s = elf.to_str().unwrap();
+    let stream_out = stream_s.to_str().unwrap();
+    let mut args = vec!["stream", "--qemu", elf_s, "--machine", board.machine().name(), log_s, "--out", stream_out];
+    if push {
+        args.push("--push");
+    }
+    let out = host_sim(&args);
     let wall = start.elapsed();
     println!("{out}e2e {} wall time {:.1} s", board.name(), wall.as_secs_f64());
 
@@ -89,4 +89,20 @@ fn stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(board: Boa
     }
     let (max, mean) = step_cost(&out);
     assert!(max >= mean && mean > 0.0, "step cost must be measured: {max} {mean}");
+    // Every frame answered, none lost, no overrun, as the summary says.
+    let rows = log_rows - 1;
+    assert!(
+        out.lines().any(|l| l == format!("frames sent {rows}, answered {rows}, lost 0, overruns 0")),
+        "summary:\n{out}"
+    );
+    let link = out.lines().find(|l| l.starts_with("  firmware's link: ")).expect("the link line");
+    assert!(
+        link.starts_with("  firmware's link: 0 lost frames, 0 UART overruns, 0 buffer overruns, 0 framing errors, 0 noise errors;"),
+        "{link}"
+    );
+    if push {
+        // The frames really queued in the firmware's receive ring: more than one frame waited.
+        let peak: u32 = link.split("peak ").nth(1).and_then(|p| p.split(' ').next()).unwrap().parse().unwrap();
+        assert!(peak > 43, "receive buffer peak {peak} bytes: the push did not queue frames");
+    }
 }

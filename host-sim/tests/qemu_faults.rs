@@ -12,7 +12,8 @@ use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::frame::MAX_FRAME;
 use link_protocol::{
-    crc, encode_frame, FrameAccumulator, FrameError, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
+    crc, encode_frame, FrameAccumulator, FrameError, Numbered, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
+    UNNUMBERED,
 };
 use qemu_support::*;
 use std::time::Duration;
@@ -31,9 +32,11 @@ impl Rng {
     }
 }
 
+/// The frame of an unnumbered request (numbered frames are the link's own, through `step_remote`:
+/// the faults must not look like lost frames).
 fn frame(request: &Request) -> Vec<u8> {
     let mut out = [0u8; MAX_FRAME];
-    let n = encode_frame(request, &mut out).unwrap();
+    let n = encode_frame(&Numbered { seq: UNNUMBERED, message: *request }, &mut out).unwrap();
     out[..n].to_vec()
 }
 
@@ -125,7 +128,7 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
     let mut shadow_feed = |bytes: &[u8], predicted: &mut [u32; FrameError::COUNT]| -> (u32, u32) {
         let (mut bad, mut good) = (0, 0);
         for &b in bytes {
-            match shadow.push_decode::<Request>(b) {
+            match shadow.push_decode::<Numbered<Request>>(b) {
                 Some(Err(e)) => {
                     predicted[e as usize] += 1;
                     bad += 1;
@@ -200,7 +203,7 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
             "row {i}: the valid frame closes a pending fault and decodes"
         );
         pending_closing_zero = false;
-        // step_remote sends exactly these bytes (`f`), as the stream command does.
+        // step_remote sends this frame numbered (the shadow decodes it the same unnumbered).
         let answer = step_remote(&mut target, &msg).unwrap_or_else(|e| panic!("row {i}: {e:#}"));
         assert_eq!(
             key(&answer.result),
@@ -237,6 +240,9 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
     assert_eq!(rejected[RejectReason::TimeNotIncreasing as usize], injected[7]);
     assert_eq!(status.counters.rejected_samples_total(), injected[6] + injected[7]);
     assert_eq!(status.accepted as usize, lines.len());
+    // The numbered frames all arrived: the faults cost no frame but their own.
+    assert_eq!(status.link.lost_frames, 0, "no numbered frame lost: {:?}", status.link);
+    assert_eq!(status.link.errors_total(), 0, "{:?}", status.link);
 
     // Random bytes, zeros included: nothing may stop the firmware.
     let noise: Vec<u8> = (0..20_000)

@@ -18,6 +18,16 @@ fn s(p: &std::path::Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Runs host-sim on a log too short for a first estimate: it must end with exit status 4 and say
+/// so on standard error (every output written); returns stdout.
+fn host_sim_no_estimate(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim")).args(args).output().unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr));
+    assert_eq!(out.status.code(), Some(4), "host-sim {args:?}:\n{stdout}\n{stderr}");
+    assert!(stderr.contains("no estimate: "), "{stderr}");
+    stdout
+}
+
 #[test]
 fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
     let elf = firmware_elf(Board::Mps2An386);
@@ -29,7 +39,8 @@ fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
     let flash = dir.join("flash");
     std::fs::create_dir_all(&flash).unwrap();
 
-    host_sim(&["stream", "--qemu", s(&elf), s(&first), "--flash-dir", s(&flash), "--out", s(&dir.join("first.stream.csv"))]);
+    // 600 s: no estimate yet (exit status 4), a checkpoint saved.
+    host_sim_no_estimate(&["stream", "--qemu", s(&elf), s(&first), "--flash-dir", s(&flash), "--out", s(&dir.join("first.stream.csv"))]);
 
     let refused_out = dir.join("refused.csv");
     let refused = Command::new(env!("CARGO_BIN_EXE_host-sim"))

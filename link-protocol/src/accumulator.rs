@@ -63,6 +63,14 @@ impl<const N: usize> FrameAccumulator<N> {
         self.push(byte).map(|frame| frame.and_then(|bytes| decode_frame(bytes)))
     }
 
+    /// Drops the frame being received (its bytes were cut by a hole in the stream); the bytes up
+    /// to the next 0x00 then form a frame of their own.
+    pub fn discard(&mut self) {
+        self.frame.clear();
+        self.ended = false;
+        self.oversize = false;
+    }
+
     /// Bytes of the frame being received so far.
     pub fn pending(&self) -> usize {
         if self.ended {
@@ -70,6 +78,19 @@ impl<const N: usize> FrameAccumulator<N> {
         } else {
             self.frame.len()
         }
+    }
+}
+
+impl FrameAccumulator<{ crate::MAX_REQUEST_ENCODED }> {
+    /// [`Self::push_decode`] of a numbered request, compiled here once (not generic): the
+    /// firmware's one decoder, built with this crate's optimisation (size, in the firmware's
+    /// profile) rather than inlined into the caller.
+    #[inline(never)]
+    pub fn push_request(
+        &mut self,
+        byte: u8,
+    ) -> Option<Result<crate::message::Numbered<crate::message::Request>, FrameError>> {
+        self.push_decode(byte)
     }
 }
 
@@ -207,6 +228,22 @@ mod tests {
         assert_eq!(rx.pending(), 0);
         assert!(rx.push(0x02).is_none());
         assert_eq!(rx.pending(), 1, "a new frame starts after the ended one");
+    }
+
+    #[test]
+    fn discard_drops_the_frame_in_progress_only() {
+        let mut rx = Rx::new();
+        let f = frame(&sample(6.0));
+        assert!(feed(&mut rx, &f[..20]).is_empty());
+        rx.discard();
+        assert_eq!(rx.pending(), 0);
+        // The rest of the cut frame is one bad frame; the next frame is whole.
+        let mut stream = f[20..].to_vec();
+        stream.extend(frame(&sample(7.0)));
+        let got = feed(&mut rx, &stream);
+        assert_eq!(got.len(), 2);
+        assert!(got[0].is_err());
+        assert_eq!(got[1], Ok(sample(7.0)));
     }
 
     #[test]

@@ -137,6 +137,18 @@ pub fn encode_frame<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, 
     Ok(m + 2)
 }
 
+/// [`encode_frame`] of a numbered response, compiled here once (not generic): the firmware's one
+/// encoder, built with this crate's optimisation (size, in the firmware's profile) rather than
+/// inlined into the caller.
+#[inline(never)]
+pub fn encode_response_frame(
+    seq: u32,
+    response: &crate::message::Response,
+    out: &mut [u8],
+) -> Result<usize, EncodeError> {
+    encode_frame(&crate::message::Numbered { seq, message: *response }, out)
+}
+
 /// COBS-decodes a received frame (without its 0x00 delimiters) in place; returns the decoded
 /// length. Strict: an empty frame, a group whose code byte points past the end of the frame (a
 /// truncated frame) and a 0x00 anywhere in the frame are errors, never a shorter message.
@@ -177,7 +189,7 @@ pub fn decode_frame<T: DeserializeOwned>(encoded: &mut [u8]) -> Result<T, FrameE
 mod tests {
     use super::*;
     use crate::message::*;
-    use crate::{MAX_REQUEST_ENCODED, MAX_RESPONSE_ENCODED};
+    use crate::{MAX_REQUEST_ENCODED, MAX_RESPONSE_ENCODED, MAX_SAMPLE_FRAME};
     use estimator_core::{Output, Sample, Status};
     use std::vec::Vec;
 
@@ -220,29 +232,50 @@ mod tests {
         StepReply::new(&output, 123, counters)
     }
 
-    #[test]
-    fn requests_and_responses_round_trip() {
-        let requests = [Request::Sample(sample()), Request::Reset, Request::ReadStatus];
-        for r in requests {
-            let mut inner = body(&frame_of(&r));
-            assert!(inner.len() <= MAX_REQUEST_ENCODED);
-            assert_eq!(decode_frame::<Request>(&mut inner), Ok(r));
-        }
-        let status = StatusReply {
+    /// A status with every field at its longest encoding.
+    fn longest_status() -> StatusReply {
+        StatusReply {
             protocol_version: crate::PROTOCOL_VERSION,
             method: 0,
-            counters: Counters::default(),
+            counters: Counters {
+                bad_frames: [u32::MAX; 5],
+                rejected_samples: [u32::MAX; 5],
+            },
             accepted: u32::MAX,
-            filled: 1,
-            window_restarts: 2,
+            filled: u32::MAX,
+            window_restarts: u32::MAX,
             estimate: step_reply().estimate,
-            cost_counter_hz: 25_000_000,
-            boot_stack_peak_bytes: 30_000,
-            stack_peak_bytes: 1000,
-            stack_size_bytes: 4_000_000,
+            cost_counter_hz: u32::MAX,
+            boot_stack_peak_bytes: u32::MAX,
+            stack_peak_bytes: u32::MAX,
+            stack_size_bytes: u32::MAX,
             checkpoint_time_s: Some(12_345.0),
-            checkpoints_saved: 7,
-        };
+            checkpoints_saved: u32::MAX,
+            link: LinkCounters {
+                lost_frames: u32::MAX,
+                uart_overruns: u32::MAX,
+                buffer_overruns: u32::MAX,
+                framing_errors: u32::MAX,
+                noise_errors: u32::MAX,
+                rx_buffer_bytes: u32::MAX,
+                rx_peak_bytes: u32::MAX,
+            },
+            reset_cause: ResetCause::Watchdog as u8,
+            clock_source: ClockSource::InternalFallback as u8,
+        }
+    }
+
+    #[test]
+    fn requests_and_responses_round_trip() {
+        let requests = [Request::Sample(sample()), Request::Reset, Request::ReadStatus, Request::Hang];
+        for r in requests {
+            for seq in [UNNUMBERED, 1, u32::MAX] {
+                let numbered = Numbered { seq, message: r };
+                let mut inner = body(&frame_of(&numbered));
+                assert!(inner.len() <= MAX_REQUEST_ENCODED);
+                assert_eq!(decode_frame::<Numbered<Request>>(&mut inner), Ok(numbered));
+            }
+        }
         let rejected = RejectedReply::new(
             3.0,
             &estimator_core::SampleError::NonFinite(estimator_core::Field::Roll),
@@ -252,14 +285,15 @@ mod tests {
         for r in [
             Response::Step(step_reply()),
             Response::Rejected(rejected),
-            Response::Status(status),
+            Response::Status(longest_status()),
             Response::Ready {
                 protocol_version: crate::PROTOCOL_VERSION,
             },
         ] {
-            let mut inner = body(&frame_of(&r));
+            let numbered = Numbered { seq: u32::MAX, message: r };
+            let mut inner = body(&frame_of(&numbered));
             assert!(inner.len() <= MAX_RESPONSE_ENCODED, "{} bytes", inner.len());
-            assert_eq!(decode_frame::<Response>(&mut inner), Ok(r));
+            assert_eq!(decode_frame::<Numbered<Response>>(&mut inner), Ok(numbered));
         }
     }
 
@@ -302,26 +336,54 @@ mod tests {
         }
         assert_eq!(bytes, expect);
         assert_eq!(bytes.len(), 33);
+        // A numbered message is its sequence number (varint), then the message.
+        let numbered = postcard::to_slice(&Numbered { seq: 300, message: Request::Sample(m) }, &mut raw)
+            .unwrap()
+            .to_vec();
+        assert_eq!(numbered[..2], [0xac, 0x02]);
+        assert_eq!(numbered[2..], expect[..]);
         // The examples of docs/link-protocol.md, byte for byte.
         let sample_frame = [
-            0x00, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xf0, 0x3f, 0x01, 0x01, 0x02, 0x40, 0x01, 0x01, 0x01,
-            0x01, 0x01, 0x01, 0x02, 0x3f, 0x01, 0x03, 0x80, 0xbf, 0x01, 0x03, 0x80, 0x3e, 0x01, 0x01, 0x04, 0x3e, 0x7a,
-            0x62, 0x00,
+            0x00, 0x02, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xf0, 0x3f, 0x01, 0x01, 0x02, 0x40, 0x01, 0x01,
+            0x01, 0x01, 0x01, 0x01, 0x02, 0x3f, 0x01, 0x03, 0x80, 0xbf, 0x01, 0x03, 0x80, 0x3e, 0x01, 0x01, 0x04, 0x3e,
+            0xd9, 0xe4, 0x00,
         ];
-        assert_eq!(frame_of(&Request::Sample(m)), sample_frame.to_vec());
-        assert_eq!(frame_of(&Request::Reset), [0x00, 0x04, 0x01, 0xd1, 0xf1, 0x00].to_vec());
+        assert_eq!(frame_of(&Numbered { seq: 1, message: Request::Sample(m) }), sample_frame.to_vec());
         assert_eq!(
-            frame_of(&Request::ReadStatus),
-            [0x00, 0x04, 0x02, 0xb2, 0xc1, 0x00].to_vec()
+            frame_of(&Numbered { seq: 2, message: Request::Reset }),
+            [0x00, 0x05, 0x02, 0x01, 0x4c, 0x6b, 0x00].to_vec()
         );
-        // The firmware's boot announcement (protocol 5): M = 03 05.
-        let ready = Response::Ready { protocol_version: crate::PROTOCOL_VERSION };
+        assert_eq!(
+            frame_of(&Numbered { seq: 3, message: Request::ReadStatus }),
+            [0x00, 0x05, 0x03, 0x02, 0x1e, 0x68, 0x00].to_vec()
+        );
+        assert_eq!(
+            frame_of(&Numbered { seq: 300, message: Request::Hang }),
+            [0x00, 0x06, 0xac, 0x02, 0x03, 0x60, 0x52, 0x00].to_vec()
+        );
+        // The firmware's boot announcement (protocol 5), unnumbered: M = 00 03 05.
+        let ready = Numbered {
+            seq: UNNUMBERED,
+            message: Response::Ready { protocol_version: crate::PROTOCOL_VERSION },
+        };
         let bytes = postcard::to_slice(&ready, &mut raw).unwrap().to_vec();
-        assert_eq!(bytes, [0x03, 0x05]);
-        assert_eq!(crate::crc::crc16(&bytes), 0x18f9);
-        assert_eq!(frame_of(&ready), [0x00, 0x05, 0x03, 0x05, 0xf9, 0x18, 0x00].to_vec());
-        // No sample frame is longer than 38 bytes: 33 + 2 bytes COBS-encoded into at most 36.
-        assert!(frame_of(&Request::Sample(sample())).len() <= 38);
+        assert_eq!(bytes, [0x00, 0x03, 0x05]);
+        assert_eq!(crate::crc::crc16(&bytes), 0xc96a);
+        assert_eq!(frame_of(&ready), [0x00, 0x01, 0x05, 0x03, 0x05, 0x6a, 0xc9, 0x00].to_vec());
+        // No sample frame is longer than 43 bytes: 5 + 33 + 2 bytes COBS-encoded into at most 41.
+        assert!(frame_of(&Numbered { seq: u32::MAX, message: Request::Sample(sample()) }).len() <= MAX_SAMPLE_FRAME);
+        assert_eq!(MAX_SAMPLE_FRAME, 43);
+    }
+
+    /// The longest status and step answers fit the host's receive buffer, as the docs say.
+    #[test]
+    fn the_longest_answers_are_as_documented() {
+        let mut raw = [0u8; 300];
+        let status = Numbered { seq: u32::MAX, message: Response::Status(longest_status()) };
+        assert_eq!(postcard::to_slice(&status, &mut raw).unwrap().len(), 177);
+        let step = Numbered { seq: u32::MAX, message: Response::Step(step_reply()) };
+        assert_eq!(postcard::to_slice(&step, &mut raw).unwrap().len(), 111);
+        assert!(frame_of(&status).len() - 2 <= MAX_RESPONSE_ENCODED);
     }
 
     #[test]
@@ -429,11 +491,11 @@ mod tests {
             assert_eq!(cobs_decode_strict(&mut part), Err(FrameError::Cobs), "cut at {cut}");
         }
         assert_eq!(cobs_decode_strict(&mut []), Err(FrameError::Cobs));
-        // The Ready frame (one group) cut anywhere.
+        // A frame of one group (a bare Ready message) cut anywhere.
         let ready = body(&frame_of(&Response::Ready {
             protocol_version: crate::PROTOCOL_VERSION,
         }));
-        assert_eq!(ready, [0x05, 0x03, 0x04, 0xd8, 0x08]);
+        assert_eq!(ready, [0x05, 0x03, 0x05, 0xf9, 0x18]);
         for cut in 0..ready.len() {
             let mut part = ready[..cut].to_vec();
             assert_eq!(decode_frame::<Response>(&mut part), Err(FrameError::Cobs), "cut at {cut}");

@@ -26,14 +26,14 @@
 //! use estimator_core::Sample;
 //! use link_protocol::frame::MAX_FRAME;
 //! use link_protocol::{
-//!     encode_frame, FrameAccumulator, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
-//!     MAX_RESPONSE_ENCODED, PROTOCOL_VERSION,
+//!     encode_frame, FrameAccumulator, Numbered, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
+//!     MAX_RESPONSE_ENCODED, PROTOCOL_VERSION, UNNUMBERED,
 //! };
 //!
-//! // Host: a sample at 100 s (rotation 45 deg, platform 0 deg, latitude 30 deg, heading 10 deg,
-//! // roll 1 deg, pitch -0.5 deg) becomes one frame.
+//! // Host: its 7th request, a sample at 100 s (rotation 45 deg, platform 0 deg, latitude 30 deg,
+//! // heading 10 deg, roll 1 deg, pitch -0.5 deg), becomes one frame.
 //! let sample = Sample::from_degrees(100.0, 45.0, 0.0, 30.0, 10.0, 1.0, -0.5);
-//! let request = Request::Sample(SampleMsg::from(&sample));
+//! let request = Numbered { seq: 7, message: Request::Sample(SampleMsg::from(&sample)) };
 //! let mut frame = [0u8; MAX_FRAME];
 //! let n = encode_frame(&request, &mut frame)?;
 //!
@@ -41,24 +41,25 @@
 //! let mut rx = FrameAccumulator::<MAX_REQUEST_ENCODED>::new();
 //! let mut received = None;
 //! for &byte in &frame[..n] {
-//!     if let Some(result) = rx.push_decode::<Request>(byte) {
+//!     if let Some(result) = rx.push_decode::<Numbered<Request>>(byte) {
 //!         received = Some(result?); // a bad frame would be a `FrameError` here
 //!     }
 //! }
 //! assert_eq!(received, Some(request));
-//! // The firmware's core gets the very sample the host built, bit for bit.
-//! if let Some(Request::Sample(msg)) = received {
+//! // The firmware's core gets the very sample the host built, bit for bit; its answer will
+//! // carry the number 7.
+//! if let Some(Numbered { seq: 7, message: Request::Sample(msg) }) = received {
 //!     assert_eq!(Sample::from(&msg), sample);
 //! }
 //!
-//! // Firmware to host: the boot announcement, 7 bytes on the wire.
-//! let ready = Response::Ready { protocol_version: PROTOCOL_VERSION };
+//! // Firmware to host: the boot announcement, unnumbered, 8 bytes on the wire.
+//! let ready = Numbered { seq: UNNUMBERED, message: Response::Ready { protocol_version: PROTOCOL_VERSION } };
 //! let n = encode_frame(&ready, &mut frame)?;
-//! assert_eq!(frame[..n], [0x00, 0x05, 0x03, 0x04, 0xd8, 0x08, 0x00]);
+//! assert_eq!(frame[..n], [0x00, 0x01, 0x05, 0x03, 0x05, 0x6a, 0xc9, 0x00]);
 //! let mut host_rx = FrameAccumulator::<MAX_RESPONSE_ENCODED>::new();
 //! let responses = frame[..n]
 //!     .iter()
-//!     .filter_map(|&byte| host_rx.push_decode::<Response>(byte))
+//!     .filter_map(|&byte| host_rx.push_decode::<Numbered<Response>>(byte))
 //!     .collect::<Result<Vec<_>, _>>()?;
 //! assert_eq!(responses, [ready]);
 //! # Ok::<(), Box<dyn core::error::Error>>(())
@@ -79,21 +80,30 @@ pub mod message;
 
 pub use accumulator::FrameAccumulator;
 pub use blocking_writer::BlockingWriter;
-pub use frame::{decode_frame, encode_frame, EncodeError, FrameError};
-pub use message::{Counters, EstimateMsg, RejectedReply, Request, Response, SampleMsg, StatusReply, StepReply};
+pub use frame::{decode_frame, encode_frame, encode_response_frame, EncodeError, FrameError};
+pub use message::{
+    ClockSource, Counters, EstimateMsg, LinkCounters, Numbered, RejectedReply, Request, ResetCause, Response,
+    SampleMsg, StatusReply, StepReply, UNNUMBERED,
+};
 
-/// Version of this protocol, reported in [`StatusReply::protocol_version`]. 4: status code 9
-/// (the estimator detecting the sample interval or the rotation pattern), the third counter of
-/// `Status` counts filled samples, `Reset` erases the checkpoint slots; 5: status code 10 (a
-/// change of the installation errors declared) (docs/link-protocol.md, Versioning).
+/// Version of this protocol, reported in [`StatusReply::protocol_version`]. 5: every frame's
+/// message is [`Numbered`] (a sequence number before it), `Status` appends the receive path's
+/// [`LinkCounters`], the reset cause and the clock source, and the request `Hang` (variant 3, test
+/// builds only) exists, and `Step`'s status may be 10 (a change of the installation errors
+/// declared) (docs/link-protocol.md, Versioning).
 pub const PROTOCOL_VERSION: u8 = 5;
 
 /// Largest COBS-encoded request the firmware accepts (without the two 0x00 delimiters). The largest
 /// request, a sample, encodes to 36 bytes; anything longer than this is counted as oversized.
 pub const MAX_REQUEST_ENCODED: usize = 64;
 
+/// Longest sample request frame on the wire, both 0x00 delimiters included: a sequence number of
+/// 5 bytes, the 33-byte sample and the CRC, COBS-encoded (one code byte more) between the
+/// delimiters. Receive buffers are sized in these.
+pub const MAX_SAMPLE_FRAME: usize = 43;
+
 /// Largest COBS-encoded response (without the delimiters); the largest response encodes to far less.
-pub const MAX_RESPONSE_ENCODED: usize = 192;
+pub const MAX_RESPONSE_ENCODED: usize = 256;
 
 /// Largest message (postcard bytes, before the CRC) this crate encodes.
-pub const MAX_MESSAGE: usize = 160;
+pub const MAX_MESSAGE: usize = 224;

@@ -8,10 +8,27 @@
 //! travel exactly as [`estimator_core::Output`] holds them, so the host rebuilds the same `Output`.
 //! Variants are only ever appended, never reordered.
 
-use estimator_core::{Attitude, Estimate, Field, Output, Real, RejectReason, Sample, SampleError, Status};
+use estimator_core::{Attitude, Estimate, Field, Output, Real, RejectReason, Sample, SampleError, Status, UnknownCode};
 use serde::{Deserialize, Serialize};
 
 use crate::frame::FrameError;
+
+/// One frame's message with its sequence number: every frame in both directions carries one
+/// (protocol 5). The host numbers its requests 1, 2, 3, ... in the order it sends them; the
+/// firmware answers each with the request's number, so a host that sends without waiting
+/// (`host-sim stream --push`) matches every answer to its request, and a gap in the numbers shows
+/// a lost frame at either end. The firmware's unasked `Ready` carries [`UNNUMBERED`], as may a
+/// request from a host that does not count (the firmware then counts no loss for it).
+///
+/// On the wire: `seq` as a varint (1 to 5 bytes), then the message.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+pub struct Numbered<T> {
+    pub seq: u32,
+    pub message: T,
+}
+
+/// The sequence number of a frame that is not part of the numbered stream (`Ready`).
+pub const UNNUMBERED: u32 = 0;
 
 /// Host to firmware.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
@@ -24,6 +41,11 @@ pub enum Request {
     Reset,
     /// (2) Answered by [`Response::Status`].
     ReadStatus,
+    /// (3) Only for the watchdog test: a firmware built with its `test-hang` feature stops its
+    /// main loop for good (it no longer feeds the watchdog), so the watchdog must reset it. Every
+    /// other build treats it as no request: dropped, counted as a `message` bad frame, never
+    /// answered.
+    Hang,
 }
 
 /// Firmware to host. Exactly one response per well-formed request; none for a bad frame.
@@ -248,6 +270,148 @@ pub struct StatusReply {
     pub checkpoint_time_s: Option<f64>,
     /// Checkpoints saved since boot.
     pub checkpoints_saved: u32,
+    /// The receive path's counters since boot.
+    pub link: LinkCounters,
+    /// Why the firmware last started ([`ResetCause`] code, `as u8`).
+    pub reset_cause: u8,
+    /// What clocks the core ([`ClockSource`] code, `as u8`).
+    pub clock_source: u8,
+}
+
+/// The receive path's counters since boot (they survive `Reset`; saturating), and its buffer.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LinkCounters {
+    /// Numbered requests that never arrived intact: gaps in the sequence numbers received.
+    pub lost_frames: u32,
+    /// Bytes the UART itself lost: a byte completed while the previous one was still in its data
+    /// register (the STM32's ORE, the CMSDK UART's RX overrun).
+    pub uart_overruns: u32,
+    /// Times the receive buffer overflowed: received bytes overwritten or dropped before the
+    /// firmware read them (the DMA ring lapped, or the interrupt ring was full).
+    pub buffer_overruns: u32,
+    /// Bytes received with a framing error (no stop bit where one belongs: wrong baud rate, a
+    /// break, a line fault).
+    pub framing_errors: u32,
+    /// Bytes received with noise (the STM32's NF: the samples of a bit disagreed).
+    pub noise_errors: u32,
+    /// Size of the receive buffer, bytes.
+    pub rx_buffer_bytes: u32,
+    /// Most bytes that were waiting in the receive buffer at once since boot.
+    pub rx_peak_bytes: u32,
+}
+
+impl LinkCounters {
+    /// Every error the receive path saw (lost frames, overruns of both kinds, framing, noise).
+    pub fn errors_total(&self) -> u32 {
+        [
+            self.lost_frames,
+            self.uart_overruns,
+            self.buffer_overruns,
+            self.framing_errors,
+            self.noise_errors,
+        ]
+        .iter()
+        .fold(0u32, |a, b| a.saturating_add(*b))
+    }
+
+    /// Overruns of either kind (UART and buffer).
+    pub fn overruns(&self) -> u32 {
+        self.uart_overruns.saturating_add(self.buffer_overruns)
+    }
+}
+
+/// Why the firmware started, as far as the board can tell (code: `as u8`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum ResetCause {
+    /// Power-on, or a board that cannot tell.
+    PowerOn = 0,
+    /// The watchdog: the main loop stopped feeding it.
+    Watchdog = 1,
+    /// The supply fell below the brown-out level.
+    BrownOut = 2,
+    /// The firmware reset itself after a fatal error.
+    Software = 3,
+    /// The reset pin (a debugger, a button).
+    Pin = 4,
+    /// The clock security system saw the crystal fail; the firmware reset itself to start again
+    /// on what still runs.
+    ClockFailure = 5,
+}
+
+impl ResetCause {
+    /// Every cause, in code order.
+    pub const ALL: [ResetCause; 6] = [
+        ResetCause::PowerOn,
+        ResetCause::Watchdog,
+        ResetCause::BrownOut,
+        ResetCause::Software,
+        ResetCause::Pin,
+        ResetCause::ClockFailure,
+    ];
+
+    /// Short name, as the host prints it.
+    pub const fn name(&self) -> &'static str {
+        match self {
+            ResetCause::PowerOn => "power-on",
+            ResetCause::Watchdog => "watchdog",
+            ResetCause::BrownOut => "brown-out",
+            ResetCause::Software => "software",
+            ResetCause::Pin => "reset pin",
+            ResetCause::ClockFailure => "clock failure",
+        }
+    }
+}
+
+impl TryFrom<u8> for ResetCause {
+    type Error = UnknownCode;
+
+    fn try_from(code: u8) -> Result<Self, UnknownCode> {
+        Self::ALL
+            .into_iter()
+            .find(|c| *c as u8 == code)
+            .ok_or(UnknownCode { what: "reset-cause", code })
+    }
+}
+
+/// What clocks the core (code: `as u8`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum ClockSource {
+    /// The crystal (HSE) through the PLL, as intended.
+    Crystal = 0,
+    /// The internal RC oscillator (HSI, 16 MHz) alone, because the crystal did not start in
+    /// time: the baud rate is within the HSI's +-1 % instead of the crystal's ppm.
+    InternalFallback = 1,
+    /// The board's one fixed clock (mps2-an386), or an emulator's (QEMU).
+    Fixed = 2,
+}
+
+impl ClockSource {
+    /// Every source, in code order.
+    pub const ALL: [ClockSource; 3] = [ClockSource::Crystal, ClockSource::InternalFallback, ClockSource::Fixed];
+
+    /// Short name, as the host prints it.
+    pub const fn name(&self) -> &'static str {
+        match self {
+            ClockSource::Crystal => "crystal",
+            ClockSource::InternalFallback => "internal RC (crystal failed to start)",
+            ClockSource::Fixed => "fixed",
+        }
+    }
+}
+
+impl TryFrom<u8> for ClockSource {
+    type Error = UnknownCode;
+
+    fn try_from(code: u8) -> Result<Self, UnknownCode> {
+        Self::ALL
+            .into_iter()
+            .find(|c| *c as u8 == code)
+            .ok_or(UnknownCode { what: "clock-source", code })
+    }
 }
 
 #[cfg(test)]
@@ -276,6 +440,37 @@ mod tests {
             let r = RejectedReply::new(1.0, &e, 0, Counters::default());
             assert_eq!(r.error(), Some(e));
         }
+    }
+
+    #[test]
+    fn reset_causes_and_clock_sources_list_their_codes_in_order() {
+        for (i, c) in ResetCause::ALL.iter().enumerate() {
+            assert_eq!(*c as usize, i);
+            assert_eq!(ResetCause::try_from(i as u8), Ok(*c));
+        }
+        assert!(ResetCause::try_from(ResetCause::ALL.len() as u8).is_err());
+        for (i, c) in ClockSource::ALL.iter().enumerate() {
+            assert_eq!(*c as usize, i);
+            assert_eq!(ClockSource::try_from(i as u8), Ok(*c));
+        }
+        assert!(ClockSource::try_from(ClockSource::ALL.len() as u8).is_err());
+    }
+
+    #[test]
+    fn link_counters_add_up_their_errors() {
+        let c = LinkCounters {
+            lost_frames: 1,
+            uart_overruns: 2,
+            buffer_overruns: 4,
+            framing_errors: 8,
+            noise_errors: 16,
+            rx_buffer_bytes: 1000,
+            rx_peak_bytes: 500,
+        };
+        assert_eq!(c.errors_total(), 31);
+        assert_eq!(c.overruns(), 6);
+        let saturated = LinkCounters { lost_frames: u32::MAX, ..c };
+        assert_eq!(saturated.errors_total(), u32::MAX);
     }
 
     #[test]

@@ -316,3 +316,20 @@ fn a_step_of_the_errors_is_declared_reported_and_learned_again() {
     let at_14000 = rows[14_000].2.unwrap();
     assert!(at_14000[1].abs() > 10.0, "{at_14000:?}");
 }
+
+#[test]
+fn clock_steps_are_counted() {
+    let mut est: Estimator = Estimator::new(Config::default()).unwrap();
+    for k in 0..200 {
+        est.step(&sample(k as f64, 3.0)).unwrap();
+    }
+    assert_eq!(est.counters().clock_steps, 0);
+    // A step back of 5 s (more than two intervals) and a jump forwards off the grid (a whole
+    // number of intervals forwards is a gap, not a step of the clock).
+    est.step(&sample(194.0, 3.0)).unwrap();
+    for k in 195..300 {
+        est.step(&sample(k as f64, 3.0)).unwrap();
+    }
+    est.step(&sample(3900.5, 3.0)).unwrap();
+    assert_eq!(est.counters().clock_steps, 2);
+}

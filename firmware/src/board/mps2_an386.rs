@@ -1,23 +1,36 @@
 //! ARM MPS2+ AN386 (Cortex-M4F, 25 MHz) as QEMU emulates it (`-machine mps2-an386`).
 //!
-//! - UART0: CMSDK APB UART at 0x4000_4000, 115200 baud from the 25 MHz peripheral clock. The core
-//!   sleeps (WFI) until a byte arrives: the RX interrupt (IRQ 0) is enabled in the UART and the NVIC
-//!   but masked by PRIMASK, so it wakes the core without running a handler; no interrupt handler
-//!   exists. Sleeping instead of spinning leaves the host's CPU to QEMU's I/O thread.
-//! - Cost counter: SysTick on the core clock, free-running over 24 bits. On real silicon a tick is a
-//!   core cycle (40 ns). Under QEMU with `-icount shift=0` each instruction takes 1 ns of virtual
-//!   time, so one tick (1/25 MHz = 40 ns) is exactly 40 instructions; the TCG plugin
-//!   `firmware/tools/stepcount.c` confirms it.
+//! - UART0: CMSDK APB UART at 0x4000_4000, 115200 baud from the 25 MHz peripheral clock.
+//!   Receive: the RX interrupt (IRQ 0) moves each byte into the receive ring (`interrupt_rx.rs`)
+//!   as it arrives, whatever the main loop is doing. Transmit: interrupt-driven too (IRQ 1, raised
+//!   when the one-byte transmit buffer empties): `write` queues the bytes and returns; the handler
+//!   feeds them to the UART. The UART's RX overrun flag is counted (QEMU holds input back while a
+//!   byte waits, so it never overruns there).
+//! - Watchdog: the CMSDK APB watchdog at 0x4000_8000 (WDOGCLK 25 MHz), which QEMU models: its
+//!   interrupt (the NMI on this board) after [`WATCHDOG_TIMEOUT_CYCLES`] unfed, the reset after as
+//!   many again. The NMI leaves the cause for the next boot (`reset_mark.rs`).
+//! - Cost counter: SysTick on the core clock, free-running over 24 bits; its wrap interrupt wakes
+//!   the main loop every 0.67 s so that it feeds the watchdog while no byte arrives. Under QEMU
+//!   with `-icount shift=0` one tick is exactly 40 instructions.
 //! - Logs: defmt over semihosting (QEMU's stdout). Fatal errors: semihosting exit with status 1.
 //! - Flash for checkpoints: the host file `rins-flash.bin` in QEMU's working directory
 //!   ([`Flash`], `semihosted_flash.rs`), laid out as `firmware::flash_layout::MPS2_AN386` (64
 //!   sectors of 4 KiB), each 256-byte page written in the STM32F405's time (4.1 ms of core clock).
+//!
+//! Interrupts are dispatched by number from cortex-m-rt's `DefaultHandler` (this board has no
+//! peripheral access crate, so no vector table of named handlers).
 
 use core::convert::Infallible;
-use core::ptr::{read_volatile, write_volatile};
+use core::ptr::{addr_of_mut, read_volatile, write_volatile};
 
+use cortex_m_rt::exception;
 use defmt_semihosting as _;
+use firmware::rx_stats::LineErrors;
+use firmware::watchdog::Watchdog;
+use heapless::spsc::{Consumer, Producer, Queue};
+use link_protocol::{ClockSource, ResetCause};
 
+pub use super::interrupt_rx::RingReceiver as Receiver;
 pub use super::systick_cost::CostCounter;
 
 /// The checkpoint flash: the semihosted file, as big as the board's checkpoint region.
@@ -36,133 +49,257 @@ const UART_INTSTATUS: usize = 0x0C;
 const UART_BAUDDIV: usize = 0x10;
 const STATE_TX_FULL: u32 = 1 << 0;
 const STATE_RX_FULL: u32 = 1 << 1;
+const STATE_RX_OVERRUN: u32 = 1 << 3;
 const CTRL_TX_EN: u32 = 1 << 0;
 const CTRL_RX_EN: u32 = 1 << 1;
+const CTRL_TX_INT_EN: u32 = 1 << 2;
 const CTRL_RX_INT_EN: u32 = 1 << 3;
+const INTSTATUS_TX: u32 = 1 << 0;
 const INTSTATUS_RX: u32 = 1 << 1;
-/// UART0's receive interrupt on this board (QEMU hw/arm/mps2.c: UART0 RX = IRQ 0).
-const UART0_RX_IRQ: u32 = 0;
+/// UART0's interrupts on this board (QEMU hw/arm/mps2.c: RX = IRQ 0, TX = IRQ 1).
+const UART0_RX_IRQ: i16 = 0;
+const UART0_TX_IRQ: i16 = 1;
+
+const WATCHDOG_BASE: usize = 0x4000_8000;
+const WDOG_LOAD: usize = 0x000;
+const WDOG_CONTROL: usize = 0x008;
+const WDOG_INTCLR: usize = 0x00C;
+const WDOG_LOCK: usize = 0xC00;
+const WDOG_UNLOCK_KEY: u32 = 0x1ACC_E551;
+const WDOG_CONTROL_INTEN: u32 = 1 << 0;
+const WDOG_CONTROL_RESEN: u32 = 1 << 1;
+/// Cycles of WDOGCLK (25 MHz) from a feed to the watchdog's interrupt, and again to the reset:
+/// 1 s and 2 s. The main loop feeds at least every 0.67 s (SysTick's wrap), and the longest thing
+/// it does here (a checkpoint into the host file) takes a few ms of core clock.
+pub const WATCHDOG_TIMEOUT_CYCLES: u32 = 25_000_000;
+
+/// Bytes queued for transmission (more than the longest frame, 182 bytes).
+const TX_QUEUE_ENTRIES: usize = 256;
 
 /// The board's parts.
 pub struct Board {
-    pub uart: Uart,
+    pub tx: Transmitter,
+    pub rx: Receiver,
     pub cost: CostCounter,
     /// Non-volatile storage for checkpoints; `None` without the `checkpoint` feature or if the
     /// host file cannot be opened.
     #[cfg_attr(not(feature = "checkpoint"), allow(dead_code))]
     pub flash: Option<Flash>,
+    pub watchdog: BoardWatchdog,
+    pub reset_cause: ResetCause,
+    pub clock_source: ClockSource,
 }
 
 impl Board {
-    /// Sets up the UART and the cost counter. Call once.
+    /// Sets up the UART, its interrupts, the cost counter and the watchdog. Call once.
     pub fn init() -> Option<Board> {
         let peripherals = cortex_m::Peripherals::take()?;
-        // Interrupts stay masked: a pending UART interrupt only wakes the core from WFI.
         cortex_m::interrupt::disable();
-        let nvic = peripherals.NVIC;
-        // SAFETY: enabling an interrupt that PRIMASK keeps from being taken.
-        unsafe { nvic.iser[0].write(1 << UART0_RX_IRQ) };
+        let reset_cause = super::reset_mark::take().unwrap_or(ResetCause::PowerOn);
+        let rx = super::interrupt_rx::init()?;
+        let tx = Transmitter::init()?;
+        let watchdog = BoardWatchdog::start();
+        // SAFETY: the rings' ends are in place; the handlers below may run from now on.
+        unsafe {
+            uart_init();
+            cortex_m::peripheral::NVIC::unmask(Irq(UART0_RX_IRQ));
+            cortex_m::peripheral::NVIC::unmask(Irq(UART0_TX_IRQ));
+            cortex_m::interrupt::enable();
+        }
+        defmt::info!("mps2-an386: reset cause {}", reset_cause);
         Some(Board {
-            uart: Uart::init(nvic),
-            cost: CostCounter::init(peripherals.SYST, CORE_CLOCK_HZ),
+            tx,
+            rx,
+            cost: CostCounter::init(peripherals.SYST, CORE_CLOCK_HZ, true),
             flash: if cfg!(feature = "checkpoint") {
                 Flash::open(CORE_CLOCK_HZ)
             } else {
                 None
             },
+            watchdog,
+            reset_cause,
+            clock_source: ClockSource::Fixed,
         })
     }
 }
 
-/// UART0.
-pub struct Uart {
-    nvic: cortex_m::peripheral::NVIC,
-}
+/// An interrupt number for the NVIC.
+#[derive(Clone, Copy)]
+struct Irq(i16);
 
-impl Uart {
-    fn init(nvic: cortex_m::peripheral::NVIC) -> Uart {
-        // SAFETY: UART0's registers, owned by this one `Uart` created once in `Board::init`.
-        unsafe {
-            reg_write(UART_BAUDDIV, UART_CLOCK_HZ / BAUD);
-            reg_write(UART_CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_INT_EN);
-            reg_write(UART_INTSTATUS, 0xF);
-            // One dummy read: QEMU wakes its chardev only when DATA is read, so without it the first
-            // input byte waits about a second (measured under QEMU).
-            let _ = reg_read(UART_DATA);
-        }
-        Uart { nvic }
-    }
-
-    fn read_byte(&mut self) -> u8 {
-        while !self.rx_ready() {
-            // Wakes when UART0's RX interrupt is pending (also if it became pending just before).
-            cortex_m::asm::wfi();
-        }
-        // SAFETY: see `init`.
-        let byte = unsafe { reg_read(UART_DATA) as u8 };
-        // Clear the interrupt at the UART, then in the NVIC, so the next WFI sleeps.
-        // SAFETY: see `init`; ICPR only clears a pending bit.
-        unsafe {
-            reg_write(UART_INTSTATUS, INTSTATUS_RX);
-            self.nvic.icpr[0].write(1 << UART0_RX_IRQ);
-        }
-        byte
-    }
-
-    fn rx_ready(&self) -> bool {
-        // SAFETY: see `init`; reading STATE has no side effect.
-        unsafe { reg_read(UART_STATE) & STATE_RX_FULL != 0 }
-    }
-
-    fn write_byte(&mut self, byte: u8) {
-        // SAFETY: see `init`.
-        unsafe {
-            while reg_read(UART_STATE) & STATE_TX_FULL != 0 {}
-            reg_write(UART_DATA, byte as u32);
-        }
+// SAFETY: the numbers are this board's interrupt lines.
+unsafe impl cortex_m::interrupt::InterruptNumber for Irq {
+    fn number(self) -> u16 {
+        self.0 as u16
     }
 }
 
-impl embedded_io::ErrorType for Uart {
+/// # Safety
+/// Once, from `Board::init`.
+unsafe fn uart_init() {
+    // SAFETY: UART0's registers, set up once here.
+    unsafe {
+        reg_write(UART_BAUDDIV, UART_CLOCK_HZ / BAUD);
+        reg_write(UART_CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_INT_EN | CTRL_TX_INT_EN);
+        reg_write(UART_INTSTATUS, INTSTATUS_TX | INTSTATUS_RX);
+        // One dummy read: QEMU wakes its chardev only when DATA is read, so without it the first
+        // input byte waits about a second (measured under QEMU).
+        let _ = reg_read(UART_DATA);
+    }
+}
+
+/// UART0's receive interrupt: every byte waiting goes into the ring. The interrupt is cleared
+/// first: a byte that arrives after the last look raises it again.
+fn uart_rx_interrupt() {
+    // SAFETY: UART0's registers; this handler is the only reader of DATA.
+    unsafe {
+        reg_write(UART_INTSTATUS, INTSTATUS_RX);
+        loop {
+            let state = reg_read(UART_STATE);
+            if state & STATE_RX_FULL == 0 {
+                break;
+            }
+            let byte = reg_read(UART_DATA) as u8;
+            let overrun = state & STATE_RX_OVERRUN != 0;
+            if overrun {
+                // Write 1 to clear.
+                reg_write(UART_STATE, STATE_RX_OVERRUN);
+            }
+            super::interrupt_rx::push(byte, LineErrors { overrun, ..LineErrors::default() });
+        }
+    }
+}
+
+static mut TX_QUEUE: Queue<u8, TX_QUEUE_ENTRIES> = Queue::new();
+/// The transmit interrupt handler's end of the queue; `None` until `Transmitter::init`.
+static mut TX_CONSUMER: Option<Consumer<'static, u8>> = None;
+
+/// UART0's transmit interrupt (the buffer emptied), or pended by [`Transmitter::write`]: the next
+/// queued byte goes out.
+fn uart_tx_interrupt() {
+    // SAFETY: UART0's registers; this handler is the only writer of DATA and the queue's one
+    // consumer.
+    unsafe {
+        reg_write(UART_INTSTATUS, INTSTATUS_TX);
+        if let Some(queue) = (*addr_of_mut!(TX_CONSUMER)).as_mut() {
+            if reg_read(UART_STATE) & STATE_TX_FULL == 0 {
+                if let Some(byte) = queue.dequeue() {
+                    reg_write(UART_DATA, u32::from(byte));
+                }
+            }
+        }
+    }
+}
+
+/// UART0's transmitter: bytes are queued and sent by the transmit interrupt.
+pub struct Transmitter {
+    queue: Producer<'static, u8>,
+}
+
+impl Transmitter {
+    fn init() -> Option<Transmitter> {
+        // SAFETY: called once from Board::init before the transmit interrupt is enabled.
+        unsafe {
+            let consumer = &mut *addr_of_mut!(TX_CONSUMER);
+            if consumer.is_some() {
+                return None;
+            }
+            let (producer, c) = (*addr_of_mut!(TX_QUEUE)).split();
+            *consumer = Some(c);
+            Some(Transmitter { queue: producer })
+        }
+    }
+}
+
+impl embedded_io::ErrorType for Transmitter {
     type Error = Infallible;
 }
 
-impl embedded_io::Read for Uart {
-    /// Blocks until at least one byte has arrived, then takes what is already there.
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
-        let mut n = 0;
-        for slot in buf.iter_mut() {
-            if n > 0 && !self.rx_ready() {
-                break;
-            }
-            *slot = self.read_byte();
-            n += 1;
-        }
-        Ok(n)
-    }
-}
-
-impl embedded_io::Write for Uart {
+impl embedded_io::Write for Transmitter {
+    /// Queues what fits (at least one byte: waits for room) and starts the transmit interrupt.
     fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
-        for &b in buf {
-            self.write_byte(b);
+        loop {
+            let mut n = 0;
+            for &byte in buf {
+                if self.queue.enqueue(byte).is_err() {
+                    break;
+                }
+                n += 1;
+            }
+            cortex_m::peripheral::NVIC::pend(Irq(UART0_TX_IRQ));
+            if n > 0 || buf.is_empty() {
+                return Ok(n);
+            }
+            // Full: the handler is draining it; wait for its next interrupt and try again.
+            cortex_m::asm::wfi();
         }
-        Ok(buf.len())
     }
 
+    /// Waits until every queued byte has gone to the UART.
     fn flush(&mut self) -> Result<(), Infallible> {
-        // SAFETY: see `init`.
-        unsafe { while reg_read(UART_STATE) & STATE_TX_FULL != 0 {} }
+        while !self.queue.is_empty() {
+            cortex_m::peripheral::NVIC::pend(Irq(UART0_TX_IRQ));
+            cortex_m::asm::wfi();
+        }
         Ok(())
     }
 }
 
+/// The CMSDK watchdog (registers locked between accesses).
+#[derive(Clone, Copy)]
+pub struct BoardWatchdog;
+
+impl BoardWatchdog {
+    fn start() -> BoardWatchdog {
+        // SAFETY: the watchdog's registers, unlocked for these writes only.
+        unsafe {
+            wdog_write(WDOG_LOCK, WDOG_UNLOCK_KEY);
+            wdog_write(WDOG_LOAD, WATCHDOG_TIMEOUT_CYCLES);
+            wdog_write(WDOG_CONTROL, WDOG_CONTROL_INTEN | WDOG_CONTROL_RESEN);
+            wdog_write(WDOG_LOCK, 0);
+        }
+        BoardWatchdog
+    }
+}
+
+impl Watchdog for BoardWatchdog {
+    /// Clears the interrupt and reloads the counter.
+    fn feed(&self) {
+        // SAFETY: as in `start`; a write to INTCLR has no other effect.
+        unsafe {
+            wdog_write(WDOG_LOCK, WDOG_UNLOCK_KEY);
+            wdog_write(WDOG_INTCLR, 1);
+            wdog_write(WDOG_LOCK, 0);
+        }
+    }
+}
+
+/// The watchdog's interrupt: the main loop has not fed it for 1 s; the reset follows 1 s later
+/// unless it is fed meanwhile. Leaves the cause for the next boot.
+#[exception]
+unsafe fn NonMaskableInt() {
+    super::reset_mark::set(ResetCause::Watchdog);
+}
+
+#[exception]
+unsafe fn DefaultHandler(irqn: i16) {
+    match irqn {
+        UART0_RX_IRQ => uart_rx_interrupt(),
+        UART0_TX_IRQ => uart_tx_interrupt(),
+        _ => {}
+    }
+}
+
 unsafe fn reg_read(offset: usize) -> u32 {
-    read_volatile((UART0_BASE + offset) as *const u32)
+    unsafe { read_volatile((UART0_BASE + offset) as *const u32) }
 }
 
 unsafe fn reg_write(offset: usize, value: u32) {
-    write_volatile((UART0_BASE + offset) as *mut u32, value)
+    unsafe { write_volatile((UART0_BASE + offset) as *mut u32, value) }
+}
+
+unsafe fn wdog_write(offset: usize, value: u32) {
+    unsafe { write_volatile((WATCHDOG_BASE + offset) as *mut u32, value) }
 }
 
 /// After a panic or a fault has been logged: end the QEMU run with exit status 1.

@@ -1,85 +1,177 @@
-//! The host end of the link: requests out, responses in, over any byte stream (QEMU's UART socket,
-//! a serial port). Framing is `link-protocol`'s, the same code the firmware runs.
+//! The host end of the link: numbered requests out, numbered responses in, over any byte stream
+//! (QEMU's UART socket, a serial port). Framing is `link-protocol`'s, the same code the firmware
+//! runs.
+//!
+//! A reader thread decodes the responses as they come and hands them over a channel, so that the
+//! host can send without waiting for answers (`host-sim stream --push`) and still notice each
+//! answer as soon as it arrives. Requests are numbered 1, 2, 3, ... in the order they are sent
+//! (protocol 5); every answer carries its request's number.
 
 use anyhow::{bail, Context};
 use link_protocol::frame::MAX_FRAME;
-use link_protocol::{encode_frame, FrameAccumulator, Request, Response, MAX_RESPONSE_ENCODED};
-use std::collections::VecDeque;
+use link_protocol::{encode_frame, FrameAccumulator, Numbered, Request, Response, MAX_RESPONSE_ENCODED};
 use std::io::{ErrorKind, Read, Write};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
-/// A byte stream to the firmware.
-pub trait Port: Read + Write + Send {}
-impl<T: Read + Write + Send> Port for T {}
+/// A byte stream to the firmware (what each end needs: reading or writing).
+pub trait PortReader: Read + Send {}
+impl<T: Read + Send> PortReader for T {}
+pub trait PortWriter: Write + Send {}
+impl<T: Write + Send> PortWriter for T {}
 
-/// Frames over a [`Port`].
+/// Frames over a port.
 pub struct FirmwareLink {
-    port: Box<dyn Port>,
-    rx: FrameAccumulator<MAX_RESPONSE_ENCODED>,
-    received: VecDeque<Response>,
-    /// Bytes sent and received so far.
+    writer: Box<dyn PortWriter>,
+    answers: Receiver<anyhow::Result<Numbered<Response>>>,
+    stop: Arc<AtomicBool>,
+    timeout: Duration,
+    /// The number of the next request.
+    next_seq: u32,
+    /// Bytes sent so far.
     pub bytes_out: u64,
-    pub bytes_in: u64,
+    bytes_in: Arc<AtomicU64>,
 }
 
 impl FirmwareLink {
-    /// Wraps a port whose reads time out (a read that times out is a lost firmware).
-    pub fn new(port: Box<dyn Port>) -> Self {
+    /// Two ends of one port: `reader` (whose reads may time out: a timeout is only a pause) and
+    /// `writer`. A response not there `timeout` after it is awaited means a lost firmware.
+    pub fn new(reader: Box<dyn PortReader>, writer: Box<dyn PortWriter>, timeout: Duration) -> Self {
+        let (tx, answers) = mpsc::channel();
+        let stop = Arc::new(AtomicBool::new(false));
+        let bytes_in = Arc::new(AtomicU64::new(0));
+        let (thread_stop, thread_bytes) = (stop.clone(), bytes_in.clone());
+        std::thread::spawn(move || read_responses(reader, &tx, &thread_stop, &thread_bytes));
         FirmwareLink {
-            port,
-            rx: FrameAccumulator::new(),
-            received: VecDeque::new(),
+            writer,
+            answers,
+            stop,
+            timeout,
+            next_seq: 1,
             bytes_out: 0,
-            bytes_in: 0,
+            bytes_in,
         }
+    }
+
+    /// Bytes received so far.
+    pub fn bytes_in(&self) -> u64 {
+        self.bytes_in.load(Ordering::Relaxed)
     }
 
     /// Sends raw bytes (fault injection, or a frame encoded elsewhere).
     pub fn send_raw(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
-        self.port
+        self.writer
             .write_all(bytes)
             .context("cannot write to the firmware's port")?;
-        self.port.flush().context("cannot write to the firmware's port")?;
+        self.writer.flush().context("cannot write to the firmware's port")?;
         self.bytes_out += bytes.len() as u64;
         Ok(())
     }
 
-    /// Sends one request frame.
-    pub fn send(&mut self, request: &Request) -> anyhow::Result<()> {
+    /// Sends one request frame with the next number; returns the number.
+    pub fn send(&mut self, request: &Request) -> anyhow::Result<u32> {
+        let seq = self.next_seq;
+        self.next_seq = firmware_next_seq(seq);
         let mut frame = [0u8; MAX_FRAME];
-        let n = encode_frame(request, &mut frame).map_err(|e| anyhow::anyhow!("cannot encode {request:?}: {e:?}"))?;
-        self.send_raw(&frame[..n])
+        let n = encode_frame(&Numbered { seq, message: *request }, &mut frame)
+            .map_err(|e| anyhow::anyhow!("cannot encode {request:?}: {e:?}"))?;
+        self.send_raw(&frame[..n])?;
+        Ok(seq)
     }
 
-    /// The next response; errors if the port times out, closes, or a response frame is bad.
-    pub fn receive(&mut self) -> anyhow::Result<Response> {
-        let mut buf = [0u8; 512];
-        loop {
-            if let Some(r) = self.received.pop_front() {
-                return Ok(r);
-            }
-            let n = match self.port.read(&mut buf) {
-                Ok(0) => bail!("the firmware's port closed"),
-                Ok(n) => n,
-                Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-                Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => {
-                    bail!("no response from the firmware (read timed out)")
-                }
-                Err(e) => return Err(e).context("cannot read from the firmware's port"),
-            };
-            self.bytes_in += n as u64;
-            for &b in &buf[..n] {
-                match self.rx.push_decode::<Response>(b) {
-                    None => {}
-                    Some(Ok(r)) => self.received.push_back(r),
-                    Some(Err(e)) => bail!("bad frame from the firmware: {}", e.name()),
-                }
-            }
+    /// The next response with its number; errors if none comes within the timeout, the port
+    /// closes, or a response frame is bad.
+    pub fn receive_numbered(&mut self) -> anyhow::Result<Numbered<Response>> {
+        match self.answers.recv_timeout(self.timeout) {
+            Ok(answer) => answer,
+            Err(RecvTimeoutError::Timeout) => bail!("no response from the firmware (read timed out)"),
+            Err(RecvTimeoutError::Disconnected) => bail!("the firmware's port closed"),
         }
     }
 
-    /// Sends a request and waits for its response.
+    /// The next response that arrives before `deadline`, if one does.
+    pub fn receive_until(&mut self, deadline: Instant) -> anyhow::Result<Option<Numbered<Response>>> {
+        let wait = deadline.saturating_duration_since(Instant::now());
+        match self.answers.recv_timeout(wait) {
+            Ok(answer) => answer.map(Some),
+            Err(RecvTimeoutError::Timeout) => Ok(None),
+            Err(RecvTimeoutError::Disconnected) => bail!("the firmware's port closed"),
+        }
+    }
+
+    /// The next response (its number dropped).
+    pub fn receive(&mut self) -> anyhow::Result<Response> {
+        Ok(self.receive_numbered()?.message)
+    }
+
+    /// Sends a request and waits for its answer: responses to earlier requests (late ones) are
+    /// passed over; a `Ready` (the firmware restarted) is returned as it is.
     pub fn request(&mut self, request: &Request) -> anyhow::Result<Response> {
-        self.send(request)?;
-        self.receive()
+        let seq = self.send(request)?;
+        loop {
+            let answer = self.receive_numbered()?;
+            if answer.seq == seq || matches!(answer.message, Response::Ready { .. }) {
+                return Ok(answer.message);
+            }
+        }
+    }
+}
+
+/// The number after `seq` (after `u32::MAX` comes 1: 0 is the unnumbered frame's).
+fn firmware_next_seq(seq: u32) -> u32 {
+    match seq.wrapping_add(1) {
+        link_protocol::UNNUMBERED => 1,
+        n => n,
+    }
+}
+
+impl Drop for FirmwareLink {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
+}
+
+/// The reader thread: decodes every response and hands it over, until the port closes, fails, or
+/// the link is dropped (seen at the next read timeout).
+fn read_responses(
+    mut reader: Box<dyn PortReader>,
+    answers: &mpsc::Sender<anyhow::Result<Numbered<Response>>>,
+    stop: &AtomicBool,
+    bytes_in: &AtomicU64,
+) {
+    let mut rx = FrameAccumulator::<MAX_RESPONSE_ENCODED>::new();
+    let mut buf = [0u8; 512];
+    loop {
+        let n = match reader.read(&mut buf) {
+            Ok(0) => {
+                let _ = answers.send(Err(anyhow::anyhow!("the firmware's port closed")));
+                return;
+            }
+            Ok(n) => n,
+            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+            Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => {
+                if stop.load(Ordering::Relaxed) {
+                    return;
+                }
+                continue;
+            }
+            Err(e) => {
+                let _ = answers.send(Err(anyhow::Error::new(e).context("cannot read from the firmware's port")));
+                return;
+            }
+        };
+        bytes_in.fetch_add(n as u64, Ordering::Relaxed);
+        for &b in &buf[..n] {
+            let item = match rx.push_decode::<Numbered<Response>>(b) {
+                None => continue,
+                Some(Ok(r)) => Ok(r),
+                Some(Err(e)) => Err(anyhow::anyhow!("bad frame from the firmware: {}", e.name())),
+            };
+            if answers.send(item).is_err() {
+                return;
+            }
+        }
     }
 }

@@ -53,7 +53,7 @@ pub fn workspace_root() -> PathBuf {
 /// environment variables `env` (e.g. `RINS_CHECKPOINT_INTERVAL_S`) and copies the ELF to
 /// `target/qemu-tests/NAME.elf`, where no later build overwrites it. Builds one at a time: every
 /// build writes the same cargo output path.
-fn build_firmware(board: Board, env: &[(&str, &str)], name: &str) -> PathBuf {
+fn build_firmware(board: Board, env: &[(&str, &str)], features: &[&str], name: &str) -> PathBuf {
     static BUILDING: Mutex<()> = Mutex::new(());
     let _one_at_a_time = BUILDING.lock().unwrap_or_else(|e| e.into_inner());
     require_qemu();
@@ -64,6 +64,9 @@ fn build_firmware(board: Board, env: &[(&str, &str)], name: &str) -> PathBuf {
         .current_dir(&root)
         .args(["build", "-p", "firmware", "--target", "thumbv7em-none-eabihf", "--profile", "firmware"]);
     command.args(board.cargo_features());
+    for feature in features {
+        command.args(["--features", feature]);
+    }
     command.envs(env.iter().copied());
     let status = command.status().expect("cannot run cargo to build the firmware");
     assert!(
@@ -85,13 +88,18 @@ fn build_firmware(board: Board, env: &[(&str, &str)], name: &str) -> PathBuf {
 pub fn firmware_elf(board: Board) -> PathBuf {
     static ELFS: [OnceLock<PathBuf>; 2] = [OnceLock::new(), OnceLock::new()];
     ELFS[board as usize]
-        .get_or_init(|| build_firmware(board, &[], &format!("firmware-{}", board.name())))
+        .get_or_init(|| build_firmware(board, &[], &[], &format!("firmware-{}", board.name())))
         .clone()
 }
 
 /// The default board's firmware built with build-time environment `env`, as `NAME.elf`.
 pub fn firmware_elf_with_env(name: &str, env: &[(&str, &str)]) -> PathBuf {
-    build_firmware(Board::Mps2An386, env, name)
+    build_firmware(Board::Mps2An386, env, &[], name)
+}
+
+/// The default board's firmware built with extra cargo features (e.g. `test-hang`), as `NAME.elf`.
+pub fn firmware_elf_with_features(name: &str, features: &[&str]) -> PathBuf {
+    build_firmware(Board::Mps2An386, &[], features, name)
 }
 
 /// Generates the paper scenario (default seed) for `duration_s` into `dir/paper.csv` and its truth

@@ -1,0 +1,70 @@
+//! Checkpoints: what a restarted estimator needs to go on, as a small, versioned, CRC-protected
+//! image in the caller's buffer (for flash, EEPROM or a file), and back. The image's layout is the
+//! core's (`estimator_core::checkpoint`); the firmware writes the same images.
+
+use crate::error::RinsError;
+use crate::estimator::{from_handle, from_handle_mut, RinsEstimator};
+use crate::pointer;
+use estimator_core::Estimator;
+
+/// Bytes of a checkpoint image: the buffer `rins_estimator_checkpoint` needs.
+pub const RINS_CHECKPOINT_LEN: usize = <Estimator>::CHECKPOINT_LEN;
+
+/// Writes what a restart needs (the configuration, the filter and what it learned of noise and
+/// drift, the sample interval and rotation pattern, health, counters, the last sample's time;
+/// not the one-period window, which the next samples refill) into `buffer` (`capacity` bytes, at
+/// least `RINS_CHECKPOINT_LEN`) and the image's length into `*written`.
+/// `RINS_ERROR_BUFFER_TOO_SMALL` leaves the buffer as it was. The estimator is not changed.
+///
+/// # Safety
+/// `estimator` is null or a handle from `rins_estimator_init` that no call changes at the same
+/// time; `buffer` is null or points to `capacity` writable bytes; `written` is null or points to a
+/// writable `size_t`.
+#[no_mangle]
+pub unsafe extern "C" fn rins_estimator_checkpoint(
+    estimator: *const RinsEstimator,
+    buffer: *mut u8,
+    capacity: usize,
+    written: *mut usize,
+) -> RinsError {
+    // SAFETY: the caller's promises.
+    let checked = unsafe { (from_handle(estimator), pointer::check(written.cast_const()), pointer::bytes_mut(buffer, capacity)) };
+    let (est, buffer) = match checked {
+        (Ok(est), Ok(()), Ok(buffer)) => (est, buffer),
+        (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => return e,
+    };
+    match est.checkpoint(buffer) {
+        Ok(len) => {
+            // SAFETY: checked above; writable by the caller's promise.
+            unsafe { written.write(len) };
+            RinsError::Ok
+        }
+        Err(e) => RinsError::from(e),
+    }
+}
+
+/// Replaces the estimator's state (its configuration included) with the image in `buffer`
+/// (`len` bytes, as `rins_estimator_checkpoint` wrote them; a longer buffer is fine). The estimate
+/// and its 1-sigma are reported again from the next sample on, with `RINS_STATUS_HOLDING` while
+/// the window refills (one rotation period), as after a long gap. Every part of the image is
+/// checked before anything is changed: on `RINS_ERROR_CHECKPOINT_CORRUPT`,
+/// `RINS_ERROR_CHECKPOINT_INCOMPATIBLE` or `RINS_ERROR_BUFFER_TOO_SMALL` the estimator is exactly
+/// as it was, so a program at boot sets up a fresh estimator, tries to restore, and runs on either
+/// way.
+///
+/// # Safety
+/// `estimator` is null or a handle from `rins_estimator_init` that no other call uses at the same
+/// time; `buffer` is null or points to `len` readable bytes.
+#[no_mangle]
+pub unsafe extern "C" fn rins_estimator_restore(estimator: *mut RinsEstimator, buffer: *const u8, len: usize) -> RinsError {
+    // SAFETY: the caller's promises.
+    let checked = unsafe { (from_handle_mut(estimator), pointer::bytes(buffer, len)) };
+    let (est, image) = match checked {
+        (Ok(est), Ok(image)) => (est, image),
+        (Err(e), _) | (_, Err(e)) => return e,
+    };
+    match est.restore(image) {
+        Ok(()) => RinsError::Ok,
+        Err(e) => RinsError::from(e),
+    }
+}

@@ -1,0 +1,395 @@
+//! `host-sim stream --push`: samples sent without waiting for their answers, as a navigation
+//! computer sends them (`--realtime`: at the log's own rate), up to a window of unanswered frames
+//! that half the firmware's receive buffer holds. Answers are matched to their requests by their
+//! numbers (link protocol 5).
+
+use super::cost::CostStats;
+use super::{answer_of, describe_exit, LinkSummary, Progress, StreamSummary, Target};
+use crate::estimates_csv::EstimatesWriter;
+use crate::log_csv::{LogLine, LogReader, RowFilter};
+use crate::replay::sample_of;
+use anyhow::{bail, Context};
+use estimator_core::{Output, SampleError};
+use link_protocol::{Request, ResetCause, Response, SampleMsg, StatusReply, MAX_SAMPLE_FRAME};
+use std::collections::VecDeque;
+use std::io::{Read, Write};
+use std::time::{Duration, Instant};
+
+/// How `--push` sends.
+#[derive(Clone, Debug)]
+pub struct PushOptions {
+    /// Send each row at the log's own rate (wall clock follows its time stamps).
+    pub realtime: bool,
+    /// Most sample frames sent and not yet answered.
+    pub window: usize,
+    /// Send this request just before the row with this index (counted from 0 among the rows
+    /// streamed); for tests (the watchdog test's `Hang`).
+    pub inject: Option<(u64, Request)>,
+}
+
+impl PushOptions {
+    /// The default window: the sample frames that half the firmware's receive buffer holds (a DMA
+    /// ring's reader sees every overrun only while at most half of it arrives unread), at least 1.
+    pub fn default_window(status: &StatusReply) -> usize {
+        (status.link.rx_buffer_bytes as usize / 2 / MAX_SAMPLE_FRAME).max(1)
+    }
+}
+
+/// What a request in flight was.
+#[derive(Clone, Copy)]
+enum Sent {
+    /// A sample: its log line and the message.
+    Sample { line: LogLine, msg: SampleMsg },
+    /// The status asked for after a restart.
+    RestartStatus,
+    /// The status asked for at the end.
+    FinalStatus,
+    /// Anything else (injected); its answer, if any, is passed over.
+    Other,
+}
+
+/// The requests in flight and what the stream has counted so far.
+struct Push {
+    in_flight: VecDeque<(u32, Sent)>,
+    link: LinkSummary,
+    cost: CostStats,
+    restart_status: Vec<StatusReply>,
+    final_status: Option<StatusReply>,
+}
+
+impl Push {
+    fn samples_in_flight(&self) -> usize {
+        self.in_flight.iter().filter(|(_, s)| matches!(s, Sent::Sample { .. })).count()
+    }
+
+    fn send(&mut self, target: &mut Target, request: &Request, sent: Sent) -> anyhow::Result<()> {
+        let seq = target.link.send(request)?;
+        self.in_flight.push_back((seq, sent));
+        if matches!(sent, Sent::Sample { .. }) {
+            self.link.sent += 1;
+        }
+        Ok(())
+    }
+
+    /// Takes one answer, waiting until `deadline` (or the link's timeout), and writes the rows it
+    /// settles: an answer to request `s` settles every earlier request still in flight as lost
+    /// (the firmware answers in order). Returns false if nothing came before the deadline.
+    fn settle<W: Write>(
+        &mut self,
+        target: &mut Target,
+        writer: &mut EstimatesWriter<W>,
+        info: &mut dyn Write,
+        deadline: Option<Instant>,
+        each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
+    ) -> anyhow::Result<bool> {
+        let received = match deadline {
+            Some(d) => target.link.receive_until(d),
+            None => target.link.receive_numbered().map(Some),
+        };
+        let answer = match received {
+            Ok(Some(a)) => a,
+            Ok(None) => return Ok(false),
+            Err(e) => return Err(e.context(describe_exit(&mut target.qemu))),
+        };
+        if let Response::Ready { .. } = answer.message {
+            self.link.restarts += 1;
+            writeln!(info, "the firmware restarted (it announced Ready): asking for its status")?;
+            self.send(target, &Request::ReadStatus, Sent::RestartStatus)?;
+            return Ok(true);
+        }
+        if !self.in_flight.iter().any(|(seq, _)| *seq == answer.seq) {
+            bail!("an answer numbered {} to no request in flight: {:?}", answer.seq, answer.message);
+        }
+        while let Some((seq, sent)) = self.in_flight.pop_front() {
+            if seq != answer.seq {
+                if matches!(sent, Sent::Sample { .. }) {
+                    self.link.lost += 1;
+                }
+                continue;
+            }
+            match (sent, answer.message) {
+                (Sent::Sample { line, msg }, response) => {
+                    let a = answer_of(&msg, response).with_context(|| format!("log line {}", line.line))?;
+                    self.cost.add(a.step_cost_ticks);
+                    writer.write_step(line.row.time_s, &a.result)?;
+                    each(&line, &a.result);
+                    self.link.answered += 1;
+                }
+                (Sent::RestartStatus, Response::Status(s)) => {
+                    let cause = ResetCause::try_from(s.reset_cause).map_or("unknown", |c| c.name());
+                    let checkpoint = s
+                        .checkpoint_time_s
+                        .map_or("no checkpoint".to_string(), |t| format!("the checkpoint of {t} s"));
+                    writeln!(info, "  reset cause {cause}; the firmware restored {checkpoint}")?;
+                    self.restart_status.push(s);
+                }
+                (Sent::FinalStatus, Response::Status(s)) => self.final_status = Some(s),
+                (Sent::Other, _) => {}
+                (_, other) => bail!("the firmware answered ReadStatus with {other:?}"),
+            }
+            break;
+        }
+        Ok(true)
+    }
+}
+
+/// Streams like [`stream_log`], but sends without waiting for each answer ([`PushOptions`]).
+/// Answers are matched to their requests by number. A `Ready` in the middle (the firmware
+/// restarted: watchdog, power) is counted; the host asks for the status (reset cause, restored
+/// checkpoint) and carries on. Rows whose answer never came are counted as lost and left out of
+/// the estimates; a final status request settles every sample sent before it.
+#[allow(clippy::too_many_arguments)]
+pub fn stream_log_push<R: Read, W: Write>(
+    target: &mut Target,
+    lines: &mut LogReader<R>,
+    mut filter: RowFilter,
+    resume_after_s: Option<f64>,
+    writer: &mut EstimatesWriter<W>,
+    total_bytes: Option<u64>,
+    options: &PushOptions,
+    info: &mut dyn Write,
+    each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
+) -> anyhow::Result<StreamSummary> {
+    let start = Instant::now();
+    let progress = Progress::new(total_bytes);
+    let mut push = Push {
+        in_flight: VecDeque::new(),
+        link: LinkSummary::default(),
+        cost: CostStats::default(),
+        restart_status: Vec::new(),
+        final_status: None,
+    };
+    let mut streamed = 0u64;
+    let mut first_time_s: Option<f64> = None;
+    let window = options.window.max(1);
+    while let Some(item) = lines.next() {
+        let Some(line) = filter.admit(item, &mut |e| {
+            progress.bar.suspend(|| eprintln!("warning: {e} (row skipped)"));
+        })?
+        else {
+            continue;
+        };
+        if resume_after_s.is_some_and(|t| line.row.time_s <= t) {
+            continue;
+        }
+        if let Some((at, request)) = &options.inject {
+            if *at == streamed {
+                push.send(target, request, Sent::Other)?;
+            }
+        }
+        if options.realtime {
+            let first = *first_time_s.get_or_insert(line.row.time_s);
+            let due = start + Duration::from_secs_f64((line.row.time_s - first).max(0.0));
+            while Instant::now() < due {
+                push.settle(target, writer, info, Some(due), each)?;
+            }
+        }
+        while push.samples_in_flight() >= window {
+            push.settle(target, writer, info, None, each)?;
+        }
+        let msg = SampleMsg::from(&sample_of(&line.row));
+        let sent = Sent::Sample { line, msg };
+        push.send(target, &Request::Sample(msg), sent)?;
+        streamed += 1;
+        // Whatever answers are there already, without waiting.
+        while push.settle(target, writer, info, Some(Instant::now()), each)? {}
+        progress.update(push.link.answered, lines.bytes_read());
+    }
+    push.send(target, &Request::ReadStatus, Sent::FinalStatus)?;
+    let final_status = loop {
+        push.settle(target, writer, info, None, each)?;
+        if let Some(s) = push.final_status {
+            break s;
+        }
+    };
+    drop(progress);
+    Ok(StreamSummary {
+        rows: push.link.answered,
+        link: push.link,
+        restart_status: push.restart_status,
+        cost: push.cost,
+        final_status,
+        wall: start.elapsed(),
+        unreadable: filter,
+    })
+}
+
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stream::cost::CostUnit;
+    use crate::stream::link::FirmwareLink;
+    use estimator_core::SampleError;
+    use link_protocol::frame::MAX_FRAME;
+    use link_protocol::{
+        encode_frame, Counters, FrameAccumulator, LinkCounters, Numbered, RejectedReply, MAX_REQUEST_ENCODED,
+        UNNUMBERED,
+    };
+    use std::os::unix::net::UnixStream;
+    use std::path::Path;
+
+    fn status(reset_cause: ResetCause) -> StatusReply {
+        StatusReply {
+            protocol_version: link_protocol::PROTOCOL_VERSION,
+            method: 0,
+            counters: Counters::default(),
+            accepted: 0,
+            filled: 0,
+            window_restarts: 0,
+            estimate: None,
+            cost_counter_hz: 1,
+            boot_stack_peak_bytes: 0,
+            stack_peak_bytes: 0,
+            stack_size_bytes: 0,
+            checkpoint_time_s: Some(5.0),
+            checkpoints_saved: 0,
+            link: LinkCounters {
+                rx_buffer_bytes: 1023,
+                ..LinkCounters::default()
+            },
+            reset_cause: reset_cause as u8,
+            clock_source: 2,
+        }
+    }
+
+    /// A firmware on the other end of a socket: answers every sample with a rejection (enough to
+    /// match answers), except the samples numbered in `drop`; after the request numbered
+    /// `restart_after` it announces `Ready`, as after a watchdog reset.
+    fn fake_firmware(mut port: UnixStream, drop: Vec<u32>, restart_after: Option<u32>) {
+        use std::io::Read as _;
+        let mut rx = FrameAccumulator::<MAX_REQUEST_ENCODED>::new();
+        let mut buf = [0u8; 256];
+        let send = |port: &mut UnixStream, seq: u32, message: Response| {
+            let mut out = [0u8; MAX_FRAME];
+            let n = encode_frame(&Numbered { seq, message }, &mut out).unwrap();
+            port.write_all(&out[..n]).unwrap();
+        };
+        let mut restarted = false;
+        loop {
+            let n = match port.read(&mut buf) {
+                Ok(0) | Err(_) => return,
+                Ok(n) => n,
+            };
+            for &b in &buf[..n] {
+                let Some(Ok(request)) = rx.push_decode::<Numbered<Request>>(b) else { continue };
+                match request.message {
+                    Request::Sample(msg) if !drop.contains(&request.seq) => {
+                        let error = SampleError::IrregularTimeStep;
+                        let reply = RejectedReply::new(msg.time_s, &error, 7, Counters::default());
+                        send(&mut port, request.seq, Response::Rejected(reply));
+                    }
+                    Request::Sample(_) => {}
+                    Request::ReadStatus => {
+                        let cause = if restarted { ResetCause::Watchdog } else { ResetCause::PowerOn };
+                        send(&mut port, request.seq, Response::Status(status(cause)));
+                    }
+                    _ => {}
+                }
+                if Some(request.seq) == restart_after {
+                    restarted = true;
+                    send(&mut port, UNNUMBERED, Response::Ready { protocol_version: link_protocol::PROTOCOL_VERSION });
+                }
+            }
+        }
+    }
+
+    /// Pushes `rows` rows at 1 s through the fake firmware; returns the summary, the estimates
+    /// CSV and what the stream said.
+    fn push(rows: u32, drop: Vec<u32>, restart_after: Option<u32>, window: usize) -> (StreamSummary, String, String) {
+        push_at(rows, 1.0, false, drop, restart_after, window)
+    }
+
+    /// The same with rows `interval_s` apart, and `realtime`.
+    fn push_at(
+        rows: u32,
+        interval_s: f64,
+        realtime: bool,
+        drop: Vec<u32>,
+        restart_after: Option<u32>,
+        window: usize,
+    ) -> (StreamSummary, String, String) {
+        let (host_end, firmware_end) = UnixStream::pair().unwrap();
+        std::thread::spawn(move || fake_firmware(firmware_end, drop, restart_after));
+        let reader = host_end.try_clone().unwrap();
+        reader.set_read_timeout(Some(Duration::from_millis(100))).unwrap();
+        let mut target = Target {
+            link: FirmwareLink::new(Box::new(reader), Box::new(host_end), Duration::from_secs(5)),
+            qemu: None,
+            unit: CostUnit::BoardCycles { counter_hz: 1 },
+            boot_status: status(ResetCause::PowerOn),
+        };
+        let mut csv = String::from("time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n");
+        for k in 0..rows {
+            csv.push_str(&format!("{},10,20,30,40,1,2\n", f64::from(k) * interval_s));
+        }
+        let mut lines = LogReader::new(Path::new("test.csv"), std::io::Cursor::new(csv.into_bytes()));
+        let mut writer = EstimatesWriter::new(Vec::new()).unwrap();
+        let mut info = Vec::new();
+        let options = PushOptions { realtime, window, inject: None };
+        let summary =
+            stream_log_push(&mut target, &mut lines, RowFilter::new(true), None, &mut writer, None, &options, &mut info, &mut |_, _| {})
+                .unwrap();
+        let out = String::from_utf8(writer.finish().unwrap()).unwrap();
+        (summary, out, String::from_utf8(info).unwrap())
+    }
+
+    fn times(csv: &str) -> Vec<u32> {
+        csv.lines().skip(1).map(|l| l.split(',').next().unwrap().parse::<f64>().unwrap() as u32).collect()
+    }
+
+    #[test]
+    fn every_answer_is_matched_to_its_row_and_unanswered_rows_are_counted_lost() {
+        // Samples are numbered from 1 (row 0 is sample 1): drop the answers to rows 4, 5 and 20.
+        let (summary, csv, _) = push(40, vec![5, 6, 21], None, 4);
+        assert_eq!((summary.link.sent, summary.link.answered, summary.link.lost), (40, 37, 3));
+        let want: Vec<u32> = (0..40).filter(|t| ![4, 5, 20].contains(t)).collect();
+        assert_eq!(times(&csv), want);
+        assert_eq!(summary.cost.steps, 37);
+    }
+
+    #[test]
+    fn the_last_rows_lost_are_settled_by_the_final_status() {
+        let (summary, csv, _) = push(10, vec![9, 10], None, 3);
+        assert_eq!((summary.link.answered, summary.link.lost), (8, 2));
+        assert_eq!(times(&csv), (0..8).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn a_restart_is_reported_with_its_cause_and_the_stream_carries_on() {
+        // The firmware announces Ready after sample 12 (row 11) and loses nothing else.
+        let (summary, csv, info) = push(30, vec![], Some(12), 5);
+        assert_eq!(summary.link.restarts, 1);
+        assert_eq!((summary.link.sent, summary.link.answered, summary.link.lost), (30, 30, 0));
+        assert_eq!(times(&csv), (0..30).collect::<Vec<_>>());
+        assert!(info.contains("reset cause watchdog; the firmware restored the checkpoint of 5 s"), "{info}");
+        assert_eq!(summary.restart_status.len(), 1);
+    }
+
+    #[test]
+    fn realtime_sends_at_the_log_s_own_rate() {
+        // 11 rows 0.1 s apart: the last is sent 1 s after the first, not at once (the upper
+        // bound leaves room for a loaded machine).
+        let start = Instant::now();
+        let (summary, _, _) = push_at(11, 0.1, true, vec![], None, 50);
+        let wall = start.elapsed().as_secs_f64();
+        assert_eq!((summary.link.answered, summary.link.lost), (11, 0));
+        assert!((1.0..5.0).contains(&wall), "11 rows at 10 Hz took {wall} s");
+        // Without it, 11 rows 10 s apart (100 s of log) go as fast as the link takes them.
+        let start = Instant::now();
+        push_at(11, 10.0, false, vec![], None, 50);
+        let wall = start.elapsed().as_secs_f64();
+        assert!(wall < 10.0, "without --realtime as fast as the link takes them: {wall} s");
+    }
+
+    #[test]
+    fn the_default_window_is_what_half_the_receive_buffer_holds() {
+        let mut s = status(ResetCause::PowerOn);
+        s.link.rx_buffer_bytes = 2048;
+        assert_eq!(PushOptions::default_window(&s), 23);
+        s.link.rx_buffer_bytes = 1023;
+        assert_eq!(PushOptions::default_window(&s), 11);
+        s.link.rx_buffer_bytes = 0;
+        assert_eq!(PushOptions::default_window(&s), 1);
+    }
+}

@@ -1,0 +1,288 @@
+//! Time stamps as recorders write them, and whether their interval makes sense for a RINS.
+//!
+//! # Formats (the log's time column, see `docs/log-format.md`)
+//! - `time_s`: seconds, any origin (log start, Unix or GPS seconds), plain decimal or scientific;
+//! - `time_ms`: milliseconds, any origin;
+//! - `time_utc`: ISO 8601 / RFC 3339 date and time, parsed with the `jiff` crate:
+//!   `2024-05-01T12:00:00Z`, `2024-05-01T12:00:00.250+02:00`, `2024-05-01 12:00:00.25` (a space for
+//!   the `T`; no offset is read as UTC). It becomes Unix seconds, which the estimates CSV writes in
+//!   its `time_s` column.
+//!
+//! A cell of any time column that is a date and time is read as one (a `time_s` column holding
+//! `2024-05-01T12:00:00Z` is read as it means); a number in `time_utc` is read as seconds.
+//!
+//! # The interval ([`IntervalCheck`])
+//! The estimator learns the sample interval from the stamps (the median of the first 8 steps) and
+//! accepts any; a RINS logs its attitude every 10 ms to 10 s. Stamps in another unit than their
+//! column says give intervals outside that range (1000 "s" for milliseconds in `time_s`), and a
+//! `--sample-interval` that contradicts the stamps makes every row a clock step: both are caught
+//! after the first 8 steps, before any estimate is made, and told with their likely cause.
+
+use jiff::civil::DateTime;
+use jiff::tz::TimeZone;
+use jiff::Timestamp;
+
+/// What a time column holds by its name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeColumn {
+    /// `time_s`: seconds.
+    Seconds,
+    /// `time_ms`: milliseconds.
+    Milliseconds,
+    /// `time_utc`: ISO 8601 / RFC 3339 date and time.
+    Utc,
+}
+
+impl TimeColumn {
+    /// The time columns by name, in the order one is chosen when a log has several.
+    pub const ALL: [TimeColumn; 3] = [TimeColumn::Seconds, TimeColumn::Milliseconds, TimeColumn::Utc];
+
+    /// The column's name in a log header.
+    pub fn name(self) -> &'static str {
+        match self {
+            TimeColumn::Seconds => "time_s",
+            TimeColumn::Milliseconds => "time_ms",
+            TimeColumn::Utc => "time_utc",
+        }
+    }
+
+    /// Reads one cell (trimmed) as seconds.
+    pub fn parse(self, cell: &str) -> Result<f64, String> {
+        if looks_like_date(cell) {
+            return parse_utc(cell);
+        }
+        let value: f64 = cell.parse().map_err(|_| {
+            if cell.is_empty() {
+                "blank cell".to_string()
+            } else {
+                format!("not a number: {cell:?}")
+            }
+        })?;
+        Ok(match self {
+            TimeColumn::Milliseconds => value / 1000.0,
+            TimeColumn::Seconds | TimeColumn::Utc => value,
+        })
+    }
+}
+
+/// Whether a cell is a date (`YYYY-MM-DD...`) rather than a number.
+fn looks_like_date(cell: &str) -> bool {
+    let b = cell.as_bytes();
+    b.len() >= 10 && b[..4].iter().all(u8::is_ascii_digit) && b[4] == b'-' && b[7] == b'-'
+}
+
+/// An ISO 8601 / RFC 3339 date and time as Unix seconds; without an offset, UTC.
+pub fn parse_utc(cell: &str) -> Result<f64, String> {
+    let timestamp = match cell.parse::<Timestamp>() {
+        Ok(t) => t,
+        Err(with_offset) => match cell.parse::<DateTime>() {
+            Ok(civil) => TimeZone::UTC.to_timestamp(civil).map_err(|e| format!("not a date and time: {cell:?}: {e}"))?,
+            Err(_) => return Err(format!("not a date and time: {cell:?}: {with_offset}")),
+        },
+    };
+    Ok(timestamp.as_second() as f64 + f64::from(timestamp.subsec_nanosecond()) * 1e-9)
+}
+
+/// A time in Unix seconds as an RFC 3339 UTC date and time to the millisecond, when it lies
+/// between 1980 and 2100 (a log's stamps that are Unix or ISO time); `None` otherwise (seconds
+/// since the log's start).
+pub fn format_utc(unix_s: f64) -> Option<String> {
+    const Y1980_S: f64 = 315_532_800.0;
+    const Y2100_S: f64 = 4_102_444_800.0;
+    if !(Y1980_S..Y2100_S).contains(&unix_s) {
+        return None;
+    }
+    let millis = (unix_s * 1000.0).round() as i64;
+    let t = Timestamp::from_millisecond(millis).ok()?;
+    Some(format!("{t:.3}"))
+}
+
+/// The interval a RINS logs its attitude at, s: 10 ms to 10 s.
+pub const PLAUSIBLE_INTERVAL_S: (f64, f64) = (0.01, 10.0);
+
+/// Steps whose median [`IntervalCheck`] judges (as the estimator learns from the first 8).
+pub const CHECKED_STEPS: usize = estimator_core::time_grid::LEARNING_STEPS;
+
+/// Why the stamps' interval makes no sense.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum IntervalError {
+    /// The stamps step by more than 10 s or less than 10 ms, and another unit explains it.
+    #[error(
+        "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every 0.01 to 10 s: \
+         they look like {unit} ({interval_s} {unit_short} a row is {as_seconds} s){hint}"
+    )]
+    WrongUnit { interval_s: f64, unit: &'static str, unit_short: &'static str, as_seconds: f64, hint: &'static str },
+    /// The stamps step by more than 10 s or less than 10 ms, and no unit explains it.
+    #[error(
+        "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every 0.01 to 10 s: \
+         {cause}"
+    )]
+    Implausible { interval_s: f64, cause: &'static str },
+    /// `--sample-interval` says one interval, the stamps another.
+    #[error(
+        "--sample-interval {pinned_s} s contradicts the log's time stamps, which step by {shortest_s} s (the shortest of the first {CHECKED_STEPS} steps): \
+         every row would be off the grid; leave --sample-interval out (the interval is learned) or give {shortest_s}"
+    )]
+    ContradictsPinned { pinned_s: f64, shortest_s: f64 },
+}
+
+/// Watches the first steps of a log's stamps (rows as read, in order) and judges their median
+/// once [`CHECKED_STEPS`] positive steps are in (see the module doc).
+#[derive(Clone, Debug)]
+pub struct IntervalCheck {
+    pinned_s: Option<f64>,
+    last_s: Option<f64>,
+    steps: Vec<f64>,
+    done: bool,
+}
+
+impl IntervalCheck {
+    /// `pinned_s`: the `--sample-interval`, if given.
+    pub fn new(pinned_s: Option<f64>) -> IntervalCheck {
+        IntervalCheck { pinned_s, last_s: None, steps: Vec::with_capacity(CHECKED_STEPS), done: false }
+    }
+
+    /// One stamp; an error once the first steps show an interval that makes no sense.
+    pub fn observe(&mut self, time_s: f64) -> Result<(), IntervalError> {
+        if self.done || !time_s.is_finite() {
+            return Ok(());
+        }
+        let last = self.last_s.replace(time_s);
+        if let Some(step) = last.map(|l| time_s - l).filter(|s| *s > 0.0) {
+            self.steps.push(step);
+        }
+        if self.steps.len() < CHECKED_STEPS {
+            return Ok(());
+        }
+        self.done = true;
+        self.steps.sort_by(f64::total_cmp);
+        let n = self.steps.len();
+        let median = 0.5 * (self.steps[n / 2 - 1] + self.steps[n / 2]);
+        judge(median, self.steps[0], self.pinned_s)
+    }
+}
+
+/// Rounds to 4 significant digits for messages (the stamps carry a recorder's clock error).
+fn round4(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    let scale = 10f64.powi(3 - v.abs().log10().floor() as i32);
+    (v * scale).round() / scale
+}
+
+/// Units a RINS's stamps are mistaken for seconds in: name, symbol, seconds per unit, what to do.
+const OTHER_UNITS: [(&str, &str, f64, &str); 6] = [
+    ("milliseconds", "ms", 1e-3, " (name the time column time_ms, or divide them by 1000), unless the log was thinned out to one row in many"),
+    ("microseconds", "us", 1e-6, " (divide them by 1e6 into a time_s column), unless the log was thinned out to one row in many"),
+    ("nanoseconds", "ns", 1e-9, " (divide them by 1e9 into a time_s column), unless the log was thinned out to one row in many"),
+    ("minutes", "min", 60.0, " (write seconds in a time_s column)"),
+    ("hours", "h", 3600.0, " (write seconds in a time_s column)"),
+    ("days", "d", 86_400.0, " (write seconds in a time_s column)"),
+];
+
+/// Judges the stamps' steps: their median against the plausible range, their shortest (the
+/// interval itself, whatever rows are lost) against the pinned interval.
+pub fn judge(median_s: f64, shortest_s: f64, pinned_s: Option<f64>) -> Result<(), IntervalError> {
+    let (lo, hi) = PLAUSIBLE_INTERVAL_S;
+    let interval_s = round4(median_s);
+    if !(lo..=hi).contains(&median_s) {
+        // The unit that makes the step a RINS's interval, the nearest to the usual 1 s.
+        let unit = OTHER_UNITS
+            .iter()
+            .map(|&(name, short, s_per_unit, hint)| (name, short, median_s * s_per_unit, hint))
+            .filter(|&(.., s, _)| (lo..=hi).contains(&s))
+            .min_by(|a, b| a.2.log10().abs().total_cmp(&b.2.log10().abs()));
+        return Err(match unit {
+            Some((unit, unit_short, as_seconds, hint)) => {
+                IntervalError::WrongUnit { interval_s, unit, unit_short, as_seconds: round4(as_seconds), hint }
+            }
+            None if median_s > hi => IntervalError::Implausible {
+                interval_s,
+                cause: "the log may have been thinned out (every n-th row kept), or the time column is not a time",
+            },
+            None => IntervalError::Implausible {
+                interval_s,
+                cause: "the stamps may have too few digits (rounded), or the time column is not a time",
+            },
+        });
+    }
+    if let Some(pinned_s) = pinned_s {
+        // The estimator snaps steps within a quarter of an interval to the grid.
+        if (shortest_s - pinned_s).abs() > estimator_core::time_grid::SNAP_TOLERANCE * pinned_s {
+            return Err(IntervalError::ContradictsPinned { pinned_s, shortest_s: round4(shortest_s) });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seconds_milliseconds_and_utc_stamps_read_as_seconds() {
+        assert_eq!(TimeColumn::Seconds.parse("1700000000.25"), Ok(1_700_000_000.25));
+        assert_eq!(TimeColumn::Milliseconds.parse("1700000000250"), Ok(1_700_000_000.25));
+        assert_eq!(TimeColumn::Milliseconds.parse("1500"), Ok(1.5));
+        // 2023-11-14T22:13:20Z is Unix 1700000000.
+        for cell in ["2023-11-14T22:13:20Z", "2023-11-14 22:13:20Z", "2023-11-14T22:13:20", "2023-11-15T00:13:20+02:00", "2023-11-14t22:13:20z"] {
+            assert_eq!(TimeColumn::Utc.parse(cell), Ok(1_700_000_000.0), "{cell}");
+            assert_eq!(TimeColumn::Seconds.parse(cell), Ok(1_700_000_000.0), "a date in time_s: {cell}");
+        }
+        assert_eq!(TimeColumn::Utc.parse("2023-11-14T22:13:20.250Z"), Ok(1_700_000_000.25));
+        assert_eq!(TimeColumn::Utc.parse("12.5"), Ok(12.5), "a number in time_utc is seconds");
+        assert!(TimeColumn::Utc.parse("2023-13-14T22:13:20Z").unwrap_err().contains("not a date and time"));
+        assert_eq!(TimeColumn::Seconds.parse(""), Err("blank cell".to_string()));
+        assert!(TimeColumn::Seconds.parse("12:00:00").unwrap_err().contains("not a number"));
+    }
+
+    #[test]
+    fn utc_is_formatted_for_unix_times_only() {
+        assert_eq!(format_utc(1_700_000_000.25).as_deref(), Some("2023-11-14T22:13:20.250Z"));
+        assert_eq!(format_utc(45_000.0), None, "seconds since the log's start are no date");
+        assert_eq!(format_utc(f64::NAN), None);
+    }
+
+    fn check(stamps: impl IntoIterator<Item = f64>, pinned: Option<f64>) -> Result<(), IntervalError> {
+        let mut c = IntervalCheck::new(pinned);
+        stamps.into_iter().try_for_each(|t| c.observe(t))
+    }
+
+    #[test]
+    fn plausible_intervals_pass_with_lost_rows_and_jitter() {
+        assert_eq!(check((0..100).map(f64::from), None), Ok(()));
+        assert_eq!(check((0..100).map(|k| 1.7e9 + 0.1 * f64::from(k)), Some(0.1)), Ok(()));
+        // Every other row lost (the median is 2 s, the shortest step 1 s), 20 ms of jitter.
+        let stamps = (0..100).filter(|k| k % 4 == 0 || k % 4 == 1).map(|k| f64::from(k) + 0.02 * f64::from(k % 2));
+        assert_eq!(check(stamps, Some(1.0)), Ok(()));
+        assert_eq!(check((0..100).map(|k| 10.0 * f64::from(k)), None), Ok(()), "10 s is the slowest RINS rate");
+    }
+
+    #[test]
+    fn implausible_intervals_name_their_likely_cause() {
+        let ms = check((0..100).map(|k| 1000.0 * f64::from(k)), None).unwrap_err();
+        assert!(matches!(ms, IntervalError::WrongUnit { unit: "milliseconds", .. }), "{ms:?}");
+        assert!(ms.to_string().contains("step by 1000 s") && ms.to_string().contains("time_ms"), "{ms}");
+        let us = check((0..100).map(|k| 2e6 * f64::from(k)), None).unwrap_err();
+        assert!(matches!(us, IntervalError::WrongUnit { unit: "microseconds", .. }), "{us:?}");
+        let hours = check((0..100).map(|k| f64::from(k) / 3600.0), None).unwrap_err();
+        // 1 s in hours is 0.0002778 h; read as minutes it would be 16.7 ms: hours is nearer 1 s.
+        assert!(matches!(hours, IntervalError::WrongUnit { unit: "hours", .. }), "{hours:?}");
+        assert!(hours.to_string().contains("0.0002778 h a row is 1 s"), "{hours}");
+        let thinned = check((0..100).map(|k| 60.0 * f64::from(k)), None).unwrap_err();
+        assert!(thinned.to_string().contains("milliseconds") && thinned.to_string().contains("thinned out"), "{thinned}");
+        let rounded = check((0..100).map(|k| 1e-9 * f64::from(k)), None).unwrap_err();
+        assert!(matches!(rounded, IntervalError::Implausible { .. }) && rounded.to_string().contains("too few digits"), "{rounded}");
+    }
+
+    #[test]
+    fn a_pinned_interval_that_contradicts_the_stamps_is_refused() {
+        let e = check((0..100).map(f64::from), Some(2.0)).unwrap_err();
+        assert_eq!(e, IntervalError::ContradictsPinned { pinned_s: 2.0, shortest_s: 1.0 });
+        assert!(e.to_string().starts_with("--sample-interval 2 s contradicts"), "{e}");
+        assert_eq!(check((0..100).map(|k| 1.1 * f64::from(k)), Some(1.0)), Ok(()), "within the grid's snap");
+        let half = check((0..100).map(f64::from), Some(0.5)).unwrap_err();
+        assert!(matches!(half, IntervalError::ContradictsPinned { .. }), "every step two pinned intervals: {half:?}");
+    }
+}
