@@ -299,7 +299,8 @@ mod tests {
             assert_eq!(std::format!("{c:?}").to_lowercase(), std::format!("rejected{}", r.name().replace('_', "")));
         }
         assert_eq!(RinsStatus::ALL.len(), Status::ALL.len() + RejectReason::ALL.len());
-        assert_eq!(RinsStatus::from_code(10), None);
+        // The first code after the core's statuses is none.
+        assert_eq!(RinsStatus::from_code(Status::ALL.len() as u32), None);
         assert_eq!(RinsStatus::from_code(127), None);
         for f in Field::ALL {
             assert_eq!(RinsField::from(Some(f)) as u32, u32::from(f as u8));
