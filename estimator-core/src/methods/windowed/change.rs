@@ -317,7 +317,11 @@ impl ChangeDetector {
                 self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) * weight;
                 // The product with the previous block, both clipped alike: the lag-one covariance.
                 if learned > 0 {
-                    let product = (b * self.previous_block_rad[ch]).clamp(-WINSOR_SIGMAS * WINSOR_SIGMAS * var, WINSOR_SIGMAS * WINSOR_SIGMAS * var);
+                    // max/min, not clamp: clamp's bounds come from a learned value here, and its
+                    // check of them (a panic that formats floats) cost 31 KB of flash on the
+                    // Cortex-M4F.
+                    let bound = WINSOR_SIGMAS * WINSOR_SIGMAS * var;
+                    let product = (b * self.previous_block_rad[ch]).max(-bound).min(bound);
                     self.lag_product_rad2[ch] += (product - self.lag_product_rad2[ch]) * weight;
                 }
             }
