@@ -17,7 +17,7 @@
 //! header says erased but whose content is not). So [`CheckpointStore::new`] does the same before
 //! the crate sees the flash ([`re_erase_torn_sectors`]). A cut at any point of a save therefore
 //! leaves the newest complete image, or the one before it (tested at every erase and every
-//! programmed unit by `host-sim/tests/store_power_fail.rs`, on a model of the flash that tears the
+//! programmed unit by `host-sim/tests/replay/store_power_fail.rs`, on a model of the flash that tears the
 //! operation the cut lands in, bits and bytes at random). The core checks every restored image
 //! again (its CRC and every value), so a torn or foreign image is refused, never half-restored.
 //!

@@ -34,7 +34,7 @@ section "link-protocol unit tests"
 run cargo test -p link-protocol
 
 section "QEMU tests (faults, serial-port path, 50000 s end to end, budgets)"
-run cargo test -p host-sim --release --no-fail-fast --test qemu_faults --test qemu_port --test qemu_power_cut --test qemu_checkpoint_interval --test qemu_e2e --test qemu_budgets -- --nocapture --test-threads=1
+run cargo test -p host-sim --release --no-fail-fast --test qemu qemu_faults --test qemu qemu_port --test qemu qemu_power_cut --test qemu qemu_checkpoint_interval --test qemu qemu_e2e --test qemu qemu_budgets -- --nocapture --test-threads=1
 
 section "exact step instruction count (TCG plugin firmware/tools/stepcount.c)"
 WORK="$PWD/target/qemu-tests/plugin"   # absolute: host-sim runs QEMU in a scratch directory

@@ -73,7 +73,7 @@ extern crate std;
 pub mod accumulator;
 pub mod blocking_writer;
 #[cfg(test)]
-mod cobs_reference;
+mod golden_frames;
 pub mod crc;
 pub mod frame;
 pub mod message;

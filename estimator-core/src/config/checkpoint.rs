@@ -43,7 +43,6 @@ impl Stored for Config {
         w.u32(c.max_filled_gap_samples);
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, cx: ConfigContext) -> Result<Config, CheckpointError> {
         let rotation_period_s = r.option(Part::Config, |r| Ok(r.f64()))?;
         let sample_interval_s = r.option(Part::Config, |r| Ok(r.f64()))?;

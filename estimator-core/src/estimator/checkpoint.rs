@@ -235,7 +235,6 @@ impl Stored for Running {
         });
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, (): ()) -> Result<Running, CheckpointError> {
         let index = r.u32();
         let feed_interval_s = r.option(Part::Estimator, |r| Ok(r.f64()))?;

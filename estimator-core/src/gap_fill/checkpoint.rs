@@ -48,7 +48,6 @@ impl Stored for FillError {
         w.u32(self.samples);
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, (): ()) -> Result<FillError, CheckpointError> {
         let e = FillError { roll_rad2: r.real(), pitch_rad2: r.real(), samples: r.u32() };
         ensure(

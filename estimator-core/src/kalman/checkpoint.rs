@@ -27,7 +27,6 @@ impl<T: Float, const N: usize> Stored for ConstantStateKalman<T, N> {
 
     /// States within [`MAX_STATE`], variances within `max_variance`, covariance symmetric
     /// positive definite.
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, max_variance: f64) -> Result<Self, CheckpointError> {
         let mut kf = Self::new([T::zero(); N]);
         for i in 0..N {

@@ -83,7 +83,6 @@ impl Stored for MethodPart {
         w.skip(Self::LEN - self.written_len());
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, config: &Config) -> Result<MethodPart, CheckpointError> {
         let prior = f64::from(config.prior_sigma_rad);
         let max_variance = MAX_VARIANCE.max(4.0 * prior * prior);

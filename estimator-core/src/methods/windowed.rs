@@ -108,7 +108,7 @@
 //! `n / r` and the share), plus a division per error in every estimate (the lag): the step's
 //! maximum on the Cortex-M4F (MPS2-AN386) went from about 4,720 to 4,760 instructions with the
 //! noise scale and drift share, and to 4,960 with the lag term, 40 below the budget of 5,000
-//! (`host-sim/tests/qemu_budgets.rs`). The reported 1-sigma (the lag included) is now computed
+//! (`host-sim/tests/qemu/qemu_budgets.rs`). The reported 1-sigma (the lag included) is now computed
 //! once per update of a pair, for that pair's two errors, not every step for all four (the other
 //! pair's is at most one update old; four values more in the checkpoint): what made room for the
 //! change detector below. Before the first full horizon both stay at their defaults (scale 1,

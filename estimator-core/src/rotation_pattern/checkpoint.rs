@@ -69,7 +69,6 @@ impl Stored for RotationMonitor {
         w.u32(m.reversed_run);
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, config: &Config) -> Result<RotationMonitor, CheckpointError> {
         const P: Part = Part::RotationMonitor;
         let invalid = CheckpointError::InvalidValue(P);

@@ -18,7 +18,6 @@ impl Stored for SwayMonitor {
         w.u32(self.samples);
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, (): ()) -> Result<Self, CheckpointError> {
         let sway = SwayMonitor { mean_rad: r.real(), mean_square_rad2: r.real(), samples: r.u32() };
         ensure(

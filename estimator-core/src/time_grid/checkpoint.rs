@@ -32,7 +32,6 @@ impl Stored for TimeGrid {
         w.u32(g.clock_steps);
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, config: &Config) -> Result<TimeGrid, CheckpointError> {
         let invalid = CheckpointError::InvalidValue(Part::TimeGrid);
         let g = TimeGrid {

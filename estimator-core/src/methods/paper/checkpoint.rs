@@ -61,7 +61,6 @@ impl Stored for Learned {
         }
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, max_variance: f64) -> Result<Learned, CheckpointError> {
         let updates = r.u32();
         let samples = r.u32();

@@ -19,7 +19,6 @@ impl Stored for Traditional {
         self.kf.write(w);
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, max_variance: f64) -> Result<Traditional, CheckpointError> {
         let updates = r.u32();
         let kf = ConstantStateKalman::read(r, max_variance)?;

@@ -168,7 +168,6 @@ impl Stored for Learned {
         m.change.write(w);
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, max_variance: f64) -> Result<Learned, CheckpointError> {
         let updates = r.u32();
         let kf = ConstantStateKalman::read(r, max_variance)?;

@@ -6,9 +6,7 @@
 //! 0.1 arcsec of an uncut run's (`host-sim estimate` on the whole log, which the firmware matches
 //! bit for bit). The start-up with the restore stays within its 4 KiB of stack.
 
-mod qemu_support;
-
-use qemu_support::*;
+use crate::qemu_support::*;
 use std::path::Path;
 
 /// The estimates (x1..x4 arcsec, empty while none) and status of an estimates CSV's data row.

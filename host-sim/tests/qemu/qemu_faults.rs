@@ -4,8 +4,6 @@
 //! and answer every valid sample exactly as the host's own estimator does on the clean stream.
 //! Then a burst of random bytes: the firmware must still be up and answering. On both boards.
 
-mod qemu_support;
-
 use estimator_core::{Config, Field, Output, RejectReason, SampleError};
 use host_sim::log_csv::read_log;
 use host_sim::replay::{sample_of, HostEstimator};
@@ -15,7 +13,7 @@ use link_protocol::{
     crc, encode_frame, FrameAccumulator, FrameError, Numbered, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
     UNNUMBERED,
 };
-use qemu_support::*;
+use crate::qemu_support::*;
 use std::time::Duration;
 
 /// xorshift32: the faults are the same on every run.

@@ -8,11 +8,9 @@
 //! stamps) through the mps2-an386 image in push mode: the rotation pattern and the interval
 //! learned, the gaps filled, on the target bit for bit as on the host.
 
-mod qemu_support;
-
 use host_sim::estimates_csv::read_estimates;
 use host_sim::log_csv::{read_truth, truth_path};
-use qemu_support::*;
+use crate::qemu_support::*;
 use std::time::Instant;
 
 #[test]

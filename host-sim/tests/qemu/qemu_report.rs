@@ -2,9 +2,7 @@
 //! self-contained `report.html`, whose final estimate is the one `estimate --report` reports for
 //! the same log (the two replays are byte-identical, `qemu_e2e.rs`).
 
-mod qemu_support;
-
-use qemu_support::*;
+use crate::qemu_support::*;
 
 #[test]
 fn stream_report_shows_the_firmwares_answers() {

@@ -3,14 +3,12 @@
 //! saves at 20, 40, ..., 180 s after the first sample; a restart restores the newest image and
 //! saves every 20 s from its time on. The default build's rule is what `qemu_power_cut` follows.
 
-mod qemu_support;
-
 use host_sim::log_csv::read_log;
 use host_sim::replay::sample_of;
 use host_sim::stream::qemu::Machine;
 use host_sim::stream::{step_remote, Target};
 use link_protocol::SampleMsg;
-use qemu_support::*;
+use crate::qemu_support::*;
 use std::time::Duration;
 
 #[test]

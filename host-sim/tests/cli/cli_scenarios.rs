@@ -1,8 +1,6 @@
 //! generate + estimate through the binary for each scenario, checked against the truth file.
 
-mod common;
-
-use common::{host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim_ok, path_str, temp_dir};
 use host_sim::estimates_csv::{read_estimates, EstimateRow};
 use host_sim::log_csv::{read_truth, truth_path};
 use std::path::Path;

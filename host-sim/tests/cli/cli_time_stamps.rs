@@ -3,9 +3,7 @@
 //! the wrong unit and a `--sample-interval` that contradicts them are refused with the likely
 //! cause; a clock step back is counted.
 
-mod common;
-
-use common::{host_sim, host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
 use std::path::{Path, PathBuf};
 
 /// A paper log of `duration` s stamped in Unix seconds from 1700000000 (2023-11-14T22:13:20Z).

@@ -4,9 +4,7 @@
 //! (max over a 6000 s stream, counted in QEMU with `-icount shift=0` and SysTick: 40 instructions
 //! per tick at mps2-an386's 25 MHz, 5.95 at netduinoplus2's 168 MHz).
 
-mod qemu_support;
-
-use qemu_support::*;
+use crate::qemu_support::*;
 
 const STEP_BUDGET_INSTRUCTIONS: f64 = 5000.0;
 

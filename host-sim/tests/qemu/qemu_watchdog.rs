@@ -7,15 +7,13 @@
 //! nothing lost but the samples sent while the firmware was down, one contiguous block right after
 //! the `Hang`, and every sample after the restart answered.
 
-mod qemu_support;
-
 use host_sim::estimates_csv::EstimatesWriter;
 use host_sim::log_csv::{LogReader, RowFilter};
 use host_sim::stream::qemu::Machine;
 use host_sim::stream::push::{stream_log_push, PushOptions};
 use host_sim::stream::Target;
 use link_protocol::{Request, ResetCause};
-use qemu_support::*;
+use crate::qemu_support::*;
 use std::time::{Duration, Instant};
 
 /// The row before which the host sends `Hang`: after the first checkpoint (300 s of samples, the

@@ -5,9 +5,7 @@
 //! (the window refilling: `holding`); and at the end our method is within the uninterrupted run's
 //! 1-sigma of it.
 
-mod common;
-
-use common::{host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim_ok, path_str, temp_dir};
 
 /// x1..x4, sigma1..4 (arcsec) and status of an estimates row.
 fn fields(line: &str) -> ([Option<f64>; 8], String) {

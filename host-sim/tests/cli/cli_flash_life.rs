@@ -3,9 +3,7 @@
 //! alike, a save that only programs stalls the CPU within 50 ms typical and 250 ms worst (the
 //! datasheet's program times), and the flash lasts at least 10 years at 10,000 cycles.
 
-mod common;
-
-use common::host_sim_ok;
+use crate::common::host_sim_ok;
 
 /// The number before `unit` on the line starting with `prefix`.
 fn number_before(out: &str, prefix: &str, unit: &str) -> f64 {

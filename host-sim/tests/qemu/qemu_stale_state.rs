@@ -4,13 +4,11 @@
 //! `host-sim estimate`; with `--resume` it continues after the checkpoint. And a `Reset` erases the
 //! checkpoints: a power cut right after it brings no state back.
 
-mod qemu_support;
-
 use host_sim::log_csv::read_log;
 use host_sim::replay::sample_of;
 use host_sim::stream::{holds_state, step_remote, Target};
 use link_protocol::{Request, Response, SampleMsg};
-use qemu_support::*;
+use crate::qemu_support::*;
 use std::process::Command;
 use std::time::Duration;
 

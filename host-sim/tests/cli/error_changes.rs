@@ -4,9 +4,7 @@
 //! scheme and period) is `bash scripts/change-study.sh`, which runs the `#[ignore]`d tests below
 //! with `--ignored --nocapture`; docs/uncertainty.md quotes its tables.
 
-mod common;
-
-use common::{host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim_ok, path_str, temp_dir};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, ErrorChange, Estimator, Status};
 use host_sim::monte_carlo::Draw;

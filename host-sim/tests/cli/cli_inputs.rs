@@ -2,9 +2,7 @@
 //! and output, a closed pipe, an output naming the log, a minimal or broken truth file, logs
 //! starting at other times, negative option values, configuration errors.
 
-mod common;
-
-use common::{host_sim, host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

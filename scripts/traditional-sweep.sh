@@ -1,6 +1,6 @@
 #!/bin/bash
-# Sweep of the traditional baseline's tuning on a 2-day paper-scenario log (see host-sim/RESULTS.md).
-# usage: [SCENARIO=paper] [SEED=1] host-sim/scripts/traditional_sweep.sh [WORKDIR]
+# Sweep of the traditional baseline's tuning on a 2-day paper-scenario log (the tables in docs/results.md).
+# usage: [SCENARIO=paper] [SEED=1] bash scripts/traditional-sweep.sh [WORKDIR]
 #        (needs python3; builds host-sim --release)
 # Prints markdown rows: sigma deg | drift arcsec/sqrt(s) | % error x1..x4 at 45000 s | max | at 172799 s | max
 set -euo pipefail

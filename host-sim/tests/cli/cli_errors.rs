@@ -1,8 +1,6 @@
 //! Malformed logs, NaN rows and gaps, through the binary.
 
-mod common;
-
-use common::{host_sim, host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
 use host_sim::estimates_csv::read_estimates;
 use host_sim::log_csv::HEADER;
 

@@ -1,8 +1,6 @@
 //! `compare` and `monte-carlo` over rotation schemes and recorder losses: well-formed tables.
 
-mod common;
-
-use common::host_sim_ok;
+use crate::common::host_sim_ok;
 
 /// Markdown blocks of a compare output: (heading line, table lines).
 fn blocks(stdout: &str) -> Vec<(String, Vec<String>)> {

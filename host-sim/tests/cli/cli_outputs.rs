@@ -3,9 +3,7 @@
 //! earlier good file is kept when a run fails, no temporary file is left, no input is ever an
 //! output) and negative values accepted by every numeric option.
 
-mod common;
-
-use common::{host_sim, host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
 use std::path::{Path, PathBuf};
 
 fn paper(dir: &Path, duration: u32) -> PathBuf {

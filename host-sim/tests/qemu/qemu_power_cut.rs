@@ -7,8 +7,6 @@
 //! firmware reports. At the end the firmware's estimate equals the mirror's bit for bit, and is
 //! within 1 arcsec of the uninterrupted run's.
 
-mod qemu_support;
-
 use estimator_core::checkpoint::CHECKPOINT_LEN;
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, Estimate};
@@ -17,7 +15,7 @@ use host_sim::log_csv::read_log;
 use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::{Request, SampleMsg};
-use qemu_support::*;
+use crate::qemu_support::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::{Duration, Instant};

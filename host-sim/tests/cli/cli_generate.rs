@@ -1,9 +1,7 @@
 //! `generate`'s log, read back: rotation schemes, sample interval, lost rows, outages, time
 //! stamps, and the default scenarios unchanged.
 
-mod common;
-
-use common::{host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim_ok, path_str, temp_dir};
 use std::path::Path;
 
 /// CRC-64 (ECMA-182) and length of a file.
@@ -160,7 +158,7 @@ fn scheme_needs_room_for_its_moves_and_ranges_are_checked() {
     ] {
         let mut a = vec!["generate", "--scenario", "paper", "--duration", "1000", "--out", path_str(&log)];
         a.extend_from_slice(args);
-        let out = common::host_sim(&a);
+        let out = crate::common::host_sim(&a);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && stderr.contains(message), "{args:?}: {stderr}");
     }

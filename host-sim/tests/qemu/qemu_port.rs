@@ -3,9 +3,7 @@
 //! host-sim must give the same estimates CSV as `host-sim estimate`. A second stream to the same
 //! board, which now holds the first one's state, is refused; with `--reset` it is exact again.
 
-mod qemu_support;
-
-use qemu_support::*;
+use crate::qemu_support::*;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 

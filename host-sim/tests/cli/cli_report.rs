@@ -4,9 +4,7 @@
 //! message where none is installed): every figure decodes from the page alone, copied away from
 //! its PNGs.
 
-mod common;
-
-use common::{host_sim, host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
