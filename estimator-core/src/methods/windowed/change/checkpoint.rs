@@ -48,7 +48,6 @@ impl Stored for BlockVariance {
         }
     }
 
-    #[inline(never)]
     fn read(r: &mut Reader<'_>, (): ()) -> Result<BlockVariance, CheckpointError> {
         let l = BlockVariance {
             mean_square_rad2: core::array::from_fn(|_| r.real()),
