@@ -632,17 +632,18 @@ impl<const CAP: usize> Windowed<CAP> {
     }
 
     /// Keeps a copy of the filter and its residual statistics ([`CleanState`]).
+    /// Field by field, in place: a whole `CleanState` built first took its size again on the
+    /// stack (at a restore, on top of the image's parts).
     fn keep_clean_state(&mut self) {
-        self.clean = CleanState {
-            kf: self.kf.clone(),
-            residual_mean: self.residual_mean,
-            residual_count: self.residual_count,
-            residual_mean_long: self.residual_mean_long,
-            residual_power: self.residual_power,
-            long_count: self.long_count,
-            noise_scale: self.noise_scale,
-            drift_share: self.drift_share,
-        };
+        let c = &mut self.clean;
+        c.kf.clone_from(&self.kf);
+        c.residual_mean = self.residual_mean;
+        c.residual_count = self.residual_count;
+        c.residual_mean_long = self.residual_mean_long;
+        c.residual_power = self.residual_power;
+        c.long_count = self.long_count;
+        c.noise_scale = self.noise_scale;
+        c.drift_share = self.drift_share;
     }
 
     /// Goes back to the copy of [`Windowed::keep_clean_state`].

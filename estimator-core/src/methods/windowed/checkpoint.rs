@@ -174,7 +174,9 @@ impl Stored for Learned {
         let residual_mean: [Real; 4] = core::array::from_fn(|_| r.real());
         let next_pair = r.u8();
         ensure(next_pair <= 1, CheckpointError::InvalidValue(Part::Residuals))?;
-        let m = Learned {
+        // One value built in place, then its later fields read into it: a second `Learned`
+        // made from this one (`..m`) took its size again on the restore's stack.
+        let mut m = Learned {
             updates,
             kf,
             residual_mean,
@@ -196,14 +198,12 @@ impl Stored for Learned {
             change: BlockVariance::default(),
         };
         let bits = r.u8();
-        let mut m = Learned {
-            channel_mismatch: core::array::from_fn(|i| bits & (1 << i) != 0),
-            relearning: core::array::from_fn(|i| bits & (1 << (4 + i)) != 0),
-            held_x_rad: core::array::from_fn(|_| r.real()),
-            spread_rad2: core::array::from_fn(|_| r.real()),
-            spread_count: [r.u32(), r.u32()],
-            ..m
-        };
+        m.channel_mismatch = core::array::from_fn(|i| bits & (1 << i) != 0);
+        m.relearning = core::array::from_fn(|i| bits & (1 << (4 + i)) != 0);
+        for v in m.held_x_rad.iter_mut().chain(&mut m.spread_rad2) {
+            *v = r.real();
+        }
+        m.spread_count = [r.u32(), r.u32()];
         m.change = BlockVariance::read(r, ())?;
         ensure(bits & 0xC0 == 0, CheckpointError::InvalidValue(Part::Residuals))?;
         let in_range = m.residual_mean.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
