@@ -93,7 +93,7 @@ fn image_length() {
     #[cfg(not(feature = "f64"))]
     assert_eq!(CHECKPOINT_LEN, 860);
     #[cfg(feature = "f64")]
-    assert_eq!(CHECKPOINT_LEN, 1000);
+    assert_eq!(CHECKPOINT_LEN, 1032);
     assert!(CHECKPOINT_LEN <= 2048);
     assert_eq!(Estimator::<720>::CHECKPOINT_LEN, CHECKPOINT_LEN);
     assert_eq!(Est::CHECKPOINT_LEN, CHECKPOINT_LEN);
