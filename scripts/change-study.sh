@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Changes of the installation errors, the full study (docs/uncertainty.md quotes its tables):
+# Changes of the installation errors, the full study (docs/uncertainty.md, "Changes of the errors",
+# quotes its tables):
 #   - steps of 20, 30, 50 and 150 arcsec of each error at 20,000 s of a sea log, one-way,
 #     reciprocating and four-position rotation at 360, 480 and 720 s, 4 seeds a line: detected
 #     once, when, every error within 10 arcsec of the new values from when, the 1-sigma's cover;
