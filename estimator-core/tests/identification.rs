@@ -145,13 +145,16 @@ fn corrected_attitude_removes_the_oscillation() {
 }
 
 /// The state budget: 24 KiB for the default capacity (720 window entries: one period of up to
-/// 720 samples without bins) in the firmware's f32, so that its RAM holds it and a checkpoint
-/// buffer. (The f64 build, a precision comparison on the host, stores the same integer ring and
-/// wider floats elsewhere: 25 KiB.)
+/// 720 samples without bins) in the firmware's f32, so that the board's static RAM holds it with
+/// the checkpoint store's buffers and the receive rings within 64 KiB. The f64 build is a
+/// precision comparison on the host, with no RAM to fit: its limit only makes growth visible. It
+/// stores the same integer ring and every float twice as wide: the f32 limit plus 2 KiB (the
+/// filter, the change detector's blocks and the clean state it goes back to are most of the
+/// floats).
 #[test]
 fn estimator_fits_in_24_kib() {
     let size = core::mem::size_of::<Estimator>();
     println!("size_of::<Estimator>() = {size} bytes; Real = {}", core::any::type_name::<Real>());
-    let budget = if cfg!(feature = "f64") { 25 * 1024 } else { 24 * 1024 };
+    let budget = if cfg!(feature = "f64") { 26 * 1024 } else { 24 * 1024 };
     assert!(size <= budget, "{size} bytes");
 }

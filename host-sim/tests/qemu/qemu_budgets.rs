@@ -12,7 +12,7 @@ const STEP_BUDGET_INSTRUCTIONS: f64 = 5000.0;
 /// in sectors 0-4, 128 KiB (the rest holds the checkpoint log: `firmware/src/flash_layout.rs`);
 /// the image may take 112 KiB of them, 16 KiB kept as a margin so that a fix in the field never
 /// outgrows the region (which would move the checkpoint log). It was 96 KiB until the change
-/// detector and the gap handling took 8 and 4 KB of code. The mps2-an386 (4 MiB) is held to the same
+/// detector's 8 KB of code. The mps2-an386 (4 MiB) is held to the same
 /// figure, so that growth shows on either board. Static RAM: half of the STM32F405's 128 KiB
 /// SRAM, the rest for the stack and room to grow.
 const FLASH_BUDGET_BYTES: u64 = 128 * 1024 - 16 * 1024;
