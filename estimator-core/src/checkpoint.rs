@@ -41,7 +41,8 @@
 //! # Versions
 //! [`VERSION`] is the only version read. An image of another version is refused with
 //! [`CheckpointError::Version`]; the firmware then starts afresh. Versions 1 to 4 held the whole
-//! state, window included (23 KB); version 5 is the first that holds only what a restart can use.
+//! state, window included (23 KB); version 5 is the first that holds only what a restart can use;
+//! version 6 adds what the change detector learned and the last change of the errors declared.
 //!
 //! # Layout
 //! Little-endian; `R` = bytes of [`Real`] (4, or 8 with the `f64` feature). An optional value is a
@@ -86,7 +87,7 @@ use wire::{Reader, Writer};
 /// First four bytes of every image.
 pub const MAGIC: [u8; 4] = *b"RIEC";
 /// Format version written and the only one read.
-pub const VERSION: u16 = 5;
+pub const VERSION: u16 = 6;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 12;
 /// Bytes of the CRC at the end.
@@ -158,6 +159,9 @@ pub enum Part {
     KalmanCovariance,
     /// The windowed method's residual means, gains and what it learned of noise and drift.
     Residuals,
+    /// The windowed method's change detector: what it learned of its block means, the errors being
+    /// learned again and the estimate they are learned against.
+    ChangeDetector,
     /// The paper method's integrals.
     PaperIntegrals,
     /// The paper method's start time.
@@ -211,6 +215,7 @@ impl core::fmt::Display for Part {
             Part::KalmanState => "Kalman state",
             Part::KalmanCovariance => "Kalman covariance",
             Part::Residuals => "residual means and gains",
+            Part::ChangeDetector => "change detector",
             Part::PaperIntegrals => "paper method integrals",
             Part::PaperStartTime => "paper method start time",
             Part::Padding => "padding",

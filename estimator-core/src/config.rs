@@ -97,6 +97,12 @@ pub struct Config {
     /// Largest relative deviation of the time between two passes of the rotation pattern through
     /// the same angle from its period (see [`crate::rotation_pattern`]). Default 0.01 (1 %).
     pub rotation_period_tolerance: Real,
+    /// The smallest step of an installation error the change detector is sized for (windowed
+    /// method): a step of the errors (a re-installation, a shock) at least this large is detected
+    /// from the residuals, reported as [`crate::Status::ErrorsChanged`], and the errors that
+    /// changed are learned again from the next window on (see [`crate::methods::windowed`],
+    /// "Changes of the errors"). Default 20 arcsec; 0 turns detection off.
+    pub change_detection_step_rad: Real,
 }
 
 impl Default for Config {
@@ -114,6 +120,7 @@ impl Default for Config {
             max_filled_gap_samples: 2,
             converged_sigma_rad: arcsec_to_rad(1.0) as Real,
             rotation_period_tolerance: 0.01,
+            change_detection_step_rad: arcsec_to_rad(20.0) as Real,
         }
     }
 }
@@ -233,6 +240,7 @@ impl Config {
             ("drift_rad_per_sqrt_s", self.drift_rad_per_sqrt_s),
             ("traditional_drift_rad_per_sqrt_s", self.traditional_drift_rad_per_sqrt_s),
             ("sway_gate_rad", self.sway_gate_rad),
+            ("change_detection_step_rad", self.change_detection_step_rad),
         ];
         if let Some((name, v)) = positive.iter().find(|(_, v)| !(*v > 0.0 && v.is_finite())) {
             return fail(name, *v, Positive);
@@ -279,6 +287,10 @@ impl Config {
                 value: f64::from(self.max_filled_gap_samples),
                 bound: AtMost(f64::from(MAX_FILLABLE_GAP)),
             });
+        }
+        // A step of a radian is no installation error; and its square must not overflow.
+        if !(self.change_detection_step_rad <= 1.0) {
+            return fail("change_detection_step_rad", self.change_detection_step_rad, AtMost(1.0));
         }
         if !(self.rotation_period_tolerance <= 0.5) {
             return fail("rotation_period_tolerance", self.rotation_period_tolerance, AtMost(0.5));

@@ -37,7 +37,7 @@ use crate::gap_fill::{GapFiller, GridSample, Passed};
 use crate::installation::Angles;
 use crate::math::{sin_cos, wrap_pi};
 use crate::methods::MethodState;
-use crate::output::{Counters, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status};
+use crate::output::{Counters, ErrorChange, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status};
 use crate::rotation_pattern::{Limits, PatternEvent, RotationFault, RotationMonitor};
 use crate::sample::{Attitude, Sample, SampleError};
 use crate::sway_gate::SwayMonitor;
@@ -109,6 +109,8 @@ pub struct Estimator<const CAP: usize = DEFAULT_CAPACITY> {
     fault: Option<(RotationFault, f64)>,
     rejected: RejectCounts,
     counters: Counters,
+    /// The last change of the errors the windowed method declared.
+    error_change: Option<ErrorChange>,
 }
 
 impl<const CAP: usize> Estimator<CAP> {
@@ -131,6 +133,7 @@ impl<const CAP: usize> Estimator<CAP> {
             fault: None,
             rejected: RejectCounts::default(),
             counters: Counters::default(),
+            error_change: None,
         })
     }
 
@@ -172,6 +175,7 @@ impl<const CAP: usize> Estimator<CAP> {
             addr_of_mut!((*p).fault).write(None);
             addr_of_mut!((*p).rejected).write(RejectCounts::ZERO);
             addr_of_mut!((*p).counters).write(Counters::ZERO);
+            addr_of_mut!((*p).error_change).write(None);
             slot.assume_init_mut()
         };
         // The windowed method resets in place; another method's state is built by value (see
@@ -210,6 +214,7 @@ impl<const CAP: usize> Estimator<CAP> {
         self.fault = None;
         self.rejected = RejectCounts::default();
         self.counters = Counters::default();
+        self.error_change = None;
         Ok(())
     }
 
@@ -288,6 +293,12 @@ impl<const CAP: usize> Estimator<CAP> {
         }
     }
 
+    /// The last change of the installation errors declared (windowed method), if any: when, and
+    /// which errors are learned again.
+    pub fn error_change(&self) -> Option<ErrorChange> {
+        self.error_change
+    }
+
     /// The current estimate, if any.
     pub fn estimate(&self) -> Option<Estimate> {
         self.method.estimate(&self.config).map(|e| Estimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad })
@@ -319,6 +330,7 @@ impl<const CAP: usize> Estimator<CAP> {
         };
         let estimate = self.method.estimate(&self.config);
         let status = match (status, estimate) {
+            (Status::Estimating | Status::WarmingUp, Some(e)) if e.relearning => Status::ErrorsChanged,
             (Status::Estimating, Some(e)) if e.mismatch => Status::ModelMismatch,
             (Status::Estimating, Some(e)) if e.sigma_rad.iter().all(|s| *s < self.config.converged_sigma_rad) => {
                 Status::Converged
@@ -433,7 +445,16 @@ impl<const CAP: usize> Estimator<CAP> {
         }
         // A filled sample is a sample's work and a fill's: the filter waits for the next step.
         if took > 0 && work <= 2 && !filled {
-            self.method.update(&self.config, feed, self.filler.single_fill_variance());
+            if let Some(alarm) = self.method.update(&self.config, feed, self.filler.single_fill_variance()) {
+                // The run's first block began `run_blocks` blocks of half a window before this update.
+                let entry_s = feed.interval_s * f64::from(self.rotation().samples_per_entry);
+                let window_s = entry_s * self.method.window_len() as f64;
+                self.error_change = Some(ErrorChange {
+                    detected_s: stamp_s,
+                    seen_since_s: stamp_s - f64::from(alarm.run_blocks) * 0.5 * window_s,
+                    relearned: alarm.changed,
+                });
+            }
         }
     }
 

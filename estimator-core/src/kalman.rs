@@ -38,6 +38,8 @@ pub enum KalmanError {
     NonFinite,
     /// `h' P h + r` was not positive.
     Degenerate,
+    /// The innovation was beyond the gate ([`ConstantStateKalman::update_gated`]).
+    Gated,
 }
 
 impl core::fmt::Display for KalmanError {
@@ -45,6 +47,7 @@ impl core::fmt::Display for KalmanError {
         match self {
             KalmanError::NonFinite => write!(f, "measurement, row or noise not finite, or noise negative"),
             KalmanError::Degenerate => write!(f, "innovation variance h' P h + r not positive"),
+            KalmanError::Gated => write!(f, "innovation beyond the gate"),
         }
     }
 }
@@ -85,17 +88,32 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
 
     /// Applies one scalar measurement `z = h . x + w`, `var(w) = r`. Returns the innovation.
     pub fn update(&mut self, h: &[T; N], z: T, r: T) -> Result<T, KalmanError> {
+        self.update_gated(h, z, r, None)
+    }
+
+    /// [`ConstantStateKalman::update`], refused ([`KalmanError::Gated`], the filter untouched)
+    /// when `gate = Some((spread, g))` and the innovation is beyond `g` times its standard
+    /// deviation for a measurement of variance `spread`: `(z - h x)^2 > g^2 (h' P h + spread)`
+    /// (innovation gating: a measurement the filter's own uncertainty and the measurements' usual
+    /// spread cannot explain is left out).
+    pub fn update_gated(&mut self, h: &[T; N], z: T, r: T, gate: Option<(T, T)>) -> Result<T, KalmanError> {
         let h = SVector::<T, N>::from_column_slice(h);
         if !z.is_finite() || !r.is_finite() || r < T::zero() || h.iter().any(|v| !v.is_finite()) {
             return Err(KalmanError::NonFinite);
         }
         let ph = self.p * h;
-        let s = h.dot(&ph) + r;
+        let hph = h.dot(&ph);
+        let s = hph + r;
         if !(s > T::zero()) || !s.is_finite() {
             return Err(KalmanError::Degenerate);
         }
-        let k = ph / s;
         let innovation = z - h.dot(&self.x);
+        if let Some((spread, g)) = gate {
+            if innovation * innovation > g * g * (hph + spread) {
+                return Err(KalmanError::Gated);
+            }
+        }
+        let k = ph / s;
         // D = (I - k h') P = P - k b', b = P h = ph (P symmetric).
         let mut d = self.p;
         for i in 0..N {
@@ -120,6 +138,21 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         self.x = x;
         self.p = p;
         Ok(innovation)
+    }
+
+    /// Forgets what is known of the states `which`: their variance becomes `prior_sigma^2` and their
+    /// covariance with every other state 0, their estimates stay as they are (the next measurements
+    /// move them as at a cold start); the other states keep their estimates and covariance. The
+    /// covariance stays symmetric positive definite: the kept block is a principal submatrix of a
+    /// positive definite matrix, and the forgotten states are uncorrelated with it.
+    pub fn forget(&mut self, which: &[bool; N], prior_sigma: T) {
+        for i in (0..N).filter(|i| which[*i]) {
+            for j in 0..N {
+                self.p[(i, j)] = T::zero();
+                self.p[(j, i)] = T::zero();
+            }
+            self.p[(i, i)] = prior_sigma * prior_sigma;
+        }
     }
 
     /// The state estimate.
@@ -203,6 +236,43 @@ mod tests {
     #[test]
     fn f64_filter_matches_batch_least_squares() {
         matches_batch_least_squares::<f64>(1e3, 1e-9);
+    }
+
+    #[test]
+    fn forgetting_states_keeps_the_others_and_the_covariance_positive_definite() {
+        let mut kf = ConstantStateKalman::<f32, 4>::new([1.0; 4]);
+        for k in 0..40 {
+            let a = k as f32 * 0.3;
+            kf.update(&[libm::cosf(a), libm::sinf(a), 0.3, 0.2 * libm::cosf(2.0 * a)], 0.1 * k as f32, 1e-3).unwrap();
+        }
+        let before = kf.clone();
+        kf.forget(&[true, false, true, false], 2.0);
+        assert!(kf.covariance_is_spd());
+        assert_eq!(kf.state(), before.state());
+        for i in 0..4 {
+            for j in 0..4 {
+                let expected = match (i % 2 == 0, j % 2 == 0) {
+                    (true, _) | (_, true) if i == j => 4.0,
+                    (true, _) | (_, true) => 0.0,
+                    _ => before.covariance()[(i, j)],
+                };
+                assert_eq!(kf.covariance()[(i, j)], expected, "({i}, {j})");
+            }
+        }
+    }
+
+    #[test]
+    fn a_gated_update_refuses_an_innovation_beyond_the_gate_and_leaves_the_state() {
+        let mut kf = ConstantStateKalman::<f32, 2>::new([1.0, 1.0]);
+        kf.update(&[1.0, 0.0], 0.5, 0.01).unwrap();
+        let before = kf.clone();
+        // h' P h is about 0.01 here; with a spread of 0.01 the 3-sigma gate is about 0.42.
+        let hph = kf.covariance()[(0, 0)];
+        let gate = 3.0 * libm::sqrtf(hph + 0.01);
+        assert_eq!(kf.update_gated(&[1.0, 0.0], kf.state()[0] + 1.01 * gate, 0.01, Some((0.01, 3.0))), Err(KalmanError::Gated));
+        assert_eq!(kf, before);
+        assert!(kf.update_gated(&[1.0, 0.0], kf.state()[0] + 0.99 * gate, 0.01, Some((0.01, 3.0))).is_ok());
+        assert_ne!(kf, before);
     }
 
     #[test]

@@ -107,7 +107,7 @@ pub mod units;
 
 pub use config::{Config, ConfigError, Method};
 pub use estimator::Estimator;
-pub use output::{Counters, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status};
+pub use output::{Counters, ErrorChange, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status};
 pub use rotation_pattern::RotationFault;
 pub use rotation_pattern::PatternKind;
 pub use code::UnknownCode;

@@ -18,6 +18,7 @@ use crate::output::Estimate;
 #[cfg(feature = "paper-method")]
 pub use paper::Paper;
 pub use traditional::Traditional;
+pub use windowed::change::Alarm;
 pub use windowed::{MethodEstimate, Windowed};
 
 /// The running state of whichever method the configuration selects.
@@ -100,15 +101,17 @@ impl<const CAP: usize> MethodState<CAP> {
     }
 
     /// The windowed method's one update per step (see [`Windowed::update`]); the others update
-    /// in [`MethodState::push`].
-    pub fn update(&mut self, config: &Config, feed: &Feed, fill_variance: FillVariance) -> bool {
+    /// in [`MethodState::push`]. Returns the change of the errors declared, if any (only the
+    /// windowed method detects changes).
+    pub fn update(&mut self, config: &Config, feed: &Feed, fill_variance: FillVariance) -> Option<Alarm> {
         match self {
             MethodState::Windowed(m) => m.update(config, feed.interval, fill_variance),
             #[cfg(feature = "paper-method")]
-            MethodState::Paper(_) => false,
-            MethodState::Traditional(_) => false,
+            MethodState::Paper(_) => None,
+            MethodState::Traditional(_) => None,
         }
     }
+
 
     /// Forgets the moving-average window (the filter keeps what it learnt).
     pub fn restart_window(&mut self) {
@@ -134,6 +137,16 @@ impl<const CAP: usize> MethodState<CAP> {
         !matches!(self, MethodState::Traditional(_))
     }
 
+    /// Entries the method's window holds when full (0 for a method without one).
+    pub fn window_len(&self) -> usize {
+        match self {
+            MethodState::Windowed(m) => m.window().len(),
+            #[cfg(feature = "paper-method")]
+            MethodState::Paper(m) => m.window().len(),
+            MethodState::Traditional(_) => 0,
+        }
+    }
+
     /// Whether the method's window has spanned a whole period since it started (always, for a
     /// method without one).
     pub fn window_full(&self) -> bool {
@@ -149,7 +162,7 @@ impl<const CAP: usize> MethodState<CAP> {
     /// had a measurement. Only the windowed method checks its residuals; the others never report
     /// a mismatch.
     pub fn estimate(&self, config: &Config) -> Option<MethodEstimate> {
-        let plain = |e: Estimate| MethodEstimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad, mismatch: false };
+        let plain = |e: Estimate| MethodEstimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad, mismatch: false, relearning: false };
         match self {
             MethodState::Windowed(m) => m.estimate(config),
             #[cfg(feature = "paper-method")]

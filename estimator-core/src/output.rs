@@ -27,11 +27,17 @@ pub enum Status {
     /// The sample interval or the rotation pattern's period is not known yet; estimates are
     /// frozen (or none yet).
     DetectingPattern,
+    /// The residuals showed a step of the installation errors (a re-installation, a shock): the
+    /// errors that changed are learned again (from the residuals that showed the change, at
+    /// once, or from the next half period of them), their 1-sigma from the learning; said for
+    /// one rotation period from the detection, then `estimating` again. When and which:
+    /// [`crate::Estimator::error_change`].
+    ErrorsChanged,
 }
 
 impl Status {
     /// Every status, in code order.
-    pub const ALL: [Status; 10] = [
+    pub const ALL: [Status; 11] = [
         Status::WaitingForSway,
         Status::RotationFault(RotationFault::Stopped),
         Status::RotationFault(RotationFault::Reversed),
@@ -42,6 +48,7 @@ impl Status {
         Status::Converged,
         Status::ModelMismatch,
         Status::DetectingPattern,
+        Status::ErrorsChanged,
     ];
 
     /// Short name used in files.
@@ -57,6 +64,7 @@ impl Status {
             Status::Converged => "converged",
             Status::ModelMismatch => "model_mismatch",
             Status::DetectingPattern => "detecting_pattern",
+            Status::ErrorsChanged => "errors_changed",
         }
     }
 
@@ -73,6 +81,7 @@ impl Status {
             Status::Converged => 7,
             Status::ModelMismatch => 8,
             Status::DetectingPattern => 9,
+            Status::ErrorsChanged => 10,
         }
     }
 
@@ -105,6 +114,19 @@ pub struct Output {
     /// The sample's attitude minus eq (2)'s oscillation for the current estimate (unchanged while
     /// there is none). Heading wrapped to [-pi, pi].
     pub corrected: Attitude,
+}
+
+/// A change of the installation errors the residuals showed (windowed method, see
+/// [`crate::methods::windowed::change`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorChange {
+    /// Time stamp of the sample at which the change was declared, s.
+    pub detected_s: f64,
+    /// Time stamp from which the residuals showed it (the start of the first block of the run
+    /// that declared it), s. The change itself began up to one rotation period before.
+    pub seen_since_s: f64,
+    /// The errors x1..x4 learned again (those whose residuals showed the change).
+    pub relearned: [bool; 4],
 }
 
 /// Rejected samples by reason (index: the [`RejectReason`] code).

@@ -432,13 +432,13 @@ fn an_image_of_the_previous_format_version_is_refused_as_such() {
     let mut target: Estimator = Estimator::new(Config::with_method(Method::Traditional)).unwrap();
     let before = target.clone();
     let mut old = good.clone();
-    old[4..6].copy_from_slice(&4u16.to_le_bytes());
+    old[4..6].copy_from_slice(&5u16.to_le_bytes());
     let n = old.len();
     let crc = crc32(&old[..n - 4]);
     old[n - 4..].copy_from_slice(&crc.to_le_bytes());
     let err = target.restore(&old).unwrap_err();
-    assert_eq!(err, CheckpointError::Version { found: 4, expected: 5 });
-    assert_eq!(VERSION, 5);
+    assert_eq!(err, CheckpointError::Version { found: 5, expected: 6 });
+    assert_eq!(VERSION, 6);
     assert!(err.to_string().contains("older firmware"), "{err}");
     assert!(target == before);
     target.restore(good).unwrap();

@@ -366,6 +366,7 @@ prop_compose! {
         filled in 0u32..=4,
         converged in log_uniform(1e-9, 1e-3),
         period_tol in log_uniform(1e-4, 0.6),
+        change in prop_oneof![Just(0.0 as Real), log_uniform(1e-7, 1.0)],
     ) -> Config {
         Config {
             method: Method::try_from(method).unwrap_or_default(),
@@ -380,6 +381,7 @@ prop_compose! {
             max_filled_gap_samples: filled,
             converged_sigma_rad: converged,
             rotation_period_tolerance: period_tol,
+            change_detection_step_rad: change,
         }
     }
 }

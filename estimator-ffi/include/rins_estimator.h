@@ -16,7 +16,7 @@
 #include <stdint.h>
 
 // Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.
-#define RINS_CHECKPOINT_LEN 840
+#define RINS_CHECKPOINT_LEN 860
 
 // Bytes of a buffer that holds any estimates CSV row with its line end and NUL.
 #define RINS_ROW_MAX_LEN 1024
@@ -31,7 +31,7 @@
 // Bytes of memory an estimator needs, on every target (32- and 64-bit): at least
 // `rins_estimator_size()`, which is this build's exact figure. The library does not build
 // where its estimator would not fit.
-#define RINS_ESTIMATOR_SIZE 29184
+#define RINS_ESTIMATOR_SIZE 29696
 
 // Alignment of the estimator's memory, bytes (it holds `double`s).
 #define RINS_ESTIMATOR_ALIGN 8
@@ -114,6 +114,10 @@ enum RinsStatus
   RINS_STATUS_MODEL_MISMATCH = 8,
   // `detecting_pattern`: the sample interval or the rotation period is not known yet.
   RINS_STATUS_DETECTING_PATTERN = 9,
+  // `errors_changed`: a change of the installation errors was declared from the residuals;
+  // the errors that changed are being learned again. Said for one rotation period from the
+  // detection, then `estimating` again.
+  RINS_STATUS_ERRORS_CHANGED = 10,
   // `rejected_non_finite`: a field is NaN or infinite (`rejected_field` says which).
   RINS_STATUS_REJECTED_NON_FINITE = 128,
   // `rejected_latitude_out_of_range`: |latitude| >= 90 deg.
@@ -215,6 +219,10 @@ typedef struct RinsConfig {
   float converged_sigma_rad;
   // Largest relative deviation of the rotation pattern's period. Default 0.01.
   float rotation_period_tolerance;
+  // Smallest step of an installation error the change detector is sized for, rad (windowed
+  // method): a larger step is reported as `RINS_STATUS_ERRORS_CHANGED` and learned again.
+  // Default 20 arcsec; 0 turns detection off.
+  float change_detection_step_rad;
 } RinsConfig;
 
 // One sample as the RINS outputs it, in the units of the attitude log (`docs/log-format.md`):

@@ -62,6 +62,10 @@ pub struct RinsConfig {
     pub converged_sigma_rad: f32,
     /// Largest relative deviation of the rotation pattern's period. Default 0.01.
     pub rotation_period_tolerance: f32,
+    /// Smallest step of an installation error the change detector is sized for, rad (windowed
+    /// method): a larger step is reported as `RINS_STATUS_ERRORS_CHANGED` and learned again.
+    /// Default 20 arcsec; 0 turns detection off.
+    pub change_detection_step_rad: f32,
 }
 
 /// A period or interval of the C struct: 0 stands for "not pinned".
@@ -88,6 +92,7 @@ impl From<&Config> for RinsConfig {
             max_filled_gap_samples: c.max_filled_gap_samples,
             converged_sigma_rad: c.converged_sigma_rad as f32,
             rotation_period_tolerance: c.rotation_period_tolerance as f32,
+            change_detection_step_rad: c.change_detection_step_rad as f32,
         }
     }
 }
@@ -117,6 +122,7 @@ impl RinsConfig {
             max_filled_gap_samples: self.max_filled_gap_samples,
             converged_sigma_rad: self.converged_sigma_rad as Real,
             rotation_period_tolerance: self.rotation_period_tolerance as Real,
+            change_detection_step_rad: self.change_detection_step_rad as Real,
         };
         config.check(DEFAULT_CAPACITY)?;
         Ok(config)

@@ -81,6 +81,10 @@ pub enum RinsStatus {
     ModelMismatch = 8,
     /// `detecting_pattern`: the sample interval or the rotation period is not known yet.
     DetectingPattern = 9,
+    /// `errors_changed`: a change of the installation errors was declared from the residuals;
+    /// the errors that changed are being learned again. Said for one rotation period from the
+    /// detection, then `estimating` again.
+    ErrorsChanged = 10,
     /// `rejected_non_finite`: a field is NaN or infinite (`rejected_field` says which).
     RejectedNonFinite = 128,
     /// `rejected_latitude_out_of_range`: |latitude| >= 90 deg.
@@ -96,7 +100,7 @@ pub enum RinsStatus {
 
 impl RinsStatus {
     /// Every status, in code order.
-    pub(crate) const ALL: [RinsStatus; 15] = [
+    pub(crate) const ALL: [RinsStatus; 16] = [
         RinsStatus::WaitingForSway,
         RinsStatus::RotationStopped,
         RinsStatus::RotationReversed,
@@ -107,6 +111,7 @@ impl RinsStatus {
         RinsStatus::Converged,
         RinsStatus::ModelMismatch,
         RinsStatus::DetectingPattern,
+        RinsStatus::ErrorsChanged,
         RinsStatus::RejectedNonFinite,
         RinsStatus::RejectedLatitudeOutOfRange,
         RinsStatus::RejectedAngleOutOfRange,
@@ -127,6 +132,7 @@ impl RinsStatus {
             RinsStatus::Converged => Status::Converged,
             RinsStatus::ModelMismatch => Status::ModelMismatch,
             RinsStatus::DetectingPattern => Status::DetectingPattern,
+            RinsStatus::ErrorsChanged => Status::ErrorsChanged,
             RinsStatus::RejectedNonFinite => return Err(RejectReason::NonFinite),
             RinsStatus::RejectedLatitudeOutOfRange => return Err(RejectReason::LatitudeOutOfRange),
             RinsStatus::RejectedAngleOutOfRange => return Err(RejectReason::AngleOutOfRange),
@@ -154,6 +160,7 @@ impl From<Status> for RinsStatus {
             Status::Converged => RinsStatus::Converged,
             Status::ModelMismatch => RinsStatus::ModelMismatch,
             Status::DetectingPattern => RinsStatus::DetectingPattern,
+            Status::ErrorsChanged => RinsStatus::ErrorsChanged,
         }
     }
 }
@@ -292,7 +299,8 @@ mod tests {
             assert_eq!(std::format!("{c:?}").to_lowercase(), std::format!("rejected{}", r.name().replace('_', "")));
         }
         assert_eq!(RinsStatus::ALL.len(), Status::ALL.len() + RejectReason::ALL.len());
-        assert_eq!(RinsStatus::from_code(10), None);
+        // The first code after the core's statuses is none.
+        assert_eq!(RinsStatus::from_code(Status::ALL.len() as u32), None);
         assert_eq!(RinsStatus::from_code(127), None);
         for f in Field::ALL {
             assert_eq!(RinsField::from(Some(f)) as u32, u32::from(f as u8));

@@ -282,9 +282,11 @@ mod tests {
     fn an_output_no_step_wrote_is_refused() {
         let out = accepted();
         let mut raw = core::mem::MaybeUninit::new(out);
+        // The first code after the core's statuses, which no status has.
+        let unused = estimator_core::Status::ALL.len() as u32;
         // SAFETY: an integer over the enum field, as C code may write; the memory is never read
         // as a `RinsOutput` value, only through `rins_format_row`, which reads it as an integer.
-        unsafe { core::ptr::addr_of_mut!((*raw.as_mut_ptr()).status).cast::<u32>().write(10) };
+        unsafe { core::ptr::addr_of_mut!((*raw.as_mut_ptr()).status).cast::<u32>().write(unused) };
         let mut buffer = [0u8; RINS_ROW_MAX_LEN];
         let mut written = 0;
         // SAFETY: readable, writable.

@@ -2,7 +2,7 @@
 
 use crate::recorder::RecorderSettings;
 use crate::rotation_scheme::RotationScheme;
-use crate::scenario::{ScenarioKind, ScenarioParams};
+use crate::scenario::{ErrorsStep, ScenarioKind, ScenarioParams};
 use estimator_core::units::{arcsec_to_rad, RAD_PER_DEG};
 use estimator_core::{Config, Method, Real};
 
@@ -70,6 +70,11 @@ pub struct TuningArgs {
     /// restarting the moving average (default: the core's, 3; 0 = never fill, at most 3).
     #[arg(long, value_name = "N")]
     pub max_filled_gap_samples: Option<u32>,
+    /// Windowed method: the smallest step of an installation error the change detector is sized
+    /// for, arcsec (default: the core's, 20; 0 turns detection off: a change of the errors is then
+    /// followed only as slowly as the filter's memory allows).
+    #[arg(long, value_name = "ARCSEC")]
+    pub change_detection_arcsec: Option<f64>,
 }
 
 impl TuningArgs {
@@ -85,6 +90,9 @@ impl TuningArgs {
         if let Some(n) = self.max_filled_gap_samples {
             c.max_filled_gap_samples = n;
         }
+        if let Some(a) = self.change_detection_arcsec {
+            c.change_detection_step_rad = arcsec_to_rad(a) as Real;
+        }
         c
     }
 
@@ -99,6 +107,7 @@ impl TuningArgs {
                     " (set by --traditional-drift-arcsec-per-sqrt-s, arcsec/sqrt(s))"
                 }
                 estimator_core::ConfigError::Parameter { name: "max_filled_gap_samples", .. } => " (set by --max-filled-gap-samples)",
+                estimator_core::ConfigError::Parameter { name: "change_detection_step_rad", .. } => " (set by --change-detection-arcsec, arcsec)",
                 _ => "",
             };
             anyhow::bail!("invalid estimator configuration: {e}{option}");
@@ -153,6 +162,13 @@ pub struct ScenarioOverrides {
     /// Installation errors x1..x4, arcsec.
     #[arg(long, value_name = "X1,X2,X3,X4", allow_hyphen_values = true, value_parser = parse_list::<4>)]
     pub errors_arcsec: Option<[f64; 4]>,
+    /// A change of the installation errors (re-installation, shock): at this time, s from the
+    /// start, the errors become those of --errors-after-arcsec.
+    #[arg(long, value_name = "S", requires = "errors_after_arcsec")]
+    pub errors_step_at: Option<f64>,
+    /// Installation errors x1..x4 from --errors-step-at on, arcsec.
+    #[arg(long, value_name = "X1,X2,X3,X4", allow_hyphen_values = true, value_parser = parse_list::<4>, requires = "errors_step_at")]
+    pub errors_after_arcsec: Option<[f64; 4]>,
     /// White attitude noise, 1-sigma arcsec.
     #[arg(long, value_name = "ARCSEC")]
     pub noise_arcsec: Option<f64>,
@@ -174,6 +190,14 @@ impl ScenarioOverrides {
         }
         if let Some(e) = self.errors_arcsec {
             p.errors_arcsec = e;
+        }
+        if let (Some(at_s), Some(errors_after_arcsec)) = (self.errors_step_at, self.errors_after_arcsec) {
+            anyhow::ensure!(
+                at_s.is_finite() && at_s > 0.0 && at_s < p.duration_s,
+                "--errors-step-at must be inside the log (0, {} s), got {at_s}",
+                p.duration_s
+            );
+            p.errors_step = Some(ErrorsStep { at_s, errors_after_arcsec });
         }
         if let Some(n) = self.noise_arcsec {
             anyhow::ensure!(n.is_finite() && n >= 0.0, "--noise-arcsec must be >= 0");

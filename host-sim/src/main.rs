@@ -186,6 +186,10 @@ struct SpreadArgs {
     /// Model mismatch: coloured (Gauss-Markov, 60 s) attitude noise, 1-sigma arcsec.
     #[arg(long, value_name = "ARCSEC", default_value_t = 0.0)]
     coloured_noise_arcsec: f64,
+    /// Heel in turns: a 90 deg course change at 0.5 deg/s every hour, alternately to starboard
+    /// and port, the ship heeling outward by this much while it turns, deg.
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true)]
+    heel_in_turns_deg: f64,
     #[command(flatten)]
     timing: TimingArgs,
     #[command(flatten)]
@@ -211,7 +215,14 @@ impl SpreadArgs {
         if let Some(t) = self.duration {
             d.duration_s = Some(host_sim::cli_args::check_duration(t)?);
         }
-        let finite = [self.period_error, self.rotation_jitter_deg, self.error_drift_arcsec_per_day, self.lowfreq_rate_error, self.coloured_noise_arcsec];
+        let finite = [
+            self.period_error,
+            self.rotation_jitter_deg,
+            self.error_drift_arcsec_per_day,
+            self.lowfreq_rate_error,
+            self.coloured_noise_arcsec,
+            self.heel_in_turns_deg,
+        ];
         anyhow::ensure!(finite.iter().all(|v| v.is_finite()), "mismatch switches must be finite");
         anyhow::ensure!(self.period_error > -1.0, "--period-error must be above -1");
         anyhow::ensure!(self.rotation_jitter_deg >= 0.0 && self.coloured_noise_arcsec >= 0.0, "noise levels must be >= 0");
@@ -221,6 +232,7 @@ impl SpreadArgs {
             error_drift_arcsec_per_day: self.error_drift_arcsec_per_day,
             low_frequency_rate_error: self.lowfreq_rate_error,
             coloured_noise_arcsec: self.coloured_noise_arcsec,
+            heel_in_turns_deg: self.heel_in_turns_deg,
         };
         d.check()?;
         Ok(d)
@@ -368,6 +380,9 @@ fn print_summary(w: &mut dyn Write, log: &Path, method: Method, r: &Replay, out:
         c.clock_steps
     )?;
     writeln!(w, "  {}", host_sim::replay::pattern_summary(r))?;
+    for change in &r.error_changes {
+        writeln!(w, "  {}", host_sim::replay::describe_error_change(change))?;
+    }
     writeln!(w, "  final status: {}", r.final_status.map_or("none (no row accepted)", |s| s.name()))?;
     match (r.final_estimate, r.holdup) {
         (Some(e), holdup) => {

@@ -5,7 +5,9 @@ use crate::log_csv::{LogError, LogLine, RowFilter};
 use crate::scenario::Row;
 use crate::time_stamps::{IntervalCheck, IntervalError};
 use estimator_core::time_grid::{Placement, TimeGrid};
-use estimator_core::{Config, ConfigError, Counters, Estimator, Holdup, Output, Real, RejectCounts, RotationSummary, Sample, SampleError};
+use estimator_core::{
+    Config, ConfigError, Counters, ErrorChange, Estimator, Holdup, Output, Real, RejectCounts, RotationSummary, Sample, SampleError,
+};
 use std::io::Write;
 
 /// The estimator type the host runs: the firmware's default capacity.
@@ -35,6 +37,8 @@ pub struct Replay {
     pub rotation: RotationSummary,
     /// What held the estimate back at the end, if anything.
     pub holdup: Option<Holdup>,
+    /// Every change of the installation errors the estimator declared, in order.
+    pub error_changes: Vec<ErrorChange>,
     /// Rows that could not be read and were skipped (with the first few, for the report).
     pub unreadable: RowFilter,
 }
@@ -89,6 +93,18 @@ pub fn pattern_summary(r: &Replay) -> String {
     let bins = if r.rotation.samples_per_entry > 1 { format!(", {} samples a window entry", r.rotation.samples_per_entry) } else { String::new() };
     let interval = r.sample_interval_s.map_or("not yet learned".to_string(), |d| format!("{} s", round(d)));
     format!("rotation: {rotation}{pinned}{bins}; sample interval {interval}")
+}
+
+/// A change of the installation errors, for people: e.g. `change of the installation errors
+/// detected at 13440 s (residuals showing it since 12240 s): x1, x3 learned again`.
+pub fn describe_error_change(c: &ErrorChange) -> String {
+    let which: Vec<String> = (0..4).filter(|i| c.relearned[*i]).map(|i| format!("x{}", i + 1)).collect();
+    format!(
+        "change of the installation errors detected at {} s (residuals showing it since {} s): {} learned again",
+        c.detected_s,
+        c.seen_since_s,
+        which.join(", ")
+    )
 }
 
 /// The core's sample for a log row.
@@ -201,6 +217,7 @@ where
     let mut next_restart = 0;
     let mut count = 0u64;
     let mut final_status = None;
+    let mut error_changes = Vec::new();
     let mut interval_check = IntervalCheck::new(config.sample_interval_s);
     let mut grid = GridFollower::new(&config);
     for item in rows {
@@ -210,6 +227,9 @@ where
         count += 1;
         if let Ok(out) = &result {
             final_status = Some(out.status);
+            if let Some(change) = est.error_change().filter(|c| c.detected_s == out.time_s) {
+                error_changes.push(change);
+            }
         }
         let placement = grid.follow(line.row.time_s, &result);
         each(&StepView { line: &line, result: &result, placement, estimator: &est })?;
@@ -231,6 +251,7 @@ where
         sample_interval_s: est.sample_interval_s(),
         rotation: est.rotation(),
         holdup: est.progress(),
+        error_changes,
         unreadable: filter,
     })
 }

@@ -86,6 +86,63 @@ pub struct Mismatch {
     pub low_frequency_rate_error: f64,
     /// 1-sigma of a first-order Gauss-Markov (coloured) attitude noise, arcsec, time constant 60 s.
     pub coloured_noise_arcsec: f64,
+    /// Heel in turns, deg: course changes of [`TURN_DEG`] at [`TURN_RATE_DEG_S`] every
+    /// [`TURN_EVERY_S`] from [`FIRST_TURN_S`] on, alternately to starboard and to port, the ship
+    /// heeling outward by this much while it turns (a frigate at 15 m/s heels some 3 deg in a
+    /// standard-rate turn). Truth files without it: no turns.
+    #[serde(default)]
+    pub heel_in_turns_deg: f64,
+}
+
+/// Course change of each turn of [`Mismatch::heel_in_turns_deg`], deg.
+pub const TURN_DEG: f64 = 90.0;
+/// Rate of turn, deg/s (a turn takes 180 s).
+pub const TURN_RATE_DEG_S: f64 = 0.5;
+/// Time from one turn's start to the next's, s.
+pub const TURN_EVERY_S: f64 = 3600.0;
+/// Start of the first turn, s: two hours in, once the estimator has settled (a turn before that
+/// costs it accuracy for hours: docs/uncertainty.md).
+pub const FIRST_TURN_S: f64 = 2.0 * TURN_EVERY_S;
+/// Time the heel takes to build up and to die away at the start and the end of a turn, s.
+pub const TURN_HEEL_RAMP_S: f64 = 20.0;
+
+/// Heading change and heel of the ship's turns at `t`, deg: `(heading, heel)`.
+fn turns_deg(heel_deg: f64, t: f64) -> (f64, f64) {
+    if heel_deg == 0.0 {
+        return (0.0, 0.0);
+    }
+    if t < FIRST_TURN_S {
+        return (0.0, 0.0);
+    }
+    let k = ((t - FIRST_TURN_S) / TURN_EVERY_S).floor();
+    let into = t - FIRST_TURN_S - k * TURN_EVERY_S;
+    let duration = TURN_DEG / TURN_RATE_DEG_S;
+    // Turns alternate: to starboard (heading up), then back to port.
+    let starboard = (k as i64) % 2 == 0;
+    let before = if starboard { 0.0 } else { TURN_DEG };
+    let (turned, heel) = if into >= duration {
+        (TURN_DEG, 0.0)
+    } else {
+        let ramp = |u: f64| 0.5 - 0.5 * (PI * (u / TURN_HEEL_RAMP_S).clamp(0.0, 1.0)).cos();
+        (TURN_RATE_DEG_S * into, heel_deg * ramp(into).min(ramp(duration - into)))
+    };
+    // Outward: a turn to starboard heels the ship to port (roll < 0).
+    if starboard {
+        (before + turned, -heel)
+    } else {
+        (before - turned, heel)
+    }
+}
+
+/// A change of the installation errors during the log: a re-installation after maintenance, or a
+/// shock that shifts the RINS on its mounting. From `at_s` on, the errors are
+/// `errors_after_arcsec` (a drift of [`Mismatch`] goes on from them).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ErrorsStep {
+    /// Time of the change, s from the start of the log.
+    pub at_s: f64,
+    /// Installation errors x1..x4 from then on, arcsec.
+    pub errors_after_arcsec: [f64; 4],
 }
 
 /// Everything that defines a generated log. Written into the truth file.
@@ -96,8 +153,11 @@ pub struct ScenarioParams {
     /// Length of the log, s (one sample per `sample_interval_s`).
     pub duration_s: f64,
     pub sample_interval_s: f64,
-    /// Installation errors x1..x4 of eqs (1)-(2), arcsec.
+    /// Installation errors x1..x4 of eqs (1)-(2), arcsec (from the start; see `errors_step`).
     pub errors_arcsec: [f64; 4],
+    /// A change of the errors during the log (truth files without it: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub errors_step: Option<ErrorsStep>,
     /// Latitude at the start, deg.
     pub latitude_deg: f64,
     /// Forward speed, m/s (northward component moves the latitude).
@@ -150,7 +210,8 @@ pub struct Row {
 pub struct RowTruth {
     pub true_attitude_deg: [f64; 3],
     pub oscillation_deg: [f64; 3],
-    /// Installation errors in force at this row (they drift only under [`Mismatch`]), arcsec.
+    /// Installation errors in force at this row (they drift only under [`Mismatch`] and change
+    /// only at an [`ErrorsStep`]), arcsec.
     pub errors_arcsec: [f64; 4],
 }
 
@@ -209,6 +270,7 @@ impl ScenarioParams {
             duration_s: 172_800.0,
             sample_interval_s: 1.0,
             errors_arcsec: [200.0, -150.0, 300.0, -250.0],
+            errors_step: None,
             latitude_deg: 40.0,
             speed_m_s: 0.0,
             course_deg: 0.0,
@@ -375,7 +437,11 @@ impl Iterator for Samples<'_> {
         let t = self.k as f64 * p.sample_interval_s;
         self.k += 1;
         let drift = p.mismatch.error_drift_arcsec_per_day * t / 86_400.0;
-        let x_arcsec: [f64; 4] = core::array::from_fn(|i| p.errors_arcsec[i] + drift);
+        let base = match p.errors_step {
+            Some(step) if t >= step.at_s => step.errors_after_arcsec,
+            _ => p.errors_arcsec,
+        };
+        let x_arcsec: [f64; 4] = core::array::from_fn(|i| base[i] + drift);
         let x: [f64; 4] = core::array::from_fn(|i| arcsec_to_rad(x_arcsec[i]));
         // The angle actually applied: the scheme at the true period, plus the angle jitter. Eq (2)
         // is evaluated at it and the log reports it.
@@ -387,7 +453,8 @@ impl Iterator for Samples<'_> {
         } else {
             0.0
         };
-        let true_att = [p.heading_deg + weave + sway(&p.heading_sway, t), sway(&p.roll_sway, t), sway(&p.pitch_sway, t)];
+        let (turned_deg, heel_deg) = turns_deg(p.mismatch.heel_in_turns_deg, t);
+        let true_att = [p.heading_deg + weave + turned_deg + sway(&p.heading_sway, t), sway(&p.roll_sway, t) + heel_deg, sway(&p.pitch_sway, t)];
         let osc = oscillation_rad(&x, rho, s, lat);
         let we = self.w_lf * t;
         let mut out = [0.0; 3];

@@ -89,7 +89,8 @@ pub use message::{
 /// Version of this protocol, reported in [`StatusReply::protocol_version`]. 5: every frame's
 /// message is [`Numbered`] (a sequence number before it), `Status` appends the receive path's
 /// [`LinkCounters`], the reset cause and the clock source, and the request `Hang` (variant 3, test
-/// builds only) exists (docs/link-protocol.md, Versioning).
+/// builds only) exists, and `Step`'s status may be 10 (a change of the installation errors
+/// declared) (docs/link-protocol.md, Versioning).
 pub const PROTOCOL_VERSION: u8 = 5;
 
 /// Largest COBS-encoded request the firmware accepts (without the two 0x00 delimiters). The largest

@@ -107,25 +107,32 @@ impl<'a> Reader<'a> {
         self.pos += N;
         out
     }
+    #[inline(never)]
     pub(crate) fn u8(&mut self) -> u8 {
         self.array::<1>()[0]
     }
+    #[inline(never)]
     pub(crate) fn i8(&mut self) -> i8 {
         i8::from_le_bytes(self.array())
     }
+    #[inline(never)]
     pub(crate) fn u16(&mut self) -> u16 {
         u16::from_le_bytes(self.array())
     }
+    #[inline(never)]
     pub(crate) fn u32(&mut self) -> u32 {
         u32::from_le_bytes(self.array())
     }
     #[cfg_attr(not(feature = "paper-method"), allow(dead_code))]
+    #[inline(never)]
     pub(crate) fn i64(&mut self) -> i64 {
         i64::from_le_bytes(self.array())
     }
+    #[inline(never)]
     pub(crate) fn f64(&mut self) -> f64 {
         f64::from_le_bytes(self.array())
     }
+    #[inline(never)]
     pub(crate) fn real(&mut self) -> Real {
         Real::from_le_bytes(self.array())
     }

@@ -1,8 +1,8 @@
 //! The configuration part (the method code is in the header): `rotation_period_s` (optional
 //! f64), `sample_interval_s` (optional f64), `prior_sigma_rad`, `measurement_sigma_rad`,
 //! `drift_rad_per_sqrt_s`, `traditional_sigma_rad`, `traditional_drift_rad_per_sqrt_s`,
-//! `sway_gate_rad`, `converged_sigma_rad`, `rotation_period_tolerance` (`R` each),
-//! `max_filled_gap_samples` (u32).
+//! `sway_gate_rad`, `converged_sigma_rad`, `rotation_period_tolerance`,
+//! `change_detection_step_rad` (`R` each), `max_filled_gap_samples` (u32).
 //!
 //! Checked: [`Config::check`] for the estimator's ring capacity, which bounds every value (ranges
 //! of the pinned period and interval, sigmas, random walks, the gap that may be filled).
@@ -20,7 +20,7 @@ pub(crate) struct ConfigContext {
 }
 
 impl Stored for Config {
-    const LEN: usize = 2 * (1 + 8) + 8 * R + 4;
+    const LEN: usize = 2 * (1 + 8) + 9 * R + 4;
     type Context<'a> = ConfigContext;
 
     fn write(&self, w: &mut Writer<'_>) {
@@ -36,6 +36,7 @@ impl Stored for Config {
             c.sway_gate_rad,
             c.converged_sigma_rad,
             c.rotation_period_tolerance,
+            c.change_detection_step_rad,
         ] {
             w.real(v);
         }
@@ -57,6 +58,7 @@ impl Stored for Config {
             sway_gate_rad: r.real(),
             converged_sigma_rad: r.real(),
             rotation_period_tolerance: r.real(),
+            change_detection_step_rad: r.real(),
             max_filled_gap_samples: r.u32(),
         };
         config.check(cx.capacity).map_err(CheckpointError::InvalidConfig)?;

@@ -19,10 +19,12 @@
 //! the last rotation fault (u8: 0 none, else the [`Status::code`](crate::Status::code) of that
 //! fault) and the sample time it began at (f64, zero without a fault), the sway monitor (see
 //! `sway_gate/checkpoint.rs`), rejected counts ([`RejectReason::ALL`] x u32), counters (accepted,
-//! filled, window restarts, clock steps: u32 each).
+//! filled, window restarts, clock steps: u32 each), the last change of the errors declared
+//! (optional: the sample time it was declared at and the time the residuals showed it from, f64
+//! each, and the errors learned again, a u8 with bits 0-3 for x1..x4).
 //!
 //! Checked: flags and codes; the feed interval positive and finite; the fault's time finite (a
-//! time stamp).
+//! time stamp); a change's times finite and at least one error learned again, no other bit set.
 
 use super::{Estimator, Feed};
 use crate::checkpoint::image::{seal, verified_image, write_header};
@@ -32,7 +34,7 @@ use crate::config::checkpoint::ConfigContext;
 use crate::config::Config;
 use crate::gap_fill::checkpoint::FillError;
 use crate::methods::checkpoint::MethodPart;
-use crate::output::{Counters, RejectCounts, Status};
+use crate::output::{Counters, ErrorChange, RejectCounts, Status};
 use crate::rotation_pattern::{RotationFault, RotationMonitor};
 use crate::sample::RejectReason;
 use crate::sway_gate::SwayMonitor;
@@ -49,8 +51,8 @@ const PARTS_END: usize = HEADER_LEN
     + MethodPart::LEN;
 
 /// Bytes of a checkpoint image, whatever the ring capacity: the header, the parts, zero padding
-/// to a multiple of 4 (so that a flash with 4-byte writes takes it as it is) and the CRC: 840 bytes
-/// with `f32`, 904 with the `f64` feature (`checkpoint::tests::image_length`).
+/// to a multiple of 4 (so that a flash with 4-byte writes takes it as it is) and the CRC: 860 bytes
+/// with `f32`, 1,032 with the `f64` feature (`checkpoint::tests::image_length`).
 pub const CHECKPOINT_LEN: usize = PARTS_END.div_ceil(4) * 4 + CRC_LEN;
 
 impl<const CAP: usize> Estimator<CAP> {
@@ -168,6 +170,7 @@ struct Running {
     sway: SwayMonitor,
     rejected: RejectCounts,
     counters: Counters,
+    error_change: Option<ErrorChange>,
 }
 
 impl Running {
@@ -181,6 +184,7 @@ impl Running {
         e.sway = self.sway;
         e.rejected = self.rejected;
         e.counters = self.counters;
+        e.error_change = self.error_change;
     }
 
     fn of<const CAP: usize>(e: &Estimator<CAP>) -> Running {
@@ -192,12 +196,13 @@ impl Running {
             sway: e.sway,
             rejected: e.rejected,
             counters: e.counters,
+            error_change: e.error_change,
         }
     }
 }
 
 impl Stored for Running {
-    const LEN: usize = 4 + (1 + 8) + 1 + 1 + 8 + SwayMonitor::LEN + RejectReason::ALL.len() * 4 + 4 * 4;
+    const LEN: usize = 4 + (1 + 8) + 1 + 1 + 8 + SwayMonitor::LEN + RejectReason::ALL.len() * 4 + 4 * 4 + (1 + 8 + 8 + 1);
     type Context<'a> = ();
 
     fn write(&self, w: &mut Writer<'_>) {
@@ -222,6 +227,12 @@ impl Stored for Running {
         for n in [c.accepted, c.filled, c.window_restarts, c.clock_steps] {
             w.u32(n);
         }
+        let zero = ErrorChange { detected_s: 0.0, seen_since_s: 0.0, relearned: [false; 4] };
+        w.option(self.error_change, zero, |w, c| {
+            w.f64(c.detected_s);
+            w.f64(c.seen_since_s);
+            w.u8(c.relearned.iter().enumerate().fold(0, |b, (i, f)| b | (u8::from(*f) << i)));
+        });
     }
 
     fn read(r: &mut Reader<'_>, (): ()) -> Result<Running, CheckpointError> {
@@ -247,7 +258,17 @@ impl Stored for Running {
         let sway = SwayMonitor::read(r, ())?;
         let rejected = RejectCounts(core::array::from_fn(|_| r.u32()));
         let counters = Counters { accepted: r.u32(), filled: r.u32(), window_restarts: r.u32(), clock_steps: r.u32() };
-        Ok(Running { index, feed_interval_s, gate_open, fault, sway, rejected, counters })
+        let error_change = r.option(Part::Estimator, |r| Ok((r.f64(), r.f64(), r.u8())))?;
+        if let Some((detected_s, seen_since_s, bits)) = error_change {
+            let ok = detected_s.is_finite() && seen_since_s.is_finite() && bits != 0 && bits & 0xF0 == 0;
+            ensure(ok, CheckpointError::InvalidValue(Part::Estimator))?;
+        }
+        let error_change = error_change.map(|(detected_s, seen_since_s, bits)| ErrorChange {
+            detected_s,
+            seen_since_s,
+            relearned: core::array::from_fn(|i| bits & (1 << i) != 0),
+        });
+        Ok(Running { index, feed_interval_s, gate_open, fault, sway, rejected, counters, error_change })
     }
 }
 
@@ -298,6 +319,12 @@ mod tests {
         assert_eq!(with(&|r| r.fault = Some((RotationFault::Stopped, f64::NAN))), Err(InvalidValue(Part::Fault)));
         assert!(with(&|r| r.fault = Some((RotationFault::Stopped, -1.0))).is_ok());
         assert!(with(&|r| r.fault = Some((RotationFault::Reversed, 12.0))).is_ok());
+        let change = ErrorChange { detected_s: 30_000.0, seen_since_s: 28_800.0, relearned: [true, false, false, true] };
+        assert_eq!(with(&|r| r.error_change = Some(change)).map(|r| r.error_change), Ok(Some(change)));
+        let no_error = ErrorChange { relearned: [false; 4], ..change };
+        assert_eq!(with(&|r| r.error_change = Some(no_error)), Err(InvalidValue(Part::Estimator)));
+        let no_time = ErrorChange { detected_s: f64::INFINITY, ..change };
+        assert_eq!(with(&|r| r.error_change = Some(no_time)), Err(InvalidValue(Part::Estimator)));
 
         // Bytes no value can hold, in a whole image: the feed interval's flag, the fault's code
         // and a time without a fault.

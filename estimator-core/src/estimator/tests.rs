@@ -6,6 +6,7 @@ use crate::gap_fill::DELAY;
 use crate::synthetic::Signal;
 use crate::units::{rad_to_arcsec, RAD_PER_DEG};
 use crate::Field;
+use std::vec::Vec;
 
 const X_ARCSEC: [f64; 4] = [200.0, -150.0, 300.0, -250.0];
 
@@ -280,6 +281,60 @@ fn covariance_stays_symmetric_positive_definite_over_two_days() {
     for (i, e) in errors_arcsec(&est).iter().enumerate() {
         assert!(e.abs() < 0.5, "x{}: {e:.3}", i + 1);
     }
+}
+
+/// A 16,000 s log of the paper's sway with 5 arcsec of noise, whose errors step at 12,000 s by
+/// `step_arcsec`; per row the estimator's status and, once there is one, the estimate's errors
+/// against the errors in force. Returns the rows and the estimator at the end.
+fn stepped_run(config: Config, step_arcsec: [f64; 4]) -> (Vec<(f64, Status, Option<[f64; 4]>)>, Estimator) {
+    let after: [f64; 4] = core::array::from_fn(|i| X_ARCSEC[i] + step_arcsec[i]);
+    let mut signal = Signal::new(X_ARCSEC, 40.0).with_seed(11);
+    signal.noise_arcsec = 5.0;
+    let mut est: Estimator = Estimator::new(config).unwrap();
+    let mut rows = Vec::new();
+    for k in 0..16_000u32 {
+        let t = f64::from(k);
+        if k == 12_000 {
+            signal.x_arcsec = after;
+        }
+        let out = est.step(&signal.sample(t)).unwrap();
+        let errors = out.estimate.map(|e| core::array::from_fn(|i| rad_to_arcsec(e.x_rad[i] as f64) - signal.x_arcsec[i]));
+        rows.push((t, out.status, errors));
+    }
+    (rows, est)
+}
+
+#[test]
+fn a_step_of_the_errors_is_declared_reported_and_learned_again() {
+    let step = [0.0, 40.0, -25.0, 0.0];
+    let (rows, est) = stepped_run(Config::default(), step);
+    let change = est.error_change().expect("a change declared");
+    // Declared within 3.5 periods, x2 and x3 learned again (other errors may be too: they are
+    // learned from the same block).
+    assert!(change.detected_s > 12_000.0 && change.detected_s <= 12_000.0 + 3.5 * 480.0, "{change:?}");
+    assert!(change.relearned[1] && change.relearned[2], "{change:?}");
+    assert!(change.seen_since_s > 12_000.0 - 480.0 && change.seen_since_s < change.detected_s, "{change:?}");
+    // Said so in the status, from the detection, once; then estimating again.
+    let changed: Vec<f64> = rows.iter().filter(|r| r.1 == Status::ErrorsChanged).map(|r| r.0).collect();
+    assert_eq!(changed.first(), Some(&change.detected_s));
+    assert!(changed.windows(2).all(|w| w[1] == w[0] + 1.0), "one run of errors_changed: {changed:?}");
+    assert!(matches!(rows.last().unwrap().1, Status::Estimating | Status::Converged), "{:?}", rows.last());
+    // Every error within 10 arcsec of the new values from 2,000 s after the step on, within 1 at
+    // the end; before the step, nothing was declared.
+    for (t, _, e) in rows.iter().filter(|r| r.0 >= 14_000.0) {
+        assert!(e.unwrap().iter().all(|v| v.abs() < 10.0), "{t}: {e:?}");
+    }
+    assert!(rows.last().unwrap().2.unwrap().iter().all(|v| v.abs() < 1.0), "{:?}", rows.last());
+    assert!(rows.iter().all(|r| r.0 >= 12_000.0 || r.1 != Status::ErrorsChanged));
+
+    // Detection off: nothing declared, and 2,000 s after the step x2 is still off by more than
+    // 10 arcsec (the filter's memory is the whole log).
+    let off = Config { change_detection_step_rad: 0.0, ..Config::default() };
+    let (rows, est) = stepped_run(off, step);
+    assert_eq!(est.error_change(), None);
+    assert!(rows.iter().all(|r| r.1 != Status::ErrorsChanged));
+    let at_14000 = rows[14_000].2.unwrap();
+    assert!(at_14000[1].abs() > 10.0, "{at_14000:?}");
 }
 
 #[test]

@@ -108,20 +108,63 @@
 //! `n / r` and the share), plus a division per error in every estimate (the lag): the step's
 //! maximum on the Cortex-M4F (MPS2-AN386) went from about 4,720 to 4,760 instructions with the
 //! noise scale and drift share, and to 4,960 with the lag term, 40 below the budget of 5,000
-//! (`host-sim/tests/qemu/qemu_budgets.rs`). Computing the lag once per update instead of every step
-//! would take most of its 200 back, at the price of four more values in the checkpoint.
-//! Before the first full horizon both stay at their defaults (scale 1, full walk), so the start
-//! is as before.
+//! (`host-sim/tests/qemu/qemu_budgets.rs`). The reported 1-sigma (the lag included) is now computed
+//! once per update of a pair, for that pair's two errors, not every step for all four (the other
+//! pair's is at most one update old; four values more in the checkpoint): what made room for the
+//! change detector below. Before the first full horizon both stay at their defaults (scale 1,
+//! full walk), so the start is as before.
+//!
+//! # Changes of the errors
+//! A re-installation or a shock moves the errors by a step. The filter, whose memory has grown
+//! with the log, would follow it only as fast as the random walk lets it (hours to days); the
+//! residual check would say `model_mismatch` and widen the 1-sigma by a part of the step. Instead
+//! ([`change`] has the derivation and the thresholds):
+//!
+//! 1. **Detection**: the pair's residuals, averaged again over blocks of half a period, are tested
+//!    for a shift of at least half the smallest step (`Config::change_detection_step_rad`, 20
+//!    arcsec; 0 turns all of this off) by a log-likelihood ratio summed over a run of blocks, with
+//!    the run's long-run variance; a change is declared when the sum reaches 20 and the run has
+//!    lasted longer than a passing disturbance can make it (2.5 periods at 480 s).
+//! 2. **While a change builds up**: the 1-sigma of the error whose channel shows it is widened by
+//!    the block's shift over the gain; once a block is in a run and significant (beyond 3 of its
+//!    standard deviations), the filter holds its updates and goes back to the state it had at the
+//!    end of the last block that did not hold ([`CleanState`]: the filter and the residual
+//!    statistics), so that neither a change nor a passing disturbance (a turn's heel) pulls at it.
+//!    A hold never outlasts the persistence: a longer run is a change, or an inconsistency the
+//!    filter must work through. What the filter holds out stays out of the residual averages.
+//! 3. **Learning again**: when a change is declared, the filter goes back to the clean state, the
+//!    errors that changed get the prior's covariance ([`ConstantStateKalman::forget`]) and their
+//!    pairs' residual statistics start afresh; x3 and x4 are learned again with any change of x1
+//!    or x2 (through the leakage, a change of x1 or x2 can cancel one of x3 or x4 on their
+//!    channels). Each pair then applies one block of residuals against the held estimate as a
+//!    single measurement per channel of the learned block variance: the last block, when the
+//!    filter held through it (a change is declared after a run longer than a passing disturbance,
+//!    so that block saw only windows after the change began), or else the next one. A window at
+//!    a cold start carries tens of arcsec of sway; a block, a fraction of an arcsec. The status is
+//!    [`crate::Status::ErrorsChanged`] for one period from the declaration.
+//!
+//! # Innovation gate
+//! With change detection on, a channel's measurement is left out when its innovation is beyond
+//! [`GATE_SIGMAS`] = 8 standard deviations of `h' P h + s`, `s` the learned mean square of that
+//! channel's residuals (a running mean over [`SPREAD_HORIZONS`] horizons, learned from the first
+//! update, each residual clipped at [`SPREAD_CLIP_SIGMAS`]; one held out enters with the weight of
+//! a full average, so a disturbance cannot widen the gate that holds it out). It protects the
+//! first hours, before the detector is armed, from a disturbance tens of times the usual residual
+//! (a turn of several degrees of heel). At 5 sigma it also held out the tails of the sway's
+//! residuals that a cold start needs (p95 at 5,000 s 0.52 instead of 0.40 arcsec on the sea
+//! scenario); at 8 it holds out none of them.
 
+pub mod change;
 pub(crate) mod checkpoint;
 
 use crate::config::Config;
 use crate::correlation::{ReferenceFilter, FULL_WEIGHT};
 use crate::gap_fill::{FillVariance, GridSample};
-use crate::kalman::ConstantStateKalman;
+use crate::kalman::{ConstantStateKalman, KalmanError};
 use crate::math::sqrt;
 use crate::moving_average::CorrelationWindow;
 use crate::Real;
+use change::{persistence_blocks, Alarm, BlockContext, ChangeDetector};
 
 /// Time constant of the residual average, in rotation periods.
 pub const RESIDUAL_PERIODS: usize = 4;
@@ -135,6 +178,16 @@ pub const LONG_HORIZONS: u32 = 32;
 /// `Config::drift_rad_per_sqrt_s`). Between them the random walk's variance rises linearly.
 pub const BIAS_SHARE_NOISE: Real = 0.35;
 pub const BIAS_SHARE_DRIFT: Real = 0.7;
+
+/// Innovation gate, in standard deviations of a window's residual (see "Innovation gate" in the
+/// module doc).
+pub const GATE_SIGMAS: Real = 8.0;
+
+/// Time constant of the learned spread of the residuals, in horizons of the residual average.
+pub const SPREAD_HORIZONS: u32 = 2;
+
+/// A residual enters the learned spread clipped at this many of its standard deviations.
+pub const SPREAD_CLIP_SIGMAS: Real = 3.0;
 
 /// Smallest noise scale applied to the reported 1-sigma (the data may be quieter than
 /// `Config::measurement_sigma_rad` says, but not without bound).
@@ -178,21 +231,94 @@ pub struct Windowed<const CAP: usize> {
     /// Share of the configured random walk's variance applied to each pair's errors, in [0, 1]
     /// (1 until the long averages start).
     drift_share: [Real; 2],
+    /// The detector of changes of the errors ([`change`]).
+    change: ChangeDetector,
+    /// Per pair: its updates wait for a block of residuals after a change was declared (see
+    /// "Changes of the errors" in the module doc).
+    relearning: [bool; 2],
+    /// The estimate when the change was declared, rad: the residuals of that block are formed
+    /// against it.
+    held_x_rad: [Real; 4],
+    /// Window entries still to come in the period after a change was declared, while which the
+    /// status says so (not kept by a checkpoint).
+    changed_entries: u32,
+    /// Channel measurements held out by the innovation gate.
+    gated: u32,
+    /// Each error's reported 1-sigma, rad, refreshed with its pair's updates.
+    reported_sigma_rad: [Real; 4],
+    /// Each channel's residual mean beyond the residual check's bound at its pair's last update.
+    channel_mismatch: [bool; 4],
+    /// The usual spread of each channel's residual, rad^2 (mean square, learned).
+    spread_rad2: [Real; 4],
+    /// Residuals learned into it, per pair (saturates at [`SPREAD_HORIZONS`] horizons).
+    spread_count: [u32; 2],
+    /// Per pair: the filter has held through every update of the current block so far.
+    block_held: [bool; 2],
+    /// Each channel's last block mean, rad, and the rows of the update that ended it.
+    last_block_rad: [Real; 4],
+    last_block_rows: [[Real; 4]; 4],
+    /// Per pair: the filter held through all of its last block.
+    last_block_held: [bool; 2],
+    /// Whether the clean state is to be kept at the next update.
+    clean_state_due: bool,
+    /// The filter and its residual statistics at the end of the last block of the roll pair that
+    /// did not hold it (see [`change`]): what they knew before a change or a passing disturbance
+    /// began to pull at them.
+    clean: CleanState,
 }
 
-/// The estimate of one step: x1..x4, their 1-sigma, and whether the model is inconsistent.
+/// A copy of what a change or a passing disturbance pulls at before the change detector sees it:
+/// the filter and the residual statistics learned alongside it (the residual means, the long
+/// averages and what they give).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CleanState {
+    kf: ConstantStateKalman<Real, 4>,
+    residual_mean: [Real; 4],
+    residual_count: [u32; 2],
+    residual_mean_long: [Real; 4],
+    residual_power: [Real; 4],
+    long_count: [u32; 2],
+    noise_scale: [Real; 2],
+    drift_share: [Real; 2],
+}
+
+impl CleanState {
+    /// A filter of zeros (see [`Windowed::unconfigured`]).
+    const UNCONFIGURED: CleanState = CleanState {
+        kf: ConstantStateKalman::from_parts([0.0; 4], [[0.0; 4]; 4]),
+        residual_mean: [0.0; 4],
+        residual_count: [0; 2],
+        residual_mean_long: [0.0; 4],
+        residual_power: [0.0; 4],
+        long_count: [0; 2],
+        noise_scale: [0.0; 2],
+        drift_share: [0.0; 2],
+    };
+
+    fn new(config: &Config) -> Self {
+        CleanState {
+            kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
+            residual_mean: [0.0; 4],
+            residual_count: [0; 2],
+            residual_mean_long: [0.0; 4],
+            residual_power: [0.0; 4],
+            long_count: [0; 2],
+            noise_scale: [1.0; 2],
+            drift_share: [1.0; 2],
+        }
+    }
+}
+
+/// The estimate of one step: x1..x4, their 1-sigma, whether the model is inconsistent and
+/// whether errors are being learned again after a change.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MethodEstimate {
     pub x_rad: [Real; 4],
     pub sigma_rad: [Real; 4],
     pub mismatch: bool,
-}
-
-/// The residual check of one step: extra 1-sigma per error and whether the model is inconsistent.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Consistency {
-    pub model_sigma_rad: [Real; 4],
-    pub mismatch: bool,
+    /// Within one period of a declared change of the errors, or still learning them again
+    /// ([`change`]).
+    pub relearning: bool,
 }
 
 impl<const CAP: usize> Windowed<CAP> {
@@ -213,6 +339,9 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// An empty window and a filter of zeros: what an estimator holds before
     /// [`crate::Estimator::init_in`] resets it to a configuration.
+    // Inlined, so that `Estimator::init_in` writes it into its place: called, it was built on
+    // the stack and copied (22 KB of stack in the C library's `rins_estimator_init`).
+    #[inline(always)]
     pub(crate) fn unconfigured() -> Self {
         Windowed {
             window: CorrelationWindow::new(),
@@ -230,6 +359,21 @@ impl<const CAP: usize> Windowed<CAP> {
             long_count: [0; 2],
             noise_scale: [0.0; 2],
             drift_share: [0.0; 2],
+            change: ChangeDetector::NEW,
+            relearning: [false; 2],
+            held_x_rad: [0.0; 4],
+            changed_entries: 0,
+            gated: 0,
+            reported_sigma_rad: [0.0; 4],
+            channel_mismatch: [false; 4],
+            spread_rad2: [0.0; 4],
+            spread_count: [0; 2],
+            block_held: [true; 2],
+            last_block_rad: [0.0; 4],
+            last_block_rows: [[0.0; 4]; 4],
+            last_block_held: [false; 2],
+            clean_state_due: false,
+            clean: CleanState::UNCONFIGURED,
         }
     }
 
@@ -251,6 +395,21 @@ impl<const CAP: usize> Windowed<CAP> {
             long_count: [0; 2],
             noise_scale: [1.0; 2],
             drift_share: [1.0; 2],
+            change: ChangeDetector::NEW,
+            relearning: [false; 2],
+            held_x_rad: [0.0; 4],
+            changed_entries: 0,
+            gated: 0,
+            reported_sigma_rad: [config.prior_sigma_rad; 4],
+            channel_mismatch: [false; 4],
+            spread_rad2: [0.0; 4],
+            spread_count: [0; 2],
+            block_held: [true; 2],
+            last_block_rad: [0.0; 4],
+            last_block_rows: [[0.0; 4]; 4],
+            last_block_held: [false; 2],
+            clean_state_due: false,
+            clean: CleanState::new(config),
         }
     }
 
@@ -271,12 +430,45 @@ impl<const CAP: usize> Windowed<CAP> {
         self.long_count = [0; 2];
         self.noise_scale = [1.0; 2];
         self.drift_share = [1.0; 2];
+        self.change = ChangeDetector::NEW;
+        self.relearning = [false; 2];
+        self.held_x_rad = [0.0; 4];
+        self.changed_entries = 0;
+        self.gated = 0;
+        self.reported_sigma_rad = [config.prior_sigma_rad; 4];
+        self.channel_mismatch = [false; 4];
+        self.spread_rad2 = [0.0; 4];
+        self.spread_count = [0; 2];
+        self.block_held = [true; 2];
+        self.last_block_rad = [0.0; 4];
+        self.last_block_rows = [[0.0; 4]; 4];
+        self.last_block_held = [false; 2];
+        self.clean_state_due = false;
+        self.clean = CleanState::new(config);
+    }
+
+    /// Channel measurements the innovation gate held out so far.
+    pub fn gated(&self) -> u32 {
+        self.gated
+    }
+
+    /// The learned mean square of each channel's residual, rad^2 (0 until learned).
+    pub fn residual_spread_rad2(&self) -> &[Real; 4] {
+        &self.spread_rad2
+    }
+
+    /// The detector of changes of the errors.
+    pub fn change_detector(&self) -> &ChangeDetector {
+        &self.change
     }
 
     /// Sets the window to one period of the rotation pattern.
     pub fn configure(&mut self, period_samples: u32) {
         self.window.configure(period_samples);
         self.entries_since_update = 0;
+        self.change.restart_blocks();
+        self.block_held = [true; 2];
+        self.last_block_held = [false; 2];
     }
 
     /// Adds one sample of weight `weight` to the window (its references low-passed on the way,
@@ -294,17 +486,17 @@ impl<const CAP: usize> Windowed<CAP> {
     /// Updates the filter with the window's measurement, if the window is full and has new
     /// entries. `interval` is the sample interval, s, `fill_variance` a filled single sample's
     /// error variance of roll and of pitch ([`crate::gap_fill::GapFiller::single_fill_variance`]).
-    pub fn update(&mut self, config: &Config, interval: Real, fill_variance: FillVariance) -> bool {
+    /// Returns the change of the errors this update declared, if any (see [`change`]).
+    pub fn update(&mut self, config: &Config, interval: Real, fill_variance: FillVariance) -> Option<Alarm> {
         if !self.window.is_full() || self.entries_since_update == 0 {
-            return false;
+            return None;
         }
         let pair = usize::from(self.next_pair.min(1));
-        let Some(m) = self.window.sums().measurement_of(pair) else {
-            return false;
-        };
+        let m = self.window.sums().measurement_of(pair)?;
         self.next_pair = 1 - pair as u8;
         let bin = self.window.bin() as Real;
         let elapsed_s = interval * bin * self.entries_since_update as Real;
+        self.changed_entries = self.changed_entries.saturating_sub(self.entries_since_update);
         self.entries_since_update = 0;
         let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
         let (qp, qr) = (q * self.drift_share[0], q * self.drift_share[1]);
@@ -321,18 +513,236 @@ impl<const CAP: usize> Windowed<CAP> {
         let r_pitch = r0 + 0.5 * filled * fill_variance.pitch_rad2;
         let r_roll = r0 + 0.5 * filled * fill_variance.roll_rad2;
         self.product_variance_rad2 = [r_pitch, r_roll];
+        if core::mem::take(&mut self.clean_state_due) && !self.change.holding() {
+            self.keep_clean_state();
+        }
+        if self.relearning[pair] {
+            if self.relearn_from_block(pair, &m.rows, &m.z) {
+                self.refresh_report(config, 0);
+                self.refresh_report(config, 1);
+            }
+            return None;
+        }
         // Each pair takes every other window, so each of its updates carries two entries' worth.
         let r = 0.5 * self.product_variance_rad2[pair];
-        let mut applied = false;
-        for ch in 2 * pair..2 * pair + 2 {
-            applied |= self.kf.update(&m.rows[ch], m.z[ch], r).is_ok();
+        let detecting = config.change_detection_step_rad > 0.0;
+        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
+        let gate = (detecting && self.spread_count[pair] >= (horizon / RESIDUAL_PERIODS as u32).max(1)).then_some(GATE_SIGMAS);
+        // Whether the measurement was taken (applied, or held out by the gate or the detector's
+        // hold: its residuals still go on to the checks).
+        let (mut applied, mut taken) = (false, false);
+        if self.change.holding() {
+            // A change may be building up: the filter waits.
+            taken = true;
+        } else {
+            for ch in 2 * pair..2 * pair + 2 {
+                match self.kf.update_gated(&m.rows[ch], m.z[ch], r, gate.map(|g| (self.spread_rad2[ch], g))) {
+                    Ok(_) => applied = true,
+                    Err(KalmanError::Gated) => {
+                        taken = true;
+                        self.gated = self.gated.saturating_add(1);
+                    }
+                    Err(_) => {}
+                }
+            }
+        }
+        if !(applied || taken) {
+            return None;
         }
         if applied {
             self.updates = self.updates.saturating_add(1);
-            self.average_residuals(pair, &m.rows, &m.z);
+        }
+        // What the filter held out (the gate, the detector's hold) stays out of the residual
+        // averages too: the check and the learned noise and drift are about the data the filter
+        // took; the detector sees everything.
+        let residual = self.average_residuals(pair, &m.rows, &m.z, applied);
+        if applied {
             self.learn_noise_and_drift(config, pair);
         }
-        applied
+        let alarm = if detecting {
+            self.learn_spread(pair, residual, taken);
+            self.detect_change(config, pair, residual, &m.rows, interval * bin)
+        } else {
+            None
+        };
+        self.refresh_report(config, pair);
+        alarm
+    }
+
+    /// The usual spread of each channel's residuals: a running mean of the squared residual over
+    /// [`SPREAD_HORIZONS`] horizons. A residual the gate held out enters clipped at
+    /// [`SPREAD_CLIP_SIGMAS`] and with the weight of a full average, so that a disturbance cannot
+    /// widen the gate it is being held out by (see "Innovation gate" in the module doc).
+    fn learn_spread(&mut self, pair: usize, residual: [Real; 2], gated: bool) {
+        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2).max(1) as u32;
+        let learned = self.spread_count[pair];
+        let full = SPREAD_HORIZONS * horizon;
+        let count = learned.saturating_add(1).min(full);
+        let weight = 1.0 / if gated { full } else { count } as Real;
+        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
+            let e2 = residual[k] * residual[k];
+            let e2 = if learned == 0 { e2 } else { e2.min(SPREAD_CLIP_SIGMAS * SPREAD_CLIP_SIGMAS * self.spread_rad2[ch]) };
+            self.spread_rad2[ch] += weight * (e2 - self.spread_rad2[ch]);
+        }
+        self.spread_count[pair] = count;
+    }
+
+    /// The model's variance of a block mean of the change detector, rad^2: white products of
+    /// variance `r` give `r (1 - 1/6) / W` (see [`change`]).
+    fn block_floor_rad2(&self, pair: usize) -> Real {
+        self.product_variance_rad2[pair] * (5.0 / 6.0) / self.window.len().max(1) as Real
+    }
+
+    /// Updates of a pair in one block of the change detector: half a period of entries.
+    fn updates_per_block(&self) -> u32 {
+        (self.window.len() as u32 / 4).max(1)
+    }
+
+    /// Passes the pair's residuals to the change detector; when it declares a change, the errors
+    /// that changed are learned again (see "Changes of the errors" in the module doc).
+    fn detect_change(&mut self, config: &Config, pair: usize, residual: [Real; 2], rows: &[[Real; 4]; 4], entry_s: Real) -> Option<Alarm> {
+        self.block_held[pair] &= self.change.holding();
+        let block = self.change.accumulate(pair, residual, self.updates_per_block())?;
+        // Kept for learning the errors again, should a change be declared while the filter holds.
+        self.last_block_held[pair] = self.block_held[pair];
+        if self.block_held[pair] {
+            self.last_block_rad[2 * pair] = block[0];
+            self.last_block_rad[2 * pair + 1] = block[1];
+            self.last_block_rows[2 * pair] = rows[2 * pair];
+            self.last_block_rows[2 * pair + 1] = rows[2 * pair + 1];
+        }
+        self.block_held[pair] = true;
+        let len = self.window.len() as u32;
+        let horizon = (RESIDUAL_PERIODS as u32 * len / 2).max(1);
+        let ctx = BlockContext {
+            persistence_blocks: persistence_blocks(len, entry_s),
+            floor_rad2: self.block_floor_rad2(pair),
+            step_rad: config.change_detection_step_rad,
+            settled: self.residual_count[pair] >= horizon,
+            armed: self.residual_count.iter().all(|c| *c >= horizon),
+            max_widening_rad: config.prior_sigma_rad,
+        };
+        let was_holding = self.change.holding();
+        let alarm = self.change.test(pair, block, [self.gains[2 * pair], self.gains[2 * pair + 1]], &ctx);
+        // Kept at the next update: this one has the block's work already.
+        self.clean_state_due |= alarm.is_none() && pair == 1 && !self.change.holding();
+        if self.change.holding() && !was_holding {
+            // The block that started the hold was taken: back to before it.
+            self.restore_clean_state();
+            self.refresh_report(config, 1 - pair);
+        }
+        let mut alarm = alarm?;
+        // The roll channels carry the leakage of x1 and x2: a change of those can hide a change
+        // of x3 or x4 on their channels (their shifts cancel), so x3 and x4 are learned again
+        // with any change. The pitch channels see x1 and x2 alone.
+        if alarm.changed[0] || alarm.changed[1] {
+            alarm.changed[2] = true;
+            alarm.changed[3] = true;
+        }
+        self.relearn(config, &alarm.changed);
+        Some(alarm)
+    }
+
+    /// Keeps a copy of the filter and its residual statistics ([`CleanState`]).
+    /// Field by field, in place: a whole `CleanState` built first took its size again on the
+    /// stack (at a restore, on top of the image's parts).
+    fn keep_clean_state(&mut self) {
+        let c = &mut self.clean;
+        c.kf.clone_from(&self.kf);
+        c.residual_mean = self.residual_mean;
+        c.residual_count = self.residual_count;
+        c.residual_mean_long = self.residual_mean_long;
+        c.residual_power = self.residual_power;
+        c.long_count = self.long_count;
+        c.noise_scale = self.noise_scale;
+        c.drift_share = self.drift_share;
+    }
+
+    /// Goes back to the copy of [`Windowed::keep_clean_state`].
+    fn restore_clean_state(&mut self) {
+        let c = &self.clean;
+        self.kf = c.kf.clone();
+        self.residual_mean = c.residual_mean;
+        self.residual_count = c.residual_count;
+        self.residual_mean_long = c.residual_mean_long;
+        self.residual_power = c.residual_power;
+        self.long_count = c.long_count;
+        self.noise_scale = c.noise_scale;
+        self.drift_share = c.drift_share;
+    }
+
+    /// Starts learning the errors `changed` again: their covariance back to the prior, the
+    /// residual statistics of their pairs (polluted by the step) back to their start, the
+    /// detector's blocks started over; both pairs' updates then wait for one block of residuals
+    /// against the estimate held now ([`Windowed::relearn_from_block`]: a pair updated from a
+    /// single window would take that window's sway for the change, and through the leakage of x1,
+    /// x2 into the roll channels the roll pair's update would move a forgotten x1 or x2). The other
+    /// errors, and the statistics of a pair whose channels showed nothing, keep what they learnt.
+    fn relearn(&mut self, config: &Config, changed: &[bool; 4]) {
+        // Back to before the change began to pull at the filter: through the leakage of x1, x2
+        // into the roll channels, the errors that did not change were pulled too.
+        self.restore_clean_state();
+        self.clean_state_due = false;
+        self.kf.forget(changed, config.prior_sigma_rad);
+        for pair in 0..2 {
+            if !(changed[2 * pair] || changed[2 * pair + 1]) {
+                continue;
+            }
+            for ch in 2 * pair..2 * pair + 2 {
+                self.residual_mean[ch] = 0.0;
+                self.residual_mean_long[ch] = 0.0;
+                self.residual_power[ch] = 0.0;
+            }
+            self.residual_count[pair] = 0;
+            self.long_count[pair] = 0;
+            self.noise_scale[pair] = 1.0;
+            self.drift_share[pair] = 1.0;
+        }
+        let x = self.kf.state();
+        self.held_x_rad = [x[0], x[1], x[2], x[3]];
+        self.relearning = [true; 2];
+        self.changed_entries = self.window.len() as u32;
+        self.change.restart_blocks();
+        self.block_held = [true; 2];
+        self.refresh_report(config, 0);
+        self.refresh_report(config, 1);
+    }
+
+    /// An update of a pair while the errors are learned again. Its last block of residuals, when
+    /// the filter held through all of it, was formed against the estimate the filter went back to
+    /// and holds now, and (a change being declared only after a run longer than a passing
+    /// disturbance) from windows wholly after the change began: it is applied at once. Otherwise
+    /// the residuals against the estimate held now are summed over one more block first. Applied
+    /// as one measurement per channel, of the learned variance of a block mean: with the prior's
+    /// covariance the filter takes the changed errors from it, as from a window at a cold start but
+    /// with the block's far smaller sway; the pair updates from windows again from then on.
+    /// Returns whether the block was applied (the filter changed).
+    fn relearn_from_block(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) -> bool {
+        let held = self.held_x_rad;
+        let (block, rows) = if self.last_block_held[pair] {
+            self.last_block_held[pair] = false;
+            ([self.last_block_rad[2 * pair], self.last_block_rad[2 * pair + 1]], self.last_block_rows)
+        } else {
+            let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
+            let residual = [z[2 * pair] - fit(2 * pair), z[2 * pair + 1] - fit(2 * pair + 1)];
+            let Some(block) = self.change.accumulate(pair, residual, self.updates_per_block()) else {
+                return false;
+            };
+            (block, *rows)
+        };
+        let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
+        let floor = self.block_floor_rad2(pair);
+        let mut applied = false;
+        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
+            let target = block[k] + fit(ch);
+            applied |= self.kf.update(&rows[ch], target, self.change.block_variance(ch, floor)).is_ok();
+            self.gains[ch] = rows[ch][ch].abs();
+        }
+        if applied {
+            self.updates = self.updates.saturating_add(1);
+        }
+        self.relearning[pair] = false;
+        true
     }
 
     /// The long averages of the residual means of `pair` and what they give: the pair's noise
@@ -363,53 +773,68 @@ impl<const CAP: usize> Windowed<CAP> {
         self.drift_share[pair] = ((share - BIAS_SHARE_NOISE) * (1.0 / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE))).clamp(0.0, 1.0);
     }
 
-    fn average_residuals(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) {
+    /// The pair's post-fit residuals (returned, rad), averaged into the residual means when
+    /// `average`.
+    fn average_residuals(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4], average: bool) -> [Real; 2] {
         let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
         let count = &mut self.residual_count[pair];
-        *count = count.saturating_add(1).min(horizon.max(1));
-        let alpha = 1.0 / *count as Real;
-        for ch in 2 * pair..2 * pair + 2 {
+        if average {
+            *count = count.saturating_add(1).min(horizon.max(1));
+        }
+        let alpha = if average { 1.0 / *count as Real } else { 0.0 };
+        let mut out = [0.0; 2];
+        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
             let fit: Real = (0..4).map(|i| rows[ch][i] * self.kf.state()[i]).sum();
             let residual = z[ch] - fit;
             self.residual_mean[ch] += alpha * (residual - self.residual_mean[ch]);
             self.gains[ch] = rows[ch][ch].abs();
+            out[k] = residual;
         }
+        out
     }
 
-    /// The residual check (see the module doc).
-    pub fn consistency(&self, config: &Config) -> Consistency {
+    /// Refreshes what is reported of the errors of `pair` (after its update, or after anything
+    /// that changed the filter): each error's 1-sigma, the filter's widened by the residual check,
+    /// the lag and the change detector (see the module doc), and whether its channel's residual
+    /// mean is beyond the check's bound. Once per update of the pair, not every step: the other
+    /// pair's report is at most one update old.
+    fn refresh_report(&mut self, config: &Config, pair: usize) {
         // The residual mean of a pair averages `count` updates of two entries each, of per-entry
         // variance `r` (filled samples included); without an update yet, the configured sigma.
         let sigma2 = config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
-        let mut out = Consistency { model_sigma_rad: [0.0; 4], mismatch: false };
-        for ch in 0..4 {
-            let n = (2 * self.residual_count[ch / 2] as usize).max(self.window.len()) as Real;
-            let r = self.product_variance_rad2[ch / 2].max(sigma2);
-            let (mean, s_e2) = (self.residual_mean[ch], r / n);
-            if mean * mean <= 4.0 * s_e2 {
-                // Within 2 sigma: nothing to add, no mismatch (the usual case, without a root).
-                continue;
+        let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
+        let s_e2 = self.product_variance_rad2[pair].max(sigma2) / n;
+        for ch in 2 * pair..2 * pair + 2 {
+            let mean = self.residual_mean[ch];
+            let mut model = 0.0;
+            let mut mismatch = false;
+            // Within 2 sigma: nothing to add, no mismatch (the usual case, without a root).
+            if mean * mean > 4.0 * s_e2 {
+                let s_e = sqrt(s_e2);
+                let excess = (mean.abs() - 2.0 * s_e).max(0.0);
+                // A bias b on a channel of gain g means an error of about b/g, but never more than
+                // the prior says we could not know anyway: near the pole the gain of x3, x4 is
+                // cos L / 2, about 0, and they are unobservable (their filter 1-sigma stays at the
+                // prior).
+                model = if excess <= 0.0 {
+                    0.0
+                } else if self.gains[ch] > 1e-6 {
+                    (excess / self.gains[ch]).min(config.prior_sigma_rad)
+                } else {
+                    config.prior_sigma_rad
+                };
+                mismatch = mean.abs() > 4.0 * s_e;
             }
-            let s_e = sqrt(s_e2);
-            let excess = (self.residual_mean[ch].abs() - 2.0 * s_e).max(0.0);
-            // A bias b on a channel of gain g means an error of about b/g, but never more than the
-            // prior says we could not know anyway: near the pole the gain of x3, x4 is cos L / 2,
-            // about 0, and they are unobservable (their filter 1-sigma stays at the prior).
-            out.model_sigma_rad[ch] = if excess <= 0.0 {
-                0.0
-            } else if self.gains[ch] > 1e-6 {
-                (excess / self.gains[ch]).min(config.prior_sigma_rad)
+            // The persistent residual mean as a state error (a drift's lag), where a drift is seen.
+            let lag = if self.drift_share[pair] > 0.0 && self.gains[ch] > 1e-6 {
+                (self.residual_mean_long[ch] / self.gains[ch]).abs().min(config.prior_sigma_rad)
             } else {
-                config.prior_sigma_rad
+                0.0
             };
-            out.mismatch |= self.residual_mean[ch].abs() > 4.0 * s_e;
+            let m = model.max(lag).max(self.change.widening_rad()[ch]);
+            self.reported_sigma_rad[ch] = sqrt(self.noise_scale[pair] * self.kf.covariance()[(ch, ch)].max(0.0) + m * m);
+            self.channel_mismatch[ch] = mismatch;
         }
-        // Flag only with a full horizon of residuals: the first windows carry sway residuals of
-        // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
-        // stays: it is conservative).
-        let horizon = RESIDUAL_PERIODS * self.window.len() / 2;
-        out.mismatch &= self.residual_count.iter().all(|c| *c as usize >= horizon);
-        out
     }
 
     /// The rotation pattern was forgotten (a new one is being learned): the window lets go of the
@@ -431,23 +856,21 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// Current estimate, 1-sigma (the filter's, widened by the residual check) and whether the
     /// residual check reports a model mismatch, once updated.
-    pub fn estimate(&self, config: &Config) -> Option<MethodEstimate> {
+    pub fn estimate(&self, _config: &Config) -> Option<MethodEstimate> {
         if self.updates == 0 {
             return None;
         }
-        let check = self.consistency(config);
-        let model = check.model_sigma_rad;
-        let x_rad = [self.kf.state()[0], self.kf.state()[1], self.kf.state()[2], self.kf.state()[3]];
-        let sigma_rad = core::array::from_fn(|i| {
-            // The persistent residual mean as a state error (a drift's lag), where a drift is seen.
-            let lag = if self.drift_share[i / 2] > 0.0 && self.gains[i] > 1e-6 {
-                (self.residual_mean_long[i] / self.gains[i]).abs().min(config.prior_sigma_rad)
-            } else {
-                0.0
-            };
-            let m = model[i].max(lag);
-            sqrt(self.noise_scale[i / 2] * self.kf.covariance()[(i, i)].max(0.0) + m * m)
-        });
-        Some(MethodEstimate { x_rad, sigma_rad, mismatch: check.mismatch })
+        // Flag only with a full horizon of residuals: the first windows carry sway residuals of
+        // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
+        // stays: it is conservative).
+        let horizon = RESIDUAL_PERIODS * self.window.len() / 2;
+        let mismatch = self.channel_mismatch.iter().any(|m| *m) && self.residual_count.iter().all(|c| *c as usize >= horizon);
+        let x = self.kf.state();
+        Some(MethodEstimate {
+            x_rad: [x[0], x[1], x[2], x[3]],
+            sigma_rad: self.reported_sigma_rad,
+            mismatch,
+            relearning: self.changed_entries > 0 || self.relearning.iter().any(|r| *r),
+        })
     }
 }

@@ -41,6 +41,7 @@ fn mismatch_logs_unchanged() {
         error_drift_arcsec_per_day: 20.0,
         low_frequency_rate_error: 0.2,
         coloured_noise_arcsec: 2.0,
+        ..Mismatch::default()
     };
     let mut bytes = Vec::new();
     host_sim::log_csv::write_log_to(&mut bytes, &generate(&p).rows).unwrap();

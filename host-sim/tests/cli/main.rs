@@ -15,3 +15,4 @@ mod cli_restart;
 mod cli_scenarios;
 mod cli_scheme_tables;
 mod cli_time_stamps;
+mod error_changes;

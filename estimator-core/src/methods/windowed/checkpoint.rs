@@ -3,19 +3,28 @@
 //! next update takes (u8: 0 pitch, 1 roll), residuals averaged per pair (2 x u32), channel gains
 //! (4 `R`), the per-product variances of the pitch and roll channels (2 `R`), the long means of
 //! the residual means (4 `R`) and of their powers (4 `R`), the residual means in the long
-//! averages per pair (2 x u32), the noise scale and the drift share per pair (2 + 2 `R`). The
-//! window, the low-pass of its references and the entries since the last update are not kept: the
-//! next period of samples refills them (the window restarts, as after a long gap).
+//! averages per pair (2 x u32), the noise scale and the drift share per pair (2 + 2 `R`); then
+//! what the report and the change detector need: each error's reported 1-sigma (4 `R`), a flag
+//! byte (bits 0-3: each channel's residual mean beyond the check's bound; bits 4-5: the pitch and
+//! roll pair learning their errors again after a change), the estimate they are learned against
+//! (4 `R`), the learned spread of each channel's residual (4 `R`) and the residuals learned into
+//! it per pair (2 x u32), and the change detector's part (`change/checkpoint.rs`). The window, the
+//! low-pass of its references, the entries since the last update and the detector's blocks are
+//! not kept: the next period of samples refills them (the window restarts, as after a long gap).
+//! The state the detector goes back to while a change builds up is the restored one.
 //!
 //! Checked: the Kalman filter (see [`crate::kalman`]); residual means and their long means within
 //! [`MAX_RESIDUAL`]; gains within `[0, 4]` (a gain is the magnitude of a window mean of products
 //! of sines and cosines, minus a product of two such means); the per-product variances within
 //! [`MAX_PRODUCT_VARIANCE_RAD2`]; powers and noise scales within [`MAX_NOISE_SCALE`]; drift shares
-//! within `[0, 1]`; the pair 0 or 1.
+//! within `[0, 1]`; the pair 0 or 1; the reported 1-sigma finite and not negative; the flag
+//! byte's unused bits zero; the estimate learned against within [`MAX_STATE`]; the spreads within
+//! [`MAX_RESIDUAL`]^2.
 
+use super::change::checkpoint::BlockVariance;
 use super::Windowed;
 use crate::checkpoint::wire::{Reader, Writer};
-use crate::checkpoint::{ensure, within, within_non_negative, CheckpointError, Part, Stored, MAX_RESIDUAL, R};
+use crate::checkpoint::{ensure, within, within_non_negative, CheckpointError, Part, Stored, MAX_RESIDUAL, MAX_STATE, R};
 use crate::kalman::ConstantStateKalman;
 use crate::Real;
 
@@ -28,7 +37,8 @@ const MAX_NOISE_SCALE: Real = 1.0e30;
 /// of the fill variances (each below (4.1 x 90 deg)^2, times the saturated fill weight).
 const MAX_PRODUCT_VARIANCE_RAD2: Real = 1.0e7;
 
-/// What a restart keeps of the windowed method (the fields of [`Windowed`] of the same names).
+/// What a restart keeps of the windowed method (the fields of [`Windowed`] of the same names; the
+/// period during which the status says the errors changed is not kept).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Learned {
     updates: u32,
@@ -43,6 +53,13 @@ pub(crate) struct Learned {
     long_count: [u32; 2],
     noise_scale: [Real; 2],
     drift_share: [Real; 2],
+    reported_sigma_rad: [Real; 4],
+    channel_mismatch: [bool; 4],
+    relearning: [bool; 2],
+    held_x_rad: [Real; 4],
+    spread_rad2: [Real; 4],
+    spread_count: [u32; 2],
+    change: BlockVariance,
 }
 
 impl<const CAP: usize> Windowed<CAP> {
@@ -61,6 +78,13 @@ impl<const CAP: usize> Windowed<CAP> {
             long_count: self.long_count,
             noise_scale: self.noise_scale,
             drift_share: self.drift_share,
+            reported_sigma_rad: self.reported_sigma_rad,
+            channel_mismatch: self.channel_mismatch,
+            relearning: self.relearning,
+            held_x_rad: self.held_x_rad,
+            spread_rad2: self.spread_rad2,
+            spread_count: self.spread_count,
+            change: self.change.learned(),
         }
     }
 
@@ -78,12 +102,36 @@ impl<const CAP: usize> Windowed<CAP> {
         self.long_count = l.long_count;
         self.noise_scale = l.noise_scale;
         self.drift_share = l.drift_share;
+        self.reported_sigma_rad = l.reported_sigma_rad;
+        self.channel_mismatch = l.channel_mismatch;
+        self.relearning = l.relearning;
+        self.held_x_rad = l.held_x_rad;
+        self.spread_rad2 = l.spread_rad2;
+        self.spread_count = l.spread_count;
+        self.change.keep_learned(l.change);
+        // What the detector goes back to, should a change build up before the next block.
+        self.keep_clean_state();
     }
 }
 
 /// Read with the largest variance allowed (see [`crate::checkpoint::MAX_VARIANCE`]).
 impl Stored for Learned {
-    const LEN: usize = 4 + ConstantStateKalman::<Real, 4>::LEN + 4 * R + 1 + 8 + 4 * R + 2 * R + 8 * R + 8 + 4 * R;
+    const LEN: usize = 4
+        + ConstantStateKalman::<Real, 4>::LEN
+        + 4 * R
+        + 1
+        + 8
+        + 4 * R
+        + 2 * R
+        + 8 * R
+        + 8
+        + 4 * R
+        + 4 * R
+        + 1
+        + 4 * R
+        + 4 * R
+        + 8
+        + BlockVariance::LEN;
     type Context<'a> = f64;
 
     fn write(&self, w: &mut Writer<'_>) {
@@ -106,9 +154,18 @@ impl Stored for Learned {
         for c in m.long_count {
             w.u32(c);
         }
-        for v in m.noise_scale.into_iter().chain(m.drift_share) {
+        for v in m.noise_scale.into_iter().chain(m.drift_share).chain(m.reported_sigma_rad) {
             w.real(v);
         }
+        let bits = m.channel_mismatch.iter().chain(&m.relearning).enumerate().fold(0u8, |b, (i, f)| b | (u8::from(*f) << i));
+        w.u8(bits);
+        for v in m.held_x_rad.into_iter().chain(m.spread_rad2) {
+            w.real(v);
+        }
+        for c in m.spread_count {
+            w.u32(c);
+        }
+        m.change.write(w);
     }
 
     fn read(r: &mut Reader<'_>, max_variance: f64) -> Result<Learned, CheckpointError> {
@@ -117,7 +174,9 @@ impl Stored for Learned {
         let residual_mean: [Real; 4] = core::array::from_fn(|_| r.real());
         let next_pair = r.u8();
         ensure(next_pair <= 1, CheckpointError::InvalidValue(Part::Residuals))?;
-        let m = Learned {
+        // One value built in place, then its later fields read into it: a second `Learned`
+        // made from this one (`..m`) took its size again on the restore's stack.
+        let mut m = Learned {
             updates,
             kf,
             residual_mean,
@@ -130,14 +189,34 @@ impl Stored for Learned {
             long_count: [r.u32(), r.u32()],
             noise_scale: core::array::from_fn(|_| r.real()),
             drift_share: core::array::from_fn(|_| r.real()),
+            reported_sigma_rad: core::array::from_fn(|_| r.real()),
+            channel_mismatch: [false; 4],
+            relearning: [false; 2],
+            held_x_rad: [0.0; 4],
+            spread_rad2: [0.0; 4],
+            spread_count: [0; 2],
+            change: BlockVariance::default(),
         };
+        let bits = r.u8();
+        m.channel_mismatch = core::array::from_fn(|i| bits & (1 << i) != 0);
+        m.relearning = core::array::from_fn(|i| bits & (1 << (4 + i)) != 0);
+        for v in m.held_x_rad.iter_mut().chain(&mut m.spread_rad2) {
+            *v = r.real();
+        }
+        m.spread_count = [r.u32(), r.u32()];
+        m.change = BlockVariance::read(r, ())?;
+        ensure(bits & 0xC0 == 0, CheckpointError::InvalidValue(Part::Residuals))?;
         let in_range = m.residual_mean.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
             && m.gains.iter().all(|g| within_non_negative(*g, 4.0))
             && m.product_variance_rad2.iter().all(|v| within_non_negative(*v, MAX_PRODUCT_VARIANCE_RAD2))
             && m.residual_mean_long.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
             && m.residual_power.iter().chain(&m.noise_scale).all(|v| within_non_negative(*v, MAX_NOISE_SCALE))
-            && m.drift_share.iter().all(|v| within_non_negative(*v, 1.0));
+            && m.drift_share.iter().all(|v| within_non_negative(*v, 1.0))
+            && m.reported_sigma_rad.iter().all(|v| within_non_negative(*v, Real::MAX))
+            && m.spread_rad2.iter().all(|v| within_non_negative(*v, (MAX_RESIDUAL * MAX_RESIDUAL) as Real));
         ensure(in_range, CheckpointError::InvalidValue(Part::Residuals))?;
+        let held_in_range = m.held_x_rad.iter().all(|v| within(*v, MAX_STATE as Real));
+        ensure(held_in_range, CheckpointError::InvalidValue(Part::ChangeDetector))?;
         Ok(m)
     }
 }
@@ -171,6 +250,12 @@ mod tests {
         assert_eq!(with(&|m| m.gains[0] = 1e30), Err(InvalidValue(Part::Residuals)));
         // A zero gain (a window whose reference does not move) is a state the estimator can be in.
         assert!(with(&|m| m.gains[3] = 0.0).is_ok());
+        // What the report and the change detector keep.
+        assert_eq!(with(&|m| m.reported_sigma_rad[1] = -1e-6), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.reported_sigma_rad[2] = Real::INFINITY), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.spread_rad2[0] = -1e-9), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(with(&|m| m.held_x_rad[3] = 1e9), Err(InvalidValue(Part::ChangeDetector)));
+        assert!(with(&|m| m.relearning = [true, false]).is_ok());
         // The Kalman filter's checks (see `kalman/checkpoint.rs`) apply to the method's.
         assert_eq!(with(&|m| m.kf = ConstantStateKalman::new([Real::NAN; 4])), Err(InvalidValue(Part::KalmanCovariance)));
     }

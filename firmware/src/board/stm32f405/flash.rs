@@ -6,8 +6,8 @@
 //! end of sector 4, so the linker never puts code in the checkpoint sectors.
 //!
 //! Timing on silicon, from the STM32F405 datasheet (not measured; `firmware::flash_layout` and
-//! docs/firmware.md): a save programs about 860 bytes (16 us typical, 100 us maximum each: 14 ms
-//! and 86 ms); one save in about 170 also erases a 128 KiB sector first (2 s typical, 4 s
+//! docs/firmware.md): a save programs about 880 bytes (16 us typical, 100 us maximum each: 14 ms
+//! and 88 ms); one save in about 170 also erases a 128 KiB sector first (2 s typical, 4 s
 //! maximum). The core stalls on instruction fetches from flash meanwhile.
 
 use core::ptr::addr_of;
