@@ -66,8 +66,10 @@ pub const TAPER_LEN: u32 = 2 * TAPER_HALF + 1;
 /// `FULL_WEIGHT / 64` (64 = full): `R(d) = sum_{j < d} K_j` with `K` the Hann window
 /// `sin^2(pi (j + 1) / (2 TAPER_HALF + 2))`, `j = 0..2 TAPER_HALF`, normalised to sum 1, rounded to
 /// 64ths (the test `taper_weights_are_the_hann_window_s_cumulative_sum` recomputes them).
-pub const TAPER_WEIGHTS: [u8; TAPER_LEN as usize] =
-    [0, 0, 1, 1, 2, 3, 5, 7, 9, 12, 15, 19, 22, 26, 30, 34, 38, 42, 45, 49, 52, 55, 57, 59, 61, 62, 63, 63, 64, 64, 64];
+pub const TAPER_WEIGHTS: [u8; TAPER_LEN as usize] = [
+    0, 0, 1, 1, 2, 3, 5, 7, 9, 12, 15, 19, 22, 26, 30, 34, 38, 42, 45, 49, 52, 55, 57, 59, 61, 62,
+    63, 63, 64, 64, 64,
+];
 /// How far the window runs behind the newest sample: a sample is passed on once its
 /// [`TAPER_LEN`] successors are known (received or lost), so that a hole after it has tapered it.
 pub const DELAY: u32 = TAPER_LEN;
@@ -320,7 +322,10 @@ impl GapFiller {
 
     /// The variance of a filled single sample of roll and of pitch (0 until measured).
     pub fn single_fill_variance(&self) -> FillVariance {
-        FillVariance { roll_rad2: self.roll_error_rad2, pitch_rad2: self.pitch_error_rad2 }
+        FillVariance {
+            roll_rad2: self.roll_error_rad2,
+            pitch_rad2: self.pitch_error_rad2,
+        }
     }
 
     /// Samples dropped because the delay line was full.
@@ -354,7 +359,10 @@ impl GapFiller {
                 }
             }
         }
-        let _ = self.line.push_back(Held { sample: *sample, restart });
+        let _ = self.line.push_back(Held {
+            sample: *sample,
+            restart,
+        });
         self.newest = Some(sample.index);
     }
 
@@ -364,9 +372,11 @@ impl GapFiller {
     /// the lag they caused.
     pub fn backlog(&self) -> u32 {
         match self.newest {
-            Some(n) if n.wrapping_sub(self.next) < 1 << 31 => {
-                n.wrapping_sub(self.next).saturating_sub(DELAY - 1).saturating_sub(self.hole_rows_ahead).min(LINE as u32)
-            }
+            Some(n) if n.wrapping_sub(self.next) < 1 << 31 => n
+                .wrapping_sub(self.next)
+                .saturating_sub(DELAY - 1)
+                .saturating_sub(self.hole_rows_ahead)
+                .min(LINE as u32),
             _ => 0,
         }
     }
@@ -387,18 +397,29 @@ impl GapFiller {
             let held = self.line.get(pos)?;
             let received = held.sample.index == k;
             if !received {
-                let before = if pos > 0 { self.line.get(pos - 1).map(|h| h.sample.index) } else { None };
-                let run = before.map_or(u32::MAX, |b| held.sample.index.wrapping_sub(b).wrapping_sub(1));
+                let before = if pos > 0 {
+                    self.line.get(pos - 1).map(|h| h.sample.index)
+                } else {
+                    None
+                };
+                let run = before.map_or(u32::MAX, |b| {
+                    held.sample.index.wrapping_sub(b).wrapping_sub(1)
+                });
                 if run > self.max_fill || held.restart {
                     // A hole: step over it.
                     self.hole_end = Some(held.sample.index.wrapping_sub(1));
-                    self.hole_rows_ahead = self.hole_rows_ahead.saturating_sub(held.sample.index.wrapping_sub(k));
+                    self.hole_rows_ahead = self
+                        .hole_rows_ahead
+                        .saturating_sub(held.sample.index.wrapping_sub(k));
                     self.next = held.sample.index;
                     continue;
                 }
             }
             // The usual case: a received sample, no hole near it.
-            if received && self.holes.is_empty() && self.hole_end.is_none_or(|e| k.wrapping_sub(e) > TAPER_LEN) {
+            if received
+                && self.holes.is_empty()
+                && self.hole_end.is_none_or(|e| k.wrapping_sub(e) > TAPER_LEN)
+            {
                 if newest.wrapping_sub(k) < DELAY {
                     return None;
                 }
@@ -413,7 +434,11 @@ impl GapFiller {
                     self.line.pop_front();
                     self.history -= 1;
                 }
-                return Some(Passed { sample, weight: FULL_WEIGHT, restart });
+                return Some(Passed {
+                    sample,
+                    weight: FULL_WEIGHT,
+                    restart,
+                });
             }
             // Holes behind are done with; the nearest ahead tapers this sample. Its weight is
             // final once a hole ahead is known (none can come nearer) or `DELAY` samples have come.
@@ -450,7 +475,11 @@ impl GapFiller {
                 self.line.pop_front();
                 self.history -= 1;
             }
-            return Some(Passed { sample, weight: weight.min(FULL_WEIGHT), restart });
+            return Some(Passed {
+                sample,
+                weight: weight.min(FULL_WEIGHT),
+                restart,
+            });
         }
     }
 
@@ -467,18 +496,25 @@ impl GapFiller {
         // 0 changes no sum: the same values as the ten terms alone).
         let (mut roll, mut pitch) = (0.0, 0.0);
         let (mut seen, mut first, mut last) = (0usize, 0u32, 0u32);
-        self.line.iter().skip(pos - NEIGHBOURS).take(2 * NEIGHBOURS + 1).for_each(|h| {
-            let w = CENTRED_WEIGHTS.get(seen).copied().unwrap_or(0.0);
-            roll += w * h.sample.roll_rad;
-            pitch += w * h.sample.pitch_rad;
-            if seen == 0 {
-                first = h.sample.index;
-            }
-            last = h.sample.index;
-            seen += 1;
-        });
+        self.line
+            .iter()
+            .skip(pos - NEIGHBOURS)
+            .take(2 * NEIGHBOURS + 1)
+            .for_each(|h| {
+                let w = CENTRED_WEIGHTS.get(seen).copied().unwrap_or(0.0);
+                roll += w * h.sample.roll_rad;
+                pitch += w * h.sample.pitch_rad;
+                if seen == 0 {
+                    first = h.sample.index;
+                }
+                last = h.sample.index;
+                seen += 1;
+            });
         let n = NEIGHBOURS as u32;
-        if seen != 2 * NEIGHBOURS + 1 || s.index.wrapping_sub(first) != n || last.wrapping_sub(s.index) != n {
+        if seen != 2 * NEIGHBOURS + 1
+            || s.index.wrapping_sub(first) != n
+            || last.wrapping_sub(s.index) != n
+        {
             return;
         }
         self.error_samples = (self.error_samples + 1).min(FILL_ERROR_SAMPLES);
@@ -500,21 +536,25 @@ impl GapFiller {
         // `index` sits at most five places before `pos`, one after at most four after it.
         let mut present = 0u32;
         let start = pos.saturating_sub(NEIGHBOURS);
-        self.line.iter().skip(start).take(pos + NEIGHBOURS - start).for_each(|h| {
-            let offset = h.sample.index.wrapping_sub(index) as i32;
-            if offset == 0 || offset.unsigned_abs() > NEIGHBOURS as u32 || n >= 2 * NEIGHBOURS {
-                return;
-            }
-            nodes[n] = offset;
-            values[n] = (h.sample.roll_rad, h.sample.pitch_rad);
-            n += 1;
-            present |= 1 << (offset + NEIGHBOURS as i32);
-            if offset < 0 {
-                before = Some((offset, &h.sample));
-            } else if after.is_none() {
-                after = Some((offset, &h.sample));
-            }
-        });
+        self.line
+            .iter()
+            .skip(start)
+            .take(pos + NEIGHBOURS - start)
+            .for_each(|h| {
+                let offset = h.sample.index.wrapping_sub(index) as i32;
+                if offset == 0 || offset.unsigned_abs() > NEIGHBOURS as u32 || n >= 2 * NEIGHBOURS {
+                    return;
+                }
+                nodes[n] = offset;
+                values[n] = (h.sample.roll_rad, h.sample.pitch_rad);
+                n += 1;
+                present |= 1 << (offset + NEIGHBOURS as i32);
+                if offset < 0 {
+                    before = Some((offset, &h.sample));
+                } else if after.is_none() {
+                    after = Some((offset, &h.sample));
+                }
+            });
         // Each missing neighbour raises the fill's variance; `missing` is the last one missing.
         // (By the bits of the offsets absent, lowest first: as many passes as neighbours missing.)
         let mut weight = 1u32;
@@ -524,7 +564,10 @@ impl GapFiller {
         while absent != 0 {
             let offset = absent.trailing_zeros() as i32 - NEIGHBOURS as i32;
             absent &= absent - 1;
-            let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR.get(offset.unsigned_abs() as usize - 1).copied().unwrap_or(u32::MAX);
+            let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR
+                .get(offset.unsigned_abs() as usize - 1)
+                .copied()
+                .unwrap_or(u32::MAX);
             weight = weight.saturating_mul(factor);
             missing = offset;
         }
@@ -544,9 +587,14 @@ impl GapFiller {
         let f = (-ob) as Real / (oa - ob) as Real;
         let ang = |x: Real, y: Real| wrap_pi(x + wrap_pi(y - x) * f);
         let rotation_rad = ang(b.rotation_rad, a.rotation_rad);
-        let rotation_minus_platform_rad = ang(b.rotation_minus_platform_rad, a.rotation_minus_platform_rad);
+        let rotation_minus_platform_rad =
+            ang(b.rotation_minus_platform_rad, a.rotation_minus_platform_rad);
         let latitude_rad = b.latitude_rad + (a.latitude_rad - b.latitude_rad) * f;
-        let lat = if latitude_rad == b.latitude_rad { (b.angles.sin_lat, b.angles.cos_lat) } else { sin_cos(latitude_rad) };
+        let lat = if latitude_rad == b.latitude_rad {
+            (b.angles.sin_lat, b.angles.cos_lat)
+        } else {
+            sin_cos(latitude_rad)
+        };
         let weight = weight.min(u32::from(u16::MAX)) as u16;
         Some(GridSample {
             index,
@@ -572,7 +620,10 @@ mod tests {
         for subset in 1u32..1 << (2 * NEIGHBOURS) {
             let mut nodes = [0i32; 2 * NEIGHBOURS];
             let mut n = 0;
-            for (bit, x) in (-(NEIGHBOURS as i32)..=NEIGHBOURS as i32).filter(|x| *x != 0).enumerate() {
+            for (bit, x) in (-(NEIGHBOURS as i32)..=NEIGHBOURS as i32)
+                .filter(|x| *x != 0)
+                .enumerate()
+            {
                 if subset & (1 << bit) != 0 {
                     nodes[n] = x;
                     n += 1;
@@ -585,7 +636,12 @@ mod tests {
                     num *= -nodes[m];
                     den *= nodes[i] - nodes[m];
                 }
-                assert_eq!(w[i].to_bits(), (num as Real / den as Real).to_bits(), "nodes {:?}", &nodes[..n]);
+                assert_eq!(
+                    w[i].to_bits(),
+                    (num as Real / den as Real).to_bits(),
+                    "nodes {:?}",
+                    &nodes[..n]
+                );
             }
         }
     }
@@ -594,13 +650,23 @@ mod tests {
     #[test]
     fn taper_weights_are_the_hann_window_s_cumulative_sum() {
         let n = TAPER_LEN as usize;
-        let k: std::vec::Vec<f64> =
-            (0..n).map(|j| (core::f64::consts::PI * (j + 1) as f64 / (2.0 * TAPER_HALF as f64 + 2.0)).sin().powi(2)).collect();
+        let k: std::vec::Vec<f64> = (0..n)
+            .map(|j| {
+                (core::f64::consts::PI * (j + 1) as f64 / (2.0 * TAPER_HALF as f64 + 2.0))
+                    .sin()
+                    .powi(2)
+            })
+            .collect();
         let total: f64 = k.iter().sum();
         let mut cumulative = 0.0;
         for (j, w) in k.iter().enumerate() {
             cumulative += w / total;
-            assert_eq!(TAPER_WEIGHTS[j], (64.0 * cumulative).round() as u8, "d = {}", j + 1);
+            assert_eq!(
+                TAPER_WEIGHTS[j],
+                (64.0 * cumulative).round() as u8,
+                "d = {}",
+                j + 1
+            );
         }
         assert_eq!(u32::from(FULL_WEIGHT), 64);
     }
@@ -629,17 +695,30 @@ mod tests {
         for i in (0..200u32).filter(|i| !(40..50).contains(i) && !(120..122).contains(i)) {
             f.push(&grid_sample(i), false, 2);
             while let Some(p) = f.pass_on(true) {
-                assert!(i >= p.sample.index + DELAY || p.sample.index < 40, "{} passed at {i}", p.sample.index);
+                assert!(
+                    i >= p.sample.index + DELAY || p.sample.index < 40,
+                    "{} passed at {i}",
+                    p.sample.index
+                );
                 passed.push(p);
             }
         }
         let indices: std::vec::Vec<u32> = passed.iter().map(|p| p.sample.index).collect();
-        let expected: std::vec::Vec<u32> = (0..200 - DELAY).filter(|i| !(40..50).contains(i)).collect();
+        let expected: std::vec::Vec<u32> =
+            (0..200 - DELAY).filter(|i| !(40..50).contains(i)).collect();
         assert_eq!(indices, expected);
         let weight = |i: u32| passed.iter().find(|p| p.sample.index == i).unwrap().weight;
         for d in 1..=TAPER_LEN {
-            assert_eq!(weight(40 - d), TAPER_WEIGHTS[d as usize - 1], "{d} before the hole");
-            assert_eq!(weight(49 + d), TAPER_WEIGHTS[d as usize - 1], "{d} after the hole");
+            assert_eq!(
+                weight(40 - d),
+                TAPER_WEIGHTS[d as usize - 1],
+                "{d} before the hole"
+            );
+            assert_eq!(
+                weight(49 + d),
+                TAPER_WEIGHTS[d as usize - 1],
+                "{d} after the hole"
+            );
         }
         assert_eq!(weight(100), FULL_WEIGHT);
         for i in [120, 121] {
@@ -647,7 +726,10 @@ mod tests {
             assert!(p.sample.fill_weight > 0 && p.weight == FULL_WEIGHT);
             // Two lost in a row: the fill through the 9 neighbours left of a 6 s sway is 3.4 % of
             // its amplitude off for the first, far less for the second.
-            assert!((p.sample.roll_rad - grid_sample(i).roll_rad).abs() < 0.04 * 0.05, "filled {i}");
+            assert!(
+                (p.sample.roll_rad - grid_sample(i).roll_rad).abs() < 0.04 * 0.05,
+                "filled {i}"
+            );
         }
     }
 }

@@ -81,7 +81,14 @@ impl<const CAP: usize> MethodState<CAP> {
     /// (its window keeps them while the period is learned) and updates in
     /// [`MethodState::update`], once per step; the others take samples once the period is known
     /// (`period_known`) and update here, and leave the weights aside.
-    pub fn push(&mut self, config: &Config, feed: &Feed, sample: &GridSample, weight: u8, period_known: bool) -> u32 {
+    pub fn push(
+        &mut self,
+        config: &Config,
+        feed: &Feed,
+        sample: &GridSample,
+        weight: u8,
+        period_known: bool,
+    ) -> u32 {
         match self {
             MethodState::Windowed(m) => m.push(sample, feed.reference_alpha, weight),
             #[cfg(feature = "paper-method")]
@@ -103,7 +110,12 @@ impl<const CAP: usize> MethodState<CAP> {
     /// The windowed method's one update per step (see [`Windowed::update`]); the others update
     /// in [`MethodState::push`]. Returns the change of the errors declared, if any (only the
     /// windowed method detects changes).
-    pub fn update(&mut self, config: &Config, feed: &Feed, fill_variance: FillVariance) -> Option<Alarm> {
+    pub fn update(
+        &mut self,
+        config: &Config,
+        feed: &Feed,
+        fill_variance: FillVariance,
+    ) -> Option<Alarm> {
         match self {
             MethodState::Windowed(m) => m.update(config, feed.interval, fill_variance),
             #[cfg(feature = "paper-method")]
@@ -111,7 +123,6 @@ impl<const CAP: usize> MethodState<CAP> {
             MethodState::Traditional(_) => None,
         }
     }
-
 
     /// Forgets the moving-average window (the filter keeps what it learnt).
     pub fn restart_window(&mut self) {
@@ -162,7 +173,12 @@ impl<const CAP: usize> MethodState<CAP> {
     /// had a measurement. Only the windowed method checks its residuals; the others never report
     /// a mismatch.
     pub fn estimate(&self, config: &Config) -> Option<MethodEstimate> {
-        let plain = |e: Estimate| MethodEstimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad, mismatch: false, relearning: false };
+        let plain = |e: Estimate| MethodEstimate {
+            x_rad: e.x_rad,
+            sigma_rad: e.sigma_rad,
+            mismatch: false,
+            relearning: false,
+        };
         match self {
             MethodState::Windowed(m) => m.estimate(config),
             #[cfg(feature = "paper-method")]

@@ -43,13 +43,21 @@ pub struct WindowAverage<const CH: usize, const CAP: usize> {
 impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
     /// A window of `len` samples, `1 <= len <= CAP` (clamped into that range).
     pub fn new(len: usize) -> Self {
-        WindowAverage { ring: Deque::new(), sums: [0; CH], len: len.clamp(1, CAP.max(1)) }
+        WindowAverage {
+            ring: Deque::new(),
+            sums: [0; CH],
+            len: len.clamp(1, CAP.max(1)),
+        }
     }
 
     /// Rounds a value to fixed point, clamping it to +-[`MAX_MAGNITUDE`]. NaN becomes 0 (callers
     /// never pass NaN: samples are checked before they get here).
     pub fn quantize(value: Real) -> i32 {
-        let v = if value.is_nan() { 0.0 } else { value.clamp(-MAX_MAGNITUDE, MAX_MAGNITUDE) };
+        let v = if value.is_nan() {
+            0.0
+        } else {
+            value.clamp(-MAX_MAGNITUDE, MAX_MAGNITUDE)
+        };
         round(v * COUNTS_PER_UNIT) as i32
     }
 
@@ -122,7 +130,6 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
         self.ring.iter().map(move |v| v[ch.min(CH - 1)])
     }
 }
-
 
 /// The moving average of the windowed method: the entries of exactly one rotation period, as the
 /// exact [`CorrelationSums`] of their fixed-point inputs.
@@ -209,8 +216,22 @@ pub struct Entry {
 impl Entry {
     /// An entry of weight 0: its products are all 0 (what [`CorrelationSums::replace`] takes for
     /// the side of a change that has no entry).
-    pub const NONE: Entry =
-        Entry { sample: QuantizedSample { roll: 0, pitch: 0, sin_rho: 0, cos_rho: 0, sin_rho_s: 0, cos_rho_s: 0, sin_lat: 0, cos_lat: 0, reference: [0; 4] }, number: 0, weight: 0, fill: FillCode(0) };
+    pub const NONE: Entry = Entry {
+        sample: QuantizedSample {
+            roll: 0,
+            pitch: 0,
+            sin_rho: 0,
+            cos_rho: 0,
+            sin_rho_s: 0,
+            cos_rho_s: 0,
+            sin_lat: 0,
+            cos_lat: 0,
+            reference: [0; 4],
+        },
+        number: 0,
+        weight: 0,
+        fill: FillCode(0),
+    };
 
     /// The fill weight the sums count for this entry.
     pub fn fill_weight(&self) -> u32 {
@@ -317,16 +338,25 @@ impl WindowLayout {
         let capacity = capacity.max(2) as u32;
         let period = period_samples.max(2);
         if period <= capacity {
-            return WindowLayout { samples_per_entry: 1, entries: period as usize };
+            return WindowLayout {
+                samples_per_entry: 1,
+                entries: period as usize,
+            };
         }
         let smallest = period.div_ceil(capacity);
         for bin in smallest..=2 * smallest {
             if period % bin == 0 && period / bin <= capacity {
-                return WindowLayout { samples_per_entry: bin, entries: (period / bin) as usize };
+                return WindowLayout {
+                    samples_per_entry: bin,
+                    entries: (period / bin) as usize,
+                };
             }
         }
         let entries = ((period + smallest / 2) / smallest).clamp(2, capacity);
-        WindowLayout { samples_per_entry: smallest, entries: entries as usize }
+        WindowLayout {
+            samples_per_entry: smallest,
+            entries: entries as usize,
+        }
     }
 }
 
@@ -400,7 +430,9 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     /// The entry numbers the window spans so far, up to `len`.
     fn span(&self) -> usize {
         match self.newest {
-            Some(n) => (n.wrapping_sub(self.first) as usize).saturating_add(1).min(self.len),
+            Some(n) => (n.wrapping_sub(self.first) as usize)
+                .saturating_add(1)
+                .min(self.len),
             None => 0,
         }
     }
@@ -420,7 +452,9 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     /// Whether the window still holds entries older than one period (being removed, a few a push).
     fn is_over_long(&self) -> bool {
         match (self.ring.front(), self.newest) {
-            (Some(front), Some(n)) => usize::from((n as u16).wrapping_sub(front.number)) >= self.len,
+            (Some(front), Some(n)) => {
+                usize::from((n as u16).wrapping_sub(front.number)) >= self.len
+            }
             _ => false,
         }
     }
@@ -446,12 +480,19 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     pub fn push(&mut self, s: &GridSample, reference: &[Real; 4], weight: u8) -> Pushed {
         if self.bin <= 1 {
             let q = QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference);
-            let removed = self.push_entry(s.index, q, FillCode::of(u32::from(s.fill_weight)), weight);
-            return Pushed { completed: true, removed };
+            let removed =
+                self.push_entry(s.index, q, FillCode::of(u32::from(s.fill_weight)), weight);
+            return Pushed {
+                completed: true,
+                removed,
+            };
         }
         let origin = *self.origin.get_or_insert(s.index);
         let number = s.index.wrapping_sub(origin) / self.bin;
-        let mut out = Pushed { completed: false, removed: 0 };
+        let mut out = Pushed {
+            completed: false,
+            removed: 0,
+        };
         if self.partial.count > 0 && self.partial.number != number {
             // The rest of the bin was lost: the bin is what it has.
             out = self.close_bin();
@@ -459,7 +500,12 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         let w = Real::from(weight.min(FULL_WEIGHT)) * (1.0 / FULL_WEIGHT as Real);
         let b = &mut self.partial;
         if b.count == 0 {
-            *b = Bin { number, rotation0_rad: s.rotation_rad, rotation_minus_platform0_rad: s.rotation_minus_platform_rad, ..Bin::default() };
+            *b = Bin {
+                number,
+                rotation0_rad: s.rotation_rad,
+                rotation_minus_platform0_rad: s.rotation_minus_platform_rad,
+                ..Bin::default()
+            };
         }
         b.count += 1;
         b.weight += w;
@@ -470,11 +516,15 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             b.reference[ch] += w * reference[ch];
         }
         b.rotation_offset_rad += w * wrap_pi(s.rotation_rad - b.rotation0_rad);
-        b.rotation_minus_platform_offset_rad += w * wrap_pi(s.rotation_minus_platform_rad - b.rotation_minus_platform0_rad);
+        b.rotation_minus_platform_offset_rad +=
+            w * wrap_pi(s.rotation_minus_platform_rad - b.rotation_minus_platform0_rad);
         b.fill_weight += u32::from(s.fill_weight);
         if b.count >= self.bin {
             let closed = self.close_bin();
-            out = Pushed { completed: out.completed || closed.completed, removed: out.removed + closed.removed };
+            out = Pushed {
+                completed: out.completed || closed.completed,
+                removed: out.removed + closed.removed,
+            };
         }
         out
     }
@@ -484,18 +534,35 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         let b = self.partial;
         self.partial = Bin::default();
         if !(b.weight > 0.0) {
-            return Pushed { completed: false, removed: 0 };
+            return Pushed {
+                completed: false,
+                removed: 0,
+            };
         }
         let n = b.weight;
         let rotation = wrap_pi(b.rotation0_rad + b.rotation_offset_rad / n);
-        let rotation_minus_platform = wrap_pi(b.rotation_minus_platform0_rad + b.rotation_minus_platform_offset_rad / n);
-        let angles = Angles::from_rotation(rotation, rotation_minus_platform, sin_cos(b.latitude_rad / n));
-        let q = QuantizedSample::new(b.roll_rad / n, b.pitch_rad / n, &angles, &b.reference.map(|r| r / n));
+        let rotation_minus_platform =
+            wrap_pi(b.rotation_minus_platform0_rad + b.rotation_minus_platform_offset_rad / n);
+        let angles = Angles::from_rotation(
+            rotation,
+            rotation_minus_platform,
+            sin_cos(b.latitude_rad / n),
+        );
+        let q = QuantizedSample::new(
+            b.roll_rad / n,
+            b.pitch_rad / n,
+            &angles,
+            &b.reference.map(|r| r / n),
+        );
         let fill = FillCode::of(b.fill_weight);
         // The bin's weight: the mean of its samples' (lost samples count 0).
-        let weight = round(n * FULL_WEIGHT as Real / self.bin as Real).clamp(0.0, FULL_WEIGHT as Real) as u8;
+        let weight =
+            round(n * FULL_WEIGHT as Real / self.bin as Real).clamp(0.0, FULL_WEIGHT as Real) as u8;
         let removed = self.push_entry(b.number, q, fill, weight);
-        Pushed { completed: true, removed }
+        Pushed {
+            completed: true,
+            removed,
+        }
     }
 
     /// Adds an entry, removing up to [`MAX_REMOVALS_PER_PUSH`] entries older than one period (and
@@ -504,13 +571,24 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     /// one with an entry of weight 0 (whose products are all 0), and the new one alone, when none
     /// goes, with an entry of weight 0 in its place. One copy of the products' code in the image,
     /// and the same exact sums as adding and subtracting apart.
-    fn push_entry(&mut self, number: u32, sample: QuantizedSample, fill: FillCode, weight: u8) -> u32 {
+    fn push_entry(
+        &mut self,
+        number: u32,
+        sample: QuantizedSample,
+        fill: FillCode,
+        weight: u8,
+    ) -> u32 {
         if self.newest.is_none() {
             self.first = number;
         }
         self.newest = Some(number);
         let mut removed = 0;
-        let mut new = Some(Entry { sample, number: number as u16, weight, fill });
+        let mut new = Some(Entry {
+            sample,
+            number: number as u16,
+            weight,
+            fill,
+        });
         loop {
             // The oldest goes when it is older than one period (a few a push), or to make room
             // for the new entry in a full ring (only when more than `CAP` numbers are held, before
@@ -518,7 +596,8 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             let old = match self.ring.front() {
                 Some(o)
                     if (new.is_some() && self.ring.is_full())
-                        || (removed < MAX_REMOVALS_PER_PUSH && usize::from((number as u16).wrapping_sub(o.number)) >= self.len) =>
+                        || (removed < MAX_REMOVALS_PER_PUSH
+                            && usize::from((number as u16).wrapping_sub(o.number)) >= self.len) =>
                 {
                     Some(o)
                 }
@@ -531,9 +610,20 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             if !going && adding.is_none() {
                 break;
             }
-            let (o, a) = (old.unwrap_or(&Entry::NONE), adding.as_ref().unwrap_or(&Entry::NONE));
-            self.sums.replace(&o.sample, o.fill_weight(), o.weight, &a.sample, a.fill_weight(), a.weight);
-            self.sums.count = (self.sums.count + u32::from(adding.is_some())).saturating_sub(u32::from(going));
+            let (o, a) = (
+                old.unwrap_or(&Entry::NONE),
+                adding.as_ref().unwrap_or(&Entry::NONE),
+            );
+            self.sums.replace(
+                &o.sample,
+                o.fill_weight(),
+                o.weight,
+                &a.sample,
+                a.fill_weight(),
+                a.weight,
+            );
+            self.sums.count =
+                (self.sums.count + u32::from(adding.is_some())).saturating_sub(u32::from(going));
             if going {
                 self.ring.pop_front();
                 removed += 1;
@@ -565,7 +655,9 @@ mod tests {
         let mut w: WindowAverage<2, 480> = WindowAverage::new(480);
         let mut state: u64 = 12345;
         for i in 0..172_800u64 {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let r = ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5) as Real;
             let sway = 0.05 * libm::sin(i as f64 * 1.047) as Real;
             w.push(&[sway + 1e-3 * r, -0.3 + r]);
@@ -574,8 +666,11 @@ mod tests {
             let direct: i64 = w.window_counts(ch).map(i64::from).sum();
             assert_eq!(direct, w.sums()[ch], "channel {ch} drifted");
         }
-        let direct_mean: f64 =
-            w.window_counts(0).map(|c| c as f64 / (1u64 << 30) as f64).sum::<f64>() / 480.0;
+        let direct_mean: f64 = w
+            .window_counts(0)
+            .map(|c| c as f64 / (1u64 << 30) as f64)
+            .sum::<f64>()
+            / 480.0;
         let mean = w.means().unwrap()[0] as f64;
         assert!((mean - direct_mean).abs() < 1e-7 * direct_mean.abs().max(1e-3));
     }

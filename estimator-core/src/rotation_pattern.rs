@@ -125,7 +125,10 @@ pub struct Features {
 impl Features {
     /// The pattern's kind.
     pub fn kind(&self) -> PatternKind {
-        match (self.reverses, self.longest_dwell_samples > dwell_threshold_samples()) {
+        match (
+            self.reverses,
+            self.longest_dwell_samples > dwell_threshold_samples(),
+        ) {
             (false, false) => PatternKind::OneWay,
             (true, false) => PatternKind::Reciprocating,
             (false, true) => PatternKind::StopAndGo,
@@ -166,12 +169,24 @@ fn pass_across_gap(k: u32, steps: u32, d_prev: Real, d: Real, dir: usize) -> u32
     if d_prev < -PI {
         d_prev += 2.0 * PI;
     }
-    let threshold = if dir == 0 { PASS_HYSTERESIS_RAD } else { -PASS_HYSTERESIS_RAD };
+    let threshold = if dir == 0 {
+        PASS_HYSTERESIS_RAD
+    } else {
+        -PASS_HYSTERESIS_RAD
+    };
     let span = d - d_prev;
-    let f = if span != 0.0 { ((threshold - d_prev) / span).clamp(0.0, 1.0) } else { 1.0 };
+    let f = if span != 0.0 {
+        ((threshold - d_prev) / span).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
     let x = f * steps as Real;
     let whole = x as u32;
-    let after = if (whole as Real) < x { whole + 1 } else { whole };
+    let after = if (whole as Real) < x {
+        whole + 1
+    } else {
+        whole
+    };
     k.wrapping_add(after.clamp(1, steps))
 }
 
@@ -269,24 +284,38 @@ impl RotationMonitor {
     /// its three callers.
     #[inline(never)]
     fn forget(&mut self) {
-        let pinned = if self.pinned { self.period_samples } else { None };
+        let pinned = if self.pinned {
+            self.period_samples
+        } else {
+            None
+        };
         *self = RotationMonitor::new(pinned);
     }
 
     /// Watches one sample (index on the sample grid, rotation angle).
-    pub fn observe(&mut self, index: u32, rotation_rad: Real, limits: &Limits) -> Result<PatternEvent, RotationFault> {
-        let base = *self.levels_rad.get_or_insert(wrap_pi(rotation_rad + 0.5 * LEVEL_STEP_RAD));
+    pub fn observe(
+        &mut self,
+        index: u32,
+        rotation_rad: Real,
+        limits: &Limits,
+    ) -> Result<PatternEvent, RotationFault> {
+        let base = *self
+            .levels_rad
+            .get_or_insert(wrap_pi(rotation_rad + 0.5 * LEVEL_STEP_RAD));
         let previous = self.previous.replace((index, rotation_rad));
         // Samples since the previous one (more than 1 across lost rows) and the rotation over them:
         // the angle is continuous between the rows that are there.
         let (steps, increment) = match previous {
-            Some((k, rho)) if index.wrapping_sub(k) >= 1 => (index.wrapping_sub(k), Some(wrap_pi(rotation_rad - rho))),
+            Some((k, rho)) if index.wrapping_sub(k) >= 1 => {
+                (index.wrapping_sub(k), Some(wrap_pi(rotation_rad - rho)))
+            }
             _ => (1, None),
         };
         if let Some(inc) = increment {
             self.short_steps = (self.short_steps + 1).min(SHORT_STEPS);
             let per_step = if steps == 1 { inc } else { inc / steps as Real };
-            self.short_increment_rad += (per_step - self.short_increment_rad) / self.short_steps as Real;
+            self.short_increment_rad +=
+                (per_step - self.short_increment_rad) / self.short_steps as Real;
         }
         let mut event = PatternEvent::None;
         // Passes of the reference angles.
@@ -320,7 +349,13 @@ impl RotationMonitor {
                 _ => continue,
             };
             let pass = match previous {
-                Some((k, rho)) if steps > 1 => pass_across_gap(k, steps, wrap_pi(rho - base) - m as Real * LEVEL_STEP_RAD, d, dir),
+                Some((k, rho)) if steps > 1 => pass_across_gap(
+                    k,
+                    steps,
+                    wrap_pi(rho - base) - m as Real * LEVEL_STEP_RAD,
+                    d,
+                    dir,
+                ),
                 _ => index,
             };
             let last = self.last_pass[m][dir].replace(pass);
@@ -334,12 +369,16 @@ impl RotationMonitor {
                     }
                 }
                 (Some(period), Some(k)) if self.timing_pass == Some((m as u8, dir as u8)) => {
-                    if self.features.is_some() && !pass_on_time(pass.wrapping_sub(k), period, limits) {
+                    if self.features.is_some()
+                        && !pass_on_time(pass.wrapping_sub(k), period, limits)
+                    {
                         self.forget();
                         return Err(RotationFault::RateMismatch);
                     }
                 }
-                (Some(_), _) if self.timing_pass.is_none() => self.timing_pass = Some((m as u8, dir as u8)),
+                (Some(_), _) if self.timing_pass.is_none() => {
+                    self.timing_pass = Some((m as u8, dir as u8))
+                }
                 _ => {}
             }
         }
@@ -352,7 +391,11 @@ impl RotationMonitor {
         // In the step's float type: no software f64 division a sample.
         let nominal = 2.0 * PI / period as Real;
         let still = self.short_steps > 0 && self.short_increment_rad.abs() < 0.25 * nominal;
-        self.dwell_run = if still { self.dwell_run.saturating_add(steps) } else { 0 };
+        self.dwell_run = if still {
+            self.dwell_run.saturating_add(steps)
+        } else {
+            0
+        };
         let Some(features) = self.features else {
             self.learn(index, increment, nominal, period);
             return Ok(event);
@@ -360,7 +403,9 @@ impl RotationMonitor {
         // Health against the learned pattern.
         if let Some((m, dir)) = self.timing_pass {
             if let Some(k) = self.last_pass[m as usize][dir as usize] {
-                if index.wrapping_sub(k) > period && !pass_on_time(index.wrapping_sub(k), period, limits) {
+                if index.wrapping_sub(k) > period
+                    && !pass_on_time(index.wrapping_sub(k), period, limits)
+                {
                     if self.dwell_run > 0 {
                         // Late because it has stopped: a stop, judged below, not a new period.
                         self.after_fault();
@@ -378,7 +423,11 @@ impl RotationMonitor {
         let reversed = !features.reverses
             && self.short_steps > 0
             && self.short_increment_rad * Real::from(features.direction) < -0.5 * nominal;
-        self.reversed_run = if reversed { self.reversed_run.saturating_add(1) } else { 0 };
+        self.reversed_run = if reversed {
+            self.reversed_run.saturating_add(1)
+        } else {
+            0
+        };
         if reversed {
             if self.reversed_run > period {
                 // A whole period the other way: a new pattern, not a reversal.
@@ -409,7 +458,9 @@ impl RotationMonitor {
         let s = self.short_increment_rad;
         if self.learn_first_direction == 0 && s.abs() > 0.5 * nominal {
             self.learn_first_direction = if s > 0.0 { 1 } else { -1 };
-        } else if self.learn_first_direction != 0 && s * Real::from(self.learn_first_direction) < -0.5 * nominal {
+        } else if self.learn_first_direction != 0
+            && s * Real::from(self.learn_first_direction) < -0.5 * nominal
+        {
             self.learn_reversed = true;
         }
         if index.wrapping_sub(start) >= period {

@@ -60,21 +60,37 @@ impl Recording {
             return Err(RecorderError::DropFraction(self.drop_fraction));
         }
         if !(self.time_offset_s.is_finite() && self.time_offset_s.abs() <= MAX_TIME_OFFSET_S) {
-            return Err(RecorderError::TimeOffset { value_s: self.time_offset_s });
+            return Err(RecorderError::TimeOffset {
+                value_s: self.time_offset_s,
+            });
         }
-        if !(self.time_jitter_s.is_finite() && self.time_jitter_s >= 0.0 && self.time_jitter_s < interval_s / 2.0) {
-            return Err(RecorderError::TimeJitter { value_s: self.time_jitter_s, limit_s: interval_s / 2.0 });
+        if !(self.time_jitter_s.is_finite()
+            && self.time_jitter_s >= 0.0
+            && self.time_jitter_s < interval_s / 2.0)
+        {
+            return Err(RecorderError::TimeJitter {
+                value_s: self.time_jitter_s,
+                limit_s: interval_s / 2.0,
+            });
         }
         let gap_s = f64::from(self.gap_rows) * interval_s;
-        if !(self.gap_every_s.is_finite() && self.gap_every_s >= 0.0) || (self.gap_every_s > 0.0 && !(gap_s < self.gap_every_s)) {
-            return Err(RecorderError::RegularGaps { every_s: self.gap_every_s, rows: self.gap_rows, interval_s });
+        if !(self.gap_every_s.is_finite() && self.gap_every_s >= 0.0)
+            || (self.gap_every_s > 0.0 && !(gap_s < self.gap_every_s))
+        {
+            return Err(RecorderError::RegularGaps {
+                every_s: self.gap_every_s,
+                rows: self.gap_rows,
+                interval_s,
+            });
         }
         Ok(())
     }
 
     /// Whether a sample instant falls inside an outage.
     pub fn in_outage(&self, t_s: f64) -> bool {
-        self.outage_starts_s.iter().any(|&s| t_s >= s && t_s < s + self.outage_duration_s)
+        self.outage_starts_s
+            .iter()
+            .any(|&s| t_s >= s && t_s < s + self.outage_duration_s)
     }
 
     /// Whether the row of sample `k` (instant `k * interval_s`) falls in a regular gap.
@@ -111,10 +127,18 @@ pub enum RecorderError {
     /// could leave their order.
     TimeJitter { value_s: f64, limit_s: f64 },
     /// The outages (each [`OUTAGE_S`], `gap_s` apart) do not fit in the log.
-    OutagesDoNotFit { count: usize, gap_s: f64, duration_s: f64 },
+    OutagesDoNotFit {
+        count: usize,
+        gap_s: f64,
+        duration_s: f64,
+    },
     /// The regular gaps' period is negative or not finite, or their rows do not leave a row
     /// between two gaps.
-    RegularGaps { every_s: f64, rows: u32, interval_s: f64 },
+    RegularGaps {
+        every_s: f64,
+        rows: u32,
+        interval_s: f64,
+    },
 }
 
 impl std::fmt::Display for RecorderError {
@@ -158,7 +182,12 @@ pub struct RecorderSettings {
 impl RecorderSettings {
     /// The recording of a log of `duration_s` with rows every `interval_s`, outage start times
     /// drawn from `seed`; checked.
-    pub fn recording(&self, seed: u64, duration_s: f64, interval_s: f64) -> Result<Recording, RecorderError> {
+    pub fn recording(
+        &self,
+        seed: u64,
+        duration_s: f64,
+        interval_s: f64,
+    ) -> Result<Recording, RecorderError> {
         let r = Recording {
             drop_fraction: self.drop_fraction,
             outage_starts_s: draw_outage_starts_s(seed, self.outages, duration_s, interval_s)?,
@@ -191,7 +220,12 @@ pub struct Recorder<'a> {
 impl<'a> Recorder<'a> {
     /// The recorder of a scenario with `seed` and rows every `interval_s`.
     pub fn new(recording: &'a Recording, seed: u64, interval_s: f64) -> Recorder<'a> {
-        Recorder { recording, rng: ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xD6E8_FEB8_6659_FD93) ^ 0x2EC0_2DE2), interval_s, row: 0 }
+        Recorder {
+            recording,
+            rng: ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xD6E8_FEB8_6659_FD93) ^ 0x2EC0_2DE2),
+            interval_s,
+            row: 0,
+        }
     }
 
     /// The row as logged (`row.time_s` is its sample instant; rows come one per instant, in
@@ -202,11 +236,17 @@ impl<'a> Recorder<'a> {
         let jitter_draw: f64 = self.rng.gen();
         let k = self.row;
         self.row += 1;
-        if drop_draw < r.drop_fraction || r.in_outage(row.time_s) || r.in_regular_gap(k, self.interval_s) {
+        if drop_draw < r.drop_fraction
+            || r.in_outage(row.time_s)
+            || r.in_regular_gap(k, self.interval_s)
+        {
             return None;
         }
         let jitter_s = r.time_jitter_s * (2.0 * jitter_draw - 1.0);
-        Some(Row { time_s: round_to_us(row.time_s + r.time_offset_s + jitter_s), ..*row })
+        Some(Row {
+            time_s: round_to_us(row.time_s + r.time_offset_s + jitter_s),
+            ..*row
+        })
     }
 }
 
@@ -219,21 +259,34 @@ pub fn recorded_rows(recording: &Recording, seed: u64, interval_s: f64, rows: &[
 /// Start times of `count` outages of [`OUTAGE_S`] in a log of `duration_s`, s, rounded to the
 /// millisecond, ascending: uniformly placed, not overlapping, at least two sample intervals apart
 /// (at least one row between two outages). Deterministic for a seed.
-pub fn draw_outage_starts_s(seed: u64, count: usize, duration_s: f64, interval_s: f64) -> Result<Vec<f64>, RecorderError> {
+pub fn draw_outage_starts_s(
+    seed: u64,
+    count: usize,
+    duration_s: f64,
+    interval_s: f64,
+) -> Result<Vec<f64>, RecorderError> {
     if count == 0 {
         return Ok(Vec::new());
     }
     let gap_s = 2.0 * interval_s;
     let free_s = duration_s - count as f64 * OUTAGE_S - (count - 1) as f64 * gap_s;
     if free_s.is_nan() || free_s < 0.0 {
-        return Err(RecorderError::OutagesDoNotFit { count, gap_s, duration_s });
+        return Err(RecorderError::OutagesDoNotFit {
+            count,
+            gap_s,
+            duration_s,
+        });
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xA24B_AED4_963E_E407) ^ 0x0007_A6E5);
     // Uniform non-overlapping placement: sorted uniform points in the free time, each then
     // pushed right by the outages (and gaps) before it.
     let mut points: Vec<f64> = (0..count).map(|_| rng.gen::<f64>() * free_s).collect();
     points.sort_by(f64::total_cmp);
-    Ok(points.iter().enumerate().map(|(i, p)| ((p + i as f64 * (OUTAGE_S + gap_s)) * 1e3).floor() / 1e3).collect())
+    Ok(points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| ((p + i as f64 * (OUTAGE_S + gap_s)) * 1e3).floor() / 1e3)
+        .collect())
 }
 
 #[cfg(test)]
@@ -241,7 +294,15 @@ mod tests {
     use super::*;
 
     fn row(t: f64) -> Row {
-        Row { time_s: t, rotation_deg: 1.0, platform_deg: 2.0, latitude_deg: 3.0, heading_deg: 4.0, roll_deg: 5.0, pitch_deg: 6.0 }
+        Row {
+            time_s: t,
+            rotation_deg: 1.0,
+            platform_deg: 2.0,
+            latitude_deg: 3.0,
+            heading_deg: 4.0,
+            roll_deg: 5.0,
+            pitch_deg: 6.0,
+        }
     }
 
     #[test]
@@ -256,13 +317,23 @@ mod tests {
         for (a, b) in out.iter().zip(&rows) {
             assert!((a.time_s - b.time_s).abs() < 1e-12);
             assert_eq!(rec.sample_time_s(a.time_s, 0.1), Some(b.time_s));
-            assert_eq!(Row { time_s: b.time_s, ..*a }, *b);
+            assert_eq!(
+                Row {
+                    time_s: b.time_s,
+                    ..*a
+                },
+                *b
+            );
         }
     }
 
     #[test]
     fn stamps_are_offset_jittered_within_bounds_and_map_back() {
-        let rec = Recording { time_offset_s: 1.7e9, time_jitter_s: 0.02, ..Recording::default() };
+        let rec = Recording {
+            time_offset_s: 1.7e9,
+            time_jitter_s: 0.02,
+            ..Recording::default()
+        };
         let rows: Vec<Row> = (0..2000).map(|k| row(k as f64 * 0.1)).collect();
         let out = recorded_rows(&rec, 1, 0.1, &rows);
         assert_eq!(out.len(), rows.len());
@@ -279,30 +350,63 @@ mod tests {
         assert!(largest > 0.015, "jitter spans its range: {largest}");
         assert!(out.windows(2).all(|w| w[1].time_s > w[0].time_s));
         assert_eq!(rec.sample_time_s(1.7e9 + 0.05, 0.1), None);
-        assert_eq!(round_to_us(1_700_000_123.0 + 0.02).to_string(), "1700000123.02");
+        assert_eq!(
+            round_to_us(1_700_000_123.0 + 0.02).to_string(),
+            "1700000123.02"
+        );
     }
 
     #[test]
     fn regular_gaps_lose_their_rows_at_their_cadence_and_nothing_else() {
         // 4 rows every 60 s at 1 s, and 10 rows every 120 s at 0.5 s (5 s of rows).
         for (every_s, rows_lost, interval_s) in [(60.0, 4u32, 1.0), (120.0, 10, 0.5)] {
-            let rec = Recording { gap_every_s: every_s, gap_rows: rows_lost, ..Recording::default() };
+            let rec = Recording {
+                gap_every_s: every_s,
+                gap_rows: rows_lost,
+                ..Recording::default()
+            };
             assert_eq!(rec.check(interval_s), Ok(()));
             let n = (1000.0 / interval_s) as usize;
             let rows: Vec<Row> = (0..n).map(|k| row(k as f64 * interval_s)).collect();
-            let kept: Vec<f64> = recorded_rows(&rec, 3, interval_s, &rows).iter().map(|r| r.time_s).collect();
-            let lost: Vec<f64> = rows.iter().map(|r| r.time_s).filter(|t| !kept.contains(t)).collect();
+            let kept: Vec<f64> = recorded_rows(&rec, 3, interval_s, &rows)
+                .iter()
+                .map(|r| r.time_s)
+                .collect();
+            let lost: Vec<f64> = rows
+                .iter()
+                .map(|r| r.time_s)
+                .filter(|t| !kept.contains(t))
+                .collect();
             let gaps = (1000.0 / every_s).ceil() as usize - 1;
             assert_eq!(lost.len(), gaps * rows_lost as usize, "{every_s} s");
             for (g, run) in lost.chunks(rows_lost as usize).enumerate() {
                 let start = (g + 1) as f64 * every_s;
-                let expected: Vec<f64> = (0..rows_lost).map(|j| start + f64::from(j) * interval_s).collect();
+                let expected: Vec<f64> = (0..rows_lost)
+                    .map(|j| start + f64::from(j) * interval_s)
+                    .collect();
                 assert_eq!(run, &expected[..], "gap {g} of every {every_s} s");
             }
         }
-        let bad = Recording { gap_every_s: 10.0, gap_rows: 10, ..Recording::default() };
-        assert_eq!(bad.check(1.0), Err(RecorderError::RegularGaps { every_s: 10.0, rows: 10, interval_s: 1.0 }));
-        assert!(Recording { gap_every_s: -1.0, gap_rows: 1, ..Recording::default() }.check(1.0).is_err());
+        let bad = Recording {
+            gap_every_s: 10.0,
+            gap_rows: 10,
+            ..Recording::default()
+        };
+        assert_eq!(
+            bad.check(1.0),
+            Err(RecorderError::RegularGaps {
+                every_s: 10.0,
+                rows: 10,
+                interval_s: 1.0
+            })
+        );
+        assert!(Recording {
+            gap_every_s: -1.0,
+            gap_rows: 1,
+            ..Recording::default()
+        }
+        .check(1.0)
+        .is_err());
     }
 
     #[test]
@@ -311,36 +415,82 @@ mod tests {
             let s = draw_outage_starts_s(seed, 5, 1000.0, 1.0).unwrap();
             assert_eq!(s.len(), 5);
             assert!(s[0] >= 0.0 && s[4] + OUTAGE_S <= 1000.0, "{s:?}");
-            assert!(s.windows(2).all(|w| w[1] - w[0] >= OUTAGE_S + 2.0 - 1e-3), "{s:?}");
+            assert!(
+                s.windows(2).all(|w| w[1] - w[0] >= OUTAGE_S + 2.0 - 1e-3),
+                "{s:?}"
+            );
         }
-        assert_eq!(draw_outage_starts_s(3, 2, 500.0, 1.0), draw_outage_starts_s(3, 2, 500.0, 1.0));
-        assert_ne!(draw_outage_starts_s(3, 2, 500.0, 1.0), draw_outage_starts_s(4, 2, 500.0, 1.0));
+        assert_eq!(
+            draw_outage_starts_s(3, 2, 500.0, 1.0),
+            draw_outage_starts_s(3, 2, 500.0, 1.0)
+        );
+        assert_ne!(
+            draw_outage_starts_s(3, 2, 500.0, 1.0),
+            draw_outage_starts_s(4, 2, 500.0, 1.0)
+        );
         assert_eq!(
             draw_outage_starts_s(1, 3, 180.0, 1.0),
-            Err(RecorderError::OutagesDoNotFit { count: 3, gap_s: 2.0, duration_s: 180.0 })
+            Err(RecorderError::OutagesDoNotFit {
+                count: 3,
+                gap_s: 2.0,
+                duration_s: 180.0
+            })
         );
         assert_eq!(draw_outage_starts_s(1, 0, 10.0, 1.0), Ok(vec![]));
     }
 
     #[test]
     fn check_rejects_bad_settings() {
-        let ok = Recording { drop_fraction: 0.05, time_offset_s: -1.7e9, time_jitter_s: 0.4, ..Recording::default() };
+        let ok = Recording {
+            drop_fraction: 0.05,
+            time_offset_s: -1.7e9,
+            time_jitter_s: 0.4,
+            ..Recording::default()
+        };
         assert_eq!(ok.check(1.0), Ok(()));
         for bad in [
-            Recording { drop_fraction: 1.0, ..ok.clone() },
-            Recording { drop_fraction: f64::NAN, ..ok.clone() },
-            Recording { time_offset_s: 5e9, ..ok.clone() },
-            Recording { time_jitter_s: 0.5, ..ok.clone() },
-            Recording { time_jitter_s: -0.1, ..ok.clone() },
+            Recording {
+                drop_fraction: 1.0,
+                ..ok.clone()
+            },
+            Recording {
+                drop_fraction: f64::NAN,
+                ..ok.clone()
+            },
+            Recording {
+                time_offset_s: 5e9,
+                ..ok.clone()
+            },
+            Recording {
+                time_jitter_s: 0.5,
+                ..ok.clone()
+            },
+            Recording {
+                time_jitter_s: -0.1,
+                ..ok.clone()
+            },
         ] {
             assert!(bad.check(1.0).is_err(), "{bad:?}");
         }
-        assert_eq!(Recording { drop_fraction: 1.0, ..ok.clone() }.check(1.0), Err(RecorderError::DropFraction(1.0)));
         assert_eq!(
-            Recording { time_jitter_s: 0.5, ..ok.clone() }.check(1.0),
-            Err(RecorderError::TimeJitter { value_s: 0.5, limit_s: 0.5 })
+            Recording {
+                drop_fraction: 1.0,
+                ..ok.clone()
+            }
+            .check(1.0),
+            Err(RecorderError::DropFraction(1.0))
         );
-        {
-        }
+        assert_eq!(
+            Recording {
+                time_jitter_s: 0.5,
+                ..ok.clone()
+            }
+            .check(1.0),
+            Err(RecorderError::TimeJitter {
+                value_s: 0.5,
+                limit_s: 0.5
+            })
+        );
+        {}
     }
 }

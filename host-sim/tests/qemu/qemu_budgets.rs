@@ -109,8 +109,22 @@ fn step_cost_is_within_5000_instructions_and_the_stack_is_measured(board: Board)
                 &dir,
                 "lossy.csv",
                 &[
-                    "--scenario", "sea", "--duration", "6000", "--scheme", "reciprocating", "--gap-every", "120", "--gap-rows", "10",
-                    "--drop-fraction", "0.02", "--time-offset", "1.7e9", "--time-jitter", "0.02",
+                    "--scenario",
+                    "sea",
+                    "--duration",
+                    "6000",
+                    "--scheme",
+                    "reciprocating",
+                    "--gap-every",
+                    "120",
+                    "--gap-rows",
+                    "10",
+                    "--drop-fraction",
+                    "0.02",
+                    "--time-offset",
+                    "1.7e9",
+                    "--time-jitter",
+                    "0.02",
                 ],
             ),
         ),
@@ -128,9 +142,16 @@ fn step_cost_is_within_5000_instructions_and_the_stack_is_measured(board: Board)
         ]);
         println!("{} ({name}):\n{out}", board.name());
         let (boot, _, _) = stack_peaks(&out);
-        assert!(boot <= START_UP_STACK_BUDGET_BYTES, "{}: start-up stack {boot} bytes", board.name());
+        assert!(
+            boot <= START_UP_STACK_BUDGET_BYTES,
+            "{}: start-up stack {boot} bytes",
+            board.name()
+        );
         let (max, mean) = step_cost(&out);
-        println!("{}: {name}: step max {max} instructions, mean {mean}", board.name());
+        println!(
+            "{}: {name}: step max {max} instructions, mean {mean}",
+            board.name()
+        );
         assert!(
             max <= STEP_BUDGET_INSTRUCTIONS,
             "{}: {name}: estimator step: max {max} instructions (mean {mean}) > {STEP_BUDGET_INSTRUCTIONS}",

@@ -21,25 +21,46 @@ use rayon::prelude::*;
 
 const PERIOD_S: f64 = 480.0;
 
-fn params(kind: ScenarioKind, seed: u64, scheme: RotationScheme, period_s: f64, duration_s: f64, recorder: RecorderSettings) -> ScenarioParams {
+fn params(
+    kind: ScenarioKind,
+    seed: u64,
+    scheme: RotationScheme,
+    period_s: f64,
+    duration_s: f64,
+    recorder: RecorderSettings,
+) -> ScenarioParams {
     let mut p = ScenarioParams::new(kind, seed);
     p.duration_s = duration_s;
     p.scheme = scheme;
     p.rotation_period_s = period_s;
-    p.recording = recorder.recording(seed, p.duration_s, p.sample_interval_s).unwrap();
+    p.recording = recorder
+        .recording(seed, p.duration_s, p.sample_interval_s)
+        .unwrap();
     p
 }
 
 /// Worst absolute error over x1..x4 at point `k`, arcsec (infinite without an estimate).
 fn worst(a: &Accuracy, k: usize) -> f64 {
-    a.points[k].error_arcsec.map_or(f64::INFINITY, |e| e.iter().fold(0.0, |m, v| m.max(v.abs())))
+    a.points[k]
+        .error_arcsec
+        .map_or(f64::INFINITY, |e| e.iter().fold(0.0, |m, v| m.max(v.abs())))
 }
 
 #[test]
 fn regular_gaps_and_random_loss_every_scheme_paper_and_sea() {
     let patterns = [
-        RecorderSettings { gap_every_s: 120.0, gap_rows: 10, drop_fraction: 0.01, ..RecorderSettings::default() },
-        RecorderSettings { gap_every_s: 60.0, gap_rows: 4, drop_fraction: 0.03, ..RecorderSettings::default() },
+        RecorderSettings {
+            gap_every_s: 120.0,
+            gap_rows: 10,
+            drop_fraction: 0.01,
+            ..RecorderSettings::default()
+        },
+        RecorderSettings {
+            gap_every_s: 60.0,
+            gap_rows: 4,
+            drop_fraction: 0.03,
+            ..RecorderSettings::default()
+        },
     ];
     let mut cases = Vec::new();
     for kind in [ScenarioKind::Paper, ScenarioKind::Sea] {
@@ -55,13 +76,21 @@ fn regular_gaps_and_random_loss_every_scheme_paper_and_sea() {
         .map(|&(kind, scheme, n, rec)| {
             let p = params(kind, 1 + n as u64, scheme, PERIOD_S, 45_001.0, rec);
             let ours = track_run(&p, Config::default(), &times).unwrap();
-            let traditional = track_run(&p, Config::with_method(Method::Traditional), &times).unwrap();
+            let traditional =
+                track_run(&p, Config::with_method(Method::Traditional), &times).unwrap();
             (kind, scheme, rec, ours, traditional)
         })
         .collect();
     let mut failures = Vec::new();
     for (kind, scheme, rec, ours, trad) in &results {
-        let name = format!("{} {} {} rows every {} s + {} %", kind.name(), scheme.name(), rec.gap_rows, rec.gap_every_s, 100.0 * rec.drop_fraction);
+        let name = format!(
+            "{} {} {} rows every {} s + {} %",
+            kind.name(),
+            scheme.name(),
+            rec.gap_rows,
+            rec.gap_every_s,
+            100.0 * rec.drop_fraction
+        );
         let (at20, at45) = (worst(ours, 1), worst(ours, 2));
         let (trad20, trad45) = (worst(trad, 1), worst(trad, 2));
         let within_3_sigma = ours.points[2].within_sigmas(3.0);
@@ -80,7 +109,10 @@ fn regular_gaps_and_random_loss_every_scheme_paper_and_sea() {
             failures.push(format!("{name}: worse than the traditional baseline ({at20:.2} / {at45:.2} vs {trad20:.2} / {trad45:.2})"));
         }
         if within_3_sigma != 4 {
-            failures.push(format!("{name}: errors {:?} beyond 3 x 1-sigma {:?}", ours.points[2].error_arcsec, ours.points[2].sigma_arcsec));
+            failures.push(format!(
+                "{name}: errors {:?} beyond 3 x 1-sigma {:?}",
+                ours.points[2].error_arcsec, ours.points[2].sigma_arcsec
+            ));
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
@@ -101,9 +133,20 @@ fn first_estimates(kind: ScenarioKind, periods: &[f64]) -> Vec<(RotationScheme, 
         .par_iter()
         .map(|&(scheme, period, seed)| {
             let at = 1.25 * period;
-            let p = params(kind, seed, scheme, period, at + 2.0, RecorderSettings::default());
+            let p = params(
+                kind,
+                seed,
+                scheme,
+                period,
+                at + 2.0,
+                RecorderSettings::default(),
+            );
             let w = worst(&track_run(&p, Config::default(), &[at]).unwrap(), 0);
-            println!("{:6} {:14} {period:4} s seed {seed}: worst {w:.2} arcsec at {at:.0} s", kind.name(), scheme.name());
+            println!(
+                "{:6} {:14} {period:4} s seed {seed}: worst {w:.2} arcsec at {at:.0} s",
+                kind.name(),
+                scheme.name()
+            );
             (scheme, period, seed, w)
         })
         .collect()
@@ -117,9 +160,17 @@ fn the_first_estimate_comes_within_a_period_and_a_quarter() {
     let mut failures = Vec::new();
     for kind in [ScenarioKind::Paper, ScenarioKind::Sea] {
         for (scheme, period, seed, w) in first_estimates(kind, &[360.0, 480.0, 720.0]) {
-            let bound = if kind == ScenarioKind::Sea && period < 480.0 { f64::INFINITY } else { 10.0 };
+            let bound = if kind == ScenarioKind::Sea && period < 480.0 {
+                f64::INFINITY
+            } else {
+                10.0
+            };
             if !(w.is_finite() && w < bound) {
-                failures.push(format!("{} {} {period} s seed {seed}: {w:.2} arcsec at 1.25 periods", kind.name(), scheme.name()));
+                failures.push(format!(
+                    "{} {} {period} s seed {seed}: {w:.2} arcsec at 1.25 periods",
+                    kind.name(),
+                    scheme.name()
+                ));
             }
         }
     }
@@ -132,6 +183,9 @@ fn the_first_estimate_comes_within_a_period_and_a_quarter() {
 #[test]
 #[ignore = "not met: sea sway leaves 4-19 arcsec at 1.25 periods of 360 s"]
 fn the_first_estimate_is_within_10_arcsec_at_a_period_and_a_quarter_of_360_s_at_sea() {
-    let failures: Vec<_> = first_estimates(ScenarioKind::Sea, &[360.0]).into_iter().filter(|r| !(r.3 < 10.0)).collect();
+    let failures: Vec<_> = first_estimates(ScenarioKind::Sea, &[360.0])
+        .into_iter()
+        .filter(|r| !(r.3 < 10.0))
+        .collect();
     assert!(failures.is_empty(), "{failures:#?}");
 }
