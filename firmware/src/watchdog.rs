@@ -181,6 +181,9 @@ mod tests {
         // Past the end: the blocks before the bad one are erased, then the error stops it.
         log.borrow_mut().clear();
         assert_eq!(flash.erase(3072, 6144), Err(NorFlashErrorKind::NotAligned));
-        assert_eq!(*log.borrow(), [Event::Feed, Event::Erase(3072, 4096), Event::Feed]);
+        assert_eq!(
+            *log.borrow(),
+            [Event::Feed, Event::Erase(3072, 4096), Event::Feed]
+        );
     }
 }
