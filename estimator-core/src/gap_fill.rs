@@ -242,7 +242,7 @@ impl GapFiller {
     /// squared prediction error. Every [`FILL_ERROR_EVERY`]th index only: the mean square of a sea
     /// state needs no more, and the step's cost stays low.
     fn measure_fill_error(&mut self, s: &GridSample) {
-        if s.index % FILL_ERROR_EVERY != 0 {
+        if !s.index.is_multiple_of(FILL_ERROR_EVERY) {
             return;
         }
         let mut roll = 0.0;
