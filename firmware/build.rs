@@ -32,7 +32,11 @@ fn setting(var: &str, default: u32, range: std::ops::RangeInclusive<u32>, what: 
     match parsed {
         Some(s) if range.contains(&s) => s,
         _ => {
-            eprintln!("{var}={value:?}: {what} must be whole {} to {}", range.start(), range.end());
+            eprintln!(
+                "{var}={value:?}: {what} must be whole {} to {}",
+                range.start(),
+                range.end()
+            );
             std::process::exit(1);
         }
     }
@@ -50,19 +54,27 @@ fn main() {
         "/// Seconds of sample time between checkpoints (`{INTERVAL_VAR}` at build time, default {INTERVAL_DEFAULT_S}).\n\
          pub const CHECKPOINT_INTERVAL_S: u32 = {interval_s};\n"
     );
-    std::fs::write(out.join("checkpoint_interval.rs"), interval).expect("write checkpoint_interval.rs");
+    std::fs::write(out.join("checkpoint_interval.rs"), interval)
+        .expect("write checkpoint_interval.rs");
     println!("cargo:rerun-if-changed=build.rs");
     // On the host (`cargo test --workspace`, host-sim) only the library is used: nothing to link.
     if std::env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("none") {
         return;
     }
-    let hse_hz = setting(HSE_VAR, HSE_DEFAULT_HZ, HSE_RANGE_HZ, "the HSE crystal frequency, Hz,");
+    let hse_hz = setting(
+        HSE_VAR,
+        HSE_DEFAULT_HZ,
+        HSE_RANGE_HZ,
+        "the HSE crystal frequency, Hz,",
+    );
     let clock = format!(
         "/// The HSE crystal's frequency, Hz (`{HSE_VAR}` at build time, default {HSE_DEFAULT_HZ}).\n\
          pub const HSE_HZ: u32 = {hse_hz};\n"
     );
     std::fs::write(out.join("board_clock.rs"), clock).expect("write board_clock.rs");
-    let manifest = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
+    let manifest = PathBuf::from(
+        std::env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"),
+    );
     let boards = [
         (
             "CARGO_FEATURE_BOARD_MPS2_AN386",
@@ -87,7 +99,8 @@ fn main() {
     std::fs::copy(memory_x, out.join("board-memory.x")).expect("copy the board's memory.x");
     // The same include also when the linker does not run in the workspace root.
     let root_memory_x = manifest.join("..").join("memory.x");
-    std::fs::copy(&root_memory_x, out.join("memory.x")).expect("copy memory.x from the repository root");
+    std::fs::copy(&root_memory_x, out.join("memory.x"))
+        .expect("copy memory.x from the repository root");
     println!("cargo:rerun-if-changed={}", root_memory_x.display());
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed={}", memory_x.display());

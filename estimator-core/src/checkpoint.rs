@@ -78,9 +78,9 @@ pub(crate) mod wire;
 
 #[cfg(doc)]
 use crate::config::{Config, Method};
+pub use crate::estimator::checkpoint::CHECKPOINT_LEN;
 #[cfg(doc)]
 use crate::estimator::Estimator;
-pub use crate::estimator::checkpoint::CHECKPOINT_LEN;
 use crate::Real;
 use wire::{Reader, Writer};
 
@@ -124,7 +124,8 @@ pub(crate) trait Stored: Sized {
 }
 
 /// The CRC-32/ISO-HDLC without a table (see [`crc32`]).
-static CRC32: crc::Crc<u32, crc::NoTable> = crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+static CRC32: crc::Crc<u32, crc::NoTable> =
+    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
 
 /// The CRC-32 the image ends with, of `bytes`: IEEE 802.3, reflected, init and final xor
 /// `0xFFFFFFFF` (zlib's `crc32`, the catalogue's CRC-32/ISO-HDLC); `crc32(b"123456789") ==

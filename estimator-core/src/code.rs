@@ -22,8 +22,14 @@ impl core::fmt::Display for UnknownCode {
 impl core::error::Error for UnknownCode {}
 
 /// The variant of code `code` from an `ALL` listed in code order (which each enum's tests check).
-pub(crate) fn from_code<T: Copy, const N: usize>(all: &[T; N], what: &'static str, code: u8) -> Result<T, UnknownCode> {
-    all.get(usize::from(code)).copied().ok_or(UnknownCode { what, code })
+pub(crate) fn from_code<T: Copy, const N: usize>(
+    all: &[T; N],
+    what: &'static str,
+    code: u8,
+) -> Result<T, UnknownCode> {
+    all.get(usize::from(code))
+        .copied()
+        .ok_or(UnknownCode { what, code })
 }
 
 #[cfg(test)]
@@ -34,7 +40,10 @@ mod tests {
     /// at its code's place fails here.
     #[test]
     fn every_all_is_in_code_order_and_try_from_inverts_it() {
-        fn check<T: Copy + PartialEq + core::fmt::Debug + TryFrom<u8>, const N: usize>(all: [T; N], code: impl Fn(T) -> u8) {
+        fn check<T: Copy + PartialEq + core::fmt::Debug + TryFrom<u8>, const N: usize>(
+            all: [T; N],
+            code: impl Fn(T) -> u8,
+        ) {
             for (i, v) in all.iter().enumerate() {
                 assert_eq!(usize::from(code(*v)), i, "{v:?}");
                 assert!(T::try_from(i as u8).ok() == Some(*v), "{v:?}");
@@ -46,7 +55,14 @@ mod tests {
         check(Field::ALL, |f| f as u8);
         check(RejectReason::ALL, |r| r as u8);
         check(Status::ALL, |s| s.code());
-        for (i, f) in [RotationFault::Stopped, RotationFault::Reversed, RotationFault::RateMismatch].into_iter().enumerate() {
+        for (i, f) in [
+            RotationFault::Stopped,
+            RotationFault::Reversed,
+            RotationFault::RateMismatch,
+        ]
+        .into_iter()
+        .enumerate()
+        {
             assert_eq!(Status::RotationFault(f).code(), 1 + i as u8);
         }
     }

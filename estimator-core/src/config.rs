@@ -135,7 +135,11 @@ pub enum ConfigError {
     /// A pinned `sample_interval_s` outside [`SAMPLE_INTERVAL_RANGE_S`].
     SampleInterval { value_s: f64 },
     /// A noise, tolerance, gate or filling limit out of its bound.
-    Parameter { name: &'static str, value: f64, bound: Bound },
+    Parameter {
+        name: &'static str,
+        value: f64,
+        bound: Bound,
+    },
     /// The method is not in this build (the paper's method needs the `paper-method` feature).
     MethodUnavailable,
 }
@@ -168,11 +172,24 @@ impl PartialEq for ConfigError {
     fn eq(&self, other: &Self) -> bool {
         use ConfigError::*;
         match (self, other) {
-            (RotationPeriod { value_s: a }, RotationPeriod { value_s: b }) => a.to_bits() == b.to_bits(),
-            (SampleInterval { value_s: a }, SampleInterval { value_s: b }) => a.to_bits() == b.to_bits(),
-            (Parameter { name: a, value: b, bound: c }, Parameter { name: d, value: e, bound: f }) => {
-                a == d && b.to_bits() == e.to_bits() && c == f
+            (RotationPeriod { value_s: a }, RotationPeriod { value_s: b }) => {
+                a.to_bits() == b.to_bits()
             }
+            (SampleInterval { value_s: a }, SampleInterval { value_s: b }) => {
+                a.to_bits() == b.to_bits()
+            }
+            (
+                Parameter {
+                    name: a,
+                    value: b,
+                    bound: c,
+                },
+                Parameter {
+                    name: d,
+                    value: e,
+                    bound: f,
+                },
+            ) => a == d && b.to_bits() == e.to_bits() && c == f,
             (MethodUnavailable, MethodUnavailable) => true,
             _ => false,
         }
@@ -189,15 +206,26 @@ impl core::fmt::Display for ConfigError {
             }
             ConfigError::SampleInterval { value_s } => {
                 let (lo, hi) = SAMPLE_INTERVAL_RANGE_S;
-                write!(f, "sample_interval_s = {value_s} must be from {lo} to {hi} s")
+                write!(
+                    f,
+                    "sample_interval_s = {value_s} must be from {lo} to {hi} s"
+                )
             }
             ConfigError::Parameter { name, value, bound } => match bound {
                 Bound::Positive => write!(f, "{name} = {value} must be positive and finite"),
-                Bound::NonNegative => write!(f, "{name} = {value} must be zero or positive, and finite"),
+                Bound::NonNegative => {
+                    write!(f, "{name} = {value} must be zero or positive, and finite")
+                }
                 Bound::AtMost(limit) => write!(f, "{name} = {value} must be at most {limit}"),
-                Bound::SquareUnderflows => write!(f, "{name} = {value} is too small: its square underflows to 0"),
+                Bound::SquareUnderflows => write!(
+                    f,
+                    "{name} = {value} is too small: its square underflows to 0"
+                ),
             },
-            ConfigError::MethodUnavailable => write!(f, "method unavailable: the paper's method needs the `paper-method` feature"),
+            ConfigError::MethodUnavailable => write!(
+                f,
+                "method unavailable: the paper's method needs the `paper-method` feature"
+            ),
         }
     }
 }
@@ -207,25 +235,42 @@ impl core::error::Error for ConfigError {}
 impl Config {
     /// The default configuration with another method.
     pub fn with_method(method: Method) -> Config {
-        Config { method, ..Config::default() }
+        Config {
+            method,
+            ..Config::default()
+        }
     }
 
     /// Checks the configuration against a ring capacity; the error names the first parameter
     /// out of bounds.
     pub fn check(&self, capacity: usize) -> Result<(), ConfigError> {
         use Bound::*;
-        let fail = |name: &'static str, value: Real, bound: Bound| Err(ConfigError::Parameter { name, value: value as f64, bound });
+        let fail = |name: &'static str, value: Real, bound: Bound| {
+            Err(ConfigError::Parameter {
+                name,
+                value: value as f64,
+                bound,
+            })
+        };
         if self.method == Method::Paper && !cfg!(feature = "paper-method") {
             return Err(ConfigError::MethodUnavailable);
         }
         let within = |v: f64, (lo, hi): (f64, f64)| v >= lo && v <= hi;
         if capacity < 2 {
-            return Err(ConfigError::RotationPeriod { value_s: capacity as f64 });
+            return Err(ConfigError::RotationPeriod {
+                value_s: capacity as f64,
+            });
         }
-        if let Some(t) = self.rotation_period_s.filter(|t| !within(*t, ROTATION_PERIOD_RANGE_S)) {
+        if let Some(t) = self
+            .rotation_period_s
+            .filter(|t| !within(*t, ROTATION_PERIOD_RANGE_S))
+        {
             return Err(ConfigError::RotationPeriod { value_s: t });
         }
-        if let Some(d) = self.sample_interval_s.filter(|d| !within(*d, SAMPLE_INTERVAL_RANGE_S)) {
+        if let Some(d) = self
+            .sample_interval_s
+            .filter(|d| !within(*d, SAMPLE_INTERVAL_RANGE_S))
+        {
             return Err(ConfigError::SampleInterval { value_s: d });
         }
         let positive = [
@@ -237,14 +282,20 @@ impl Config {
         ];
         let non_negative = [
             ("drift_rad_per_sqrt_s", self.drift_rad_per_sqrt_s),
-            ("traditional_drift_rad_per_sqrt_s", self.traditional_drift_rad_per_sqrt_s),
+            (
+                "traditional_drift_rad_per_sqrt_s",
+                self.traditional_drift_rad_per_sqrt_s,
+            ),
             ("sway_gate_rad", self.sway_gate_rad),
             ("change_detection_step_rad", self.change_detection_step_rad),
         ];
         if let Some((name, v)) = positive.iter().find(|(_, v)| !(*v > 0.0 && v.is_finite())) {
             return fail(name, *v, Positive);
         }
-        if let Some((name, v)) = non_negative.iter().find(|(_, v)| !(*v >= 0.0 && v.is_finite())) {
+        if let Some((name, v)) = non_negative
+            .iter()
+            .find(|(_, v)| !(*v >= 0.0 && v.is_finite()))
+        {
             return fail(name, *v, NonNegative);
         }
         // Every sigma, and the random walk of one step, at most 1 rad: no installation error or
@@ -276,7 +327,11 @@ impl Config {
         // defaults' are 141 and 0.13).
         let widest = 1000.0 * self.measurement_sigma_rad.min(self.traditional_sigma_rad);
         if self.prior_sigma_rad > widest {
-            return fail("prior_sigma_rad", self.prior_sigma_rad, AtMost(widest as f64));
+            return fail(
+                "prior_sigma_rad",
+                self.prior_sigma_rad,
+                AtMost(widest as f64),
+            );
         }
         // A filled sample is interpolated from its neighbours, which a longer gap does not have;
         // at most 50 % off the period, or the pattern is not the one detected.
@@ -289,10 +344,18 @@ impl Config {
         }
         // A step of a radian is no installation error; and its square must not overflow.
         if !(self.change_detection_step_rad <= 1.0) {
-            return fail("change_detection_step_rad", self.change_detection_step_rad, AtMost(1.0));
+            return fail(
+                "change_detection_step_rad",
+                self.change_detection_step_rad,
+                AtMost(1.0),
+            );
         }
         if !(self.rotation_period_tolerance <= 0.5) {
-            return fail("rotation_period_tolerance", self.rotation_period_tolerance, AtMost(0.5));
+            return fail(
+                "rotation_period_tolerance",
+                self.rotation_period_tolerance,
+                AtMost(0.5),
+            );
         }
         Ok(())
     }

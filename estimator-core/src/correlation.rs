@@ -120,7 +120,10 @@ pub struct ReferenceFilter {
 
 impl ReferenceFilter {
     /// Not started.
-    pub const NEW: ReferenceFilter = ReferenceFilter { stages: [[0.0; 4]; 3], started: false };
+    pub const NEW: ReferenceFilter = ReferenceFilter {
+        stages: [[0.0; 4]; 3],
+        started: false,
+    };
 
     /// The stage gain for a sample interval: `1 - exp(-dt / tau)`.
     pub fn alpha(interval_s: f64) -> Real {
@@ -130,7 +133,12 @@ impl ReferenceFilter {
     /// Filters one sample's references with stage gain `alpha`; the first sample starts every
     /// stage at its value.
     pub fn filter(&mut self, angles: &Angles, alpha: Real) -> [Real; 4] {
-        let c = [angles.sin_rho_s, angles.cos_rho_s, angles.sin_rho, angles.cos_rho];
+        let c = [
+            angles.sin_rho_s,
+            angles.cos_rho_s,
+            angles.sin_rho,
+            angles.cos_rho,
+        ];
         if !self.started {
             self.stages = [c; 3];
             self.started = true;
@@ -173,9 +181,18 @@ const MAX_ATTITUDE_RAD: Real = 1.999;
 
 impl QuantizedSample {
     /// Rounds a sample's roll, pitch, trigonometry and references to fixed point.
-    pub fn new(roll_rad: Real, pitch_rad: Real, angles: &Angles, reference: &[Real; 4]) -> QuantizedSample {
+    pub fn new(
+        roll_rad: Real,
+        pitch_rad: Real,
+        angles: &Angles,
+        reference: &[Real; 4],
+    ) -> QuantizedSample {
         let att = |v: Real| {
-            let v = if v.is_nan() { 0.0 } else { v.clamp(-MAX_ATTITUDE_RAD, MAX_ATTITUDE_RAD) };
+            let v = if v.is_nan() {
+                0.0
+            } else {
+                v.clamp(-MAX_ATTITUDE_RAD, MAX_ATTITUDE_RAD)
+            };
             round_to_i32(v * ATTITUDE_COUNTS as Real)
         };
         let trig = |v: Real| {
@@ -197,7 +214,12 @@ impl QuantizedSample {
 
     /// The products summed by the window, in the order of [`CorrelationSums::sums`] (see there).
     pub fn terms(&self) -> [i64; SUMS] {
-        let (sr, cr, ss, cs) = (i32::from(self.sin_rho), i32::from(self.cos_rho), i32::from(self.sin_rho_s), i32::from(self.cos_rho_s));
+        let (sr, cr, ss, cs) = (
+            i32::from(self.sin_rho),
+            i32::from(self.cos_rho),
+            i32::from(self.sin_rho_s),
+            i32::from(self.cos_rho_s),
+        );
         let (sl, cl) = (i32::from(self.sin_lat), i32::from(self.cos_lat));
         let [c0, c1, c2, c3] = self.reference.map(i32::from);
         let (r, p) = (i64::from(self.roll), i64::from(self.pitch));
@@ -261,7 +283,11 @@ pub struct CorrelationSums {
 
 impl CorrelationSums {
     /// Nothing summed.
-    pub const ZERO: CorrelationSums = CorrelationSums { count: 0, sums: [0; SUMS], fill_weight: 0 };
+    pub const ZERO: CorrelationSums = CorrelationSums {
+        count: 0,
+        sums: [0; SUMS],
+        fill_weight: 0,
+    };
 }
 
 /// An exact sum in the step's float type: its high and low 32 bits converted apart (one FPU
@@ -305,7 +331,10 @@ impl CorrelationSums {
     pub fn measurement(&self) -> Option<Measurement> {
         let pitch = self.measurement_of(PITCH_PAIR)?;
         let roll = self.measurement_of(ROLL_PAIR)?;
-        Some(Measurement { z: [pitch.z[0], pitch.z[1], roll.z[2], roll.z[3]], rows: [pitch.rows[0], pitch.rows[1], roll.rows[2], roll.rows[3]] })
+        Some(Measurement {
+            z: [pitch.z[0], pitch.z[1], roll.z[2], roll.z[3]],
+            rows: [pitch.rows[0], pitch.rows[1], roll.rows[2], roll.rows[3]],
+        })
     }
 
     /// The measurement of one channel pair only ([`PITCH_PAIR`] or [`ROLL_PAIR`]; the other
@@ -325,7 +354,10 @@ impl CorrelationSums {
         let at = a / TRIG_COUNTS as Real;
         let m = |i: usize, scale: Real| to_real(self.sums[i]) * scale;
         let cov = |mean_product: Real, a: Real, b: Real| mean_product - a * b;
-        let mut out = Measurement { z: [0.0; 4], rows: [[0.0; 4]; 4] };
+        let mut out = Measurement {
+            z: [0.0; 4],
+            rows: [[0.0; 4]; 4],
+        };
         if pair == PITCH_PAIR {
             let (c0, c1, ss, cs, pitch) = (m(0, t), m(1, t), m(4, t), m(5, t), m(7, a));
             out.z[0] = cov(m(8, at), pitch, c0);
@@ -337,8 +369,18 @@ impl CorrelationSums {
             let h = [m(16, tt), m(17, tt), m(18, tt), m(19, tt)];
             out.z[2] = cov(m(10, at), roll, c2);
             out.z[3] = cov(m(11, at), roll, c3);
-            out.rows[2] = [-cov(m(20, ttt), c2, h[0]), -cov(m(21, ttt), c2, h[1]), cov(m(22, ttt), c2, h[2]), -cov(m(23, ttt), c2, h[3])];
-            out.rows[3] = [-cov(m(24, ttt), c3, h[0]), -cov(m(25, ttt), c3, h[1]), cov(m(26, ttt), c3, h[2]), -cov(m(27, ttt), c3, h[3])];
+            out.rows[2] = [
+                -cov(m(20, ttt), c2, h[0]),
+                -cov(m(21, ttt), c2, h[1]),
+                cov(m(22, ttt), c2, h[2]),
+                -cov(m(23, ttt), c2, h[3]),
+            ];
+            out.rows[3] = [
+                -cov(m(24, ttt), c3, h[0]),
+                -cov(m(25, ttt), c3, h[1]),
+                cov(m(26, ttt), c3, h[2]),
+                -cov(m(27, ttt), c3, h[3]),
+            ];
         }
         Some(out)
     }
@@ -355,7 +397,12 @@ mod tests {
 
     /// A sample whose references are the unfiltered sines and cosines.
     fn quantized(roll: Real, pitch: Real, a: &Angles) -> QuantizedSample {
-        QuantizedSample::new(roll, pitch, a, &[a.sin_rho_s, a.cos_rho_s, a.sin_rho, a.cos_rho])
+        QuantizedSample::new(
+            roll,
+            pitch,
+            a,
+            &[a.sin_rho_s, a.cos_rho_s, a.sin_rho, a.cos_rho],
+        )
     }
 
     #[test]
@@ -377,7 +424,12 @@ mod tests {
         ];
         for i in 0..4 {
             for j in 0..4 {
-                assert!((rows[i][j] - expected[i][j]).abs() < 2e-4, "row {i} col {j}: {} vs {}", rows[i][j], expected[i][j]);
+                assert!(
+                    (rows[i][j] - expected[i][j]).abs() < 2e-4,
+                    "row {i} col {j}: {} vs {}",
+                    rows[i][j],
+                    expected[i][j]
+                );
             }
         }
     }
@@ -386,7 +438,13 @@ mod tests {
     fn subtracting_every_sample_added_returns_exactly_to_zero() {
         let mut sums = CorrelationSums::default();
         let qs: std::vec::Vec<QuantizedSample> = (0..300)
-            .map(|k| quantized(0.05 * (k as Real).sin(), -0.02, &angles(k as f64 * 0.7, 0.1, 0.5)))
+            .map(|k| {
+                quantized(
+                    0.05 * (k as Real).sin(),
+                    -0.02,
+                    &angles(k as f64 * 0.7, 0.1, 0.5),
+                )
+            })
             .collect();
         for q in &qs {
             sums.add(q, 1);
@@ -403,6 +461,8 @@ mod tests {
         let heel = (3.0f64).to_radians() as Real;
         let mut sums = CorrelationSums::default();
         for k in 0..480 {
+            // The positions to four decimals, as an encoder reads them (not the exact constants).
+            #[allow(clippy::approx_constant)]
             let rho = [0.0, 1.5708, 3.1416, 4.7124][(k * 7 / 480) % 4];
             sums.add(&quantized(heel, -heel, &angles(rho, 0.4, 0.6)), 0);
         }

@@ -37,7 +37,9 @@ use crate::gap_fill::{GapFiller, GridSample, SLOTS};
 use crate::installation::Angles;
 use crate::math::{sin_cos, wrap_pi};
 use crate::methods::MethodState;
-use crate::output::{Counters, ErrorChange, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status};
+use crate::output::{
+    Counters, ErrorChange, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status,
+};
 use crate::rotation_pattern::{Limits, PatternEvent, RotationFault, RotationMonitor};
 use crate::sample::{Attitude, Sample, SampleError};
 use crate::sway_gate::SwayMonitor;
@@ -71,8 +73,10 @@ impl Feed {
             interval_s,
             interval: interval_s as Real,
             limits: Limits {
-                min_period_samples: libm::ceil(ROTATION_PERIOD_RANGE_S.0 / interval_s).max(2.0) as u32,
-                max_period_samples: libm::floor(ROTATION_PERIOD_RANGE_S.1 / interval_s).max(2.0) as u32,
+                min_period_samples: libm::ceil(ROTATION_PERIOD_RANGE_S.0 / interval_s).max(2.0)
+                    as u32,
+                max_period_samples: libm::floor(ROTATION_PERIOD_RANGE_S.1 / interval_s).max(2.0)
+                    as u32,
                 period_tolerance: config.rotation_period_tolerance,
             },
             reference_alpha: ReferenceFilter::alpha(interval_s),
@@ -147,7 +151,10 @@ impl<const CAP: usize> Estimator<CAP> {
     /// assert!(estimator.estimate().is_none());
     /// # Ok::<(), estimator_core::ConfigError>(())
     /// ```
-    pub fn init_in(slot: &mut core::mem::MaybeUninit<Self>, config: Config) -> Result<&mut Self, ConfigError> {
+    pub fn init_in(
+        slot: &mut core::mem::MaybeUninit<Self>,
+        config: Config,
+    ) -> Result<&mut Self, ConfigError> {
         config.check(CAP)?;
         let p = slot.as_mut_ptr();
         // SAFETY: every field of `*p` is written (through raw pointers, never read) before `p` is
@@ -155,7 +162,9 @@ impl<const CAP: usize> Estimator<CAP> {
         // method's state whose ring is uninitialised (`heapless::Deque::new` stores nothing in it).
         let estimator = unsafe {
             addr_of_mut!((*p).config).write(config);
-            addr_of_mut!((*p).method).write(MethodState::Windowed(crate::methods::Windowed::unconfigured()));
+            addr_of_mut!((*p).method).write(MethodState::Windowed(
+                crate::methods::Windowed::unconfigured(),
+            ));
             addr_of_mut!((*p).grid).write(TimeGrid::new(None));
             addr_of_mut!((*p).index).write(0);
             addr_of_mut!((*p).feed).write(None);
@@ -265,13 +274,15 @@ impl<const CAP: usize> Estimator<CAP> {
         if self.rotation.period_samples().is_none() {
             return Some(Holdup::RotationPeriodNotDetected);
         }
-        if let (Status::RotationFault(fault), Some((_, since_s))) = (self.window_status, self.fault) {
+        if let (Status::RotationFault(fault), Some((_, since_s))) = (self.window_status, self.fault)
+        {
             return Some(Holdup::RotationFault { fault, since_s });
         }
         match &self.method {
-            MethodState::Windowed(m) if !m.window().is_full() => {
-                Some(Holdup::WindowFilling { filled: m.window().filled() as u32, len: m.window().len() as u32 })
-            }
+            MethodState::Windowed(m) if !m.window().is_full() => Some(Holdup::WindowFilling {
+                filled: m.window().filled() as u32,
+                len: m.window().len() as u32,
+            }),
             _ => None,
         }
     }
@@ -294,7 +305,10 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// The current estimate, if any.
     pub fn estimate(&self) -> Option<Estimate> {
-        self.method.estimate(&self.config).map(|e| Estimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad })
+        self.method.estimate(&self.config).map(|e| Estimate {
+            x_rad: e.x_rad,
+            sigma_rad: e.sigma_rad,
+        })
     }
 
     /// Processes one sample. On error nothing changes but the rejection counter.
@@ -317,21 +331,32 @@ impl<const CAP: usize> Estimator<CAP> {
             self.gate_open = true;
         }
         let status = match self.grid.interval_s() {
-            Some(interval_s) if self.gate_open => self.feed(sample, &angles, placement, interval_s, sample.time_s),
+            Some(interval_s) if self.gate_open => {
+                self.feed(sample, &angles, placement, interval_s, sample.time_s)
+            }
             _ if !self.gate_open => Status::WaitingForSway,
             _ => Status::DetectingPattern,
         };
         let estimate = self.method.estimate(&self.config);
         let status = match (status, estimate) {
-            (Status::Estimating | Status::WarmingUp, Some(e)) if e.relearning => Status::ErrorsChanged,
+            (Status::Estimating | Status::WarmingUp, Some(e)) if e.relearning => {
+                Status::ErrorsChanged
+            }
             (Status::Estimating, Some(e)) if e.mismatch => Status::ModelMismatch,
-            (Status::Estimating, Some(e)) if e.sigma_rad.iter().all(|s| *s < self.config.converged_sigma_rad) => {
+            (Status::Estimating, Some(e))
+                if e.sigma_rad
+                    .iter()
+                    .all(|s| *s < self.config.converged_sigma_rad) =>
+            {
                 Status::Converged
             }
             (Status::WarmingUp, Some(_)) => Status::Holding,
             (s, _) => s,
         };
-        let estimate = estimate.map(|e| Estimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad });
+        let estimate = estimate.map(|e| Estimate {
+            x_rad: e.x_rad,
+            sigma_rad: e.sigma_rad,
+        });
         let corrected = match estimate {
             Some(e) => {
                 let d = angles.oscillation(&e.x_rad);
@@ -343,18 +368,33 @@ impl<const CAP: usize> Estimator<CAP> {
             }
             None => sample.attitude,
         };
-        Ok(Output { time_s: sample.time_s, status, estimate, corrected })
+        Ok(Output {
+            time_s: sample.time_s,
+            status,
+            estimate,
+            corrected,
+        })
     }
 
     /// Places an accepted sample on the grid, passes it through the gap filler and the window
     /// takes what comes out; returns the status of the newest sample the window took.
-    fn feed(&mut self, sample: &Sample, angles: &Angles, placement: Placement, interval_s: f64, stamp_s: f64) -> Status {
+    fn feed(
+        &mut self,
+        sample: &Sample,
+        angles: &Angles,
+        placement: Placement,
+        interval_s: f64,
+        stamp_s: f64,
+    ) -> Status {
         let mut out: heapless::Vec<GridSample, SLOTS> = heapless::Vec::new();
         let feed = match self.feed {
             None => self.start_feeding(interval_s),
             Some(feed) => {
                 let (step, restart) = match placement {
-                    Placement::OnGrid { intervals } => (intervals, intervals.saturating_sub(1) > self.config.max_filled_gap_samples),
+                    Placement::OnGrid { intervals } => (
+                        intervals,
+                        intervals.saturating_sub(1) > self.config.max_filled_gap_samples,
+                    ),
                     Placement::Learning | Placement::ClockStep => (1, true),
                 };
                 self.index = self.index.wrapping_add(step);
@@ -393,7 +433,10 @@ impl<const CAP: usize> Estimator<CAP> {
         let feed = Feed::new(interval_s, &self.config);
         self.feed = Some(feed);
         self.index = 0;
-        let pinned = self.config.rotation_period_s.map(|t| libm::round(t / interval_s).max(2.0) as u32);
+        let pinned = self
+            .config
+            .rotation_period_s
+            .map(|t| libm::round(t / interval_s).max(2.0) as u32);
         self.rotation = RotationMonitor::new(pinned);
         if let Some(p) = pinned {
             self.method.configure(p);
@@ -433,9 +476,16 @@ impl<const CAP: usize> Estimator<CAP> {
                 continue;
             }
             self.method.push(&self.config, feed, s);
-            self.window_status = if self.method.window_full() { Status::Estimating } else { Status::WarmingUp };
+            self.window_status = if self.method.window_full() {
+                Status::Estimating
+            } else {
+                Status::WarmingUp
+            };
         }
-        if let Some(alarm) = self.method.update(&self.config, feed, self.filler.single_fill_variance()) {
+        if let Some(alarm) =
+            self.method
+                .update(&self.config, feed, self.filler.single_fill_variance())
+        {
             // The run's first block began `run_blocks` blocks of half a window before this update.
             let entry_s = feed.interval_s * f64::from(self.rotation().samples_per_entry);
             let window_s = entry_s * self.method.window_len() as f64;
@@ -450,7 +500,11 @@ impl<const CAP: usize> Estimator<CAP> {
     fn restart_window(&mut self) {
         self.method.restart_window();
         self.counters.window_restarts = self.counters.window_restarts.saturating_add(1);
-        self.window_status = if self.rotation.period_samples().is_some() { Status::WarmingUp } else { Status::DetectingPattern };
+        self.window_status = if self.rotation.period_samples().is_some() {
+            Status::WarmingUp
+        } else {
+            Status::DetectingPattern
+        };
     }
 
     fn angles(&mut self, sample: &Sample) -> Angles {
@@ -458,7 +512,11 @@ impl<const CAP: usize> Estimator<CAP> {
             let (s, c) = sin_cos(sample.latitude_rad);
             self.latitude_trig = (sample.latitude_rad, s, c);
         }
-        Angles::new(sample.rotation_rad, sample.platform_rad, (self.latitude_trig.1, self.latitude_trig.2))
+        Angles::new(
+            sample.rotation_rad,
+            sample.platform_rad,
+            (self.latitude_trig.1, self.latitude_trig.2),
+        )
     }
 }
 

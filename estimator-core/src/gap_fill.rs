@@ -166,7 +166,10 @@ impl GapFiller {
 
     /// The variance of a filled single sample of roll and of pitch (0 until measured).
     pub fn single_fill_variance(&self) -> FillVariance {
-        FillVariance { roll_rad2: self.roll_error_rad2, pitch_rad2: self.pitch_error_rad2 }
+        FillVariance {
+            roll_rad2: self.roll_error_rad2,
+            pitch_rad2: self.pitch_error_rad2,
+        }
     }
 
     /// Takes a received sample `intervals` after the previous one (which the caller has judged
@@ -187,7 +190,9 @@ impl GapFiller {
         self.slots[sample.index as usize % SLOTS] = Some(sample);
         self.newest = Some(sample.index);
         let mut emitted = 0;
-        while sample.index.wrapping_sub(self.next) as usize >= NEIGHBOURS && sample.index.wrapping_sub(self.next) < SLOTS as u32 {
+        while sample.index.wrapping_sub(self.next) as usize >= NEIGHBOURS
+            && sample.index.wrapping_sub(self.next) < SLOTS as u32
+        {
             let k = self.next;
             let out = match self.slots[k as usize % SLOTS] {
                 Some(s) => {
@@ -228,21 +233,27 @@ impl GapFiller {
 
     /// The sample at `index` (inside the delay line) if received.
     fn at(&self, index: u32) -> Option<&GridSample> {
-        self.slots[index as usize % SLOTS].as_ref().filter(|s| s.index == index)
+        self.slots[index as usize % SLOTS]
+            .as_ref()
+            .filter(|s| s.index == index)
     }
 
     /// Predicts a present sample from its 10 neighbours, when all are present, and averages the
     /// squared prediction error. Every [`FILL_ERROR_EVERY`]th index only: the mean square of a sea
     /// state needs no more, and the step's cost stays low.
     fn measure_fill_error(&mut self, s: &GridSample) {
-        if s.index % FILL_ERROR_EVERY != 0 {
+        if !s.index.is_multiple_of(FILL_ERROR_EVERY) {
             return;
         }
         let mut roll = 0.0;
         let mut pitch = 0.0;
         let w = &SYMMETRIC_WEIGHTS;
         for i in 0..2 * NEIGHBOURS {
-            let offset = if i < NEIGHBOURS { i as i32 - NEIGHBOURS as i32 } else { i as i32 - NEIGHBOURS as i32 + 1 };
+            let offset = if i < NEIGHBOURS {
+                i as i32 - NEIGHBOURS as i32
+            } else {
+                i as i32 - NEIGHBOURS as i32 + 1
+            };
             let Some(n) = self.at(s.index.wrapping_add(offset as u32)) else {
                 return;
             };
@@ -295,9 +306,14 @@ impl GapFiller {
         let f = (-ob) as Real / (oa - ob) as Real;
         let ang = |x: Real, y: Real| wrap_pi(x + wrap_pi(y - x) * f);
         let rotation_rad = ang(b.rotation_rad, a.rotation_rad);
-        let rotation_minus_platform_rad = ang(b.rotation_minus_platform_rad, a.rotation_minus_platform_rad);
+        let rotation_minus_platform_rad =
+            ang(b.rotation_minus_platform_rad, a.rotation_minus_platform_rad);
         let latitude_rad = b.latitude_rad + (a.latitude_rad - b.latitude_rad) * f;
-        let lat = if latitude_rad == b.latitude_rad { (b.angles.sin_lat, b.angles.cos_lat) } else { sin_cos(latitude_rad) };
+        let lat = if latitude_rad == b.latitude_rad {
+            (b.angles.sin_lat, b.angles.cos_lat)
+        } else {
+            sin_cos(latitude_rad)
+        };
         let weight = weight.min(u32::from(u16::MAX)) as u16;
         Some(GridSample {
             index,

@@ -12,8 +12,8 @@
 //! the attitude output, as the measurement rows of the traditional baseline (Fig. 2), and (through
 //! [`crate::correlation`]) to derive the correlation channels.
 
-use crate::sample::Attitude;
 use crate::math::sin_cos;
+use crate::sample::Attitude;
 use crate::Real;
 
 /// Sines and cosines of one sample's angles, computed once per step.
@@ -36,10 +36,21 @@ impl Angles {
     }
 
     /// The same from rho and rho - s.
-    pub fn from_rotation(rotation_rad: Real, rotation_minus_platform_rad: Real, lat_sin_cos: (Real, Real)) -> Angles {
+    pub fn from_rotation(
+        rotation_rad: Real,
+        rotation_minus_platform_rad: Real,
+        lat_sin_cos: (Real, Real),
+    ) -> Angles {
         let (sin_rho, cos_rho) = sin_cos(rotation_rad);
         let (sin_rho_s, cos_rho_s) = sin_cos(rotation_minus_platform_rad);
-        Angles { sin_rho, cos_rho, sin_rho_s, cos_rho_s, sin_lat: lat_sin_cos.0, cos_lat: lat_sin_cos.1 }
+        Angles {
+            sin_rho,
+            cos_rho,
+            sin_rho_s,
+            cos_rho_s,
+            sin_lat: lat_sin_cos.0,
+            cos_lat: lat_sin_cos.1,
+        }
     }
 
     /// Coefficients of x1..x4 in the heading error of eq (2).
@@ -96,12 +107,21 @@ mod tests {
             let platform_rad = -3.1 + 6.2 * (k as f64 * 0.414_214).fract();
             let latitude_rad = -1.5 + 3.0 * (k as f64 * 0.732_051).fract();
             let want = oscillation(&x_rad, rotation_rad, platform_rad, latitude_rad);
-            let rows = Angles::new(rotation_rad as Real, platform_rad as Real, sin_cos(latitude_rad as Real));
+            let rows = Angles::new(
+                rotation_rad as Real,
+                platform_rad as Real,
+                sin_cos(latitude_rad as Real),
+            );
             let got = rows.oscillation(&x_rad.map(|x| x as Real));
             let got = [got.heading_rad, got.roll_rad, got.pitch_rad];
             for i in 0..3 {
                 let diff = (f64::from(got[i]) - want[i]).abs();
-                assert!(diff < 1e-8, "k {k} axis {i}: {} vs {} (diff {diff:e} rad)", got[i], want[i]);
+                assert!(
+                    diff < 1e-8,
+                    "k {k} axis {i}: {} vs {} (diff {diff:e} rad)",
+                    got[i],
+                    want[i]
+                );
             }
         }
     }

@@ -45,7 +45,9 @@ pub enum KalmanError {
 impl core::fmt::Display for KalmanError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            KalmanError::NonFinite => write!(f, "measurement, row or noise not finite, or noise negative"),
+            KalmanError::NonFinite => {
+                write!(f, "measurement, row or noise not finite, or noise negative")
+            }
             KalmanError::Degenerate => write!(f, "innovation variance h' P h + r not positive"),
             KalmanError::Gated => write!(f, "innovation beyond the gate"),
         }
@@ -70,13 +72,19 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         for i in 0..N {
             p[(i, i)] = prior_sigma[i] * prior_sigma[i];
         }
-        ConstantStateKalman { x: SVector::zeros(), p }
+        ConstantStateKalman {
+            x: SVector::zeros(),
+            p,
+        }
     }
 
     /// A filter with states `x` and covariance columns `p` (for constants: the estimator's
     /// unconfigured state, test fixtures).
     pub const fn from_parts(x: [T; N], p: [[T; N]; N]) -> Self {
-        ConstantStateKalman { x: SVector::from_array_storage(ArrayStorage([x])), p: SMatrix::from_array_storage(ArrayStorage(p)) }
+        ConstantStateKalman {
+            x: SVector::from_array_storage(ArrayStorage([x])),
+            p: SMatrix::from_array_storage(ArrayStorage(p)),
+        }
     }
 
     /// Prediction: states constant, covariance grows by `q` on the diagonal (a random walk).
@@ -96,7 +104,13 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
     /// deviation for a measurement of variance `spread`: `(z - h x)^2 > g^2 (h' P h + spread)`
     /// (innovation gating: a measurement the filter's own uncertainty and the measurements' usual
     /// spread cannot explain is left out).
-    pub fn update_gated(&mut self, h: &[T; N], z: T, r: T, gate: Option<(T, T)>) -> Result<T, KalmanError> {
+    pub fn update_gated(
+        &mut self,
+        h: &[T; N],
+        z: T,
+        r: T,
+        gate: Option<(T, T)>,
+    ) -> Result<T, KalmanError> {
         let h = SVector::<T, N>::from_column_slice(h);
         if !z.is_finite() || !r.is_finite() || r < T::zero() || h.iter().any(|v| !v.is_finite()) {
             return Err(KalmanError::NonFinite);
@@ -132,7 +146,10 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
             }
         }
         let x = self.x + k * innovation;
-        if !innovation.is_finite() || x.iter().any(|v| !v.is_finite()) || p.iter().any(|v| !v.is_finite()) {
+        if !innovation.is_finite()
+            || x.iter().any(|v| !v.is_finite())
+            || p.iter().any(|v| !v.is_finite())
+        {
             return Err(KalmanError::NonFinite);
         }
         self.x = x;
@@ -189,7 +206,10 @@ mod tests {
 
     /// A known linear system: two constants observed through rotating rows with white noise. The
     /// filter must match batch least squares (what a constant-state Kalman filter with a weak prior is).
-    fn matches_batch_least_squares<T: RealField + Copy + Into<f64>>(prior_sigma: f64, tolerance: f64) {
+    fn matches_batch_least_squares<T: RealField + Copy + Into<f64>>(
+        prior_sigma: f64,
+        tolerance: f64,
+    ) {
         let c = |v: f64| nalgebra::convert::<f64, T>(v);
         let truth = [0.3, -0.7];
         let mut kf = ConstantStateKalman::<T, 2>::new([c(prior_sigma), c(prior_sigma)]);
@@ -197,7 +217,9 @@ mod tests {
         let mut atb = [0.0f64; 2];
         let mut state: u64 = 7;
         for k in 0..2000 {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let noise = ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 0.02;
             let h = [libm::cos(k as f64 * 0.1), libm::sin(k as f64 * 0.1) + 0.2];
             let z = h[0] * truth[0] + h[1] * truth[1] + noise;
@@ -216,7 +238,11 @@ mod tests {
         ];
         for i in 0..2 {
             let xi: f64 = kf.x[i].into();
-            assert!((xi - ls[i]).abs() < tolerance, "state {i}: {xi} vs {}", ls[i]);
+            assert!(
+                (xi - ls[i]).abs() < tolerance,
+                "state {i}: {xi} vs {}",
+                ls[i]
+            );
             assert!((xi - truth[i]).abs() < 2e-3);
         }
         // Posterior covariance of least squares: r (A'A)^-1.
@@ -243,7 +269,12 @@ mod tests {
         let mut kf = ConstantStateKalman::<f32, 4>::new([1.0; 4]);
         for k in 0..40 {
             let a = k as f32 * 0.3;
-            kf.update(&[libm::cosf(a), libm::sinf(a), 0.3, 0.2 * libm::cosf(2.0 * a)], 0.1 * k as f32, 1e-3).unwrap();
+            kf.update(
+                &[libm::cosf(a), libm::sinf(a), 0.3, 0.2 * libm::cosf(2.0 * a)],
+                0.1 * k as f32,
+                1e-3,
+            )
+            .unwrap();
         }
         let before = kf.clone();
         kf.forget(&[true, false, true, false], 2.0);
@@ -269,9 +300,24 @@ mod tests {
         // h' P h is about 0.01 here; with a spread of 0.01 the 3-sigma gate is about 0.42.
         let hph = kf.covariance()[(0, 0)];
         let gate = 3.0 * libm::sqrtf(hph + 0.01);
-        assert_eq!(kf.update_gated(&[1.0, 0.0], kf.state()[0] + 1.01 * gate, 0.01, Some((0.01, 3.0))), Err(KalmanError::Gated));
+        assert_eq!(
+            kf.update_gated(
+                &[1.0, 0.0],
+                kf.state()[0] + 1.01 * gate,
+                0.01,
+                Some((0.01, 3.0))
+            ),
+            Err(KalmanError::Gated)
+        );
         assert_eq!(kf, before);
-        assert!(kf.update_gated(&[1.0, 0.0], kf.state()[0] + 0.99 * gate, 0.01, Some((0.01, 3.0))).is_ok());
+        assert!(kf
+            .update_gated(
+                &[1.0, 0.0],
+                kf.state()[0] + 0.99 * gate,
+                0.01,
+                Some((0.01, 3.0))
+            )
+            .is_ok());
         assert_ne!(kf, before);
     }
 
@@ -280,10 +326,22 @@ mod tests {
         let mut kf = ConstantStateKalman::<f32, 2>::new([1.0, 1.0]);
         kf.update(&[1.0, 0.0], 0.5, 0.1).unwrap();
         let before = kf.clone();
-        assert_eq!(kf.update(&[1.0, 0.0], f32::NAN, 0.1), Err(KalmanError::NonFinite));
-        assert_eq!(kf.update(&[f32::INFINITY, 0.0], 0.0, 0.1), Err(KalmanError::NonFinite));
-        assert_eq!(kf.update(&[1.0, 0.0], 0.0, -1.0), Err(KalmanError::NonFinite));
-        assert_eq!(kf.update(&[0.0, 0.0], 0.0, 0.0), Err(KalmanError::Degenerate));
+        assert_eq!(
+            kf.update(&[1.0, 0.0], f32::NAN, 0.1),
+            Err(KalmanError::NonFinite)
+        );
+        assert_eq!(
+            kf.update(&[f32::INFINITY, 0.0], 0.0, 0.1),
+            Err(KalmanError::NonFinite)
+        );
+        assert_eq!(
+            kf.update(&[1.0, 0.0], 0.0, -1.0),
+            Err(KalmanError::NonFinite)
+        );
+        assert_eq!(
+            kf.update(&[0.0, 0.0], 0.0, 0.0),
+            Err(KalmanError::Degenerate)
+        );
         assert_eq!(kf, before);
     }
 }

@@ -51,10 +51,18 @@ pub fn round(x: f64) -> f64 {
 pub fn sqrt(x: f32) -> f32 {
     if !(x > 0.0) || x == f32::INFINITY {
         // 0 -> 0, +inf -> +inf, negative or NaN -> NaN.
-        return if x == 0.0 || x == f32::INFINITY { x } else { f32::NAN };
+        return if x == 0.0 || x == f32::INFINITY {
+            x
+        } else {
+            f32::NAN
+        };
     }
     // Scale subnormals into the normal range first (sqrt(x) = sqrt(x 2^24) / 2^12).
-    let (x, scale) = if x < f32::MIN_POSITIVE { (x * 16_777_216.0, 1.0 / 4096.0) } else { (x, 1.0) };
+    let (x, scale) = if x < f32::MIN_POSITIVE {
+        (x * 16_777_216.0, 1.0 / 4096.0)
+    } else {
+        (x, 1.0)
+    };
     let mut y = f32::from_bits((x.to_bits() >> 1) + 0x1FBD_1DF5);
     y = 0.5 * (y + x / y);
     y = 0.5 * (y + x / y);
@@ -104,11 +112,14 @@ mod tests {
         let mut worst: f64 = 0.0;
         let n = 200_000;
         for i in 0..=n {
-            let x = -4.0 * core::f64::consts::PI + 8.0 * core::f64::consts::PI * (i as f64) / n as f64;
+            let x =
+                -4.0 * core::f64::consts::PI + 8.0 * core::f64::consts::PI * (i as f64) / n as f64;
             let xr = x as Real;
             let (s, c) = sin_cos(xr);
             let xe = xr as f64;
-            worst = worst.max((s as f64 - libm::sin(xe)).abs()).max((c as f64 - libm::cos(xe)).abs());
+            worst = worst
+                .max((s as f64 - libm::sin(xe)).abs())
+                .max((c as f64 - libm::cos(xe)).abs());
         }
         assert!(worst < 2e-7, "worst error {worst}");
     }

@@ -93,7 +93,12 @@ impl<const CAP: usize> MethodState<CAP> {
     /// The windowed method's one update per step (see [`Windowed::update`]); the others update
     /// in [`MethodState::push`]. Returns the change of the errors declared, if any (only the
     /// windowed method detects changes).
-    pub fn update(&mut self, config: &Config, feed: &Feed, fill_variance: FillVariance) -> Option<Alarm> {
+    pub fn update(
+        &mut self,
+        config: &Config,
+        feed: &Feed,
+        fill_variance: FillVariance,
+    ) -> Option<Alarm> {
         match self {
             MethodState::Windowed(m) => m.update(config, feed.interval, fill_variance),
             #[cfg(feature = "paper-method")]
@@ -101,7 +106,6 @@ impl<const CAP: usize> MethodState<CAP> {
             MethodState::Traditional(_) => None,
         }
     }
-
 
     /// Forgets the moving-average window (the filter keeps what it learnt).
     pub fn restart_window(&mut self) {
@@ -142,7 +146,12 @@ impl<const CAP: usize> MethodState<CAP> {
     /// had a measurement. Only the windowed method checks its residuals; the others never report
     /// a mismatch.
     pub fn estimate(&self, config: &Config) -> Option<MethodEstimate> {
-        let plain = |e: Estimate| MethodEstimate { x_rad: e.x_rad, sigma_rad: e.sigma_rad, mismatch: false, relearning: false };
+        let plain = |e: Estimate| MethodEstimate {
+            x_rad: e.x_rad,
+            sigma_rad: e.sigma_rad,
+            mismatch: false,
+            relearning: false,
+        };
         match self {
             MethodState::Windowed(m) => m.estimate(config),
             #[cfg(feature = "paper-method")]

@@ -43,13 +43,21 @@ pub struct WindowAverage<const CH: usize, const CAP: usize> {
 impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
     /// A window of `len` samples, `1 <= len <= CAP` (clamped into that range).
     pub fn new(len: usize) -> Self {
-        WindowAverage { ring: Deque::new(), sums: [0; CH], len: len.clamp(1, CAP.max(1)) }
+        WindowAverage {
+            ring: Deque::new(),
+            sums: [0; CH],
+            len: len.clamp(1, CAP.max(1)),
+        }
     }
 
     /// Rounds a value to fixed point, clamping it to +-[`MAX_MAGNITUDE`]. NaN becomes 0 (callers
     /// never pass NaN: samples are checked before they get here).
     pub fn quantize(value: Real) -> i32 {
-        let v = if value.is_nan() { 0.0 } else { value.clamp(-MAX_MAGNITUDE, MAX_MAGNITUDE) };
+        let v = if value.is_nan() {
+            0.0
+        } else {
+            value.clamp(-MAX_MAGNITUDE, MAX_MAGNITUDE)
+        };
         round(v * COUNTS_PER_UNIT) as i32
     }
 
@@ -122,7 +130,6 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
         self.ring.iter().map(move |v| v[ch.min(CH - 1)])
     }
 }
-
 
 /// The moving average of the windowed method: the last `len` entries of exactly one rotation
 /// period, as the exact [`CorrelationSums`] of their fixed-point inputs.
@@ -212,16 +219,25 @@ impl WindowLayout {
         let capacity = capacity.max(2) as u32;
         let period = period_samples.max(2);
         if period <= capacity {
-            return WindowLayout { samples_per_entry: 1, entries: period as usize };
+            return WindowLayout {
+                samples_per_entry: 1,
+                entries: period as usize,
+            };
         }
         let smallest = period.div_ceil(capacity);
         for bin in smallest..=2 * smallest {
-            if period % bin == 0 && period / bin <= capacity {
-                return WindowLayout { samples_per_entry: bin, entries: (period / bin) as usize };
+            if period.is_multiple_of(bin) && period / bin <= capacity {
+                return WindowLayout {
+                    samples_per_entry: bin,
+                    entries: (period / bin) as usize,
+                };
             }
         }
         let entries = ((period + smallest / 2) / smallest).clamp(2, capacity);
-        WindowLayout { samples_per_entry: smallest, entries: entries as usize }
+        WindowLayout {
+            samples_per_entry: smallest,
+            entries: entries as usize,
+        }
     }
 }
 
@@ -293,12 +309,19 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     /// (every sample, without bins).
     pub fn push(&mut self, s: &GridSample, reference: &[Real; 4]) -> bool {
         if self.bin <= 1 {
-            self.push_entry(QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference), s.fill_weight);
+            self.push_entry(
+                QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference),
+                s.fill_weight,
+            );
             return true;
         }
         let b = &mut self.partial;
         if b.count == 0 {
-            *b = Bin { rotation0_rad: s.rotation_rad, rotation_minus_platform0_rad: s.rotation_minus_platform_rad, ..Bin::default() };
+            *b = Bin {
+                rotation0_rad: s.rotation_rad,
+                rotation_minus_platform0_rad: s.rotation_minus_platform_rad,
+                ..Bin::default()
+            };
         }
         b.count += 1;
         b.roll_rad += s.roll_rad;
@@ -308,16 +331,27 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             b.reference[ch] += reference[ch];
         }
         b.rotation_offset_rad += wrap_pi(s.rotation_rad - b.rotation0_rad);
-        b.rotation_minus_platform_offset_rad += wrap_pi(s.rotation_minus_platform_rad - b.rotation_minus_platform0_rad);
+        b.rotation_minus_platform_offset_rad +=
+            wrap_pi(s.rotation_minus_platform_rad - b.rotation_minus_platform0_rad);
         b.fill_weight += u32::from(s.fill_weight);
         if b.count < self.bin {
             return false;
         }
         let n = b.count as Real;
         let rotation = wrap_pi(b.rotation0_rad + b.rotation_offset_rad / n);
-        let rotation_minus_platform = wrap_pi(b.rotation_minus_platform0_rad + b.rotation_minus_platform_offset_rad / n);
-        let angles = Angles::from_rotation(rotation, rotation_minus_platform, sin_cos(b.latitude_rad / n));
-        let q = QuantizedSample::new(b.roll_rad / n, b.pitch_rad / n, &angles, &b.reference.map(|r| r / n));
+        let rotation_minus_platform =
+            wrap_pi(b.rotation_minus_platform0_rad + b.rotation_minus_platform_offset_rad / n);
+        let angles = Angles::from_rotation(
+            rotation,
+            rotation_minus_platform,
+            sin_cos(b.latitude_rad / n),
+        );
+        let q = QuantizedSample::new(
+            b.roll_rad / n,
+            b.pitch_rad / n,
+            &angles,
+            &b.reference.map(|r| r / n),
+        );
         let weight = b.fill_weight.min(u32::from(u16::MAX)) as u16;
         self.partial = Bin::default();
         self.push_entry(q, weight);
@@ -334,7 +368,14 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             self.ring.pop_front();
         }
         // `len <= CAP` and the window is not full: there is room.
-        if self.ring.push_back(Entry { sample, fill_weight }).is_ok() {
+        if self
+            .ring
+            .push_back(Entry {
+                sample,
+                fill_weight,
+            })
+            .is_ok()
+        {
             self.sums.add(&sample, fill_weight);
         }
     }
@@ -355,7 +396,9 @@ mod tests {
         let mut w: WindowAverage<2, 480> = WindowAverage::new(480);
         let mut state: u64 = 12345;
         for i in 0..172_800u64 {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let r = ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5) as Real;
             let sway = 0.05 * libm::sin(i as f64 * 1.047) as Real;
             w.push(&[sway + 1e-3 * r, -0.3 + r]);
@@ -364,8 +407,11 @@ mod tests {
             let direct: i64 = w.window_counts(ch).map(i64::from).sum();
             assert_eq!(direct, w.sums()[ch], "channel {ch} drifted");
         }
-        let direct_mean: f64 =
-            w.window_counts(0).map(|c| c as f64 / (1u64 << 30) as f64).sum::<f64>() / 480.0;
+        let direct_mean: f64 = w
+            .window_counts(0)
+            .map(|c| c as f64 / (1u64 << 30) as f64)
+            .sum::<f64>()
+            / 480.0;
         let mean = w.means().unwrap()[0] as f64;
         assert!((mean - direct_mean).abs() < 1e-7 * direct_mean.abs().max(1e-3));
     }

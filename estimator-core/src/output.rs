@@ -1,8 +1,8 @@
 //! What the estimator reports: its status, the estimate with its 1-sigma, the output of one step,
 //! its counters, what it knows of the rotation pattern and why there is no estimate yet.
 
-use crate::rotation_pattern::{PatternKind, RotationFault};
 use crate::code::{from_code, UnknownCode};
+use crate::rotation_pattern::{PatternKind, RotationFault};
 use crate::sample::{Attitude, RejectReason};
 use crate::Real;
 
@@ -84,7 +84,6 @@ impl Status {
             Status::ErrorsChanged => 10,
         }
     }
-
 }
 
 impl TryFrom<u8> for Status {
@@ -169,7 +168,12 @@ pub struct Counters {
 
 impl Counters {
     /// Nothing counted.
-    pub const ZERO: Counters = Counters { accepted: 0, filled: 0, window_restarts: 0, clock_steps: 0 };
+    pub const ZERO: Counters = Counters {
+        accepted: 0,
+        filled: 0,
+        window_restarts: 0,
+        clock_steps: 0,
+    };
 }
 
 /// The rotation pattern as far as it is known.
@@ -203,8 +207,12 @@ pub enum Holdup {
 impl core::fmt::Display for Holdup {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            Holdup::WaitingForSway => write!(f, "waiting for the roll sway to exceed the start gate"),
-            Holdup::SampleIntervalNotKnown => write!(f, "sample interval not yet learned from the time stamps"),
+            Holdup::WaitingForSway => {
+                write!(f, "waiting for the roll sway to exceed the start gate")
+            }
+            Holdup::SampleIntervalNotKnown => {
+                write!(f, "sample interval not yet learned from the time stamps")
+            }
             Holdup::RotationPeriodNotDetected => write!(f, "rotation period not yet detected"),
             Holdup::RotationFault { fault, since_s } => {
                 let what = match fault {
@@ -214,7 +222,9 @@ impl core::fmt::Display for Holdup {
                 };
                 write!(f, "{what} since {since_s} s")
             }
-            Holdup::WindowFilling { filled, len } => write!(f, "moving average filling ({filled} of {len} entries)"),
+            Holdup::WindowFilling { filled, len } => {
+                write!(f, "moving average filling ({filled} of {len} entries)")
+            }
         }
     }
 }

@@ -113,7 +113,10 @@ pub struct Features {
 impl Features {
     /// The pattern's kind.
     pub fn kind(&self) -> PatternKind {
-        match (self.reverses, self.longest_dwell_samples > dwell_threshold_samples()) {
+        match (
+            self.reverses,
+            self.longest_dwell_samples > dwell_threshold_samples(),
+        ) {
             (false, false) => PatternKind::OneWay,
             (true, false) => PatternKind::Reciprocating,
             (false, true) => PatternKind::StopAndGo,
@@ -236,13 +239,24 @@ impl RotationMonitor {
 
     /// Forgets the pattern (a pinned period stays) and detects it anew.
     fn forget(&mut self) {
-        let pinned = if self.pinned { self.period_samples } else { None };
+        let pinned = if self.pinned {
+            self.period_samples
+        } else {
+            None
+        };
         *self = RotationMonitor::new(pinned);
     }
 
     /// Watches one sample (index on the sample grid, rotation angle).
-    pub fn observe(&mut self, index: u32, rotation_rad: Real, limits: &Limits) -> Result<PatternEvent, RotationFault> {
-        let base = *self.levels_rad.get_or_insert(wrap_pi(rotation_rad + 0.5 * QUARTER_PI));
+    pub fn observe(
+        &mut self,
+        index: u32,
+        rotation_rad: Real,
+        limits: &Limits,
+    ) -> Result<PatternEvent, RotationFault> {
+        let base = *self
+            .levels_rad
+            .get_or_insert(wrap_pi(rotation_rad + 0.5 * QUARTER_PI));
         let previous = self.previous.replace((index, rotation_rad));
         let increment = match previous {
             Some((k, rho)) if index.wrapping_sub(k) == 1 => Some(wrap_pi(rotation_rad - rho)),
@@ -293,13 +307,17 @@ impl RotationMonitor {
                         event = PatternEvent::PeriodKnown(period);
                     }
                 }
-                (Some(period), Some(k)) if self.timing_pass == Some((m as u8, dir as u8)) => {
-                    if self.features.is_some() && !pass_on_time(index.wrapping_sub(k), period, limits) {
-                        self.forget();
-                        return Err(RotationFault::RateMismatch);
-                    }
+                (Some(period), Some(k))
+                    if self.timing_pass == Some((m as u8, dir as u8))
+                        && self.features.is_some()
+                        && !pass_on_time(index.wrapping_sub(k), period, limits) =>
+                {
+                    self.forget();
+                    return Err(RotationFault::RateMismatch);
                 }
-                (Some(_), _) if self.timing_pass.is_none() => self.timing_pass = Some((m as u8, dir as u8)),
+                (Some(_), _) if self.timing_pass.is_none() => {
+                    self.timing_pass = Some((m as u8, dir as u8))
+                }
                 _ => {}
             }
         }
@@ -311,7 +329,11 @@ impl RotationMonitor {
         };
         let nominal = (2.0 * core::f64::consts::PI / period as f64) as Real;
         let still = self.short_steps > 0 && self.short_increment_rad.abs() < 0.25 * nominal;
-        self.dwell_run = if still { self.dwell_run.saturating_add(1) } else { 0 };
+        self.dwell_run = if still {
+            self.dwell_run.saturating_add(1)
+        } else {
+            0
+        };
         let Some(features) = self.features else {
             self.learn(index, increment, nominal, period);
             return Ok(event);
@@ -319,7 +341,9 @@ impl RotationMonitor {
         // Health against the learned pattern.
         if let Some((m, dir)) = self.timing_pass {
             if let Some(k) = self.last_pass[m as usize][dir as usize] {
-                if index.wrapping_sub(k) > period && !pass_on_time(index.wrapping_sub(k), period, limits) {
+                if index.wrapping_sub(k) > period
+                    && !pass_on_time(index.wrapping_sub(k), period, limits)
+                {
                     if self.dwell_run > 0 {
                         // Late because it has stopped: a stop, judged below, not a new period.
                         self.after_fault();
@@ -337,7 +361,11 @@ impl RotationMonitor {
         let reversed = !features.reverses
             && self.short_steps > 0
             && self.short_increment_rad * Real::from(features.direction) < -0.5 * nominal;
-        self.reversed_run = if reversed { self.reversed_run.saturating_add(1) } else { 0 };
+        self.reversed_run = if reversed {
+            self.reversed_run.saturating_add(1)
+        } else {
+            0
+        };
         if reversed {
             if self.reversed_run > period {
                 // A whole period the other way: a new pattern, not a reversal.
@@ -368,7 +396,9 @@ impl RotationMonitor {
         let s = self.short_increment_rad;
         if self.learn_first_direction == 0 && s.abs() > 0.5 * nominal {
             self.learn_first_direction = if s > 0.0 { 1 } else { -1 };
-        } else if self.learn_first_direction != 0 && s * Real::from(self.learn_first_direction) < -0.5 * nominal {
+        } else if self.learn_first_direction != 0
+            && s * Real::from(self.learn_first_direction) < -0.5 * nominal
+        {
             self.learn_reversed = true;
         }
         if index.wrapping_sub(start) >= period {

@@ -47,8 +47,15 @@ pub enum Field {
 
 impl Field {
     /// Every field, in code order.
-    pub const ALL: [Field; 7] =
-        [Field::Time, Field::Rotation, Field::Platform, Field::Latitude, Field::Heading, Field::Roll, Field::Pitch];
+    pub const ALL: [Field; 7] = [
+        Field::Time,
+        Field::Rotation,
+        Field::Platform,
+        Field::Latitude,
+        Field::Heading,
+        Field::Roll,
+        Field::Pitch,
+    ];
 }
 
 impl TryFrom<u8> for Field {
@@ -141,7 +148,9 @@ impl SampleError {
     pub fn from_parts(reason: RejectReason, field: Option<Field>) -> Option<SampleError> {
         match (reason, field) {
             (RejectReason::NonFinite, Some(field)) => Some(SampleError::NonFinite(field)),
-            (RejectReason::AngleOutOfRange, Some(field)) => Some(SampleError::AngleOutOfRange(field)),
+            (RejectReason::AngleOutOfRange, Some(field)) => {
+                Some(SampleError::AngleOutOfRange(field))
+            }
             (RejectReason::LatitudeOutOfRange, None) => Some(SampleError::LatitudeOutOfRange),
             (RejectReason::TimeNotIncreasing, None) => Some(SampleError::TimeNotIncreasing),
             (RejectReason::IrregularTimeStep, None) => Some(SampleError::IrregularTimeStep),
@@ -202,7 +211,11 @@ impl Sample {
             (Field::Rotation, self.rotation_rad, MAX_WRAPPED_ANGLE_RAD),
             (Field::Platform, self.platform_rad, MAX_WRAPPED_ANGLE_RAD),
             (Field::Latitude, self.latitude_rad, MAX_TILT_RAD),
-            (Field::Heading, self.attitude.heading_rad, MAX_WRAPPED_ANGLE_RAD),
+            (
+                Field::Heading,
+                self.attitude.heading_rad,
+                MAX_WRAPPED_ANGLE_RAD,
+            ),
             (Field::Roll, self.attitude.roll_rad, MAX_TILT_RAD),
             (Field::Pitch, self.attitude.pitch_rad, MAX_TILT_RAD),
         ];
@@ -212,7 +225,11 @@ impl Sample {
             }
         }
         for (field, value, max) in fields {
-            let out = if field == Field::Latitude { value.abs() >= max } else { value.abs() > max };
+            let out = if field == Field::Latitude {
+                value.abs() >= max
+            } else {
+                value.abs() > max
+            };
             if out {
                 return Err(if field == Field::Latitude {
                     SampleError::LatitudeOutOfRange

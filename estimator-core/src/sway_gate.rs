@@ -19,7 +19,11 @@ pub struct SwayMonitor {
 
 impl SwayMonitor {
     /// Nothing observed.
-    pub const NEW: SwayMonitor = SwayMonitor { mean_rad: 0.0, mean_square_rad2: 0.0, samples: 0 };
+    pub const NEW: SwayMonitor = SwayMonitor {
+        mean_rad: 0.0,
+        mean_square_rad2: 0.0,
+        samples: 0,
+    };
 
     /// Samples in the exponential average (and before the gate may open).
     pub const SAMPLES: u32 = 64;

@@ -107,7 +107,10 @@ impl Signal {
     fn unit_noise(&mut self) -> f64 {
         let mut acc = 0.0;
         for _ in 0..4 {
-            self.state = self.state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.state = self
+                .state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             acc += (self.state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
         }
         acc * libm::sqrt(3.0)
@@ -140,7 +143,12 @@ impl Signal {
     /// Eq (2) at `t_s` and rotation angle `rotation_rad`: heading, roll, pitch errors, rad.
     pub fn oscillation_at(&self, t_s: f64, rotation_rad: f64) -> [f64; 3] {
         let x = self.x_arcsec.map(arcsec_to_rad);
-        oscillation(&x, rotation_rad, self.platform_rad(t_s), self.latitude_deg * RAD_PER_DEG)
+        oscillation(
+            &x,
+            rotation_rad,
+            self.platform_rad(t_s),
+            self.latitude_deg * RAD_PER_DEG,
+        )
     }
 
     /// The sample at `t_s`, the rotation turning by [`Signal::scheme`].
@@ -245,7 +253,12 @@ impl Scheme {
 /// d_phi   = -x1 sinL cos(rho - s) - x2 sinL sin(rho - s) + x3 cosL sin(rho) - x4 cosL cos(rho)
 /// d_theta =  x1 sin(rho - s) - x2 cos(rho - s)
 /// ```
-pub fn oscillation(x_rad: &[f64; 4], rotation_rad: f64, platform_rad: f64, latitude_rad: f64) -> [f64; 3] {
+pub fn oscillation(
+    x_rad: &[f64; 4],
+    rotation_rad: f64,
+    platform_rad: f64,
+    latitude_rad: f64,
+) -> [f64; 3] {
     let x = x_rad;
     let (sl, cl) = (libm::sin(latitude_rad), libm::cos(latitude_rad));
     let (sr, cr) = (libm::sin(rotation_rad), libm::cos(rotation_rad));

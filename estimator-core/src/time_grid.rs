@@ -103,7 +103,11 @@ impl TimeGrid {
         };
         let dt = time_s - last;
         let Some(interval) = self.interval_s else {
-            return if dt > 0.0 { Ok(Placement::Learning) } else { Err(SampleError::TimeNotIncreasing) };
+            return if dt > 0.0 {
+                Ok(Placement::Learning)
+            } else {
+                Err(SampleError::TimeNotIncreasing)
+            };
         };
         if (dt - interval).abs() <= SNAP_TOLERANCE * interval {
             // The usual case, without the (software, on the M4F) f64 division below.
@@ -122,7 +126,13 @@ impl TimeGrid {
         if (dt - n * interval).abs() > SNAP_TOLERANCE * interval {
             return Ok(Placement::ClockStep);
         }
-        Ok(Placement::OnGrid { intervals: if n > u32::MAX as f64 { u32::MAX } else { n as u32 } })
+        Ok(Placement::OnGrid {
+            intervals: if n > u32::MAX as f64 {
+                u32::MAX
+            } else {
+                n as u32
+            },
+        })
     }
 
     /// Records an accepted stamp placed by [`TimeGrid::place`].
@@ -146,7 +156,8 @@ impl TimeGrid {
                     self.step_sum_s += time_s - last;
                     self.steps += 1;
                     if self.steps == REFINEMENT_STEPS {
-                        self.interval_s = Some(self.step_sum_s * (1.0 / f64::from(REFINEMENT_STEPS)));
+                        self.interval_s =
+                            Some(self.step_sum_s * (1.0 / f64::from(REFINEMENT_STEPS)));
                         self.step_sum_s = 0.0;
                         self.steps = 0;
                     }
@@ -197,9 +208,13 @@ mod tests {
         let mut grid = TimeGrid::new(None);
         let t0 = 1.7e9;
         // 2 s interval, +-0.15 s of jitter, rows 3 and 6 lost.
-        let jitter = [0.1, -0.15, 0.05, 0.0, 0.12, -0.08, 0.15, -0.1, 0.02, -0.12, 0.07, 0.0, 0.11, -0.03];
-        let stamps: std::vec::Vec<f64> =
-            (0..14).filter(|k| *k != 3 && *k != 6).map(|k| t0 + 2.0 * k as f64 + jitter[k]).collect();
+        let jitter = [
+            0.1, -0.15, 0.05, 0.0, 0.12, -0.08, 0.15, -0.1, 0.02, -0.12, 0.07, 0.0, 0.11, -0.03,
+        ];
+        let stamps: std::vec::Vec<f64> = (0..14)
+            .filter(|k| *k != 3 && *k != 6)
+            .map(|k| t0 + 2.0 * k as f64 + jitter[k])
+            .collect();
         let placed = run(&mut grid, &stamps);
         assert!(placed[..9].iter().all(|p| *p == Ok(Placement::Learning)));
         // The median of 8 steps, two of them doubled by the lost rows and all with +-0.3 s of
@@ -209,7 +224,10 @@ mod tests {
         assert_eq!(placed[9..], [Ok(Placement::OnGrid { intervals: 1 }); 3]);
         // A stamp 3 intervals on with jitter, then one 2.6 intervals on (a jump), then a repeat.
         let last = *stamps.last().unwrap();
-        assert_eq!(grid.place(last + 6.1), Ok(Placement::OnGrid { intervals: 3 }));
+        assert_eq!(
+            grid.place(last + 6.1),
+            Ok(Placement::OnGrid { intervals: 3 })
+        );
         assert_eq!(grid.place(last + 5.2), Ok(Placement::ClockStep));
         assert_eq!(grid.place(last), Err(SampleError::TimeNotIncreasing));
         assert_eq!(grid.place(last + 0.5), Err(SampleError::IrregularTimeStep));
@@ -232,6 +250,9 @@ mod tests {
         let mut grid = TimeGrid::new(None);
         let stamps: std::vec::Vec<f64> = (0..2000).map(|k| k as f64 * 1.003).collect();
         run(&mut grid, &stamps);
-        assert_eq!(grid.place(2199.0 * 1.003), Ok(Placement::OnGrid { intervals: 200 }));
+        assert_eq!(
+            grid.place(2199.0 * 1.003),
+            Ok(Placement::OnGrid { intervals: 200 })
+        );
     }
 }

@@ -21,7 +21,9 @@
 
 use estimator_core::checkpoint::{crc32, CheckpointError, CHECKPOINT_LEN, HEADER_LEN, VERSION};
 use estimator_core::synthetic::{Scheme, Signal};
-use estimator_core::{Config, Estimator, Holdup, Method, Output, Real, Sample, SampleError, Status};
+use estimator_core::{
+    Config, Estimator, Holdup, Method, Output, Real, Sample, SampleError, Status,
+};
 use proptest::prelude::*;
 
 /// The ring of the short tests: a 180 s period at 1 Hz is binned by 3, 90 s at 10 Hz by 15.
@@ -67,7 +69,11 @@ fn log(plan: Plan) -> Log {
     let outage = n * 45 / 100..n * 45 / 100 + 20;
     let stop = n * 70 / 100..n * 70 / 100 + per_period / 3;
     let jump_at = n * 85 / 100;
-    let mut out = Log { samples: Vec::new(), grid: Vec::new(), filled: Vec::new() };
+    let mut out = Log {
+        samples: Vec::new(),
+        grid: Vec::new(),
+        filled: Vec::new(),
+    };
     let mut lost_run = 0u64;
     let mut stopped_rho = None;
     for k in 0..n {
@@ -113,7 +119,11 @@ fn config(plan: &Plan, i: u8) -> Config {
         method: Method::try_from(i % 3).unwrap(),
         sample_interval_s: (i & 4 != 0).then_some(plan.interval_s),
         rotation_period_s: (i & 8 != 0).then_some(plan.period_s),
-        sway_gate_rad: if i & 16 != 0 { 1f64.to_radians() as Real } else { 0.0 },
+        sway_gate_rad: if i & 16 != 0 {
+            1f64.to_radians() as Real
+        } else {
+            0.0
+        },
         ..Config::default()
     }
 }
@@ -121,7 +131,11 @@ fn config(plan: &Plan, i: u8) -> Config {
 /// A configuration unlike any of the above, for the estimator an image is restored into.
 fn other(config: &Config) -> Config {
     Config {
-        method: if config.method == Method::Paper { Method::Windowed } else { Method::Paper },
+        method: if config.method == Method::Paper {
+            Method::Windowed
+        } else {
+            Method::Paper
+        },
         rotation_period_s: Some(300.0),
         sample_interval_s: Some(0.5),
         max_filled_gap_samples: 1,
@@ -143,7 +157,10 @@ fn restored<const C: usize>(buf: &[u8], config: &Config) -> Estimator<C> {
 }
 
 /// The outputs of an uninterrupted run.
-fn reference<const C: usize>(config: Config, samples: &[Sample]) -> (Vec<Result<Output, SampleError>>, Estimator<C>) {
+fn reference<const C: usize>(
+    config: Config,
+    samples: &[Sample],
+) -> (Vec<Result<Output, SampleError>>, Estimator<C>) {
     let mut est = Estimator::<C>::new(config).unwrap();
     let out = samples.iter().map(|s| est.step(s)).collect();
     (out, est)
@@ -167,20 +184,35 @@ fn check_cut<const C: usize>(
     assert_eq!(resumed.config(), &config);
     assert_eq!(resumed.estimate(), at_cut, "cut {cut}");
     assert_eq!(resumed.counters(), first.counters(), "cut {cut}");
-    assert_eq!(image(&resumed), buf, "cut {cut}: the restored state writes another image");
+    assert_eq!(
+        image(&resumed),
+        buf,
+        "cut {cut}: the restored state writes another image"
+    );
     drop(first);
     let mut had_estimate = at_cut.is_some();
     for (k, s) in samples.iter().enumerate().skip(cut + 1) {
         let out = resumed.step(s);
         match (&out, &reference.0[k]) {
-            (Err(a), Err(b)) => assert_eq!(a.reason(), b.reason(), "cut {cut}: row {k} rejected for another reason"),
+            (Err(a), Err(b)) => assert_eq!(
+                a.reason(),
+                b.reason(),
+                "cut {cut}: row {k} rejected for another reason"
+            ),
             (Ok(o), Ok(_)) => {
                 if k == cut + 1 && had_estimate {
                     // The first answer after the restart carries the checkpoint's estimate.
                     assert_eq!(o.estimate, at_cut, "cut {cut}: row {k}");
-                    assert!(!matches!(o.status, Status::Estimating | Status::Converged), "cut {cut}: {:?} at once", o.status);
+                    assert!(
+                        !matches!(o.status, Status::Estimating | Status::Converged),
+                        "cut {cut}: {:?} at once",
+                        o.status
+                    );
                 }
-                assert!(!had_estimate || o.estimate.is_some(), "cut {cut}: row {k} lost the estimate");
+                assert!(
+                    !had_estimate || o.estimate.is_some(),
+                    "cut {cut}: row {k} lost the estimate"
+                );
                 had_estimate |= o.estimate.is_some();
             }
             (a, b) => panic!("cut {cut}: row {k}: {a:?} where the uncut run gives {b:?}"),
@@ -189,17 +221,37 @@ fn check_cut<const C: usize>(
 }
 
 fn plan(i: u8, seed: u64) -> Plan {
-    let scheme = [Scheme::OneWay(1.0), Scheme::OneWay(-1.0), Scheme::Reciprocating, Scheme::FourPosition, Scheme::EightPosition]
-        [(seed % 5) as usize];
+    let scheme = [
+        Scheme::OneWay(1.0),
+        Scheme::OneWay(-1.0),
+        Scheme::Reciprocating,
+        Scheme::FourPosition,
+        Scheme::EightPosition,
+    ][(seed % 5) as usize];
     match i % 2 {
-        0 => Plan { interval_s: 1.0, period_s: 180.0, scheme, periods: 5.0, seed },
-        _ => Plan { interval_s: 0.1, period_s: 90.0, scheme, periods: 5.0, seed },
+        0 => Plan {
+            interval_s: 1.0,
+            period_s: 180.0,
+            scheme,
+            periods: 5.0,
+            seed,
+        },
+        _ => Plan {
+            interval_s: 0.1,
+            period_s: 90.0,
+            scheme,
+            periods: 5.0,
+            seed,
+        },
     }
 }
 
 /// Cases per property: `n`, or `PROPTEST_CASES` from the environment for longer runs.
 fn cases(n: u32) -> u32 {
-    std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(n)
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(n)
 }
 
 proptest! {
@@ -264,7 +316,12 @@ const PHASES: [Phase; 8] = [
     Phase::Estimating,
 ];
 
-fn phases_of(est: &Estimator<CAP>, out: &Result<Output, SampleError>, log: &Log, row: usize) -> Vec<Phase> {
+fn phases_of(
+    est: &Estimator<CAP>,
+    out: &Result<Output, SampleError>,
+    log: &Log,
+    row: usize,
+) -> Vec<Phase> {
     let mut phases = Vec::new();
     let rotation = est.rotation();
     if est.sample_interval_s().is_none() {
@@ -278,18 +335,24 @@ fn phases_of(est: &Estimator<CAP>, out: &Result<Output, SampleError>, log: &Log,
     }
     // A lost row among the last NEIGHBOURS indices: filled once its neighbours have arrived.
     let k = log.grid[row];
-    if est.sample_interval_s().is_some() && log.filled.iter().any(|g| *g < k && *g + NEIGHBOURS >= k) {
+    if est.sample_interval_s().is_some()
+        && log.filled.iter().any(|g| *g < k && *g + NEIGHBOURS >= k)
+    {
         phases.push(Phase::FilledGapPending);
     }
     // With bins, an entry is complete only every `samples_per_entry` samples: most cuts of a
     // filling or full window land in a bin being filled.
-    if rotation.samples_per_entry > 1 && matches!(est.progress(), None | Some(Holdup::WindowFilling { .. })) {
+    if rotation.samples_per_entry > 1
+        && matches!(est.progress(), None | Some(Holdup::WindowFilling { .. }))
+    {
         phases.push(Phase::BinFilling);
     }
     match out.as_ref().map(|o| o.status) {
         Ok(Status::RotationFault(_)) => phases.push(Phase::Fault),
         Ok(Status::Holding) => phases.push(Phase::Holding),
-        Ok(Status::Estimating | Status::Converged | Status::ModelMismatch) => phases.push(Phase::Estimating),
+        Ok(Status::Estimating | Status::Converged | Status::ModelMismatch) => {
+            phases.push(Phase::Estimating)
+        }
         _ => {}
     }
     phases
@@ -310,8 +373,16 @@ fn every_phase_is_cut_and_restored() {
             let out = est.step(s);
             let buf = image(&est);
             let back = restored::<CAP>(&buf, &config);
-            assert_eq!(back.estimate(), est.estimate(), "{plan:?} {config:?}: row {row}");
-            assert_eq!(back.counters(), est.counters(), "{plan:?} {config:?}: row {row}");
+            assert_eq!(
+                back.estimate(),
+                est.estimate(),
+                "{plan:?} {config:?}: row {row}"
+            );
+            assert_eq!(
+                back.counters(),
+                est.counters(),
+                "{plan:?} {config:?}: row {row}"
+            );
             assert_eq!(image(&back), buf, "{plan:?}: row {row}");
             for phase in phases_of(&est, &out, &log, row) {
                 cuts[phase as usize].push(row);
@@ -327,7 +398,12 @@ fn every_phase_is_cut_and_restored() {
                 Phase::BinFilling => config.method == Method::Windowed,
                 _ => true,
             };
-            assert_eq!(!rows.is_empty(), expected, "{plan:?} {config:?}: {phase:?} at {} rows", rows.len());
+            assert_eq!(
+                !rows.is_empty(),
+                expected,
+                "{plan:?} {config:?}: {phase:?} at {} rows",
+                rows.len()
+            );
             if let (Some(first), Some(middle)) = (rows.first(), rows.get(rows.len() / 2)) {
                 check_cut::<CAP>(config, &log.samples, *first, &reference);
                 check_cut::<CAP>(config, &log.samples, *middle, &reference);
@@ -368,7 +444,10 @@ fn every_bit_flip_is_refused_and_changes_nothing() {
             let result = target.restore(&buf);
             assert!(result.is_err(), "flip at byte {byte} bit {bit} accepted");
             if byte >= HEADER_LEN {
-                assert!(matches!(result, Err(CheckpointError::CrcMismatch { .. })), "{result:?}");
+                assert!(
+                    matches!(result, Err(CheckpointError::CrcMismatch { .. })),
+                    "{result:?}"
+                );
             }
             buf[byte] ^= 1 << bit;
         }
@@ -383,9 +462,16 @@ fn every_bit_flip_is_refused_and_changes_nothing() {
 fn default_sources() -> &'static [(Estimator, Vec<u8>); 3] {
     static SOURCES: std::sync::OnceLock<[(Estimator, Vec<u8>); 3]> = std::sync::OnceLock::new();
     SOURCES.get_or_init(|| {
-        let log = log(Plan { interval_s: 1.0, period_s: 480.0, scheme: Scheme::FourPosition, periods: 4.5, seed: 5 });
+        let log = log(Plan {
+            interval_s: 1.0,
+            period_s: 480.0,
+            scheme: Scheme::FourPosition,
+            periods: 4.5,
+            seed: 5,
+        });
         std::array::from_fn(|m| {
-            let mut est: Estimator = Estimator::new(Config::with_method(Method::try_from(m as u8).unwrap())).unwrap();
+            let mut est: Estimator =
+                Estimator::new(Config::with_method(Method::try_from(m as u8).unwrap())).unwrap();
             for s in &log.samples {
                 est.step(s).ok();
             }
@@ -435,7 +521,13 @@ fn an_image_of_the_previous_format_version_is_refused_as_such() {
     let crc = crc32(&old[..n - 4]);
     old[n - 4..].copy_from_slice(&crc.to_le_bytes());
     let err = target.restore(&old).unwrap_err();
-    assert_eq!(err, CheckpointError::Version { found: 5, expected: 6 });
+    assert_eq!(
+        err,
+        CheckpointError::Version {
+            found: 5,
+            expected: 6
+        }
+    );
     assert_eq!(VERSION, 6);
     assert!(err.to_string().contains("older firmware"), "{err}");
     assert!(target == before);
@@ -445,7 +537,7 @@ fn an_image_of_the_previous_format_version_is_refused_as_such() {
 
 #[test]
 fn an_image_is_at_most_2_kib_and_a_longer_buffer_is_fine() {
-    assert!(CHECKPOINT_LEN <= 2048);
+    const { assert!(CHECKPOINT_LEN <= 2048) };
     let est: Estimator = Estimator::new(Config::default()).unwrap();
     let mut big = vec![0xAAu8; CHECKPOINT_LEN + 100];
     assert_eq!(est.checkpoint(&mut big), Ok(CHECKPOINT_LEN));
@@ -461,7 +553,10 @@ fn too_small_buffer_is_refused_and_left_alone() {
     let mut small = vec![0x55u8; CHECKPOINT_LEN - 1];
     assert_eq!(
         est.checkpoint(&mut small),
-        Err(CheckpointError::BufferTooSmall { needed: CHECKPOINT_LEN, available: CHECKPOINT_LEN - 1 })
+        Err(CheckpointError::BufferTooSmall {
+            needed: CHECKPOINT_LEN,
+            available: CHECKPOINT_LEN - 1
+        })
     );
     assert!(small.iter().all(|b| *b == 0x55));
 }
@@ -477,20 +572,35 @@ fn header_errors_are_typed() {
     assert_eq!(target.restore(&b), Err(CheckpointError::BadMagic));
     let mut b = good.clone();
     b[4..6].copy_from_slice(&(VERSION + 1).to_le_bytes());
-    assert_eq!(target.restore(&b), Err(CheckpointError::Version { found: VERSION + 1, expected: VERSION }));
+    assert_eq!(
+        target.restore(&b),
+        Err(CheckpointError::Version {
+            found: VERSION + 1,
+            expected: VERSION
+        })
+    );
     let mut b = good.clone();
     b[6] = 8 / (std::mem::size_of::<Real>() as u8 / 4); // the other float width
-    assert_eq!(target.restore(&b), Err(CheckpointError::RealWidthMismatch(b[6])));
+    assert_eq!(
+        target.restore(&b),
+        Err(CheckpointError::RealWidthMismatch(b[6]))
+    );
     let mut b = good.clone();
     b[8..12].copy_from_slice(&((CHECKPOINT_LEN - 4) as u32).to_le_bytes());
     assert_eq!(
         target.restore(&b),
-        Err(CheckpointError::LengthMismatch { expected: CHECKPOINT_LEN, found: CHECKPOINT_LEN - 4 })
+        Err(CheckpointError::LengthMismatch {
+            expected: CHECKPOINT_LEN,
+            found: CHECKPOINT_LEN - 4
+        })
     );
     let mut b = good.clone();
     let n = b.len();
     b[n - 1] ^= 0x80;
-    assert!(matches!(target.restore(&b), Err(CheckpointError::CrcMismatch { .. })));
+    assert!(matches!(
+        target.restore(&b),
+        Err(CheckpointError::CrcMismatch { .. })
+    ));
     assert!(target == before);
 
     target.restore(good).unwrap();
@@ -504,7 +614,10 @@ fn an_image_of_another_ring_capacity_restores() {
     let mut small = Estimator::<CAP>::new(Config::default()).unwrap();
     small.restore(good).unwrap();
     // The same filter (the 1-sigma's residual check counts the window's entries, which differ).
-    assert_eq!(small.estimate().map(|e| e.x_rad), est.estimate().map(|e| e.x_rad));
+    assert_eq!(
+        small.estimate().map(|e| e.x_rad),
+        est.estimate().map(|e| e.x_rad)
+    );
     assert_eq!(image(&small), *good);
 }
 
@@ -537,6 +650,10 @@ fn a_power_cut_with_lost_rows_costs_almost_nothing() {
     let (a, b) = (after.estimate().unwrap(), uncut.estimate().unwrap());
     for i in 0..4 {
         let d = rad_to_arcsec(f64::from(a.x_rad[i]) - f64::from(b.x_rad[i]));
-        assert!(d.abs() < 0.1, "x{}: {d:.3} arcsec from the uncut run", i + 1);
+        assert!(
+            d.abs() < 0.1,
+            "x{}: {d:.3} arcsec from the uncut run",
+            i + 1
+        );
     }
 }

@@ -32,7 +32,13 @@ fn each_error_alone_is_identified_by_its_own_channel() {
             let e = est.estimate().unwrap();
             for j in 0..4 {
                 let got = rad_to_arcsec(e.x_rad[j] as f64);
-                assert!((got - x[j]).abs() < 1.0, "x{} = {} arcsec alone: x{} estimated {got:.3}", i + 1, x[i], j + 1);
+                assert!(
+                    (got - x[j]).abs() < 1.0,
+                    "x{} = {} arcsec alone: x{} estimated {got:.3}",
+                    i + 1,
+                    x[i],
+                    j + 1
+                );
             }
         }
     }
@@ -49,9 +55,17 @@ fn all_four_errors_together_within_half_percent_by_5000_s() {
         let e = est.estimate().unwrap();
         for j in 0..4 {
             let err = rad_to_arcsec(e.x_rad[j] as f64) - x[j];
-            assert!(err.abs() < 0.005 * x[j].abs(), "lat {lat}: x{} off by {err:.3} arcsec", j + 1);
+            assert!(
+                err.abs() < 0.005 * x[j].abs(),
+                "lat {lat}: x{} off by {err:.3} arcsec",
+                j + 1
+            );
             let sigma = rad_to_arcsec(e.sigma_rad[j] as f64);
-            assert!(err.abs() < 4.0 * sigma, "lat {lat}: x{} error {err:.3} beyond 4 sigma {sigma:.3}", j + 1);
+            assert!(
+                err.abs() < 4.0 * sigma,
+                "lat {lat}: x{} error {err:.3} beyond 4 sigma {sigma:.3}",
+                j + 1
+            );
         }
         assert_eq!(status, Status::Converged);
     }
@@ -85,14 +99,31 @@ fn roll_sin_channel_leakage_follows_derivation_not_eq_12() {
         let wt = EARTH_RATE_RAD_PER_S * t_end as f64;
         let xr = arcsec_to_rad(x_arcsec);
         let (ours, papers) = if which == 0 {
-            (-xr * lat.sin() * (1.0 - wt.cos()) / (2.0 * wt), -xr * lat.sin() * wt.sin() / (2.0 * wt))
+            (
+                -xr * lat.sin() * (1.0 - wt.cos()) / (2.0 * wt),
+                -xr * lat.sin() * wt.sin() / (2.0 * wt),
+            )
         } else {
-            (-xr * lat.sin() * wt.sin() / (2.0 * wt), xr * lat.sin() * (wt.cos() - 1.0) / (2.0 * wt))
+            (
+                -xr * lat.sin() * wt.sin() / (2.0 * wt),
+                xr * lat.sin() * (wt.cos() - 1.0) / (2.0 * wt),
+            )
         };
         let (r, ours, papers) = (rad_to_arcsec(r), rad_to_arcsec(ours), rad_to_arcsec(papers));
-        println!("x{}: correlation {r:.3}, derivation {ours:.3}, eq (12) {papers:.3} arcsec", which + 1);
-        assert!((r - ours).abs() < 0.5, "x{}: correlation {r:.3} arcsec, derivation {ours:.3}", which + 1);
-        assert!((r - papers).abs() > 20.0, "x{}: correlation {r:.3} arcsec, eq (12) {papers:.3}", which + 1);
+        println!(
+            "x{}: correlation {r:.3}, derivation {ours:.3}, eq (12) {papers:.3} arcsec",
+            which + 1
+        );
+        assert!(
+            (r - ours).abs() < 0.5,
+            "x{}: correlation {r:.3} arcsec, derivation {ours:.3}",
+            which + 1
+        );
+        assert!(
+            (r - papers).abs() > 20.0,
+            "x{}: correlation {r:.3} arcsec, eq (12) {papers:.3}",
+            which + 1
+        );
     }
 }
 
@@ -109,7 +140,11 @@ fn literal_paper_filter_is_limited_by_unmodelled_leakage() {
     for j in 2..4 {
         let ep = (rad_to_arcsec(p.x_rad[j] as f64) - x[j]).abs();
         let eo = (rad_to_arcsec(o.x_rad[j] as f64) - x[j]).abs();
-        assert!(eo < 0.5 && ep > 5.0 * eo, "x{}: paper {ep:.2} arcsec, ours {eo:.2} arcsec", j + 1);
+        assert!(
+            eo < 0.5 && ep > 5.0 * eo,
+            "x{}: paper {ep:.2} arcsec, ours {eo:.2} arcsec",
+            j + 1
+        );
     }
 }
 
@@ -154,7 +189,14 @@ fn corrected_attitude_removes_the_oscillation() {
 #[test]
 fn estimator_fits_in_24_kib() {
     let size = core::mem::size_of::<Estimator>();
-    println!("size_of::<Estimator>() = {size} bytes; Real = {}", core::any::type_name::<Real>());
-    let budget = if cfg!(feature = "f64") { 26 * 1024 } else { 24 * 1024 };
+    println!(
+        "size_of::<Estimator>() = {size} bytes; Real = {}",
+        core::any::type_name::<Real>()
+    );
+    let budget = if cfg!(feature = "f64") {
+        26 * 1024
+    } else {
+        24 * 1024
+    };
     assert!(size <= budget, "{size} bytes");
 }

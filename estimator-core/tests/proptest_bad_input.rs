@@ -10,12 +10,15 @@
 //!   counted under that reason and changes nothing else in the state (the whole state compared,
 //!   the rejection counters aside);
 //! - every number in an accepted step's output is finite.
+//!
 //! After every sequence: accepted + rejected = samples fed, the window's running sums equal the
 //! sums of its entries, and the covariance is symmetric positive definite.
 
 use estimator_core::correlation::CorrelationSums;
 use estimator_core::synthetic::Signal;
-use estimator_core::{Attitude, Config, Estimator, Field, Method, Output, Real, RejectReason, Sample, SampleError};
+use estimator_core::{
+    Attitude, Config, Estimator, Field, Method, Output, Real, RejectReason, Sample, SampleError,
+};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 
@@ -48,7 +51,7 @@ fn special() -> impl Strategy<Value = f64> {
         Just(-1e30),
         Just(f64::MAX),
         Just(f32::MAX as f64),
-        Just(1e-40),  // subnormal in f32
+        Just(1e-40), // subnormal in f32
         Just(0.0),
         Just(-0.0),
         Just(PI / 2.0), // roll/pitch limit; latitude out of range
@@ -92,7 +95,11 @@ fn healthy(t: f64) -> Sample {
 /// pinned): a step back of more than two intervals is a clock step (accepted), a step of at most
 /// zero is a repeat, a step below half an interval is irregular, anything else is accepted (on the
 /// grid within a quarter interval, a clock jump otherwise).
-fn expected(sample: &Sample, last_accepted_s: Option<f64>, interval_s: f64) -> Result<(), SampleError> {
+fn expected(
+    sample: &Sample,
+    last_accepted_s: Option<f64>,
+    interval_s: f64,
+) -> Result<(), SampleError> {
     if !sample.time_s.is_finite() {
         return Err(SampleError::NonFinite(Field::Time));
     }
@@ -114,7 +121,9 @@ fn expected(sample: &Sample, last_accepted_s: Option<f64>, interval_s: f64) -> R
     for (f, v) in fields {
         match f {
             Field::Latitude if v.abs() >= half_pi => return Err(SampleError::LatitudeOutOfRange),
-            Field::Roll | Field::Pitch if v.abs() > half_pi => return Err(SampleError::AngleOutOfRange(f)),
+            Field::Roll | Field::Pitch if v.abs() > half_pi => {
+                return Err(SampleError::AngleOutOfRange(f))
+            }
             Field::Rotation | Field::Platform | Field::Heading if v.abs() > two_pi => {
                 return Err(SampleError::AngleOutOfRange(f))
             }
@@ -126,7 +135,7 @@ fn expected(sample: &Sample, last_accepted_s: Option<f64>, interval_s: f64) -> R
         if dt < -2.0 * interval_s {
             return Ok(());
         }
-        if !(dt > 0.0) {
+        if dt.is_nan() || dt <= 0.0 {
             return Err(SampleError::TimeNotIncreasing);
         }
         if (dt / interval_s).round() < 1.0 {
@@ -152,7 +161,9 @@ fn all_finite(o: &Output) -> bool {
 /// The whole state, rejection counters aside.
 fn image(est: &Estimator<CAP>) -> String {
     let text = format!("{est:?}");
-    let start = text.find("rejected: RejectCounts(").expect("the state has rejection counters");
+    let start = text
+        .find("rejected: RejectCounts(")
+        .expect("the state has rejection counters");
     let end = start + text[start..].find(')').expect("closed");
     format!("{}{}", &text[..start], &text[end..])
 }
@@ -209,7 +220,11 @@ fn run(config: Config, events: &[Event]) -> Result<(), TestCaseError> {
                 },
             },
         };
-        let want = expected(&sample, last_accepted, config.sample_interval_s.unwrap_or(1.0));
+        let want = expected(
+            &sample,
+            last_accepted,
+            config.sample_interval_s.unwrap_or(1.0),
+        );
         let before_image = image(&est);
         let before_rejected = est.rejected();
         let before_counters = est.counters();
@@ -237,9 +252,14 @@ fn run(config: Config, events: &[Event]) -> Result<(), TestCaseError> {
                 want_rejected.count(e.reason());
                 prop_assert_eq!(est.rejected(), want_rejected);
                 prop_assert_eq!(est.counters(), before_counters);
-                prop_assert!(image(&est) == before_image, "a rejected sample changed the state");
+                prop_assert!(
+                    image(&est) == before_image,
+                    "a rejected sample changed the state"
+                );
             }
-            (got, want) => prop_assert!(false, "got {got:?}, documented {want:?}, sample {sample:?}"),
+            (got, want) => {
+                prop_assert!(false, "got {got:?}, documented {want:?}, sample {sample:?}")
+            }
         }
     }
     prop_assert_eq!(est.rejected().0, reasons);
@@ -260,7 +280,10 @@ fn config(method: u8, filled: u32) -> Config {
 
 /// Cases per property: `n`, or `PROPTEST_CASES` from the environment for longer runs.
 fn cases(n: u32) -> u32 {
-    std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(n)
+    std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(n)
 }
 
 proptest! {
@@ -300,7 +323,10 @@ fn healthy_stream_reaches_estimation_in_a_few_periods() {
             }
         }
         // One period to learn the pattern's shape while the window fills, and the filler's delay.
-        assert!(updating >= 200 - PERIOD - 10, "method {method}: estimate on {updating} of 200 steps");
+        assert!(
+            updating >= 200 - PERIOD - 10,
+            "method {method}: estimate on {updating} of 200 steps"
+        );
     }
 }
 
@@ -309,7 +335,16 @@ fn healthy_stream_reaches_estimation_in_a_few_periods() {
 fn extremes_in_every_field_while_estimating() {
     let mut events = vec![Event::Good; 64];
     for f in 0..7u8 {
-        for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 1e30, f64::MAX, 1e-40, PI / 2.0, 2.0 * PI + 1e-5] {
+        for v in [
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            1e30,
+            f64::MAX,
+            1e-40,
+            PI / 2.0,
+            2.0 * PI + 1e-5,
+        ] {
             events.push(Event::Field(f, v));
             events.push(Event::Good);
         }
@@ -341,7 +376,9 @@ fn latitude_one_ulp_below_the_pole_keeps_outputs_finite() {
         for k in 0..400 {
             let mut s = healthy(1000.0 + k as f64);
             s.latitude_rad = lat;
-            let out = est.step(&s).unwrap_or_else(|e| panic!("latitude {lat} rejected: {e:?}"));
+            let out = est
+                .step(&s)
+                .unwrap_or_else(|e| panic!("latitude {lat} rejected: {e:?}"));
             assert!(all_finite(&out), "method {method}, step {k}: {out:?}");
         }
     }
@@ -428,7 +465,9 @@ fn huge_but_finite_random_walk_is_refused_or_stays_finite() {
             traditional_drift_rad_per_sqrt_s: 9.2e18 as Real,
             ..Config::with_method(method)
         };
-        let Ok(mut est) = Estimator::<CAP>::new(config) else { continue };
+        let Ok(mut est) = Estimator::<CAP>::new(config) else {
+            continue;
+        };
         for k in 0..100 {
             let out = est.step(&healthy(1000.0 + k as f64)).unwrap();
             assert!(all_finite(&out), "{method:?}, step {k}: {out:?}");

@@ -14,7 +14,14 @@ struct Run {
     first_estimate_s: Option<f64>,
 }
 
-fn run(signal: &mut Signal, config: Config, duration_s: f64, interval_s: f64, keep: impl Fn(u64) -> bool, stamp: impl Fn(f64, u64) -> f64) -> (Estimator, Run) {
+fn run(
+    signal: &mut Signal,
+    config: Config,
+    duration_s: f64,
+    interval_s: f64,
+    keep: impl Fn(u64) -> bool,
+    stamp: impl Fn(f64, u64) -> f64,
+) -> (Estimator, Run) {
     let mut est: Estimator = Estimator::new(config).unwrap();
     let mut status = Status::WarmingUp;
     let mut first = None;
@@ -35,7 +42,15 @@ fn run(signal: &mut Signal, config: Config, duration_s: f64, interval_s: f64, ke
     let e = est.estimate().unwrap();
     let errors_arcsec = core::array::from_fn(|i| rad_to_arcsec(e.x_rad[i] as f64) - X[i]);
     let sigma_arcsec = core::array::from_fn(|i| rad_to_arcsec(e.sigma_rad[i] as f64));
-    (est, Run { errors_arcsec, sigma_arcsec, status, first_estimate_s: first })
+    (
+        est,
+        Run {
+            errors_arcsec,
+            sigma_arcsec,
+            status,
+            first_estimate_s: first,
+        },
+    )
 }
 
 fn noisy(scheme: Scheme, period_s: f64, latitude_deg: f64) -> Signal {
@@ -46,7 +61,13 @@ fn noisy(scheme: Scheme, period_s: f64, latitude_deg: f64) -> Signal {
     s
 }
 
-const SCHEMES: [Scheme; 5] = [Scheme::OneWay(1.0), Scheme::OneWay(-1.0), Scheme::Reciprocating, Scheme::FourPosition, Scheme::EightPosition];
+const SCHEMES: [Scheme; 5] = [
+    Scheme::OneWay(1.0),
+    Scheme::OneWay(-1.0),
+    Scheme::Reciprocating,
+    Scheme::FourPosition,
+    Scheme::EightPosition,
+];
 
 fn within(r: &Run, bound_arcsec: f64) -> bool {
     r.errors_arcsec.iter().all(|e| e.abs() < bound_arcsec)
@@ -61,7 +82,14 @@ fn every_scheme_period_and_latitude_is_detected_and_estimated() {
         for period in [360.0, 480.0, 720.0] {
             for latitude in [-60.0, 0.0, 45.0] {
                 let mut sig = noisy(scheme, period, latitude);
-                let (est, r) = run(&mut sig, Config::default(), 10_000.0, 1.0, |_| true, |t, _| t);
+                let (est, r) = run(
+                    &mut sig,
+                    Config::default(),
+                    10_000.0,
+                    1.0,
+                    |_| true,
+                    |t, _| t,
+                );
                 let rot = est.rotation();
                 let name = format!("{scheme:?}, {period} s, {latitude} deg");
                 assert_eq!(rot.period_s, Some(period), "{name}");
@@ -72,14 +100,24 @@ fn every_scheme_period_and_latitude_is_detected_and_estimated() {
                     Scheme::EightPosition => PatternKind::StopAndGoReciprocating,
                 };
                 assert_eq!(rot.kind, Some(kind), "{name}");
-                assert!(r.first_estimate_s.is_some_and(|t| t <= 3.0 * period), "{name}: first estimate at {:?}", r.first_estimate_s);
+                assert!(
+                    r.first_estimate_s.is_some_and(|t| t <= 3.0 * period),
+                    "{name}: first estimate at {:?}",
+                    r.first_estimate_s
+                );
                 assert!(within(&r, 1.0), "{name}: {:?}", r.errors_arcsec);
                 // 4 sigma: the largest of 180 normalized errors. With an honest 1-sigma (the
                 // windowed method rescales it to the noise it measures) one of 180 is beyond 3
                 // sigma in about 40 % of draws, beyond 4 sigma in about 1 %; before, the 1-sigma
                 // assumed twice this log's noise and 3 of it were 6 true sigma.
                 for i in 0..4 {
-                    assert!(r.errors_arcsec[i].abs() < 4.0 * r.sigma_arcsec[i], "{name}: x{} {:.3} vs 1-sigma {:.3}", i + 1, r.errors_arcsec[i], r.sigma_arcsec[i]);
+                    assert!(
+                        r.errors_arcsec[i].abs() < 4.0 * r.sigma_arcsec[i],
+                        "{name}: x{} {:.3} vs 1-sigma {:.3}",
+                        i + 1,
+                        r.errors_arcsec[i],
+                        r.sigma_arcsec[i]
+                    );
                 }
             }
         }
@@ -100,7 +138,12 @@ fn uniform(seed: u64, k: u64) -> f64 {
 /// counts what was filled).
 #[test]
 fn lost_rows_outages_and_jittered_unix_stamps() {
-    for (scheme, loss) in [(Scheme::OneWay(1.0), 0.02), (Scheme::FourPosition, 0.02), (Scheme::EightPosition, 0.02), (Scheme::Reciprocating, 0.05)] {
+    for (scheme, loss) in [
+        (Scheme::OneWay(1.0), 0.02),
+        (Scheme::FourPosition, 0.02),
+        (Scheme::EightPosition, 0.02),
+        (Scheme::Reciprocating, 0.05),
+    ] {
         let outages = [7000u64, 19000, 31000];
         let keep = |k: u64| uniform(7, k) >= loss && !outages.iter().any(|o| k >= *o && k < o + 60);
         let stamp = |t: f64, k: u64| 1.7e9 + t + 0.02 * (2.0 * uniform(11, k) - 1.0);
@@ -110,14 +153,31 @@ fn lost_rows_outages_and_jittered_unix_stamps() {
             sig.roll_sway_deg = 6.0;
             let (est, r) = run(&mut sig, Config::default(), duration, 1.0, keep, stamp);
             std::println!("{scheme:?} loss {loss}, {duration} s: {:?} first {:?} errors {:.3?} 1-sigma {:.3?} {:?}", est.counters(), r.first_estimate_s, r.errors_arcsec, r.sigma_arcsec, r.status);
-            assert_eq!(est.counters().window_restarts, outages.iter().filter(|o| (**o as f64) < duration).count() as u32);
+            assert_eq!(
+                est.counters().window_restarts,
+                outages.iter().filter(|o| (**o as f64) < duration).count() as u32
+            );
             for i in 0..4 {
-                assert!(r.errors_arcsec[i].abs() < 3.0 * r.sigma_arcsec[i], "{scheme:?}: x{} {:.3} vs 1-sigma {:.3}", i + 1, r.errors_arcsec[i], r.sigma_arcsec[i]);
+                assert!(
+                    r.errors_arcsec[i].abs() < 3.0 * r.sigma_arcsec[i],
+                    "{scheme:?}: x{} {:.3} vs 1-sigma {:.3}",
+                    i + 1,
+                    r.errors_arcsec[i],
+                    r.sigma_arcsec[i]
+                );
             }
             results.push(r);
         }
-        assert!(within(&results[0], 10.0), "{scheme:?} at 20000 s: {:?}", results[0].errors_arcsec);
-        assert!(within(&results[1], 3.0), "{scheme:?} at 45000 s: {:?}", results[1].errors_arcsec);
+        assert!(
+            within(&results[0], 10.0),
+            "{scheme:?} at 20000 s: {:?}",
+            results[0].errors_arcsec
+        );
+        assert!(
+            within(&results[1], 3.0),
+            "{scheme:?} at 45000 s: {:?}",
+            results[1].errors_arcsec
+        );
     }
 }
 
@@ -127,11 +187,29 @@ fn lost_rows_outages_and_jittered_unix_stamps() {
 fn sample_intervals_of_2_s_and_a_10_hz_log() {
     for (interval, bin) in [(2.0, 1), (0.1, 8)] {
         let mut sig = noisy(Scheme::Reciprocating, 480.0, 40.0);
-        let (est, r) = run(&mut sig, Config::default(), 45_000.0, interval, |_| true, |t, _| t);
-        std::println!("{interval} s: {:?} learned {:?} s, first {:?} errors {:.3?} 1-sigma {:.3?} {:?}", est.rotation(), est.sample_interval_s(), r.first_estimate_s, r.errors_arcsec, r.sigma_arcsec, r.status);
+        let (est, r) = run(
+            &mut sig,
+            Config::default(),
+            45_000.0,
+            interval,
+            |_| true,
+            |t, _| t,
+        );
+        std::println!(
+            "{interval} s: {:?} learned {:?} s, first {:?} errors {:.3?} 1-sigma {:.3?} {:?}",
+            est.rotation(),
+            est.sample_interval_s(),
+            r.first_estimate_s,
+            r.errors_arcsec,
+            r.sigma_arcsec,
+            r.status
+        );
         assert!((est.sample_interval_s().unwrap() - interval).abs() < 1e-6 * interval);
         assert_eq!(est.rotation().samples_per_entry, bin);
-        assert!(est.rotation().period_s.is_some_and(|p| (p - 480.0).abs() < 1e-3));
+        assert!(est
+            .rotation()
+            .period_s
+            .is_some_and(|p| (p - 480.0).abs() < 1e-3));
         assert!(within(&r, 3.0), "{interval} s: {:?}", r.errors_arcsec);
     }
 }
@@ -147,10 +225,21 @@ fn a_constant_heel_with_lost_rows_moves_no_error() {
         let (_, a) = run(&mut level, Config::default(), 20_000.0, 1.0, keep, |t, _| t);
         let mut heeled = noisy(scheme, 480.0, 40.0);
         heeled.low_frequency_deg = 3.0;
-        let (_, b) = run(&mut heeled, Config::default(), 20_000.0, 1.0, keep, |t, _| t);
+        let (_, b) = run(
+            &mut heeled,
+            Config::default(),
+            20_000.0,
+            1.0,
+            keep,
+            |t, _| t,
+        );
         for i in 0..4 {
             let moved = (a.errors_arcsec[i] - b.errors_arcsec[i]).abs();
-            assert!(moved < 1.0, "{scheme:?}: x{} moved {moved:.3} arcsec", i + 1);
+            assert!(
+                moved < 1.0,
+                "{scheme:?}: x{} moved {moved:.3} arcsec",
+                i + 1
+            );
         }
     }
 }

@@ -28,7 +28,13 @@ pub unsafe extern "C" fn rins_estimator_checkpoint(
     written: *mut usize,
 ) -> RinsError {
     // SAFETY: the caller's promises.
-    let checked = unsafe { (from_handle(estimator), pointer::check(written.cast_const()), pointer::bytes_mut(buffer, capacity)) };
+    let checked = unsafe {
+        (
+            from_handle(estimator),
+            pointer::check(written.cast_const()),
+            pointer::bytes_mut(buffer, capacity),
+        )
+    };
     let (est, buffer) = match checked {
         (Ok(est), Ok(()), Ok(buffer)) => (est, buffer),
         (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => return e,
@@ -56,7 +62,11 @@ pub unsafe extern "C" fn rins_estimator_checkpoint(
 /// `estimator` is null or a handle from `rins_estimator_init` that no other call uses at the same
 /// time; `buffer` is null or points to `len` readable bytes.
 #[no_mangle]
-pub unsafe extern "C" fn rins_estimator_restore(estimator: *mut RinsEstimator, buffer: *const u8, len: usize) -> RinsError {
+pub unsafe extern "C" fn rins_estimator_restore(
+    estimator: *mut RinsEstimator,
+    buffer: *const u8,
+    len: usize,
+) -> RinsError {
     // SAFETY: the caller's promises.
     let checked = unsafe { (from_handle_mut(estimator), pointer::bytes(buffer, len)) };
     let (est, image) = match checked {

@@ -148,7 +148,11 @@ pub unsafe extern "C" fn rins_config_default(config: *mut RinsConfig) -> RinsErr
 /// `config` is null (refused) or points to a readable `RinsConfig`; `message` is null or points
 /// to `capacity` writable bytes.
 #[no_mangle]
-pub unsafe extern "C" fn rins_config_check(config: *const RinsConfig, message: *mut core::ffi::c_char, capacity: usize) -> RinsError {
+pub unsafe extern "C" fn rins_config_check(
+    config: *const RinsConfig,
+    message: *mut core::ffi::c_char,
+    capacity: usize,
+) -> RinsError {
     // SAFETY: the caller's promise.
     let config = match unsafe { pointer::read(config) } {
         Ok(c) => c,
@@ -176,7 +180,10 @@ mod tests {
     fn defaults() -> RinsConfig {
         let mut c = MaybeUninit::<RinsConfig>::uninit();
         // SAFETY: a writable RinsConfig.
-        assert_eq!(unsafe { rins_config_default(c.as_mut_ptr()) }, RinsError::Ok);
+        assert_eq!(
+            unsafe { rins_config_default(c.as_mut_ptr()) },
+            RinsError::Ok
+        );
         // SAFETY: written above.
         unsafe { c.assume_init() }
     }
@@ -185,9 +192,15 @@ mod tests {
     fn defaults_are_the_cores_bit_for_bit() {
         let c = defaults();
         assert_eq!(c.to_core().unwrap(), Config::default());
-        assert_eq!((c.rotation_period_s, c.sample_interval_s, c.method), (0.0, 0.0, RinsMethod::Windowed as u32));
+        assert_eq!(
+            (c.rotation_period_s, c.sample_interval_s, c.method),
+            (0.0, 0.0, RinsMethod::Windowed as u32)
+        );
         // SAFETY: null is refused, not written.
-        assert_eq!(unsafe { rins_config_default(core::ptr::null_mut()) }, RinsError::NullPointer);
+        assert_eq!(
+            unsafe { rins_config_default(core::ptr::null_mut()) },
+            RinsError::NullPointer
+        );
     }
 
     #[test]
@@ -197,7 +210,10 @@ mod tests {
         c.sample_interval_s = 1.0;
         c.method = RinsMethod::Traditional as u32;
         let core = c.to_core().unwrap();
-        assert_eq!((core.rotation_period_s, core.sample_interval_s, core.method), (Some(480.0), Some(1.0), Method::Traditional));
+        assert_eq!(
+            (core.rotation_period_s, core.sample_interval_s, core.method),
+            (Some(480.0), Some(1.0), Method::Traditional)
+        );
         assert_eq!(RinsConfig::from(&core), c);
         for m in Method::ALL {
             assert_eq!(RinsMethod::from(m) as u32, m as u32);
@@ -212,15 +228,33 @@ mod tests {
         // SAFETY: a readable config and 80 writable bytes.
         let e = unsafe { rins_config_check(&c, message.as_mut_ptr().cast(), message.len()) };
         assert_eq!(e, RinsError::InvalidConfig);
-        let text = CStr::from_bytes_until_nul(&message).unwrap().to_str().unwrap();
-        assert_eq!(text, "measurement_sigma_rad = -1 must be positive and finite");
+        let text = CStr::from_bytes_until_nul(&message)
+            .unwrap()
+            .to_str()
+            .unwrap();
+        assert_eq!(
+            text,
+            "measurement_sigma_rad = -1 must be positive and finite"
+        );
         // Cut to fit, still NUL-terminated; a null message is allowed.
         let mut short = [0x55u8; 8];
         // SAFETY: as above.
-        assert_eq!(unsafe { rins_config_check(&c, short.as_mut_ptr().cast(), short.len()) }, RinsError::InvalidConfig);
-        assert_eq!(CStr::from_bytes_until_nul(&short).unwrap().to_str().unwrap(), "measure");
+        assert_eq!(
+            unsafe { rins_config_check(&c, short.as_mut_ptr().cast(), short.len()) },
+            RinsError::InvalidConfig
+        );
+        assert_eq!(
+            CStr::from_bytes_until_nul(&short)
+                .unwrap()
+                .to_str()
+                .unwrap(),
+            "measure"
+        );
         // SAFETY: as above.
-        assert_eq!(unsafe { rins_config_check(&c, core::ptr::null_mut(), 99) }, RinsError::InvalidConfig);
+        assert_eq!(
+            unsafe { rins_config_check(&c, core::ptr::null_mut(), 99) },
+            RinsError::InvalidConfig
+        );
         let mut unknown = defaults();
         unknown.method = 7;
         assert!(unknown.to_core().is_err());
@@ -228,8 +262,14 @@ mod tests {
         nan.rotation_period_s = f64::NAN;
         assert!(nan.to_core().is_err());
         // SAFETY: null is refused.
-        assert_eq!(unsafe { rins_config_check(core::ptr::null(), core::ptr::null_mut(), 0) }, RinsError::NullPointer);
+        assert_eq!(
+            unsafe { rins_config_check(core::ptr::null(), core::ptr::null_mut(), 0) },
+            RinsError::NullPointer
+        );
         // SAFETY: a readable config.
-        assert_eq!(unsafe { rins_config_check(&defaults(), core::ptr::null_mut(), 0) }, RinsError::Ok);
+        assert_eq!(
+            unsafe { rins_config_check(&defaults(), core::ptr::null_mut(), 0) },
+            RinsError::Ok
+        );
     }
 }

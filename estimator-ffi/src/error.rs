@@ -94,7 +94,9 @@ impl From<CheckpointError> for RinsError {
             | CheckpointError::RealWidthMismatch(_)
             | CheckpointError::LengthMismatch { .. }
             | CheckpointError::UnknownMethod(_)
-            | CheckpointError::InvalidConfig(ConfigError::MethodUnavailable) => RinsError::CheckpointIncompatible,
+            | CheckpointError::InvalidConfig(ConfigError::MethodUnavailable) => {
+                RinsError::CheckpointIncompatible
+            }
             CheckpointError::BadMagic
             | CheckpointError::CrcMismatch { .. }
             | CheckpointError::InvalidConfig(_)
@@ -129,11 +131,19 @@ mod tests {
         for (i, e) in RinsError::ALL.iter().enumerate() {
             assert_eq!(*e as u32, i as u32);
             // SAFETY: the library's own NUL-terminated strings.
-            let name = unsafe { CStr::from_ptr(rins_error_name(*e as u32)) }.to_str().unwrap();
+            let name = unsafe { CStr::from_ptr(rins_error_name(*e as u32)) }
+                .to_str()
+                .unwrap();
             assert!(name.starts_with("RINS_ERROR_"), "{name}");
             let expected: std::string::String = std::format!("{e:?}")
                 .chars()
-                .flat_map(|c| if c.is_uppercase() { std::vec!['_', c] } else { std::vec![c.to_ascii_uppercase()] })
+                .flat_map(|c| {
+                    if c.is_uppercase() {
+                        std::vec!['_', c]
+                    } else {
+                        std::vec![c.to_ascii_uppercase()]
+                    }
+                })
                 .collect();
             assert_eq!(name, std::format!("RINS_ERROR{expected}"));
         }

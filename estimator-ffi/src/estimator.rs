@@ -42,7 +42,9 @@ const _: () = assert!(align_of::<RinsEstimator>() <= RINS_ESTIMATOR_ALIGN);
 /// # Safety
 /// `handle` is null or points to at least `size_of::<RinsEstimator>()` readable bytes that
 /// nothing writes while the reference lives.
-pub(crate) unsafe fn from_handle<'a>(handle: *const RinsEstimator) -> Result<&'a Estimator, RinsError> {
+pub(crate) unsafe fn from_handle<'a>(
+    handle: *const RinsEstimator,
+) -> Result<&'a Estimator, RinsError> {
     pointer::check(handle)?;
     // SAFETY: checked; the mark is read as a plain integer, whatever the memory holds.
     let magic = unsafe { core::ptr::addr_of!((*handle).magic).read() };
@@ -57,7 +59,9 @@ pub(crate) unsafe fn from_handle<'a>(handle: *const RinsEstimator) -> Result<&'a
 ///
 /// # Safety
 /// As for [`from_handle`], and nothing else reads or writes the memory while the reference lives.
-pub(crate) unsafe fn from_handle_mut<'a>(handle: *mut RinsEstimator) -> Result<&'a mut Estimator, RinsError> {
+pub(crate) unsafe fn from_handle_mut<'a>(
+    handle: *mut RinsEstimator,
+) -> Result<&'a mut Estimator, RinsError> {
     // SAFETY: the caller's promise.
     unsafe { from_handle(handle) }?;
     // SAFETY: checked and marked above; exclusive by the caller's promise.
@@ -95,7 +99,12 @@ pub unsafe extern "C" fn rins_estimator_init(
 ///
 /// # Safety
 /// As for [`rins_estimator_init`].
-unsafe fn init(memory: *mut c_void, size: usize, config: *const RinsConfig, estimator: *mut *mut RinsEstimator) -> Result<(), RinsError> {
+unsafe fn init(
+    memory: *mut c_void,
+    size: usize,
+    config: *const RinsConfig,
+    estimator: *mut *mut RinsEstimator,
+) -> Result<(), RinsError> {
     pointer::check(estimator.cast_const())?;
     // SAFETY: the caller's promise.
     let config = unsafe { pointer::read(config) }?;
@@ -129,16 +138,29 @@ unsafe fn init(memory: *mut c_void, size: usize, config: *const RinsConfig, esti
 /// time; `sample` is null or points to a readable `RinsSample`; `output` is null or points to a
 /// writable `RinsOutput`.
 #[no_mangle]
-pub unsafe extern "C" fn rins_estimator_step(estimator: *mut RinsEstimator, sample: *const RinsSample, output: *mut RinsOutput) -> RinsError {
+pub unsafe extern "C" fn rins_estimator_step(
+    estimator: *mut RinsEstimator,
+    sample: *const RinsSample,
+    output: *mut RinsOutput,
+) -> RinsError {
     // SAFETY: the caller's promises.
-    let checked = unsafe { (from_handle_mut(estimator), pointer::read(sample), pointer::check(output.cast_const())) };
+    let checked = unsafe {
+        (
+            from_handle_mut(estimator),
+            pointer::read(sample),
+            pointer::check(output.cast_const()),
+        )
+    };
     let (est, sample) = match checked {
         (Ok(est), Ok(sample), Ok(())) => (est, sample),
         (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => return e,
     };
     let (out, result) = match est.step(&Sample::from(&sample)) {
         Ok(out) => (RinsOutput::accepted(&out), RinsError::Ok),
-        Err(e) => (RinsOutput::rejected(sample.time_s, &e, est.estimate().as_ref()), RinsError::SampleRejected),
+        Err(e) => (
+            RinsOutput::rejected(sample.time_s, &e, est.estimate().as_ref()),
+            RinsError::SampleRejected,
+        ),
     };
     // SAFETY: checked above; writable by the caller's promise.
     unsafe { output.write(out) };
@@ -152,7 +174,10 @@ pub unsafe extern "C" fn rins_estimator_step(estimator: *mut RinsEstimator, samp
 /// `estimator` is null or a handle from `rins_estimator_init` that no call changes at the same
 /// time; `estimate` is null or points to a writable `RinsEstimate`.
 #[no_mangle]
-pub unsafe extern "C" fn rins_estimator_estimate(estimator: *const RinsEstimator, estimate: *mut RinsEstimate) -> RinsError {
+pub unsafe extern "C" fn rins_estimator_estimate(
+    estimator: *const RinsEstimator,
+    estimate: *mut RinsEstimate,
+) -> RinsError {
     // SAFETY: the caller's promise.
     let est = match unsafe { estimator_ref_and_check(estimator, estimate) } {
         Ok(est) => est,
@@ -187,7 +212,10 @@ pub struct RinsCounters {
 /// `estimator` is null or a handle from `rins_estimator_init` that no call changes at the same
 /// time; `counters` is null or points to a writable `RinsCounters`.
 #[no_mangle]
-pub unsafe extern "C" fn rins_estimator_counters(estimator: *const RinsEstimator, counters: *mut RinsCounters) -> RinsError {
+pub unsafe extern "C" fn rins_estimator_counters(
+    estimator: *const RinsEstimator,
+    counters: *mut RinsCounters,
+) -> RinsError {
     // SAFETY: the caller's promise.
     let est = match unsafe { estimator_ref_and_check(estimator, counters) } {
         Ok(est) => est,
@@ -228,7 +256,10 @@ pub unsafe extern "C" fn rins_estimator_reset(estimator: *mut RinsEstimator) -> 
 ///
 /// # Safety
 /// As for [`from_handle`].
-unsafe fn estimator_ref_and_check<'a, T>(handle: *const RinsEstimator, out: *mut T) -> Result<&'a Estimator, RinsError> {
+unsafe fn estimator_ref_and_check<'a, T>(
+    handle: *const RinsEstimator,
+    out: *mut T,
+) -> Result<&'a Estimator, RinsError> {
     // SAFETY: the caller's promise.
     let est = unsafe { from_handle(handle) }?;
     pointer::check(out.cast_const())?;

@@ -16,14 +16,34 @@ use std::string::{String, ToString};
 
 /// The header as the sources generate it.
 fn generate(crate_dir: &Path) -> String {
-    let config = cbindgen::Config::from_file(crate_dir.join("cbindgen.toml")).unwrap_or_else(|e| panic!("cbindgen.toml: {e}"));
+    let config = cbindgen::Config::from_file(crate_dir.join("cbindgen.toml"))
+        .unwrap_or_else(|e| panic!("cbindgen.toml: {e}"));
     let constants = [
-        ("Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.", "RINS_CHECKPOINT_LEN", RINS_CHECKPOINT_LEN.to_string()),
-        ("Bytes of a buffer that holds any estimates CSV row with its line end and NUL.", "RINS_ROW_MAX_LEN", RINS_ROW_MAX_LEN.to_string()),
-        ("Arcseconds in one radian (x_rad * RINS_ARCSEC_PER_RAD: arcsec).", "RINS_ARCSEC_PER_RAD", std::format!("{ARCSEC_PER_RAD:?}")),
-        ("Radians in one degree.", "RINS_RAD_PER_DEG", std::format!("{RAD_PER_DEG:?}")),
+        (
+            "Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.",
+            "RINS_CHECKPOINT_LEN",
+            RINS_CHECKPOINT_LEN.to_string(),
+        ),
+        (
+            "Bytes of a buffer that holds any estimates CSV row with its line end and NUL.",
+            "RINS_ROW_MAX_LEN",
+            RINS_ROW_MAX_LEN.to_string(),
+        ),
+        (
+            "Arcseconds in one radian (x_rad * RINS_ARCSEC_PER_RAD: arcsec).",
+            "RINS_ARCSEC_PER_RAD",
+            std::format!("{ARCSEC_PER_RAD:?}"),
+        ),
+        (
+            "Radians in one degree.",
+            "RINS_RAD_PER_DEG",
+            std::format!("{RAD_PER_DEG:?}"),
+        ),
     ];
-    let defines: String = constants.iter().map(|(doc, name, value)| std::format!("\n// {doc}\n#define {name} {value}\n")).collect();
+    let defines: String = constants
+        .iter()
+        .map(|(doc, name, value)| std::format!("\n// {doc}\n#define {name} {value}\n"))
+        .collect();
     let bindings = cbindgen::Builder::new()
         .with_config(config)
         .with_src(crate_dir.join("src/lib.rs"))

@@ -24,7 +24,12 @@
 //! laptop's static library) it links `std` for one thing, its panic runtime: a `no_std` static
 //! library cannot be built there with the workspace's unwinding release profile.
 #![no_std]
-#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 #![deny(unsafe_op_in_unsafe_fn)]
 // `Real` is the core's float type: `f32` unless the core's `f64` feature is on. The C types are
 // `float` either way, so the conversions are written out (no-ops in the default build).
@@ -48,8 +53,9 @@ pub use checkpoint::{rins_estimator_checkpoint, rins_estimator_restore, RINS_CHE
 pub use config::{rins_config_check, rins_config_default, RinsConfig, RinsMethod};
 pub use error::{rins_error_name, RinsError};
 pub use estimator::{
-    rins_estimator_counters, rins_estimator_estimate, rins_estimator_init, rins_estimator_reset, rins_estimator_size,
-    rins_estimator_step, RinsCounters, RinsEstimator, RINS_ESTIMATOR_ALIGN, RINS_ESTIMATOR_SIZE,
+    rins_estimator_counters, rins_estimator_estimate, rins_estimator_init, rins_estimator_reset,
+    rins_estimator_size, rins_estimator_step, RinsCounters, RinsEstimator, RINS_ESTIMATOR_ALIGN,
+    RINS_ESTIMATOR_SIZE,
 };
 pub use output::{RinsEstimate, RinsField, RinsOutput, RinsSample, RinsStatus};
 pub use text::{rins_format_header, rins_format_row, rins_parse_number, RINS_ROW_MAX_LEN};

@@ -1,7 +1,10 @@
 //! What goes into one step and what comes out: the sample in degrees as a log holds it, the
 //! status, the estimate with its 1-sigma and the corrected attitude in the core's radians.
 
-use estimator_core::{Attitude, Estimate, Field, Output, Real, RejectReason, RotationFault, Sample, SampleError, Status};
+use estimator_core::{
+    Attitude, Estimate, Field, Output, Real, RejectReason, RotationFault, Sample, SampleError,
+    Status,
+};
 
 /// One sample as the RINS outputs it, in the units of the attitude log (`docs/log-format.md`):
 /// degrees, seconds. Turned into the core's sample exactly as `host-sim` turns a log row into one
@@ -27,7 +30,15 @@ pub struct RinsSample {
 
 impl From<&RinsSample> for Sample {
     fn from(s: &RinsSample) -> Sample {
-        Sample::from_degrees(s.time_s, s.rotation_deg, s.platform_deg, s.latitude_deg, s.heading_deg, s.roll_deg, s.pitch_deg)
+        Sample::from_degrees(
+            s.time_s,
+            s.rotation_deg,
+            s.platform_deg,
+            s.latitude_deg,
+            s.heading_deg,
+            s.roll_deg,
+            s.pitch_deg,
+        )
     }
 }
 
@@ -42,13 +53,19 @@ pub struct RinsEstimate {
 
 impl From<&Estimate> for RinsEstimate {
     fn from(e: &Estimate) -> RinsEstimate {
-        RinsEstimate { x_rad: e.x_rad.map(|v| v as f32), sigma_rad: e.sigma_rad.map(|v| v as f32) }
+        RinsEstimate {
+            x_rad: e.x_rad.map(|v| v as f32),
+            sigma_rad: e.sigma_rad.map(|v| v as f32),
+        }
     }
 }
 
 impl From<&RinsEstimate> for Estimate {
     fn from(e: &RinsEstimate) -> Estimate {
-        Estimate { x_rad: e.x_rad.map(|v| v as Real), sigma_rad: e.sigma_rad.map(|v| v as Real) }
+        Estimate {
+            x_rad: e.x_rad.map(|v| v as Real),
+            sigma_rad: e.sigma_rad.map(|v| v as Real),
+        }
     }
 }
 
@@ -239,7 +256,11 @@ impl RinsOutput {
             status: RinsStatus::from(out.status),
             rejected_field: RinsField::None,
             has_estimate: out.estimate.is_some(),
-            estimate: out.estimate.as_ref().map(RinsEstimate::from).unwrap_or_default(),
+            estimate: out
+                .estimate
+                .as_ref()
+                .map(RinsEstimate::from)
+                .unwrap_or_default(),
             heading_corrected_rad: out.corrected.heading_rad as f32,
             roll_corrected_rad: out.corrected.roll_rad as f32,
             pitch_corrected_rad: out.corrected.pitch_rad as f32,
@@ -290,15 +311,24 @@ mod tests {
             assert_eq!(c as u32, u32::from(s.code()), "{s:?}");
             assert_eq!(c.to_core(), Ok(s));
             assert_eq!(RinsStatus::from_code(c as u32), Some(c));
-            assert_eq!(std::format!("{c:?}").to_lowercase(), s.name().replace('_', ""));
+            assert_eq!(
+                std::format!("{c:?}").to_lowercase(),
+                s.name().replace('_', "")
+            );
         }
         for r in RejectReason::ALL {
             let c = RinsStatus::from(r);
             assert_eq!(c as u32, REJECTED + u32::from(r as u8), "{r:?}");
             assert_eq!(c.to_core(), Err(r));
-            assert_eq!(std::format!("{c:?}").to_lowercase(), std::format!("rejected{}", r.name().replace('_', "")));
+            assert_eq!(
+                std::format!("{c:?}").to_lowercase(),
+                std::format!("rejected{}", r.name().replace('_', ""))
+            );
         }
-        assert_eq!(RinsStatus::ALL.len(), Status::ALL.len() + RejectReason::ALL.len());
+        assert_eq!(
+            RinsStatus::ALL.len(),
+            Status::ALL.len() + RejectReason::ALL.len()
+        );
         // The first code after the core's statuses is none.
         assert_eq!(RinsStatus::from_code(Status::ALL.len() as u32), None);
         assert_eq!(RinsStatus::from_code(127), None);

@@ -43,7 +43,11 @@ pub(crate) unsafe fn write<T>(pointer: *mut T, value: T) -> Result<(), RinsError
 /// lives.
 pub(crate) unsafe fn bytes<'a>(pointer: *const u8, len: usize) -> Result<&'a [u8], RinsError> {
     if pointer.is_null() {
-        return if len == 0 { Ok(&[]) } else { Err(RinsError::NullPointer) };
+        return if len == 0 {
+            Ok(&[])
+        } else {
+            Err(RinsError::NullPointer)
+        };
     }
     // SAFETY: non-null, `u8` needs no alignment, `len` readable bytes by the caller's promise.
     Ok(unsafe { core::slice::from_raw_parts(pointer, len) })
@@ -54,7 +58,10 @@ pub(crate) unsafe fn bytes<'a>(pointer: *const u8, len: usize) -> Result<&'a [u8
 /// # Safety
 /// `pointer`, if not null, points to `len` writable bytes that nothing else reads or writes
 /// while the slice lives.
-pub(crate) unsafe fn bytes_mut<'a>(pointer: *mut u8, len: usize) -> Result<&'a mut [u8], RinsError> {
+pub(crate) unsafe fn bytes_mut<'a>(
+    pointer: *mut u8,
+    len: usize,
+) -> Result<&'a mut [u8], RinsError> {
     if pointer.is_null() {
         return Err(RinsError::NullPointer);
     }

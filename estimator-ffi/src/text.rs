@@ -40,9 +40,19 @@ impl Write for Bytes<'_> {
 /// # Safety
 /// `buffer` is null or points to `capacity` writable bytes; `written` is null or points to a
 /// writable `size_t`.
-unsafe fn write_line(buffer: *mut c_char, capacity: usize, written: *mut usize, write: impl FnOnce(&mut Bytes) -> fmt::Result) -> RinsError {
+unsafe fn write_line(
+    buffer: *mut c_char,
+    capacity: usize,
+    written: *mut usize,
+    write: impl FnOnce(&mut Bytes) -> fmt::Result,
+) -> RinsError {
     // SAFETY: the caller's promises.
-    let checked = unsafe { (pointer::check(written.cast_const()), pointer::bytes_mut(buffer.cast::<u8>(), capacity)) };
+    let checked = unsafe {
+        (
+            pointer::check(written.cast_const()),
+            pointer::bytes_mut(buffer.cast::<u8>(), capacity),
+        )
+    };
     let buffer = match checked {
         (Ok(()), Ok(buffer)) => buffer,
         (Err(e), _) | (_, Err(e)) => return e,
@@ -70,7 +80,11 @@ unsafe fn write_line(buffer: *mut c_char, capacity: usize, written: *mut usize, 
 /// `buffer` is null or points to `capacity` writable bytes; `written` is null or points to a
 /// writable `size_t`.
 #[no_mangle]
-pub unsafe extern "C" fn rins_format_header(buffer: *mut c_char, capacity: usize, written: *mut usize) -> RinsError {
+pub unsafe extern "C" fn rins_format_header(
+    buffer: *mut c_char,
+    capacity: usize,
+    written: *mut usize,
+) -> RinsError {
     // SAFETY: the caller's promises.
     unsafe { write_line(buffer, capacity, written, |w| w.write_str(HEADER)) }
 }
@@ -85,7 +99,12 @@ pub unsafe extern "C" fn rins_format_header(buffer: *mut c_char, capacity: usize
 /// `output` is null or points to a readable `RinsOutput`; `buffer` is null or points to
 /// `capacity` writable bytes; `written` is null or points to a writable `size_t`.
 #[no_mangle]
-pub unsafe extern "C" fn rins_format_row(output: *const RinsOutput, buffer: *mut c_char, capacity: usize, written: *mut usize) -> RinsError {
+pub unsafe extern "C" fn rins_format_row(
+    output: *const RinsOutput,
+    buffer: *mut c_char,
+    capacity: usize,
+    written: *mut usize,
+) -> RinsError {
     // SAFETY: the caller's promise.
     let row = match unsafe { read_output(output) } {
         Ok(row) => row,
@@ -94,7 +113,15 @@ pub unsafe extern "C" fn rins_format_row(output: *const RinsOutput, buffer: *mut
     // SAFETY: the caller's promises.
     unsafe {
         write_line(buffer, capacity, written, |w| match row.status.to_core() {
-            Ok(status) => write_output(w, &Output { time_s: row.time_s, status, estimate: row.estimate, corrected: row.corrected }),
+            Ok(status) => write_output(
+                w,
+                &Output {
+                    time_s: row.time_s,
+                    status,
+                    estimate: row.estimate,
+                    corrected: row.corrected,
+                },
+            ),
             Err(reason) => write_rejected(w, row.time_s, reason, row.estimate.as_ref()),
         })
     }
@@ -137,7 +164,16 @@ unsafe fn read_output(output: *const RinsOutput) -> Result<Row, RinsError> {
         _ => return Err(RinsError::InvalidArgument),
     };
     let [heading, roll, pitch] = corrected.map(|v| v as Real);
-    Ok(Row { time_s, status, estimate, corrected: Attitude { heading_rad: heading, roll_rad: roll, pitch_rad: pitch } })
+    Ok(Row {
+        time_s,
+        status,
+        estimate,
+        corrected: Attitude {
+            heading_rad: heading,
+            roll_rad: roll,
+            pitch_rad: pitch,
+        },
+    })
 }
 
 /// Reads a number of the attitude log from the `len` bytes at `text` (no NUL needed) into
@@ -150,14 +186,26 @@ unsafe fn read_output(output: *const RinsOutput) -> Result<Row, RinsError> {
 /// `text` is null or points to `len` readable bytes; `value` is null or points to a writable
 /// `double`.
 #[no_mangle]
-pub unsafe extern "C" fn rins_parse_number(text: *const c_char, len: usize, value: *mut f64) -> RinsError {
+pub unsafe extern "C" fn rins_parse_number(
+    text: *const c_char,
+    len: usize,
+    value: *mut f64,
+) -> RinsError {
     // SAFETY: the caller's promises.
-    let checked = unsafe { (pointer::bytes(text.cast::<u8>(), len), pointer::check(value.cast_const())) };
+    let checked = unsafe {
+        (
+            pointer::bytes(text.cast::<u8>(), len),
+            pointer::check(value.cast_const()),
+        )
+    };
     let text = match checked {
         (Ok(text), Ok(())) => text,
         (Err(e), _) | (_, Err(e)) => return e,
     };
-    match core::str::from_utf8(text.trim_ascii()).ok().and_then(|t| t.parse::<f64>().ok()) {
+    match core::str::from_utf8(text.trim_ascii())
+        .ok()
+        .and_then(|t| t.parse::<f64>().ok())
+    {
         Some(number) => {
             // SAFETY: checked above; writable by the caller's promise.
             unsafe { value.write(number) };
@@ -218,8 +266,23 @@ mod tests {
 
     #[test]
     fn numbers_are_read_as_the_log_reader_reads_them() {
-        for text in ["0", "1e1", "2.5E-1", "-0.13011853224744133", " 30.05153316395367 ", "+2", ".5", "5.", "1e400", "4.9e-324"] {
-            assert_eq!(parse(text).unwrap().to_bits(), text.trim().parse::<f64>().unwrap().to_bits(), "{text}");
+        for text in [
+            "0",
+            "1e1",
+            "2.5E-1",
+            "-0.13011853224744133",
+            " 30.05153316395367 ",
+            "+2",
+            ".5",
+            "5.",
+            "1e400",
+            "4.9e-324",
+        ] {
+            assert_eq!(
+                parse(text).unwrap().to_bits(),
+                text.trim().parse::<f64>().unwrap().to_bits(),
+                "{text}"
+            );
         }
         assert!(parse("nan").unwrap().is_nan() && parse("NaN").unwrap().is_nan());
         assert_eq!(parse("-inf"), Ok(f64::NEG_INFINITY));
@@ -232,7 +295,10 @@ mod tests {
         unsafe {
             assert_eq!(rins_parse_number(null(), 3, &mut v), RinsError::NullPointer);
             assert_eq!(rins_parse_number(null(), 0, &mut v), RinsError::NotANumber);
-            assert_eq!(rins_parse_number(c"1".as_ptr(), 1, null_mut()), RinsError::NullPointer);
+            assert_eq!(
+                rins_parse_number(c"1".as_ptr(), 1, null_mut()),
+                RinsError::NullPointer
+            );
         }
     }
 
@@ -240,8 +306,11 @@ mod tests {
         let mut buffer = std::vec![0x55u8; capacity];
         let mut written = usize::MAX;
         // SAFETY: a readable output, `capacity` writable bytes, a writable size.
-        let e = unsafe { rins_format_row(output, buffer.as_mut_ptr().cast(), capacity, &mut written) };
-        let text = CStr::from_bytes_until_nul(&buffer).map(|c| c.to_str().unwrap().into()).unwrap_or_default();
+        let e =
+            unsafe { rins_format_row(output, buffer.as_mut_ptr().cast(), capacity, &mut written) };
+        let text = CStr::from_bytes_until_nul(&buffer)
+            .map(|c| c.to_str().unwrap().into())
+            .unwrap_or_default();
         (e, text, written)
     }
 
@@ -251,7 +320,10 @@ mod tests {
             status: RinsStatus::Estimating,
             rejected_field: RinsField::None,
             has_estimate: true,
-            estimate: RinsEstimate { x_rad: [1e-3, -1e-3, 2e-3, -2e-3], sigma_rad: [1e-5; 4] },
+            estimate: RinsEstimate {
+                x_rad: [1e-3, -1e-3, 2e-3, -2e-3],
+                sigma_rad: [1e-5; 4],
+            },
             heading_corrected_rad: 0.5,
             roll_corrected_rad: -0.01,
             pitch_corrected_rad: 0.02,
@@ -262,19 +334,38 @@ mod tests {
     fn rows_are_the_cores_with_line_end_and_nul() {
         let out = accepted();
         let mut expected = std::string::String::new();
-        let core = Output { time_s: 1.0, status: estimator_core::Status::Estimating, estimate: out.estimate(), corrected: out.corrected() };
+        let core = Output {
+            time_s: 1.0,
+            status: estimator_core::Status::Estimating,
+            estimate: out.estimate(),
+            corrected: out.corrected(),
+        };
         write_output(&mut expected, &core).unwrap();
         expected.push('\n');
         let (e, text, written) = row(&out, RINS_ROW_MAX_LEN);
-        assert_eq!((e, text.as_str(), written), (RinsError::Ok, expected.as_str(), expected.len()));
+        assert_eq!(
+            (e, text.as_str(), written),
+            (RinsError::Ok, expected.as_str(), expected.len())
+        );
         // Rejected: the held estimate and the reason, no corrected attitude.
-        let rejected = RinsOutput { status: RinsStatus::RejectedTimeNotIncreasing, heading_corrected_rad: f32::NAN, ..out };
+        let rejected = RinsOutput {
+            status: RinsStatus::RejectedTimeNotIncreasing,
+            heading_corrected_rad: f32::NAN,
+            ..out
+        };
         let (e, text, _) = row(&rejected, RINS_ROW_MAX_LEN);
         assert_eq!(e, RinsError::Ok);
-        assert!(text.starts_with("1.000000,206.2648,") && text.ends_with(",rejected_time_not_increasing,,,\n"), "{text}");
+        assert!(
+            text.starts_with("1.000000,206.2648,")
+                && text.ends_with(",rejected_time_not_increasing,,,\n"),
+            "{text}"
+        );
         // One byte short: refused, an empty string left.
         let (e, text, written) = row(&out, expected.len());
-        assert_eq!((e, text.as_str(), written), (RinsError::BufferTooSmall, "", usize::MAX));
+        assert_eq!(
+            (e, text.as_str(), written),
+            (RinsError::BufferTooSmall, "", usize::MAX)
+        );
         assert_eq!(row(&out, expected.len() + 1).0, RinsError::Ok);
     }
 
@@ -286,22 +377,50 @@ mod tests {
         let unused = estimator_core::Status::ALL.len() as u32;
         // SAFETY: an integer over the enum field, as C code may write; the memory is never read
         // as a `RinsOutput` value, only through `rins_format_row`, which reads it as an integer.
-        unsafe { core::ptr::addr_of_mut!((*raw.as_mut_ptr()).status).cast::<u32>().write(unused) };
+        unsafe {
+            core::ptr::addr_of_mut!((*raw.as_mut_ptr()).status)
+                .cast::<u32>()
+                .write(unused)
+        };
         let mut buffer = [0u8; RINS_ROW_MAX_LEN];
         let mut written = 0;
         // SAFETY: readable, writable.
-        let e = unsafe { rins_format_row(raw.as_ptr(), buffer.as_mut_ptr().cast(), buffer.len(), &mut written) };
+        let e = unsafe {
+            rins_format_row(
+                raw.as_ptr(),
+                buffer.as_mut_ptr().cast(),
+                buffer.len(),
+                &mut written,
+            )
+        };
         assert_eq!(e, RinsError::InvalidArgument);
         let mut raw = core::mem::MaybeUninit::new(out);
         // SAFETY: as above, a byte that is no `bool`.
-        unsafe { core::ptr::addr_of_mut!((*raw.as_mut_ptr()).has_estimate).cast::<u8>().write(2) };
+        unsafe {
+            core::ptr::addr_of_mut!((*raw.as_mut_ptr()).has_estimate)
+                .cast::<u8>()
+                .write(2)
+        };
         // SAFETY: as above.
-        let e = unsafe { rins_format_row(raw.as_ptr(), buffer.as_mut_ptr().cast(), buffer.len(), &mut written) };
+        let e = unsafe {
+            rins_format_row(
+                raw.as_ptr(),
+                buffer.as_mut_ptr().cast(),
+                buffer.len(),
+                &mut written,
+            )
+        };
         assert_eq!(e, RinsError::InvalidArgument);
         // SAFETY: nulls are refused.
         unsafe {
-            assert_eq!(rins_format_row(null(), null_mut(), 0, &mut written), RinsError::NullPointer);
-            assert_eq!(rins_format_row(&out, null_mut(), 10, &mut written), RinsError::NullPointer);
+            assert_eq!(
+                rins_format_row(null(), null_mut(), 0, &mut written),
+                RinsError::NullPointer
+            );
+            assert_eq!(
+                rins_format_row(&out, null_mut(), 10, &mut written),
+                RinsError::NullPointer
+            );
         }
     }
 
@@ -310,7 +429,10 @@ mod tests {
         let mut buffer = [0u8; 400];
         let mut written = 0;
         // SAFETY: 400 writable bytes, a writable size.
-        assert_eq!(unsafe { rins_format_header(buffer.as_mut_ptr().cast(), buffer.len(), &mut written) }, RinsError::Ok);
+        assert_eq!(
+            unsafe { rins_format_header(buffer.as_mut_ptr().cast(), buffer.len(), &mut written) },
+            RinsError::Ok
+        );
         assert_eq!(&buffer[..written], std::format!("{HEADER}\n").as_bytes());
         assert_eq!(buffer[written], 0);
     }

@@ -33,7 +33,10 @@ impl Block {
 fn defaults() -> RinsConfig {
     let mut c = MaybeUninit::uninit();
     // SAFETY: a writable config.
-    assert_eq!(unsafe { rins_config_default(c.as_mut_ptr()) }, RinsError::Ok);
+    assert_eq!(
+        unsafe { rins_config_default(c.as_mut_ptr()) },
+        RinsError::Ok
+    );
     // SAFETY: written above.
     unsafe { c.assume_init() }
 }
@@ -41,7 +44,10 @@ fn defaults() -> RinsConfig {
 fn init(block: &mut Block, config: &RinsConfig) -> *mut RinsEstimator {
     let mut handle = null_mut();
     // SAFETY: a block of RINS_ESTIMATOR_SIZE bytes aligned to 8, a readable config, a writable handle.
-    assert_eq!(unsafe { rins_estimator_init(block.ptr(), RINS_ESTIMATOR_SIZE, config, &mut handle) }, RinsError::Ok);
+    assert_eq!(
+        unsafe { rins_estimator_init(block.ptr(), RINS_ESTIMATOR_SIZE, config, &mut handle) },
+        RinsError::Ok
+    );
     assert_eq!(handle.cast(), block.ptr());
     handle
 }
@@ -52,7 +58,12 @@ fn row(t_s: f64) -> RinsSample {
     let rotation_deg = 360.0 * t_s / 480.0;
     let platform_deg = (EARTH_RATE_RAD_PER_S * t_s) / RAD_PER_DEG;
     let latitude_deg = 30.0;
-    let d = oscillation(&X_ARCSEC.map(arcsec_to_rad), rotation_deg * RAD_PER_DEG, platform_deg * RAD_PER_DEG, latitude_deg * RAD_PER_DEG);
+    let d = oscillation(
+        &X_ARCSEC.map(arcsec_to_rad),
+        rotation_deg * RAD_PER_DEG,
+        platform_deg * RAD_PER_DEG,
+        latitude_deg * RAD_PER_DEG,
+    );
     RinsSample {
         time_s: t_s,
         rotation_deg,
@@ -68,7 +79,10 @@ fn step(handle: *mut RinsEstimator, sample: &RinsSample) -> (RinsError, RinsOutp
     let mut out = MaybeUninit::<RinsOutput>::uninit();
     // SAFETY: an initialised handle, a readable sample, a writable output.
     let e = unsafe { rins_estimator_step(handle, sample, out.as_mut_ptr()) };
-    assert!(e == RinsError::Ok || e == RinsError::SampleRejected, "{e:?}");
+    assert!(
+        e == RinsError::Ok || e == RinsError::SampleRejected,
+        "{e:?}"
+    );
     // SAFETY: both results write the output.
     (e, unsafe { out.assume_init() })
 }
@@ -77,16 +91,38 @@ fn checkpoint(handle: *const RinsEstimator) -> Vec<u8> {
     let mut image = vec![0u8; RINS_CHECKPOINT_LEN];
     let mut written = 0;
     // SAFETY: an initialised handle, RINS_CHECKPOINT_LEN writable bytes, a writable size.
-    assert_eq!(unsafe { rins_estimator_checkpoint(handle, image.as_mut_ptr(), image.len(), &mut written) }, RinsError::Ok);
+    assert_eq!(
+        unsafe { rins_estimator_checkpoint(handle, image.as_mut_ptr(), image.len(), &mut written) },
+        RinsError::Ok
+    );
     assert_eq!(written, RINS_CHECKPOINT_LEN);
     image
 }
 
 fn same_bits(a: &RinsOutput, b: &RinsOutput) -> bool {
     let f = |o: &RinsOutput| {
-        let mut v: Vec<u32> = o.estimate.x_rad.iter().chain(&o.estimate.sigma_rad).map(|x| x.to_bits()).collect();
-        v.extend([o.heading_corrected_rad, o.roll_corrected_rad, o.pitch_corrected_rad].map(f32::to_bits));
-        (o.time_s.to_bits(), o.status, o.rejected_field, o.has_estimate, v)
+        let mut v: Vec<u32> = o
+            .estimate
+            .x_rad
+            .iter()
+            .chain(&o.estimate.sigma_rad)
+            .map(|x| x.to_bits())
+            .collect();
+        v.extend(
+            [
+                o.heading_corrected_rad,
+                o.roll_corrected_rad,
+                o.pitch_corrected_rad,
+            ]
+            .map(f32::to_bits),
+        );
+        (
+            o.time_s.to_bits(),
+            o.status,
+            o.rejected_field,
+            o.has_estimate,
+            v,
+        )
     };
     f(a) == f(b)
 }
@@ -102,25 +138,52 @@ fn steps_equal_the_cores_bit_for_bit_and_find_the_errors() {
         let (e, out) = step(handle, &sample);
         assert_eq!(e, RinsError::Ok);
         let expected = core
-            .step(&Sample::from_degrees(sample.time_s, sample.rotation_deg, sample.platform_deg, sample.latitude_deg, sample.heading_deg, sample.roll_deg, sample.pitch_deg))
+            .step(&Sample::from_degrees(
+                sample.time_s,
+                sample.rotation_deg,
+                sample.platform_deg,
+                sample.latitude_deg,
+                sample.heading_deg,
+                sample.roll_deg,
+                sample.pitch_deg,
+            ))
             .unwrap();
-        assert!(same_bits(&out, &RinsOutput::accepted(&expected)), "{k}: {out:?} != {expected:?}");
+        assert!(
+            same_bits(&out, &RinsOutput::accepted(&expected)),
+            "{k}: {out:?} != {expected:?}"
+        );
         last = Some(out);
     }
     let last = last.unwrap();
     assert_eq!(last.status, RinsStatus::Converged);
     for (i, (x_rad, truth_arcsec)) in last.estimate.x_rad.iter().zip(X_ARCSEC).enumerate() {
         let off_arcsec = rad_to_arcsec(f64::from(*x_rad)) - truth_arcsec;
-        assert!(off_arcsec.abs() < 1.0, "x{}: off by {off_arcsec:.3} arcsec", i + 1);
+        assert!(
+            off_arcsec.abs() < 1.0,
+            "x{}: off by {off_arcsec:.3} arcsec",
+            i + 1
+        );
     }
     let mut estimate = RinsEstimate::default();
     // SAFETY: an initialised handle, a writable estimate.
-    assert_eq!(unsafe { rins_estimator_estimate(handle, &mut estimate) }, RinsError::Ok);
+    assert_eq!(
+        unsafe { rins_estimator_estimate(handle, &mut estimate) },
+        RinsError::Ok
+    );
     assert_eq!(estimate, last.estimate);
     let mut counters = RinsCounters::default();
     // SAFETY: as above.
-    assert_eq!(unsafe { rins_estimator_counters(handle, &mut counters) }, RinsError::Ok);
-    assert_eq!(counters, RinsCounters { accepted: 4000, ..RinsCounters::default() });
+    assert_eq!(
+        unsafe { rins_estimator_counters(handle, &mut counters) },
+        RinsError::Ok
+    );
+    assert_eq!(
+        counters,
+        RinsCounters {
+            accepted: 4000,
+            ..RinsCounters::default()
+        }
+    );
 }
 
 #[test]
@@ -142,13 +205,34 @@ fn init_refuses_bad_memory_and_configurations_and_writes_nothing() {
     // SAFETY: every call either refuses its arguments or is given valid ones.
     let results = unsafe {
         [
-            (rins_estimator_init(null_mut(), size, &config, &mut handle), RinsError::NullPointer),
-            (rins_estimator_init(base, size, null(), &mut handle), RinsError::NullPointer),
-            (rins_estimator_init(base, size, &config, null_mut()), RinsError::NullPointer),
-            (rins_estimator_init(base.cast::<u8>().add(4).cast(), size, &config, &mut handle), RinsError::Misaligned),
-            (rins_estimator_init(base, size - 1, &config, &mut handle), RinsError::BufferTooSmall),
-            (rins_estimator_init(base, size, &bad_method, &mut handle), RinsError::InvalidConfig),
-            (rins_estimator_init(base, size, &bad_sigma, &mut handle), RinsError::InvalidConfig),
+            (
+                rins_estimator_init(null_mut(), size, &config, &mut handle),
+                RinsError::NullPointer,
+            ),
+            (
+                rins_estimator_init(base, size, null(), &mut handle),
+                RinsError::NullPointer,
+            ),
+            (
+                rins_estimator_init(base, size, &config, null_mut()),
+                RinsError::NullPointer,
+            ),
+            (
+                rins_estimator_init(base.cast::<u8>().add(4).cast(), size, &config, &mut handle),
+                RinsError::Misaligned,
+            ),
+            (
+                rins_estimator_init(base, size - 1, &config, &mut handle),
+                RinsError::BufferTooSmall,
+            ),
+            (
+                rins_estimator_init(base, size, &bad_method, &mut handle),
+                RinsError::InvalidConfig,
+            ),
+            (
+                rins_estimator_init(base, size, &bad_sigma, &mut handle),
+                RinsError::InvalidConfig,
+            ),
         ]
     };
     for (i, (got, want)) in results.into_iter().enumerate() {
@@ -161,8 +245,14 @@ fn init_refuses_bad_memory_and_configurations_and_writes_nothing() {
     // on) it is accepted.
     // SAFETY: valid arguments.
     let paper_result = unsafe { rins_estimator_init(base, size, &paper, &mut handle) };
-    let paper_built = Config::with_method(estimator_core::Method::Paper).check(estimator_core::estimator::DEFAULT_CAPACITY).is_ok();
-    let expected = if paper_built { RinsError::Ok } else { RinsError::InvalidConfig };
+    let paper_built = Config::with_method(estimator_core::Method::Paper)
+        .check(estimator_core::estimator::DEFAULT_CAPACITY)
+        .is_ok();
+    let expected = if paper_built {
+        RinsError::Ok
+    } else {
+        RinsError::InvalidConfig
+    };
     assert_eq!(paper_result, expected);
 }
 
@@ -177,13 +267,31 @@ fn foreign_and_null_handles_are_refused() {
     let mut written = 0;
     // SAFETY: every call refuses its handle before it reads or writes anything else.
     unsafe {
-        assert_eq!(rins_estimator_step(handle, &sample, out.as_mut_ptr()), RinsError::NotInitialised);
-        assert_eq!(rins_estimator_step(null_mut(), &sample, out.as_mut_ptr()), RinsError::NullPointer);
-        assert_eq!(rins_estimator_step(handle.cast::<u8>().add(1).cast(), &sample, out.as_mut_ptr()), RinsError::Misaligned);
-        assert_eq!(rins_estimator_estimate(handle, &mut estimate), RinsError::NotInitialised);
+        assert_eq!(
+            rins_estimator_step(handle, &sample, out.as_mut_ptr()),
+            RinsError::NotInitialised
+        );
+        assert_eq!(
+            rins_estimator_step(null_mut(), &sample, out.as_mut_ptr()),
+            RinsError::NullPointer
+        );
+        assert_eq!(
+            rins_estimator_step(handle.cast::<u8>().add(1).cast(), &sample, out.as_mut_ptr()),
+            RinsError::Misaligned
+        );
+        assert_eq!(
+            rins_estimator_estimate(handle, &mut estimate),
+            RinsError::NotInitialised
+        );
         assert_eq!(rins_estimator_reset(handle), RinsError::NotInitialised);
-        assert_eq!(rins_estimator_checkpoint(handle, image.as_mut_ptr(), image.len(), &mut written), RinsError::NotInitialised);
-        assert_eq!(rins_estimator_restore(handle, image.as_ptr(), image.len()), RinsError::NotInitialised);
+        assert_eq!(
+            rins_estimator_checkpoint(handle, image.as_mut_ptr(), image.len(), &mut written),
+            RinsError::NotInitialised
+        );
+        assert_eq!(
+            rins_estimator_restore(handle, image.as_ptr(), image.len()),
+            RinsError::NotInitialised
+        );
     }
     assert!(zeroed.0.iter().all(|w| *w == 0));
     // A set-up handle with a null sample or output: refused, nothing stepped.
@@ -192,8 +300,14 @@ fn foreign_and_null_handles_are_refused() {
     let before = checkpoint(handle);
     // SAFETY: nulls are refused.
     unsafe {
-        assert_eq!(rins_estimator_step(handle, null(), out.as_mut_ptr()), RinsError::NullPointer);
-        assert_eq!(rins_estimator_step(handle, &sample, null_mut()), RinsError::NullPointer);
+        assert_eq!(
+            rins_estimator_step(handle, null(), out.as_mut_ptr()),
+            RinsError::NullPointer
+        );
+        assert_eq!(
+            rins_estimator_step(handle, &sample, null_mut()),
+            RinsError::NullPointer
+        );
     }
     assert!(checkpoint(handle) == before);
 }
@@ -208,20 +322,59 @@ fn a_rejected_sample_says_why_and_changes_nothing() {
     let before = checkpoint(handle);
     let mut held = RinsEstimate::default();
     // SAFETY: an initialised handle, a writable estimate.
-    assert_eq!(unsafe { rins_estimator_estimate(handle, &mut held) }, RinsError::Ok);
+    assert_eq!(
+        unsafe { rins_estimator_estimate(handle, &mut held) },
+        RinsError::Ok
+    );
     let cases = [
-        (RinsSample { roll_deg: f64::NAN, ..row(1500.0) }, RinsStatus::RejectedNonFinite, RinsField::Roll),
-        (RinsSample { pitch_deg: 91.0, ..row(1500.0) }, RinsStatus::RejectedAngleOutOfRange, RinsField::Pitch),
-        (RinsSample { latitude_deg: 90.0, ..row(1500.0) }, RinsStatus::RejectedLatitudeOutOfRange, RinsField::None),
-        (row(1499.0), RinsStatus::RejectedTimeNotIncreasing, RinsField::None),
-        (row(1499.4), RinsStatus::RejectedIrregularTimeStep, RinsField::None),
+        (
+            RinsSample {
+                roll_deg: f64::NAN,
+                ..row(1500.0)
+            },
+            RinsStatus::RejectedNonFinite,
+            RinsField::Roll,
+        ),
+        (
+            RinsSample {
+                pitch_deg: 91.0,
+                ..row(1500.0)
+            },
+            RinsStatus::RejectedAngleOutOfRange,
+            RinsField::Pitch,
+        ),
+        (
+            RinsSample {
+                latitude_deg: 90.0,
+                ..row(1500.0)
+            },
+            RinsStatus::RejectedLatitudeOutOfRange,
+            RinsField::None,
+        ),
+        (
+            row(1499.0),
+            RinsStatus::RejectedTimeNotIncreasing,
+            RinsField::None,
+        ),
+        (
+            row(1499.4),
+            RinsStatus::RejectedIrregularTimeStep,
+            RinsField::None,
+        ),
     ];
     for (sample, status, field) in cases {
         let (e, out) = step(handle, &sample);
-        assert_eq!((e, out.status, out.rejected_field), (RinsError::SampleRejected, status, field));
+        assert_eq!(
+            (e, out.status, out.rejected_field),
+            (RinsError::SampleRejected, status, field)
+        );
         assert_eq!(out.time_s.to_bits(), sample.time_s.to_bits());
         assert!(out.has_estimate && out.estimate == held);
-        assert!(out.heading_corrected_rad.is_nan() && out.roll_corrected_rad.is_nan() && out.pitch_corrected_rad.is_nan());
+        assert!(
+            out.heading_corrected_rad.is_nan()
+                && out.roll_corrected_rad.is_nan()
+                && out.pitch_corrected_rad.is_nan()
+        );
     }
     // The image now differs in the rejection counters only: an estimator restored from the image
     // taken before the rejections gives the same output for the next sample.
@@ -237,7 +390,10 @@ fn a_rejected_sample_says_why_and_changes_nothing() {
     assert!(same_bits(&a, &b));
     let mut counters = RinsCounters::default();
     // SAFETY: an initialised handle, writable counters.
-    assert_eq!(unsafe { rins_estimator_counters(handle, &mut counters) }, RinsError::Ok);
+    assert_eq!(
+        unsafe { rins_estimator_counters(handle, &mut counters) },
+        RinsError::Ok
+    );
     assert_eq!((counters.accepted, counters.rejected), (1501, 5));
 }
 
@@ -251,12 +407,16 @@ fn a_checkpoint_restored_elsewhere_keeps_the_estimate_and_converges_again() {
     let image = checkpoint(handle);
     let mut at_cut = RinsEstimate::default();
     // SAFETY: an initialised handle, a writable estimate.
-    assert_eq!(unsafe { rins_estimator_estimate(handle, &mut at_cut) }, RinsError::Ok);
+    assert_eq!(
+        unsafe { rins_estimator_estimate(handle, &mut at_cut) },
+        RinsError::Ok
+    );
     // Too small a buffer: refused, left as it was.
     let mut small = vec![0x77u8; RINS_CHECKPOINT_LEN - 1];
     let mut written = 0;
     // SAFETY: an initialised handle, `small.len()` writable bytes, a writable size.
-    let e = unsafe { rins_estimator_checkpoint(handle, small.as_mut_ptr(), small.len(), &mut written) };
+    let e =
+        unsafe { rins_estimator_checkpoint(handle, small.as_mut_ptr(), small.len(), &mut written) };
     assert_eq!((e, written), (RinsError::BufferTooSmall, 0));
     assert!(small.iter().all(|b| *b == 0x77));
     // Restored into an estimator made with another configuration, which the image replaces.
@@ -269,28 +429,59 @@ fn a_checkpoint_restored_elsewhere_keeps_the_estimate_and_converges_again() {
     damaged[100] ^= 0x10;
     // SAFETY: an initialised handle and readable images.
     unsafe {
-        assert_eq!(rins_estimator_restore(restored, damaged.as_ptr(), damaged.len()), RinsError::CheckpointCorrupt);
-        assert_eq!(rins_estimator_restore(restored, image.as_ptr(), 100), RinsError::BufferTooSmall);
-        assert_eq!(rins_estimator_restore(restored, null(), 100), RinsError::NullPointer);
+        assert_eq!(
+            rins_estimator_restore(restored, damaged.as_ptr(), damaged.len()),
+            RinsError::CheckpointCorrupt
+        );
+        assert_eq!(
+            rins_estimator_restore(restored, image.as_ptr(), 100),
+            RinsError::BufferTooSmall
+        );
+        assert_eq!(
+            rins_estimator_restore(restored, null(), 100),
+            RinsError::NullPointer
+        );
     }
-    assert!(checkpoint(restored) == fresh, "a refused restore changed the estimator");
+    assert!(
+        checkpoint(restored) == fresh,
+        "a refused restore changed the estimator"
+    );
     // SAFETY: as above.
-    assert_eq!(unsafe { rins_estimator_restore(restored, image.as_ptr(), image.len()) }, RinsError::Ok);
-    assert!(checkpoint(restored) == image, "the restored estimator's image is the one it came from");
+    assert_eq!(
+        unsafe { rins_estimator_restore(restored, image.as_ptr(), image.len()) },
+        RinsError::Ok
+    );
+    assert!(
+        checkpoint(restored) == image,
+        "the restored estimator's image is the one it came from"
+    );
     // The estimate is reported from the first sample on while the window refills; the filter
     // updates again after one period and ends where the uninterrupted run ends, near the truth.
     let (e, first) = step(restored, &row(1500.0));
-    assert_eq!((e, first.status, first.has_estimate, first.estimate), (RinsError::Ok, RinsStatus::Holding, true, at_cut));
+    assert_eq!(
+        (e, first.status, first.has_estimate, first.estimate),
+        (RinsError::Ok, RinsStatus::Holding, true, at_cut)
+    );
     let (mut a, mut b) = (first, first);
     for k in 1501..4000 {
         a = step(handle, &row(f64::from(k))).1;
         b = step(restored, &row(f64::from(k))).1;
         assert!(b.has_estimate, "{k}");
     }
-    assert_eq!((a.status, b.status), (RinsStatus::Converged, RinsStatus::Converged));
+    assert_eq!(
+        (a.status, b.status),
+        (RinsStatus::Converged, RinsStatus::Converged)
+    );
     for (i, truth_arcsec) in X_ARCSEC.iter().enumerate() {
-        let (ua, ra) = (rad_to_arcsec(f64::from(a.estimate.x_rad[i])), rad_to_arcsec(f64::from(b.estimate.x_rad[i])));
-        assert!((ra - truth_arcsec).abs() < 1.0 && (ra - ua).abs() < 0.5, "x{}: restored {ra:.3}, uninterrupted {ua:.3}", i + 1);
+        let (ua, ra) = (
+            rad_to_arcsec(f64::from(a.estimate.x_rad[i])),
+            rad_to_arcsec(f64::from(b.estimate.x_rad[i])),
+        );
+        assert!(
+            (ra - truth_arcsec).abs() < 1.0 && (ra - ua).abs() < 0.5,
+            "x{}: restored {ra:.3}, uninterrupted {ua:.3}",
+            i + 1
+        );
     }
 }
 
@@ -301,21 +492,42 @@ fn reset_forgets_what_was_learnt_and_keeps_the_rejections() {
     for k in 0..1500 {
         step(handle, &row(f64::from(k)));
     }
-    step(handle, &RinsSample { roll_deg: f64::INFINITY, ..row(1500.0) });
+    step(
+        handle,
+        &RinsSample {
+            roll_deg: f64::INFINITY,
+            ..row(1500.0)
+        },
+    );
     // SAFETY: an initialised handle.
     assert_eq!(unsafe { rins_estimator_reset(handle) }, RinsError::Ok);
     let mut estimate = RinsEstimate::default();
     let mut counters = RinsCounters::default();
     // SAFETY: an initialised handle, writable outputs.
     unsafe {
-        assert_eq!(rins_estimator_estimate(handle, &mut estimate), RinsError::NoEstimate);
-        assert_eq!(rins_estimator_counters(handle, &mut counters), RinsError::Ok);
+        assert_eq!(
+            rins_estimator_estimate(handle, &mut estimate),
+            RinsError::NoEstimate
+        );
+        assert_eq!(
+            rins_estimator_counters(handle, &mut counters),
+            RinsError::Ok
+        );
     }
     assert_eq!(estimate, RinsEstimate::default());
-    assert_eq!(counters, RinsCounters { rejected: 1, ..RinsCounters::default() });
+    assert_eq!(
+        counters,
+        RinsCounters {
+            rejected: 1,
+            ..RinsCounters::default()
+        }
+    );
     // An earlier time than before the reset is a new start, not a step back.
     let (e, out) = step(handle, &row(0.0));
-    assert_eq!((e, out.status), (RinsError::Ok, RinsStatus::DetectingPattern));
+    assert_eq!(
+        (e, out.status),
+        (RinsError::Ok, RinsStatus::DetectingPattern)
+    );
 }
 
 #[test]
@@ -326,6 +538,10 @@ fn the_headers_memory_constants_hold() {
     // The size in the header is the 64-bit estimator's rounded up to 512 bytes (32-bit targets
     // need less): when the estimator grows or shrinks, this says what to write there.
     if cfg!(target_pointer_width = "64") {
-        assert_eq!(RINS_ESTIMATOR_SIZE, rins_estimator_size().next_multiple_of(512), "set RINS_ESTIMATOR_SIZE in estimator-ffi/src/estimator.rs");
+        assert_eq!(
+            RINS_ESTIMATOR_SIZE,
+            rins_estimator_size().next_multiple_of(512),
+            "set RINS_ESTIMATOR_SIZE in estimator-ffi/src/estimator.rs"
+        );
     }
 }

@@ -33,12 +33,16 @@ mod systick_cost;
 #[cfg(feature = "board-mps2-an386")]
 mod mps2_an386;
 #[cfg(feature = "board-mps2-an386")]
-pub use mps2_an386::{fatal, Board, BoardWatchdog, CostCounter, Flash as RawFlash, Receiver, Transmitter};
+pub use mps2_an386::{
+    fatal, Board, BoardWatchdog, CostCounter, Flash as RawFlash, Receiver, Transmitter,
+};
 
 #[cfg(all(feature = "board-stm32f405", not(feature = "board-mps2-an386")))]
 mod stm32f405;
 #[cfg(all(feature = "board-stm32f405", not(feature = "board-mps2-an386")))]
-pub use stm32f405::{fatal, Board, BoardWatchdog, CostCounter, Flash as RawFlash, Receiver, Transmitter};
+pub use stm32f405::{
+    fatal, Board, BoardWatchdog, CostCounter, Flash as RawFlash, Receiver, Transmitter,
+};
 
 /// The checkpoint flash as the store uses it: the board's, feeding the watchdog before each erase
 /// block and each write.

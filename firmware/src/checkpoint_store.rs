@@ -120,7 +120,10 @@ pub struct StoreBuffers {
 impl StoreBuffers {
     /// Zeroed buffers (in a static: in .bss, no flash).
     pub const fn new() -> Self {
-        StoreBuffers { item: [0; BUFFER_BYTES], image: [0; CHECKPOINT_LEN] }
+        StoreBuffers {
+            item: [0; BUFFER_BYTES],
+            image: [0; CHECKPOINT_LEN],
+        }
     }
 }
 
@@ -148,7 +151,8 @@ impl<'b, F: NorFlash> CheckpointStore<'b, F> {
     /// [`re_erase_torn_sectors`]).
     pub fn new(mut flash: F, buffers: &'b mut StoreBuffers) -> Result<Self, StoreError> {
         let end = u32::try_from(flash.capacity()).map_err(|_| StoreError::Region)?;
-        let config = MapConfig::<BlockingAsync<F>>::try_new(0..end).map_err(|_| StoreError::Region)?;
+        let config =
+            MapConfig::<BlockingAsync<F>>::try_new(0..end).map_err(|_| StoreError::Region)?;
         let re_erased = re_erase_torn_sectors(&mut flash)?;
         Ok(CheckpointStore {
             map: MapStorage::new(BlockingAsync::new(flash), config, Cache::new_uncached()),
@@ -176,13 +180,21 @@ impl<'b, F: NorFlash> CheckpointStore<'b, F> {
 
     /// Restores the newest image into `estimator` (see [`Restored`]); on anything but
     /// [`Restored::Image`] the estimator is unchanged.
-    pub fn restore<const CAP: usize>(&mut self, estimator: &mut Estimator<CAP>) -> Result<Restored, StoreError> {
-        let found = block_on(self.map.fetch_item::<&[u8]>(&mut self.buffers.item, &CHECKPOINT_KEY))?;
+    pub fn restore<const CAP: usize>(
+        &mut self,
+        estimator: &mut Estimator<CAP>,
+    ) -> Result<Restored, StoreError> {
+        let found = block_on(
+            self.map
+                .fetch_item::<&[u8]>(&mut self.buffers.item, &CHECKPOINT_KEY),
+        )?;
         let restored = match found {
             None => Restored::Nothing,
             Some([]) => Restored::Forgotten,
             Some(image) => match estimator.restore(image) {
-                Ok(()) => Restored::Image { time_s: estimator.last_sample_time_s() },
+                Ok(()) => Restored::Image {
+                    time_s: estimator.last_sample_time_s(),
+                },
                 Err(e) => Restored::Refused(e),
             },
         };
@@ -196,8 +208,13 @@ impl<'b, F: NorFlash> CheckpointStore<'b, F> {
     /// Appends the estimator's image to the log.
     pub fn save<const CAP: usize>(&mut self, estimator: &Estimator<CAP>) -> Result<(), StoreError> {
         let StoreBuffers { item, image } = &mut *self.buffers;
-        estimator.checkpoint(image).map_err(|_| StoreError::Storage)?;
-        block_on(self.map.store_item::<&[u8]>(item, &CHECKPOINT_KEY, &&image[..]))?;
+        estimator
+            .checkpoint(image)
+            .map_err(|_| StoreError::Storage)?;
+        block_on(
+            self.map
+                .store_item::<&[u8]>(item, &CHECKPOINT_KEY, &&image[..]),
+        )?;
         self.saved = self.saved.saturating_add(1);
         self.time_s = estimator.last_sample_time_s();
         Ok(())
@@ -206,7 +223,10 @@ impl<'b, F: NorFlash> CheckpointStore<'b, F> {
     /// Appends an invalidation: once it returns, no image is left to restore, whatever power cut
     /// follows. On a flash error the older image may still be restored.
     pub fn invalidate(&mut self) -> Result<(), StoreError> {
-        block_on(self.map.store_item::<&[u8]>(&mut self.buffers.item, &CHECKPOINT_KEY, &&[][..]))?;
+        block_on(
+            self.map
+                .store_item::<&[u8]>(&mut self.buffers.item, &CHECKPOINT_KEY, &&[][..]),
+        )?;
         self.time_s = None;
         Ok(())
     }
@@ -241,7 +261,9 @@ pub fn re_erase_torn_sectors<F: NorFlash>(flash: &mut F) -> Result<u32, StoreErr
         let base = (i * sector) as u32;
         flash.read(base, &mut edge).map_err(|_| StoreError::Flash)?;
         let first = marked(edge[0]);
-        flash.read(base + sector as u32 - 1, &mut edge).map_err(|_| StoreError::Flash)?;
+        flash
+            .read(base + sector as u32 - 1, &mut edge)
+            .map_err(|_| StoreError::Flash)?;
         let last = marked(edge[0]);
         let is_partial = first && !last;
         let torn = match (first, last) {
@@ -253,14 +275,18 @@ pub fn re_erase_torn_sectors<F: NorFlash>(flash: &mut F) -> Result<u32, StoreErr
             first_partial = is_partial;
         }
         if torn {
-            flash.erase(base, base + sector as u32).map_err(|_| StoreError::Flash)?;
+            flash
+                .erase(base, base + sector as u32)
+                .map_err(|_| StoreError::Flash)?;
             re_erased += 1;
         }
         previous_partial = is_partial && !torn;
     }
     // The sectors are used in a ring: the first follows the last.
     if sectors > 1 && first_partial && previous_partial {
-        flash.erase(0, sector as u32).map_err(|_| StoreError::Flash)?;
+        flash
+            .erase(0, sector as u32)
+            .map_err(|_| StoreError::Flash)?;
         re_erased += 1;
     }
     Ok(re_erased)
@@ -273,7 +299,9 @@ fn erased<F: NorFlash>(flash: &mut F, base: u32, sector: usize) -> Result<bool, 
     while at < sector {
         let n = chunk.len().min(sector - at);
         let part = chunk.get_mut(..n).ok_or(StoreError::Region)?;
-        flash.read(base + at as u32, part).map_err(|_| StoreError::Flash)?;
+        flash
+            .read(base + at as u32, part)
+            .map_err(|_| StoreError::Flash)?;
         if part.iter().any(|b| *b != 0xFF) {
             return Ok(false);
         }
@@ -294,7 +322,10 @@ impl SaveSchedule {
     /// A save every `interval_s` of sample time, the first `interval_s` after `last_saved_s` (the
     /// restored checkpoint's last sample), or after the first sample if `None`.
     pub const fn new(interval_s: f64, last_saved_s: Option<f64>) -> Self {
-        SaveSchedule { interval_s, last_s: last_saved_s }
+        SaveSchedule {
+            interval_s,
+            last_s: last_saved_s,
+        }
     }
 
     /// Whether a checkpoint is due after the sample at `time_s` (and if so, counts it as saved):
@@ -305,7 +336,10 @@ impl SaveSchedule {
         // NaN, which the core never gives, counts as due rather than never again).
         let due = match self.last_s {
             None => false,
-            Some(last) => (time_s - last).abs().partial_cmp(&self.interval_s) != Some(core::cmp::Ordering::Less),
+            Some(last) => {
+                (time_s - last).abs().partial_cmp(&self.interval_s)
+                    != Some(core::cmp::Ordering::Less)
+            }
         };
         if due || self.last_s.is_none() {
             self.last_s = Some(time_s);
@@ -326,12 +360,27 @@ mod tests {
     #[test]
     fn saves_every_interval_and_after_any_jump_of_the_clock() {
         let mut s = SaveSchedule::new(300.0, None);
-        let times = [100.0, 101.0, 399.0, 400.0, 401.0, 700.0, 650.0, 100.0, 101.0, 1e9, f64::NAN, 5.0];
+        let times = [
+            100.0,
+            101.0,
+            399.0,
+            400.0,
+            401.0,
+            700.0,
+            650.0,
+            100.0,
+            101.0,
+            1e9,
+            f64::NAN,
+            5.0,
+        ];
         let due = times.map(|t| s.due(t));
         // 400: 300 s after the first sample; 700: 300 s after that; 100: 600 s back; 1e9: forwards;
         // NaN (never given by the core, which rejects it) and the sample after it: saved, rather
         // than never again.
-        let expected = [false, false, false, true, false, true, false, true, false, true, true, true];
+        let expected = [
+            false, false, false, true, false, true, false, true, false, true, true, true,
+        ];
         assert_eq!(due, expected);
         s.restart();
         assert!(!s.due(1e9 + 5.0), "after a restart the count starts again");
@@ -339,8 +388,14 @@ mod tests {
         // After a restore: 300 s after the checkpoint's last sample, however late the first
         // sample after boot comes.
         let mut s = SaveSchedule::new(300.0, Some(1000.0));
-        assert_eq!([1200.0, 1299.0, 1300.0, 1400.0].map(|t| s.due(t)), [false, false, true, false]);
+        assert_eq!(
+            [1200.0, 1299.0, 1300.0, 1400.0].map(|t| s.due(t)),
+            [false, false, true, false]
+        );
         let mut s = SaveSchedule::new(300.0, Some(1000.0));
-        assert!(s.due(1500.0), "an outage longer than the interval: a save with the first sample");
+        assert!(
+            s.due(1500.0),
+            "an outage longer than the interval: a save with the first sample"
+        );
     }
 }

@@ -121,7 +121,8 @@ impl<const N: usize> DmaRing<N> {
         let passes = |mark: usize| self.write < mark && mark <= end;
         let passes_half = passes(N / 2) || passes(N + N / 2);
         let passes_end = passes(N) || passes(2 * N);
-        let lapped = (snapshot.flags.half && !passes_half) || (snapshot.flags.complete && !passes_end);
+        let lapped =
+            (snapshot.flags.half && !passes_half) || (snapshot.flags.complete && !passes_end);
         self.write = now;
         if lapped || self.unread + moved > N {
             stats.count_buffer_overrun();
@@ -201,7 +202,11 @@ mod tests {
         }
     }
 
-    fn read_all<const N: usize>(ring: &mut DmaRing<N>, dma: &mut SimulatedDma<N>, stats: &RxStats) -> Vec<Received> {
+    fn read_all<const N: usize>(
+        ring: &mut DmaRing<N>,
+        dma: &mut SimulatedDma<N>,
+        stats: &RxStats,
+    ) -> Vec<Received> {
         ring.update(snapshot::<N>(dma), stats);
         let buffer = dma.buffer;
         core::iter::from_fn(|| ring.next(|i| buffer[i])).collect()
@@ -250,7 +255,10 @@ mod tests {
         assert_eq!(stats.snapshot(16, 0).buffer_overruns, 1);
         // The gap shows with the next byte.
         dma.write(21);
-        assert_eq!(read_all(&mut ring, &mut dma, &stats), [Received::Gap, Received::Byte(21)]);
+        assert_eq!(
+            read_all(&mut ring, &mut dma, &stats),
+            [Received::Gap, Received::Byte(21)]
+        );
     }
 
     #[test]
@@ -309,7 +317,11 @@ mod tests {
                     if laps == 0 {
                         assert_eq!((overruns, got.len()), (0, d), "start {start} d {d}");
                     } else {
-                        assert_eq!((overruns, got.len()), (1, 0), "start {start} d {d} laps {laps}");
+                        assert_eq!(
+                            (overruns, got.len()),
+                            (1, 0),
+                            "start {start} d {d} laps {laps}"
+                        );
                     }
                 }
             }

@@ -33,7 +33,9 @@ impl<const N: usize> InterruptRing<N> {
     pub const CAPACITY: usize = N - 1;
 
     pub const fn new() -> Self {
-        InterruptRing { queue: Queue::new() }
+        InterruptRing {
+            queue: Queue::new(),
+        }
     }
 
     /// The interrupt handler's end and the main loop's end, both counting into `stats`.
@@ -45,7 +47,10 @@ impl<const N: usize> InterruptRing<N> {
                 stats,
                 gap: false,
             },
-            RingReader { consumer, pending: None },
+            RingReader {
+                consumer,
+                pending: None,
+            },
         )
     }
 }
@@ -129,11 +134,17 @@ mod tests {
         for b in [1u8, 2, 3] {
             w.push(b, LineErrors::default());
         }
-        assert_eq!(drain(&mut r), [Received::Byte(1), Received::Byte(2), Received::Byte(3)]);
+        assert_eq!(
+            drain(&mut r),
+            [Received::Byte(1), Received::Byte(2), Received::Byte(3)]
+        );
         w.push(4, LineErrors::default());
         assert_eq!(drain(&mut r), [Received::Byte(4)]);
         let c = stats.snapshot(InterruptRing::<8>::CAPACITY, 0);
-        assert_eq!((c.rx_peak_bytes, c.buffer_overruns, c.rx_buffer_bytes), (3, 0, 7));
+        assert_eq!(
+            (c.rx_peak_bytes, c.buffer_overruns, c.rx_buffer_bytes),
+            (3, 0, 7)
+        );
     }
 
     #[test]
@@ -145,10 +156,16 @@ mod tests {
             w.push(b, LineErrors::default());
         }
         // 3 fit, 13..15 dropped; then room again.
-        assert_eq!(drain(&mut r), [Received::Byte(10), Received::Byte(11), Received::Byte(12)]);
+        assert_eq!(
+            drain(&mut r),
+            [Received::Byte(10), Received::Byte(11), Received::Byte(12)]
+        );
         w.push(16, LineErrors::default());
         w.push(17, LineErrors::default());
-        assert_eq!(drain(&mut r), [Received::Gap, Received::Byte(16), Received::Byte(17)]);
+        assert_eq!(
+            drain(&mut r),
+            [Received::Gap, Received::Byte(16), Received::Byte(17)]
+        );
         assert_eq!(stats.snapshot(3, 0).buffer_overruns, 1);
     }
 
@@ -158,13 +175,35 @@ mod tests {
         let mut ring = InterruptRing::<8>::new();
         let (mut w, mut r) = ring.split(&stats);
         w.push(1, LineErrors::default());
-        w.push(2, LineErrors { overrun: true, framing: false, noise: false });
-        w.push(3, LineErrors { overrun: false, framing: true, noise: true });
+        w.push(
+            2,
+            LineErrors {
+                overrun: true,
+                framing: false,
+                noise: false,
+            },
+        );
+        w.push(
+            3,
+            LineErrors {
+                overrun: false,
+                framing: true,
+                noise: true,
+            },
+        );
         assert_eq!(
             drain(&mut r),
-            [Received::Byte(1), Received::Gap, Received::Byte(2), Received::Byte(3)]
+            [
+                Received::Byte(1),
+                Received::Gap,
+                Received::Byte(2),
+                Received::Byte(3)
+            ]
         );
         let c = stats.snapshot(7, 0);
-        assert_eq!((c.uart_overruns, c.framing_errors, c.noise_errors), (1, 1, 1));
+        assert_eq!(
+            (c.uart_overruns, c.framing_errors, c.noise_errors),
+            (1, 1, 1)
+        );
     }
 }

@@ -17,7 +17,12 @@
 //! empty program that says where it runs; nothing of the firmware is compiled.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
-#![deny(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 
 #[cfg(target_os = "none")]
 mod board;
@@ -38,10 +43,10 @@ use cortex_m_rt::entry;
 use estimator_core::{Config, Estimator};
 #[cfg(all(target_os = "none", feature = "checkpoint"))]
 use firmware::checkpoint_store::{StoreBuffers, CHECKPOINT_INTERVAL_S};
-#[cfg(target_os = "none")]
-use link_protocol::{Response, UNNUMBERED};
 #[cfg(all(target_os = "none", feature = "test-hang"))]
 use link_protocol::{Numbered, Request};
+#[cfg(target_os = "none")]
+use link_protocol::{Response, UNNUMBERED};
 
 /// The watchdog test's build (feature `test-hang`): the main loop stops for good, as a firmware
 /// bug would stop it (here: waiting for an event that never comes); interrupts go on, the watchdog
@@ -90,10 +95,17 @@ fn main() -> ! {
     #[cfg(feature = "checkpoint")]
     let persistence = board.flash.and_then(|flash| {
         // The store feeds the watchdog before every erase block and write (`FedFlash`).
-        service::Persistence::open(firmware::watchdog::FedFlash::new(flash, watchdog), buffers, estimator)
+        service::Persistence::open(
+            firmware::watchdog::FedFlash::new(flash, watchdog),
+            buffers,
+            estimator,
+        )
     });
     #[cfg(feature = "checkpoint")]
-    defmt::info!("checkpoint every {=u32} s of sample time", CHECKPOINT_INTERVAL_S);
+    defmt::info!(
+        "checkpoint every {=u32} s of sample time",
+        CHECKPOINT_INTERVAL_S
+    );
     #[cfg(not(feature = "checkpoint"))]
     let persistence = None;
     let boot_stack_peak_bytes = stack::peak_bytes();
@@ -128,7 +140,10 @@ fn main() -> ! {
     loop {
         match link.receive() {
             #[cfg(feature = "test-hang")]
-            Ok(Numbered { message: Request::Hang, .. }) => hang(),
+            Ok(Numbered {
+                message: Request::Hang,
+                ..
+            }) => hang(),
             Ok(request) => {
                 if let Some(response) = service.handle(&request.message, link.counters()) {
                     if !link.send(request.seq, &response) {

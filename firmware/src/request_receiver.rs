@@ -58,11 +58,21 @@ mod tests {
     fn frame(seq: u32) -> Vec<u8> {
         let sample = Sample::from_degrees(f64::from(seq), 1.0, 2.0, 30.0, 4.0, 0.5, -0.5);
         let mut out = [0u8; MAX_FRAME];
-        let n = encode_frame(&Numbered { seq, message: Request::Sample(SampleMsg::from(&sample)) }, &mut out).unwrap();
+        let n = encode_frame(
+            &Numbered {
+                seq,
+                message: Request::Sample(SampleMsg::from(&sample)),
+            },
+            &mut out,
+        )
+        .unwrap();
         out[..n].to_vec()
     }
 
-    fn feed(rx: &mut RequestReceiver, items: impl IntoIterator<Item = Received>) -> Vec<Result<u32, FrameError>> {
+    fn feed(
+        rx: &mut RequestReceiver,
+        items: impl IntoIterator<Item = Received>,
+    ) -> Vec<Result<u32, FrameError>> {
         items
             .into_iter()
             .filter_map(|i| rx.push(i))

@@ -60,10 +60,35 @@ mod tests {
     fn each_reset_with_the_flags_the_chip_sets_for_it() {
         // Every reset drives NRST, so PINRSTF comes along; a power-on sets BORRSTF too.
         let cases = [
-            (ResetFlags { power_on: true, brown_out: true, ..PIN }, ResetCause::PowerOn),
-            (ResetFlags { brown_out: true, ..PIN }, ResetCause::BrownOut),
-            (ResetFlags { watchdog: true, ..PIN }, ResetCause::Watchdog),
-            (ResetFlags { software: true, ..PIN }, ResetCause::Software),
+            (
+                ResetFlags {
+                    power_on: true,
+                    brown_out: true,
+                    ..PIN
+                },
+                ResetCause::PowerOn,
+            ),
+            (
+                ResetFlags {
+                    brown_out: true,
+                    ..PIN
+                },
+                ResetCause::BrownOut,
+            ),
+            (
+                ResetFlags {
+                    watchdog: true,
+                    ..PIN
+                },
+                ResetCause::Watchdog,
+            ),
+            (
+                ResetFlags {
+                    software: true,
+                    ..PIN
+                },
+                ResetCause::Software,
+            ),
             (PIN, ResetCause::Pin),
             (ResetFlags::default(), ResetCause::PowerOn),
         ];
@@ -75,7 +100,13 @@ mod tests {
     #[test]
     fn the_firmware_s_own_mark_comes_first() {
         // A clock failure resets through SCB::sys_reset: the flags say software, the mark says why.
-        let flags = ResetFlags { software: true, ..PIN };
-        assert_eq!(reset_cause(Some(ResetCause::ClockFailure), flags), ResetCause::ClockFailure);
+        let flags = ResetFlags {
+            software: true,
+            ..PIN
+        };
+        assert_eq!(
+            reset_cause(Some(ResetCause::ClockFailure), flags),
+            ResetCause::ClockFailure
+        );
     }
 }

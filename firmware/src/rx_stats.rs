@@ -98,8 +98,16 @@ mod tests {
     #[test]
     fn each_flag_counts_once_and_the_peak_keeps_the_largest_fill() {
         let s = RxStats::new();
-        s.count_line_errors(LineErrors { overrun: true, framing: false, noise: true });
-        s.count_line_errors(LineErrors { overrun: true, framing: true, noise: false });
+        s.count_line_errors(LineErrors {
+            overrun: true,
+            framing: false,
+            noise: true,
+        });
+        s.count_line_errors(LineErrors {
+            overrun: true,
+            framing: true,
+            noise: false,
+        });
         s.count_line_errors(LineErrors::default());
         s.count_buffer_overrun();
         s.note_fill(40);
@@ -124,7 +132,10 @@ mod tests {
     fn counters_saturate() {
         let s = RxStats::new();
         s.uart_overruns.store(u32::MAX, Ordering::Relaxed);
-        s.count_line_errors(LineErrors { overrun: true, ..LineErrors::default() });
+        s.count_line_errors(LineErrors {
+            overrun: true,
+            ..LineErrors::default()
+        });
         assert_eq!(s.snapshot(1, 0).uart_overruns, u32::MAX);
     }
 }

@@ -27,7 +27,10 @@ pub fn next_seq(seq: u32) -> u32 {
 
 impl SequenceTracker {
     pub const fn new() -> Self {
-        SequenceTracker { expected: None, lost: 0 }
+        SequenceTracker {
+            expected: None,
+            lost: 0,
+        }
     }
 
     /// A request with number `seq` arrived; returns how many requests before it were lost.

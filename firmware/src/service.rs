@@ -3,12 +3,14 @@
 
 use estimator_core::{Estimator, Output, Sample, SampleError};
 use link_protocol::{
-    ClockSource, Counters, EstimateMsg, FrameError, LinkCounters, RejectedReply, Request, ResetCause, Response,
-    StatusReply, StepReply, PROTOCOL_VERSION,
+    ClockSource, Counters, EstimateMsg, FrameError, LinkCounters, RejectedReply, Request,
+    ResetCause, Response, StatusReply, StepReply, PROTOCOL_VERSION,
 };
 
 use estimator_core::checkpoint::CheckpointError;
-use firmware::checkpoint_store::{CheckpointStore, Restored, SaveSchedule, StoreBuffers, CHECKPOINT_INTERVAL_S};
+use firmware::checkpoint_store::{
+    CheckpointStore, Restored, SaveSchedule, StoreBuffers, CHECKPOINT_INTERVAL_S,
+};
 
 use crate::board::{CostCounter, Flash};
 use crate::stack;
@@ -24,7 +26,11 @@ impl Persistence {
     /// The store on `flash`, working in `buffers` (sectors a power cut left half-erased are erased
     /// again first), with the newest checkpoint restored into `estimator`; `None` (logged) if the
     /// flash is unusable.
-    pub fn open(flash: Flash, buffers: &'static mut StoreBuffers, estimator: &mut Estimator) -> Option<Persistence> {
+    pub fn open(
+        flash: Flash,
+        buffers: &'static mut StoreBuffers,
+        estimator: &mut Estimator,
+    ) -> Option<Persistence> {
         let mut store = match CheckpointStore::new(flash, buffers) {
             Ok(store) => store,
             Err(error) => {
@@ -33,7 +39,10 @@ impl Persistence {
             }
         };
         if store.re_erased() > 0 {
-            defmt::warn!("{=u32} flash sector(s) left half-erased by a power cut, erased again", store.re_erased());
+            defmt::warn!(
+                "{=u32} flash sector(s) left half-erased by a power cut, erased again",
+                store.re_erased()
+            );
         }
         let restored = store.restore(estimator);
         match restored {
@@ -87,7 +96,9 @@ impl<'a> Service<'a> {
 
     /// Saves a checkpoint when one is due after the sample at `time_s` ([`SaveSchedule`]).
     fn maybe_checkpoint(&mut self, time_s: f64) {
-        let Some(p) = self.persistence.as_mut() else { return };
+        let Some(p) = self.persistence.as_mut() else {
+            return;
+        };
         if p.schedule.due(time_s) {
             if let Err(error) = p.store.save(self.estimator) {
                 defmt::error!("checkpoint at {=f64} s not saved: {}", time_s, error);
@@ -115,7 +126,12 @@ impl<'a> Service<'a> {
                         self.maybe_checkpoint(output.time_s);
                         Response::Step(StepReply::new(&output, ticks, self.counters()))
                     }
-                    Err(error) => Response::Rejected(RejectedReply::new(sample.time_s, &error, ticks, self.counters())),
+                    Err(error) => Response::Rejected(RejectedReply::new(
+                        sample.time_s,
+                        &error,
+                        ticks,
+                        self.counters(),
+                    )),
                 }
             }
             Request::Reset => {

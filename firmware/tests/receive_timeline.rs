@@ -52,9 +52,24 @@ const ANSWER_NS: u64 = 182 * BYTE_NS;
 fn frames(count: u32) -> Vec<Vec<u8>> {
     (1..=count)
         .map(|seq| {
-            let s = Sample::from_degrees(f64::from(seq), f64::from(seq) * 0.5, 1.0, 30.0, 10.0, 2.0, -1.0);
+            let s = Sample::from_degrees(
+                f64::from(seq),
+                f64::from(seq) * 0.5,
+                1.0,
+                30.0,
+                10.0,
+                2.0,
+                -1.0,
+            );
             let mut out = [0u8; MAX_FRAME];
-            let n = encode_frame(&Numbered { seq, message: Request::Sample(SampleMsg::from(&s)) }, &mut out).unwrap();
+            let n = encode_frame(
+                &Numbered {
+                    seq,
+                    message: Request::Sample(SampleMsg::from(&s)),
+                },
+                &mut out,
+            )
+            .unwrap();
             out[..n].to_vec()
         })
         .collect()
@@ -77,7 +92,7 @@ fn line(frames: &[Vec<u8>]) -> Vec<(u64, u8)> {
 /// the save's interval.
 fn serve(t: u64, seq: u32, stalls: &mut Vec<(u64, u64)>) -> u64 {
     let mut t = t + STEP_NS + ANSWER_NS;
-    if seq % SAVE_EVERY_FRAMES == 0 {
+    if seq.is_multiple_of(SAVE_EVERY_FRAMES) {
         stalls.push((t, t + ERASE_MAX_NS + PROGRAM_MAX_NS));
         t += ERASE_MAX_NS + PROGRAM_MAX_NS;
     }
@@ -204,7 +219,13 @@ fn run_interrupt(count: u32) -> Outcome {
             // that ended before `at` has already let the handler empty the register.
             if !in_stall(&stalls, at) {
                 if let Some(waiting) = data_register.take() {
-                    writer.push(waiting, LineErrors { overrun: std::mem::take(&mut overrun), ..LineErrors::default() });
+                    writer.push(
+                        waiting,
+                        LineErrors {
+                            overrun: std::mem::take(&mut overrun),
+                            ..LineErrors::default()
+                        },
+                    );
                 }
             }
             if data_register.is_some() {
@@ -214,18 +235,30 @@ fn run_interrupt(count: u32) -> Outcome {
             }
             if !in_stall(&stalls, at) {
                 if let Some(waiting) = data_register.take() {
-                    writer.push(waiting, LineErrors { overrun: std::mem::take(&mut overrun), ..LineErrors::default() });
+                    writer.push(
+                        waiting,
+                        LineErrors {
+                            overrun: std::mem::take(&mut overrun),
+                            ..LineErrors::default()
+                        },
+                    );
                 }
             }
             next += 1;
         }
         if !in_stall(&stalls, t) {
             if let Some(waiting) = data_register.take() {
-                writer.push(waiting, LineErrors { overrun: std::mem::take(&mut overrun), ..LineErrors::default() });
+                writer.push(
+                    waiting,
+                    LineErrors {
+                        overrun: std::mem::take(&mut overrun),
+                        ..LineErrors::default()
+                    },
+                );
             }
         }
         let mut served = None;
-        while let Some(item) = reader.next() {
+        for item in reader.by_ref() {
             match receiver.push(item) {
                 Some(Ok(request)) => {
                     seqs.push(request.seq);
@@ -259,7 +292,11 @@ const FRAMES: u32 = 600;
 fn the_dma_path_receives_every_frame_through_every_worst_case_flash_stall() {
     let out = run_dma(FRAMES);
     assert_eq!(out.stalls.len(), (FRAMES / SAVE_EVERY_FRAMES) as usize);
-    assert_eq!(out.seqs, (1..=FRAMES).collect::<Vec<_>>(), "every frame, in order");
+    assert_eq!(
+        out.seqs,
+        (1..=FRAMES).collect::<Vec<_>>(),
+        "every frame, in order"
+    );
     assert_eq!((out.lost_frames, out.bad_frames), (0, 0));
     assert_eq!(out.stats.buffer_overruns, 0);
     // The most that waited at once: the frames sent during a stall (4.26 s: 5 frames) and no more
@@ -270,7 +307,10 @@ fn the_dma_path_receives_every_frame_through_every_worst_case_flash_stall() {
         out.stats.rx_peak_bytes,
         out.stats.rx_peak_bytes as f64 / frame_bytes as f64
     );
-    assert!(out.stats.rx_peak_bytes >= 4 * frame_bytes, "the stalls must have let frames queue up");
+    assert!(
+        out.stats.rx_peak_bytes >= 4 * frame_bytes,
+        "the stalls must have let frames queue up"
+    );
     assert!(out.stats.rx_peak_bytes as usize <= DMA_RX_BUFFER_BYTES / 2);
 }
 
@@ -297,7 +337,11 @@ fn the_interrupt_path_would_lose_the_frames_sent_during_a_flash_stall_on_silicon
     );
     assert_eq!(out.lost_frames, 4 * (out.stalls.len() as u32 - 1));
     assert_eq!(out.seqs.len() as u32 + out.lost_frames, FRAMES);
-    assert_eq!(out.stats.uart_overruns, out.stalls.len() as u32 - 1, "one ORE a stall");
+    assert_eq!(
+        out.stats.uart_overruns,
+        out.stalls.len() as u32 - 1,
+        "one ORE a stall"
+    );
 }
 
 #[test]
@@ -307,5 +351,12 @@ fn without_stalls_the_interrupt_path_receives_every_frame() {
     let out = run_interrupt(frames_count);
     assert!(out.stalls.is_empty());
     assert_eq!(out.seqs, (1..=frames_count).collect::<Vec<_>>());
-    assert_eq!((out.lost_frames, out.stats.uart_overruns, out.stats.buffer_overruns), (0, 0, 0));
+    assert_eq!(
+        (
+            out.lost_frames,
+            out.stats.uart_overruns,
+            out.stats.buffer_overruns
+        ),
+        (0, 0, 0)
+    );
 }

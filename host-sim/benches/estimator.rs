@@ -42,7 +42,15 @@ fn estimate_two_days(c: &mut Criterion) {
     let mut group = c.benchmark_group("estimate_2day_log");
     group.sample_size(10);
     group.throughput(Throughput::Elements(g.rows.len() as u64));
-    group.bench_function("windowed", |b| b.iter(|| estimate_file(&log, &out, Config::default()).unwrap().replay.counters.accepted));
+    group.bench_function("windowed", |b| {
+        b.iter(|| {
+            estimate_file(&log, &out, Config::default())
+                .unwrap()
+                .replay
+                .counters
+                .accepted
+        })
+    });
     group.finish();
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -102,12 +102,22 @@ impl TuningArgs {
         let c = self.config(method);
         if let Err(e) = crate::replay::HostEstimator::new(c) {
             let option = match e {
-                estimator_core::ConfigError::Parameter { name: "traditional_sigma_rad", .. } => " (set by --traditional-sigma-deg, deg)",
-                estimator_core::ConfigError::Parameter { name: "traditional_drift_rad_per_sqrt_s", .. } => {
-                    " (set by --traditional-drift-arcsec-per-sqrt-s, arcsec/sqrt(s))"
-                }
-                estimator_core::ConfigError::Parameter { name: "max_filled_gap_samples", .. } => " (set by --max-filled-gap-samples)",
-                estimator_core::ConfigError::Parameter { name: "change_detection_step_rad", .. } => " (set by --change-detection-arcsec, arcsec)",
+                estimator_core::ConfigError::Parameter {
+                    name: "traditional_sigma_rad",
+                    ..
+                } => " (set by --traditional-sigma-deg, deg)",
+                estimator_core::ConfigError::Parameter {
+                    name: "traditional_drift_rad_per_sqrt_s",
+                    ..
+                } => " (set by --traditional-drift-arcsec-per-sqrt-s, arcsec/sqrt(s))",
+                estimator_core::ConfigError::Parameter {
+                    name: "max_filled_gap_samples",
+                    ..
+                } => " (set by --max-filled-gap-samples)",
+                estimator_core::ConfigError::Parameter {
+                    name: "change_detection_step_rad",
+                    ..
+                } => " (set by --change-detection-arcsec, arcsec)",
                 _ => "",
             };
             anyhow::bail!("invalid estimator configuration: {e}{option}");
@@ -120,9 +130,20 @@ impl TuningArgs {
 /// (`--duration -100`, `--latitude -35`): the option's own check then says what is wrong with it,
 /// where clap alone would take `-100` for an unknown option.
 pub fn accept_negative_numbers(cmd: clap::Command) -> clap::Command {
-    let names: Vec<String> = cmd.get_subcommands().map(|c| c.get_name().to_string()).collect();
-    let cmd = cmd.mut_args(|arg| if arg.get_action().takes_values() && !arg.is_positional() { arg.allow_negative_numbers(true) } else { arg });
-    names.iter().fold(cmd, |cmd, name| cmd.mut_subcommand(name, accept_negative_numbers))
+    let names: Vec<String> = cmd
+        .get_subcommands()
+        .map(|c| c.get_name().to_string())
+        .collect();
+    let cmd = cmd.mut_args(|arg| {
+        if arg.get_action().takes_values() && !arg.is_positional() {
+            arg.allow_negative_numbers(true)
+        } else {
+            arg
+        }
+    });
+    names.iter().fold(cmd, |cmd, name| {
+        cmd.mut_subcommand(name, accept_negative_numbers)
+    })
 }
 
 /// Longest log the generator is asked for, s (30 days: 2.6 million rows, about 200 MB of CSV).
@@ -130,7 +151,10 @@ pub const MAX_DURATION_S: f64 = 30.0 * 86_400.0;
 
 /// Checks a `--duration`.
 pub fn check_duration(d: f64) -> anyhow::Result<f64> {
-    anyhow::ensure!(d.is_finite() && (1.0..=MAX_DURATION_S).contains(&d), "--duration must be between 1 and {MAX_DURATION_S} s, got {d}");
+    anyhow::ensure!(
+        d.is_finite() && (1.0..=MAX_DURATION_S).contains(&d),
+        "--duration must be between 1 and {MAX_DURATION_S} s, got {d}"
+    );
     Ok(d)
 }
 
@@ -138,11 +162,17 @@ pub fn check_duration(d: f64) -> anyhow::Result<f64> {
 pub fn parse_list<const N: usize>(text: &str) -> Result<[f64; N], String> {
     let parts: Vec<&str> = text.split(',').collect();
     if parts.len() != N {
-        return Err(format!("expected {N} comma-separated numbers, got {}", parts.len()));
+        return Err(format!(
+            "expected {N} comma-separated numbers, got {}",
+            parts.len()
+        ));
     }
     let mut out = [0.0; N];
     for (o, p) in out.iter_mut().zip(&parts) {
-        *o = p.trim().parse::<f64>().map_err(|_| format!("not a number: {:?}", p.trim()))?;
+        *o = p
+            .trim()
+            .parse::<f64>()
+            .map_err(|_| format!("not a number: {:?}", p.trim()))?;
         if !o.is_finite() {
             return Err(format!("not finite: {:?}", p.trim()));
         }
@@ -185,26 +215,37 @@ impl ScenarioOverrides {
             p.duration_s = check_duration(d)?;
         }
         if let Some(l) = self.latitude {
-            anyhow::ensure!(l.is_finite() && l.abs() < 90.0, "--latitude must be inside (-90, 90), got {l}");
+            anyhow::ensure!(
+                l.is_finite() && l.abs() < 90.0,
+                "--latitude must be inside (-90, 90), got {l}"
+            );
             p.latitude_deg = l;
         }
         if let Some(e) = self.errors_arcsec {
             p.errors_arcsec = e;
         }
-        if let (Some(at_s), Some(errors_after_arcsec)) = (self.errors_step_at, self.errors_after_arcsec) {
+        if let (Some(at_s), Some(errors_after_arcsec)) =
+            (self.errors_step_at, self.errors_after_arcsec)
+        {
             anyhow::ensure!(
                 at_s.is_finite() && at_s > 0.0 && at_s < p.duration_s,
                 "--errors-step-at must be inside the log (0, {} s), got {at_s}",
                 p.duration_s
             );
-            p.errors_step = Some(ErrorsStep { at_s, errors_after_arcsec });
+            p.errors_step = Some(ErrorsStep {
+                at_s,
+                errors_after_arcsec,
+            });
         }
         if let Some(n) = self.noise_arcsec {
             anyhow::ensure!(n.is_finite() && n >= 0.0, "--noise-arcsec must be >= 0");
             p.noise_arcsec = n;
         }
         if let Some(a) = self.low_frequency_deg {
-            anyhow::ensure!(a.is_finite() && a >= 0.0, "--low-frequency-deg must be >= 0");
+            anyhow::ensure!(
+                a.is_finite() && a >= 0.0,
+                "--low-frequency-deg must be >= 0"
+            );
             p.low_frequency_deg = a;
         }
         Ok(p)
@@ -222,7 +263,15 @@ pub fn parse_schemes(text: &str) -> Result<SchemeList, String> {
     }
     let names: Vec<&str> = RotationScheme::ALL.iter().map(|s| s.name()).collect();
     text.split(',')
-        .map(|n| RotationScheme::parse(n.trim()).ok_or_else(|| format!("unknown scheme {:?}: expected `all` or some of {}", n.trim(), names.join(", "))))
+        .map(|n| {
+            RotationScheme::parse(n.trim()).ok_or_else(|| {
+                format!(
+                    "unknown scheme {:?}: expected `all` or some of {}",
+                    n.trim(),
+                    names.join(", ")
+                )
+            })
+        })
         .collect::<Result<Vec<_>, _>>()
         .map(SchemeList)
 }
@@ -252,11 +301,17 @@ impl TimingArgs {
     pub fn check(&self) -> anyhow::Result<()> {
         if let Some(t) = self.rotation_period {
             let (lo, hi) = ROTATION_PERIOD_RANGE_S;
-            anyhow::ensure!(t.is_finite() && (lo..=hi).contains(&t), "--rotation-period must be between {lo} and {hi} s, got {t}");
+            anyhow::ensure!(
+                t.is_finite() && (lo..=hi).contains(&t),
+                "--rotation-period must be between {lo} and {hi} s, got {t}"
+            );
         }
         if let Some(d) = self.sample_interval {
             let (lo, hi) = SAMPLE_INTERVAL_RANGE_S;
-            anyhow::ensure!(d.is_finite() && (lo..=hi).contains(&d), "--sample-interval must be between {lo} and {hi} s, got {d}");
+            anyhow::ensure!(
+                d.is_finite() && (lo..=hi).contains(&d),
+                "--sample-interval must be between {lo} and {hi} s, got {d}"
+            );
         }
         Ok(())
     }
@@ -284,7 +339,12 @@ pub struct RecorderArgs {
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub outages: usize,
     /// Recorder: added to every time stamp, s (e.g. 1.7e9 for Unix time); recorded in the truth file.
-    #[arg(long, value_name = "S", default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     pub time_offset: f64,
     /// Recorder: each time stamp is the sample instant plus a uniform jitter in [-S, S] (below half
     /// the sample interval); the data stay those of the true instant.
@@ -294,7 +354,12 @@ pub struct RecorderArgs {
 
 impl RecorderArgs {
     pub fn settings(&self) -> RecorderSettings {
-        RecorderSettings { drop_fraction: self.drop_fraction, outages: self.outages, time_offset_s: self.time_offset, time_jitter_s: self.time_jitter }
+        RecorderSettings {
+            drop_fraction: self.drop_fraction,
+            outages: self.outages,
+            time_offset_s: self.time_offset,
+            time_jitter_s: self.time_jitter,
+        }
     }
 }
 
@@ -314,12 +379,24 @@ impl LogShapeArgs {
     /// Applies scheme, timing and recorder to `p` (after its duration is set): outage start times
     /// are drawn from the scenario's seed.
     pub fn apply(&self, p: &mut ScenarioParams) -> anyhow::Result<()> {
-        apply_shape(p, self.scheme, &self.timing, &self.recorder.settings(), p.seed)
+        apply_shape(
+            p,
+            self.scheme,
+            &self.timing,
+            &self.recorder.settings(),
+            p.seed,
+        )
     }
 }
 
 /// Sets a scenario's scheme, timing and recording (outages drawn from `outage_seed`), checked.
-pub fn apply_shape(p: &mut ScenarioParams, scheme: RotationScheme, timing: &TimingArgs, recorder: &RecorderSettings, outage_seed: u64) -> anyhow::Result<()> {
+pub fn apply_shape(
+    p: &mut ScenarioParams,
+    scheme: RotationScheme,
+    timing: &TimingArgs,
+    recorder: &RecorderSettings,
+    outage_seed: u64,
+) -> anyhow::Result<()> {
     timing.check()?;
     p.scheme = scheme;
     if let Some(t) = timing.rotation_period {
@@ -335,7 +412,12 @@ pub fn apply_shape(p: &mut ScenarioParams, scheme: RotationScheme, timing: &Timi
         scheme.min_period_s(),
         p.rotation_period_s
     );
-    anyhow::ensure!(p.duration_s >= p.sample_interval_s, "--duration ({} s) is shorter than one sample interval ({} s)", p.duration_s, p.sample_interval_s);
+    anyhow::ensure!(
+        p.duration_s >= p.sample_interval_s,
+        "--duration ({} s) is shorter than one sample interval ({} s)",
+        p.duration_s,
+        p.sample_interval_s
+    );
     p.recording = recorder.recording(outage_seed, p.duration_s, p.sample_interval_s)?;
     Ok(())
 }
@@ -346,30 +428,85 @@ mod tests {
 
     #[test]
     fn schemes_parse_as_list_or_all() {
-        assert_eq!(parse_schemes("all").unwrap().0, RotationScheme::ALL.to_vec());
-        assert_eq!(parse_schemes("reversed, eight-position").unwrap().0, vec![RotationScheme::Reversed, RotationScheme::EightPosition]);
-        assert!(parse_schemes("continuous,spiral").unwrap_err().contains("spiral"));
+        assert_eq!(
+            parse_schemes("all").unwrap().0,
+            RotationScheme::ALL.to_vec()
+        );
+        assert_eq!(
+            parse_schemes("reversed, eight-position").unwrap().0,
+            vec![RotationScheme::Reversed, RotationScheme::EightPosition]
+        );
+        assert!(parse_schemes("continuous,spiral")
+            .unwrap_err()
+            .contains("spiral"));
     }
 
     #[test]
     fn timing_pins_period_and_interval() {
         let c = Config::default();
         assert_eq!(TimingArgs::default().pin(c), c);
-        let pinned = TimingArgs { rotation_period: Some(360.0), sample_interval: Some(2.0) }.pin(c);
-        assert_eq!((pinned.rotation_period_s, pinned.sample_interval_s), (Some(360.0), Some(2.0)));
-        let interval_only = TimingArgs { rotation_period: None, sample_interval: Some(0.5) }.pin(c);
-        assert_eq!((interval_only.rotation_period_s, interval_only.sample_interval_s), (None, Some(0.5)));
-        assert!(TimingArgs { rotation_period: Some(59.0), sample_interval: None }.check().is_err());
-        assert!(TimingArgs { rotation_period: None, sample_interval: Some(0.05) }.check().is_err());
+        let pinned = TimingArgs {
+            rotation_period: Some(360.0),
+            sample_interval: Some(2.0),
+        }
+        .pin(c);
+        assert_eq!(
+            (pinned.rotation_period_s, pinned.sample_interval_s),
+            (Some(360.0), Some(2.0))
+        );
+        let interval_only = TimingArgs {
+            rotation_period: None,
+            sample_interval: Some(0.5),
+        }
+        .pin(c);
+        assert_eq!(
+            (
+                interval_only.rotation_period_s,
+                interval_only.sample_interval_s
+            ),
+            (None, Some(0.5))
+        );
+        assert!(TimingArgs {
+            rotation_period: Some(59.0),
+            sample_interval: None
+        }
+        .check()
+        .is_err());
+        assert!(TimingArgs {
+            rotation_period: None,
+            sample_interval: Some(0.05)
+        }
+        .check()
+        .is_err());
     }
 
     #[test]
     fn shape_rejects_a_period_too_short_for_the_moves() {
         let mut p = ScenarioParams::new(ScenarioKind::Paper, 1);
-        let timing = TimingArgs { rotation_period: Some(100.0), sample_interval: None };
-        let err = apply_shape(&mut p, RotationScheme::EightPosition, &timing, &RecorderSettings::default(), 1).unwrap_err();
+        let timing = TimingArgs {
+            rotation_period: Some(100.0),
+            sample_interval: None,
+        };
+        let err = apply_shape(
+            &mut p,
+            RotationScheme::EightPosition,
+            &timing,
+            &RecorderSettings::default(),
+            1,
+        )
+        .unwrap_err();
         assert!(err.to_string().contains("at least 120 s"), "{err}");
-        apply_shape(&mut p, RotationScheme::FourPosition, &timing, &RecorderSettings::default(), 1).unwrap();
-        assert_eq!((p.scheme, p.rotation_period_s), (RotationScheme::FourPosition, 100.0));
+        apply_shape(
+            &mut p,
+            RotationScheme::FourPosition,
+            &timing,
+            &RecorderSettings::default(),
+            1,
+        )
+        .unwrap();
+        assert_eq!(
+            (p.scheme, p.rotation_period_s),
+            (RotationScheme::FourPosition, 100.0)
+        );
     }
 }

@@ -50,8 +50,20 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
             runs: seeds,
             to_percent_s: (inf, inf),
             to_arcsec_s: (inf, inf),
-            error_at_arcsec: COMPARE_TIMES_S.iter().map(|t| if *t > duration_s { (f64::NAN, f64::NAN) } else { (inf, inf) }).collect(),
-            coverage_2sigma: COMPARE_TIMES_S.iter().map(|t| if *t > duration_s { f64::NAN } else { 0.0 }).collect(),
+            error_at_arcsec: COMPARE_TIMES_S
+                .iter()
+                .map(|t| {
+                    if *t > duration_s {
+                        (f64::NAN, f64::NAN)
+                    } else {
+                        (inf, inf)
+                    }
+                })
+                .collect(),
+            coverage_2sigma: COMPARE_TIMES_S
+                .iter()
+                .map(|t| if *t > duration_s { f64::NAN } else { 0.0 })
+                .collect(),
             duration_s,
             final_status: vec![(format!("configuration rejected ({e:?})"), seeds)],
         });
@@ -65,13 +77,29 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
                 return (f64::NAN, f64::NAN);
             }
             stats(results.iter().map(|r| {
-                r.points.get(k).and_then(|p| p.error_arcsec).map_or(inf, |e| e.iter().fold(0.0, |m, x| f64::max(m, x.abs())))
+                r.points
+                    .get(k)
+                    .and_then(|p| p.error_arcsec)
+                    .map_or(inf, |e| e.iter().fold(0.0, |m, x| f64::max(m, x.abs())))
             }))
         })
         .collect();
-    let coverage = COMPARE_TIMES_S.iter().enumerate().map(|(k, t)| if *t > duration_s { f64::NAN } else { coverage_2sigma(&results, k) }).collect();
+    let coverage = COMPARE_TIMES_S
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            if *t > duration_s {
+                f64::NAN
+            } else {
+                coverage_2sigma(&results, k)
+            }
+        })
+        .collect();
     let mut final_status: Vec<(String, usize)> = Vec::new();
-    for name in results.iter().map(|r| r.final_status.map_or("none", |s| s.name())) {
+    for name in results
+        .iter()
+        .map(|r| r.final_status.map_or("none", |s| s.name()))
+    {
         match final_status.iter_mut().find(|(n, _)| n == name) {
             Some((_, count)) => *count += 1,
             None => final_status.push((name.to_string(), 1)),
@@ -83,8 +111,16 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
         final_status,
         method: config.method,
         runs: seeds,
-        to_percent_s: stats(results.iter().map(|r| r.all_within_percent_from_s().unwrap_or(inf))),
-        to_arcsec_s: stats(results.iter().map(|r| r.all_within_arcsec_from_s().unwrap_or(inf))),
+        to_percent_s: stats(
+            results
+                .iter()
+                .map(|r| r.all_within_percent_from_s().unwrap_or(inf)),
+        ),
+        to_arcsec_s: stats(
+            results
+                .iter()
+                .map(|r| r.all_within_arcsec_from_s().unwrap_or(inf)),
+        ),
         error_at_arcsec,
         coverage_2sigma: coverage,
         duration_s,
@@ -139,7 +175,11 @@ pub fn format_table(rows: &[CompareRow]) -> String {
             fmt_err(r.error_at_arcsec[1].1),
             fmt_share(r.coverage_2sigma[0]),
             fmt_share(r.coverage_2sigma[1]),
-            r.final_status.iter().map(|(n, c)| format!("{n} ({c})")).collect::<Vec<_>>().join(", "),
+            r.final_status
+                .iter()
+                .map(|(n, c)| format!("{n} ({c})"))
+                .collect::<Vec<_>>()
+                .join(", "),
         ));
     }
     s
@@ -148,20 +188,35 @@ pub fn format_table(rows: &[CompareRow]) -> String {
 /// How the logs of a draw are made, one line: scheme, period, interval and the recorder.
 pub fn describe(draw: &Draw) -> String {
     let p = draw.params(0);
-    let mut s = format!("scheme {}, rotation period {} s, a row every {} s", p.scheme.name(), p.rotation_period_s, p.sample_interval_s);
+    let mut s = format!(
+        "scheme {}, rotation period {} s, a row every {} s",
+        p.scheme.name(),
+        p.rotation_period_s,
+        p.sample_interval_s
+    );
     let r = &draw.recorder;
     let mut rec = Vec::new();
     if r.drop_fraction > 0.0 {
-        rec.push(format!("{} % of rows dropped at random", 100.0 * r.drop_fraction));
+        rec.push(format!(
+            "{} % of rows dropped at random",
+            100.0 * r.drop_fraction
+        ));
     }
     if r.outages > 0 {
-        rec.push(format!("{} outages of {} s", r.outages, crate::recorder::OUTAGE_S));
+        rec.push(format!(
+            "{} outages of {} s",
+            r.outages,
+            crate::recorder::OUTAGE_S
+        ));
     }
     if r.time_offset_s != 0.0 {
         rec.push(format!("time stamps offset by {} s", r.time_offset_s));
     }
     if r.time_jitter_s > 0.0 {
-        rec.push(format!("time stamps jittered by up to {} s", r.time_jitter_s));
+        rec.push(format!(
+            "time stamps jittered by up to {} s",
+            r.time_jitter_s
+        ));
     }
     if rec.is_empty() {
         s.push_str(", every row, exact time stamps");

@@ -42,11 +42,19 @@ impl<W: Write> EstimatesWriter<W> {
     /// Writes the header.
     pub fn new(mut out: W) -> std::io::Result<Self> {
         writeln!(out, "{HEADER}")?;
-        Ok(EstimatesWriter { out, held: None, line: String::with_capacity(256) })
+        Ok(EstimatesWriter {
+            out,
+            held: None,
+            line: String::with_capacity(256),
+        })
     }
 
     /// Writes the row of one step: pass `step`'s result as it is, with the input row's time.
-    pub fn write_step(&mut self, time_s: f64, result: &Result<Output, SampleError>) -> std::io::Result<()> {
+    pub fn write_step(
+        &mut self,
+        time_s: f64,
+        result: &Result<Output, SampleError>,
+    ) -> std::io::Result<()> {
         match result {
             Ok(out) => self.write_output(out),
             Err(reason) => self.write_rejected(time_s, reason),
@@ -115,7 +123,10 @@ struct RawRow {
 
 /// A group of columns written together (an estimate, its 1-sigma, the corrected attitude): all
 /// present or all empty; one empty among numbers is an error naming its column.
-fn group<const N: usize>(values: [Option<f64>; N], names: [&str; N]) -> Result<Option<[f64; N]>, String> {
+fn group<const N: usize>(
+    values: [Option<f64>; N],
+    names: [&str; N],
+) -> Result<Option<[f64; N]>, String> {
     if values.iter().all(Option::is_none) {
         return Ok(None);
     }
@@ -132,15 +143,36 @@ impl TryFrom<RawRow> for EstimateRow {
     fn try_from(r: RawRow) -> Result<EstimateRow, String> {
         Ok(EstimateRow {
             time_s: r.time_s,
-            x_arcsec: group([r.x1_arcsec, r.x2_arcsec, r.x3_arcsec, r.x4_arcsec], ["x1_arcsec", "x2_arcsec", "x3_arcsec", "x4_arcsec"])?,
+            x_arcsec: group(
+                [r.x1_arcsec, r.x2_arcsec, r.x3_arcsec, r.x4_arcsec],
+                ["x1_arcsec", "x2_arcsec", "x3_arcsec", "x4_arcsec"],
+            )?,
             sigma_arcsec: group(
-                [r.sigma1_arcsec, r.sigma2_arcsec, r.sigma3_arcsec, r.sigma4_arcsec],
-                ["sigma1_arcsec", "sigma2_arcsec", "sigma3_arcsec", "sigma4_arcsec"],
+                [
+                    r.sigma1_arcsec,
+                    r.sigma2_arcsec,
+                    r.sigma3_arcsec,
+                    r.sigma4_arcsec,
+                ],
+                [
+                    "sigma1_arcsec",
+                    "sigma2_arcsec",
+                    "sigma3_arcsec",
+                    "sigma4_arcsec",
+                ],
             )?,
             status: r.status,
             corrected_deg: group(
-                [r.heading_corrected_deg, r.roll_corrected_deg, r.pitch_corrected_deg],
-                ["heading_corrected_deg", "roll_corrected_deg", "pitch_corrected_deg"],
+                [
+                    r.heading_corrected_deg,
+                    r.roll_corrected_deg,
+                    r.pitch_corrected_deg,
+                ],
+                [
+                    "heading_corrected_deg",
+                    "roll_corrected_deg",
+                    "pitch_corrected_deg",
+                ],
             )?,
         })
     }
@@ -149,12 +181,18 @@ impl TryFrom<RawRow> for EstimateRow {
 /// What the `csv` crate's error says, as one line (the line number is given separately).
 fn describe(e: &csv::Error) -> String {
     match e.kind() {
-        csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => {
             let kind = if len < expected_len { "short" } else { "long" };
             format!("{kind} row: {len} fields, expected {expected_len}")
         }
         csv::ErrorKind::Deserialize { err, .. } => match err.field() {
-            Some(i) => format!("{}: {}", HEADER.split(',').nth(i as usize).unwrap_or("?"), err.kind()),
+            Some(i) => format!(
+                "{}: {}",
+                HEADER.split(',').nth(i as usize).unwrap_or("?"),
+                err.kind()
+            ),
             None => err.kind().to_string(),
         },
         csv::ErrorKind::Io(io) => format!("cannot read: {io}"),
@@ -166,17 +204,38 @@ fn describe(e: &csv::Error) -> String {
 /// Reads an estimates CSV (the `csv` crate, rows deserialized by column name) from a buffered
 /// reader; `path` names it in errors. Blank lines and `#` comment lines are skipped; whitespace
 /// around fields, a `\r` and a UTF-8 byte-order mark are ignored; the header must be [`HEADER`].
-pub fn read_estimates_from<R: BufRead>(path: &Path, reader: R) -> Result<Vec<EstimateRow>, LogError> {
-    let mut csv = csv::ReaderBuilder::new().comment(Some(b'#')).trim(csv::Trim::All).from_reader(reader);
+pub fn read_estimates_from<R: BufRead>(
+    path: &Path,
+    reader: R,
+) -> Result<Vec<EstimateRow>, LogError> {
+    let mut csv = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_reader(reader);
     let line_of = |e: &csv::Error| e.position().map_or(0, |p| p.line() as usize);
-    let header = csv.byte_headers().map_err(|e| LogError::new(path, line_of(&e), describe(&e)))?.clone();
+    let header = csv
+        .byte_headers()
+        .map_err(|e| LogError::new(path, line_of(&e), describe(&e)))?
+        .clone();
     if header.is_empty() {
-        return Err(LogError::new(path, 1, format!("no header, expected {HEADER:?}")));
+        return Err(LogError::new(
+            path,
+            1,
+            format!("no header, expected {HEADER:?}"),
+        ));
     }
-    let got = header.iter().map(String::from_utf8_lossy).collect::<Vec<_>>().join(",");
+    let got = header
+        .iter()
+        .map(String::from_utf8_lossy)
+        .collect::<Vec<_>>()
+        .join(",");
     if got != HEADER {
         let line = header.position().map_or(1, |p| p.line() as usize);
-        return Err(LogError::new(path, line, format!("bad header {got:?}, expected {HEADER:?}")));
+        return Err(LogError::new(
+            path,
+            line,
+            format!("bad header {got:?}, expected {HEADER:?}"),
+        ));
     }
     let names = csv::StringRecord::from_byte_record_lossy(header);
     let mut rows = Vec::new();
@@ -186,7 +245,9 @@ pub fn read_estimates_from<R: BufRead>(path: &Path, reader: R) -> Result<Vec<Est
             Ok(false) => break,
             Ok(true) => {
                 let line = record.position().map_or(0, |p| p.line() as usize);
-                let raw: RawRow = record.deserialize(Some(&names)).map_err(|e| LogError::new(path, line, describe(&e)))?;
+                let raw: RawRow = record
+                    .deserialize(Some(&names))
+                    .map_err(|e| LogError::new(path, line, describe(&e)))?;
                 rows.push(EstimateRow::try_from(raw).map_err(|m| LogError::new(path, line, m))?);
             }
             Err(e) => return Err(LogError::new(path, line_of(&e), describe(&e))),
@@ -210,9 +271,17 @@ mod tests {
     fn output(time_s: f64, estimate: Option<Estimate>) -> Output {
         Output {
             time_s,
-            status: if estimate.is_some() { Status::Estimating } else { Status::WarmingUp },
+            status: if estimate.is_some() {
+                Status::Estimating
+            } else {
+                Status::WarmingUp
+            },
             estimate,
-            corrected: Attitude { heading_rad: 0.5, roll_rad: -0.01, pitch_rad: 0.02 },
+            corrected: Attitude {
+                heading_rad: 0.5,
+                roll_rad: -0.01,
+                pitch_rad: 0.02,
+            },
         }
     }
 
@@ -225,14 +294,23 @@ mod tests {
         let mut w = EstimatesWriter::new(Vec::new()).unwrap();
         w.write_step(0.0, &Ok(output(0.0, None))).unwrap();
         w.write_step(1.0, &Ok(output(1.0, Some(e)))).unwrap();
-        w.write_step(2.0, &Err(SampleError::NonFinite(Field::Roll))).unwrap();
+        w.write_step(2.0, &Err(SampleError::NonFinite(Field::Roll)))
+            .unwrap();
         let bytes = w.finish().unwrap();
         let text = String::from_utf8(bytes.clone()).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], HEADER);
-        assert_eq!(lines[1], "0.000000,,,,,,,,,warming_up,28.647889757,-0.572957782,1.145915565");
+        assert_eq!(
+            lines[1],
+            "0.000000,,,,,,,,,warming_up,28.647889757,-0.572957782,1.145915565"
+        );
         assert!(lines[2].starts_with("1.000000,200.0000,-150.0000,300.0000,-250.0000,1.0000,2.0000,3.0000,4.0000,estimating,"), "{}", lines[2]);
-        assert!(lines[3].starts_with("2.000000,200.0000,") && lines[3].ends_with(",rejected_non_finite,,,"), "{}", lines[3]);
+        assert!(
+            lines[3].starts_with("2.000000,200.0000,")
+                && lines[3].ends_with(",rejected_non_finite,,,"),
+            "{}",
+            lines[3]
+        );
         let rows = read_estimates_from(Path::new("e.csv"), bytes.as_slice()).unwrap();
         assert_eq!(rows.len(), 3);
         assert_eq!(rows[0].x_arcsec, None);
@@ -250,7 +328,10 @@ mod tests {
         assert!(err.to_string().starts_with("e.csv:2: short row"), "{err}");
         let text = format!("{HEADER}\n0.0,1,2,3,,,,,,estimating,1,2,3\n");
         let err = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap_err();
-        assert_eq!(err.to_string(), "e.csv:2: x4_arcsec: empty while the rest of its group is not");
+        assert_eq!(
+            err.to_string(),
+            "e.csv:2: x4_arcsec: empty while the rest of its group is not"
+        );
         let text = format!("{HEADER}\n0.0,1,2,3,x,,,,,estimating,1,2,3\n");
         let err = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap_err();
         assert!(err.to_string().starts_with("e.csv:2: x4_arcsec: "), "{err}");

@@ -40,7 +40,10 @@ impl RunEnd {
             Some(e) => format!(" ({skipped} unreadable rows; the first: {e})"),
             None => " (no rows after the header)".to_string(),
         };
-        RunEnd::NothingRead { log: log.to_string(), detail }
+        RunEnd::NothingRead {
+            log: log.to_string(),
+            detail,
+        }
     }
 
     pub fn status(&self) -> i32 {
@@ -98,17 +101,27 @@ mod tests {
         let io = std::io::Error::other("t.csv:3: roll_deg: not a number");
         let e = anyhow::Error::new(Repeats(io));
         assert_eq!(message(&e), "t.csv:3: roll_deg: not a number");
-        let with_context = anyhow::Error::new(std::io::Error::other("disk full")).context("e.csv:0: cannot write");
+        let with_context =
+            anyhow::Error::new(std::io::Error::other("disk full")).context("e.csv:0: cannot write");
         assert_eq!(message(&with_context), "e.csv:0: cannot write: disk full");
     }
 
     #[test]
     fn statuses_tell_the_ends_apart() {
-        let nothing = anyhow::Error::new(RunEnd::nothing_read("t.csv", 2, Some(&"t.csv:2: time_s: not a number")));
-        let none = anyhow::Error::new(RunEnd::NoEstimate { reason: "rotation period not yet detected".into() });
+        let nothing = anyhow::Error::new(RunEnd::nothing_read(
+            "t.csv",
+            2,
+            Some(&"t.csv:2: time_s: not a number"),
+        ));
+        let none = anyhow::Error::new(RunEnd::NoEstimate {
+            reason: "rotation period not yet detected".into(),
+        });
         let failed = anyhow::anyhow!("t.csv:0: cannot open");
         assert_eq!(report(&nothing), ("error: t.csv: no row of the log could be read (2 unreadable rows; the first: t.csv:2: time_s: not a number)".into(), 3));
-        assert_eq!(report(&none), ("no estimate: rotation period not yet detected".into(), 4));
+        assert_eq!(
+            report(&none),
+            ("no estimate: rotation period not yet detected".into(), 4)
+        );
         assert_eq!(report(&failed), ("error: t.csv:0: cannot open".into(), 1));
         assert_eq!(status_of(&none), 4);
     }

@@ -5,10 +5,10 @@
 use crate::html_report::Figure;
 use crate::monte_carlo::Summary;
 use crate::plots::{self, Band, CorrelationPanel, Curve, Lane, Panel, Series, PALETTE};
-use crate::timeline::{Bucket, Timeline};
 use crate::replay::Step;
 use crate::report::{errors_arcsec, percent_error, residual_arcsec, truth_index};
 use crate::scenario::{Row, RowTruth};
+use crate::timeline::{Bucket, Timeline};
 use estimator_core::correlation::{products, ROLL_SIN};
 use estimator_core::installation::Angles;
 use estimator_core::units::{rad_to_arcsec, RAD_PER_DEG};
@@ -27,7 +27,9 @@ pub fn percent_curves(steps: &[Step], truth: &[RowTruth], interval_s: f64) -> [V
         if let Ok(o) = &step.result {
             held = o.estimate;
         }
-        let Some(k) = truth_index(step.time_s, interval_s, truth.len()) else { continue };
+        let Some(k) = truth_index(step.time_s, interval_s, truth.len()) else {
+            continue;
+        };
         let x = &truth[k].errors_arcsec;
         if let Some(e) = errors_arcsec(held.as_ref(), x) {
             for i in 0..4 {
@@ -47,11 +49,21 @@ pub struct AttitudeCurves {
 
 /// Attitude error of eq (2) before (the oscillation put in) and after compensation, arcsec
 /// (Figs. 7 and 8).
-pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interval_s: f64) -> AttitudeCurves {
+pub fn attitude_curves(
+    rows: &[Row],
+    steps: &[Step],
+    truth: &[RowTruth],
+    interval_s: f64,
+) -> AttitudeCurves {
     let mut before: [Vec<(f64, f64)>; 3] = Default::default();
     let mut after: [Vec<(f64, f64)>; 3] = Default::default();
     for (row, step) in rows.iter().zip(steps) {
-        let (Ok(out), Some(k)) = (&step.result, truth_index(step.time_s, interval_s, truth.len())) else { continue };
+        let (Ok(out), Some(k)) = (
+            &step.result,
+            truth_index(step.time_s, interval_s, truth.len()),
+        ) else {
+            continue;
+        };
         let res = residual_arcsec(row, &out.corrected, &truth[k]);
         for a in 0..3 {
             before[a].push((step.time_s, truth[k].oscillation_deg[a] * 3600.0));
@@ -66,11 +78,23 @@ pub fn attitude_curves(rows: &[Row], steps: &[Step], truth: &[RowTruth], interva
 /// cumulative correlation with sin(rho) of eq (8) and its moving average over one rotation period
 /// (`window` samples) of eq (11), arcsec. Uses the core's correlation products. `rows` are the
 /// logged rows (lost rows missing); each takes its truth by its time (`interval_s` apart).
-pub fn correlation_panels(rows: &[Row], truth: &[RowTruth], interval_s: f64, window: usize) -> Vec<CorrelationPanel> {
-    let names = ["roll as logged (sum of the three below)", "true roll", "oscillatory roll (installation errors)", "low-frequency errors + noise"];
+pub fn correlation_panels(
+    rows: &[Row],
+    truth: &[RowTruth],
+    interval_s: f64,
+    window: usize,
+) -> Vec<CorrelationPanel> {
+    let names = [
+        "roll as logged (sum of the three below)",
+        "true roll",
+        "oscillatory roll (installation errors)",
+        "low-frequency errors + noise",
+    ];
     let mut sums = [0.0f64; 4];
     let mut corr: [Curve; 4] = Default::default();
-    let with_truth = rows.iter().filter_map(|row| truth_index(row.time_s, interval_s, truth.len()).map(|k| (row, &truth[k])));
+    let with_truth = rows.iter().filter_map(|row| {
+        truth_index(row.time_s, interval_s, truth.len()).map(|k| (row, &truth[k]))
+    });
     for (n, (row, tr)) in with_truth.enumerate() {
         let rad = |deg: f64| (deg * RAD_PER_DEG) as Real;
         let lat = row.latitude_deg * RAD_PER_DEG;
@@ -82,8 +106,18 @@ pub fn correlation_panels(rows: &[Row], truth: &[RowTruth], interval_s: f64, win
         let true_roll = tr.true_attitude_deg[1];
         let osc_roll = tr.oscillation_deg[1];
         let rest_roll = row.roll_deg - true_roll - osc_roll;
-        for (c, roll_deg) in [row.roll_deg, true_roll, osc_roll, rest_roll].into_iter().enumerate() {
-            let p = products(&Attitude { heading_rad: 0.0, roll_rad: rad(roll_deg), pitch_rad: 0.0 }, &angles)[ROLL_SIN];
+        for (c, roll_deg) in [row.roll_deg, true_roll, osc_roll, rest_roll]
+            .into_iter()
+            .enumerate()
+        {
+            let p = products(
+                &Attitude {
+                    heading_rad: 0.0,
+                    roll_rad: rad(roll_deg),
+                    pitch_rad: 0.0,
+                },
+                &angles,
+            )[ROLL_SIN];
             sums[c] += p as f64;
             corr[c].push((row.time_s, rad_to_arcsec(sums[c] / (n + 1) as f64)));
         }
@@ -128,30 +162,65 @@ pub fn write_figures(
 ) -> anyhow::Result<Vec<PathBuf>> {
     let mut written = Vec::new();
     for (name, steps) in replays {
-        let fig = if *name == "traditional" { "fig2" } else { "fig4" };
+        let fig = if *name == "traditional" {
+            "fig2"
+        } else {
+            "fig4"
+        };
         let path = dir.join(format!("{fig}_percent_error_{name}.png"));
-        plots::percent_error_figure(&path, &format!("Absolute percentage error, {name} method"), &percent_curves(steps, truth, interval_s))?;
+        plots::percent_error_figure(
+            &path,
+            &format!("Absolute percentage error, {name} method"),
+            &percent_curves(steps, truth, interval_s),
+        )?;
         written.push(path);
     }
     let lat = rows.first().map_or(0.0, |r| r.latitude_deg) * RAD_PER_DEG;
     // The first 20000 s: the stage where eq (11)'s averaging matters.
     let n3 = rows.iter().take_while(|r| r.time_s <= FIG3_SPAN_S).count();
     let path = dir.join("fig3_correlation.png");
-    plots::correlation_figure(&path, &correlation_panels(&rows[..n3], truth, interval_s, window), x_arcsec[2] * lat.cos() / 2.0)?;
+    plots::correlation_figure(
+        &path,
+        &correlation_panels(&rows[..n3], truth, interval_s, window),
+        x_arcsec[2] * lat.cos() / 2.0,
+    )?;
     written.push(path);
     if let Some((name, steps)) = replays.first() {
         let AttitudeCurves { before, after } = attitude_curves(rows, steps, truth, interval_s);
-        let span = before.iter().flatten().map(|p| p.1.abs()).fold(10.0, f64::max) * 1.1;
+        let span = before
+            .iter()
+            .flatten()
+            .map(|p| p.1.abs())
+            .fold(10.0, f64::max)
+            * 1.1;
         let path = dir.join("fig7_attitude_error_before.png");
-        plots::attitude_error_figure(&path, "Attitude error of eq (2) before compensation", &before, span)?;
+        plots::attitude_error_figure(
+            &path,
+            "Attitude error of eq (2) before compensation",
+            &before,
+            span,
+        )?;
         written.push(path);
         // At its own scale, from the first estimate on (before it nothing is removed, and at
         // Fig. 7's scale what is left is a flat line at 0): the 99th percentile of what is left;
         // the first estimates' larger errors are drawn at the axis and marked.
-        let first_estimate_s = steps.iter().find(|s| s.result.as_ref().is_ok_and(|o| o.estimate.is_some())).map_or(f64::INFINITY, |s| s.time_s);
-        let mut left: Vec<f64> = after.iter().flatten().filter(|p| p.0 >= first_estimate_s).map(|p| p.1.abs()).collect();
+        let first_estimate_s = steps
+            .iter()
+            .find(|s| s.result.as_ref().is_ok_and(|o| o.estimate.is_some()))
+            .map_or(f64::INFINITY, |s| s.time_s);
+        let mut left: Vec<f64> = after
+            .iter()
+            .flatten()
+            .filter(|p| p.0 >= first_estimate_s)
+            .map(|p| p.1.abs())
+            .collect();
         left.sort_by(f64::total_cmp);
-        let after_span = left.get(left.len() * 99 / 100).copied().unwrap_or(1.0).max(1.0) * 1.2;
+        let after_span = left
+            .get(left.len() * 99 / 100)
+            .copied()
+            .unwrap_or(1.0)
+            .max(1.0)
+            * 1.2;
         let path = dir.join(format!("fig8_attitude_error_after_{name}.png"));
         plots::attitude_error_figure(
             &path,
@@ -162,10 +231,19 @@ pub fn write_figures(
         written.push(path);
         // The same after the first 10 % of the run, at a scale that shows the residual.
         let t_end = rows.last().map_or(0.0, |r| r.time_s);
-        let late: [Vec<(f64, f64)>; 3] = after.map(|c| c.into_iter().filter(|p| p.0 >= 0.1 * t_end).collect());
+        let late: [Vec<(f64, f64)>; 3] =
+            after.map(|c| c.into_iter().filter(|p| p.0 >= 0.1 * t_end).collect());
         let late_span = late.iter().flatten().map(|p| p.1.abs()).fold(1.0, f64::max) * 1.1;
         let path = dir.join(format!("fig8_attitude_error_after_{name}_zoom.png"));
-        plots::attitude_error_figure(&path, &format!("Attitude error after compensation ({name}), from {:.0} s", 0.1 * t_end), &late, late_span)?;
+        plots::attitude_error_figure(
+            &path,
+            &format!(
+                "Attitude error after compensation ({name}), from {:.0} s",
+                0.1 * t_end
+            ),
+            &late,
+            late_span,
+        )?;
         written.push(path);
     }
     Ok(written)
@@ -173,7 +251,10 @@ pub fn write_figures(
 
 /// What a figure of [`write_figures`] shows, from its file name.
 pub fn caption_of(path: &Path) -> String {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let what = if name.starts_with("fig2_") || name.starts_with("fig4_") {
         "Absolute percentage error of eq (7) over time (the paper's Figs. 2 and 4)"
     } else if name.starts_with("fig3_") {
@@ -204,7 +285,10 @@ fn lighter(c: RGBColor) -> RGBColor {
 
 /// A symmetric range around 0 holding `values` (at least `floor`), 10 % more.
 fn symmetric_range(values: impl Iterator<Item = f64>, floor: f64) -> (f64, f64) {
-    let m = values.filter(|v| v.is_finite()).fold(floor, |m, v| m.max(v.abs())) * 1.1;
+    let m = values
+        .filter(|v| v.is_finite())
+        .fold(floor, |m, v| m.max(v.abs()))
+        * 1.1;
     (-m, m)
 }
 
@@ -212,10 +296,18 @@ fn symmetric_range(values: impl Iterator<Item = f64>, floor: f64) -> (f64, f64) 
 /// error against the truth (when there is one), the status timeline, the attitude before and
 /// after compensation with its zooms, and the filter's residuals (when the replay has them).
 /// `period_s` is the rotation period, for the zoom on the last two periods.
-pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Option<f64>) -> anyhow::Result<Vec<Figure>> {
+pub fn timeline_figures(
+    dir: &Path,
+    tl: &Timeline,
+    method: &str,
+    period_s: Option<f64>,
+) -> anyhow::Result<Vec<Figure>> {
     let buckets: Vec<&Bucket> = tl.buckets().collect();
     let mut figures = Vec::new();
-    let x_range = (tl.first_time_s.unwrap_or(0.0), tl.last_time_s.unwrap_or(1.0));
+    let x_range = (
+        tl.first_time_s.unwrap_or(0.0),
+        tl.last_time_s.unwrap_or(1.0),
+    );
     let time_panel = |title: String, y_label: &str, y_range: (f64, f64), log_y: bool| Panel {
         title,
         x_label: "time, s".into(),
@@ -227,8 +319,10 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
 
     // Estimates with 1-sigma bands, one panel per error.
     if tl.first_estimate_s.is_some() {
-        let with_estimate: Vec<(f64, crate::timeline::EstimateArcsec, Option<[f64; 4]>)> =
-            buckets.iter().filter_map(|b| b.estimate.map(|e| (b.t1_s, e, b.truth_x_arcsec))).collect();
+        let with_estimate: Vec<(f64, crate::timeline::EstimateArcsec, Option<[f64; 4]>)> = buckets
+            .iter()
+            .filter_map(|b| b.estimate.map(|e| (b.t1_s, e, b.truth_x_arcsec)))
+            .collect();
         let last = with_estimate.last().map(|p| p.1);
         let t_first = with_estimate.first().map_or(0.0, |p| p.0);
         let t_last = with_estimate.last().map_or(1.0, |p| p.0);
@@ -252,23 +346,45 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
                     }
                 }
                 let pad = 0.1 * (hi - lo);
-                let mut p = time_panel(format!("{} estimate, arcsec ({method})", X_NAMES[i]), "arcsec", (lo - pad, hi + pad), false);
+                let mut p = time_panel(
+                    format!("{} estimate, arcsec ({method})", X_NAMES[i]),
+                    "arcsec",
+                    (lo - pad, hi + pad),
+                    false,
+                );
                 p.bands.push(Band {
                     label: "estimate ± 1-sigma".into(),
                     color: PALETTE[i],
-                    points: with_estimate.iter().map(|(t, e, _)| (*t, e.x[i] - e.sigma[i], e.x[i] + e.sigma[i])).collect(),
+                    points: with_estimate
+                        .iter()
+                        .map(|(t, e, _)| (*t, e.x[i] - e.sigma[i], e.x[i] + e.sigma[i]))
+                        .collect(),
                 });
-                p.series.push(Series { label: "estimate".into(), color: PALETTE[i], points: with_estimate.iter().map(|(t, e, _)| (*t, e.x[i])).collect() });
+                p.series.push(Series {
+                    label: "estimate".into(),
+                    color: PALETTE[i],
+                    points: with_estimate.iter().map(|(t, e, _)| (*t, e.x[i])).collect(),
+                });
                 if tl.has_truth {
-                    let truth: Vec<(f64, f64)> = with_estimate.iter().filter_map(|(t, _, x)| x.map(|x| (*t, x[i]))).collect();
-                    p.series.push(Series { label: "truth".into(), color: plotters::style::BLACK, points: truth });
+                    let truth: Vec<(f64, f64)> = with_estimate
+                        .iter()
+                        .filter_map(|(t, _, x)| x.map(|x| (*t, x[i])))
+                        .collect();
+                    p.series.push(Series {
+                        label: "truth".into(),
+                        color: plotters::style::BLACK,
+                        points: truth,
+                    });
                 }
                 p
             })
             .collect();
         let path = dir.join("estimates.png");
         plots::draw_png(&path, &panels, 1000, 260)?;
-        figures.push(Figure { path, caption: "The estimates of x1..x4 with their reported 1-sigma band over time".into() });
+        figures.push(Figure {
+            path,
+            caption: "The estimates of x1..x4 with their reported 1-sigma band over time".into(),
+        });
     }
 
     // The error against the truth: arcsec and percent (eq (7)), log scales.
@@ -282,26 +398,58 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
         }
         let errors: Vec<Judged> = buckets
             .iter()
-            .filter_map(|b| Some(Judged { t: b.t1_s, error: b.error_arcsec?, truth: b.truth_x_arcsec?, sigma: b.estimate?.sigma }))
+            .filter_map(|b| {
+                Some(Judged {
+                    t: b.t1_s,
+                    error: b.error_arcsec?,
+                    truth: b.truth_x_arcsec?,
+                    sigma: b.estimate?.sigma,
+                })
+            })
             .collect();
-        let mut arcsec = time_panel(format!("Error against the truth, |estimate - truth|, arcsec ({method})"), "arcsec", (1e-3, 1e4), true);
-        let mut percent = time_panel(format!("Absolute percentage error (eq 7) ({method})"), "%", (1e-3, 1e3), true);
+        let mut arcsec = time_panel(
+            format!("Error against the truth, |estimate - truth|, arcsec ({method})"),
+            "arcsec",
+            (1e-3, 1e4),
+            true,
+        );
+        let mut percent = time_panel(
+            format!("Absolute percentage error (eq 7) ({method})"),
+            "%",
+            (1e-3, 1e3),
+            true,
+        );
         for i in 0..4 {
-            arcsec.series.push(Series { label: X_NAMES[i].into(), color: PALETTE[i], points: errors.iter().map(|e| (e.t, e.error[i].abs())).collect() });
+            arcsec.series.push(Series {
+                label: X_NAMES[i].into(),
+                color: PALETTE[i],
+                points: errors.iter().map(|e| (e.t, e.error[i].abs())).collect(),
+            });
             percent.series.push(Series {
                 label: X_NAMES[i].into(),
                 color: PALETTE[i],
-                points: errors.iter().filter(|e| e.truth[i] != 0.0).map(|e| (e.t, crate::report::percent_error(e.error[i], e.truth[i]))).collect(),
+                points: errors
+                    .iter()
+                    .filter(|e| e.truth[i] != 0.0)
+                    .map(|e| (e.t, crate::report::percent_error(e.error[i], e.truth[i])))
+                    .collect(),
             });
         }
         arcsec.series.push(Series {
             label: "2-sigma reported, largest of the four".into(),
             color: GREY,
-            points: errors.iter().map(|e| (e.t, 2.0 * e.sigma.iter().fold(0.0f64, |m, s| m.max(*s)))).collect(),
+            points: errors
+                .iter()
+                .map(|e| (e.t, 2.0 * e.sigma.iter().fold(0.0f64, |m, s| m.max(*s))))
+                .collect(),
         });
         let path = dir.join("error.png");
         plots::draw_png(&path, &[arcsec, percent], 1000, 360)?;
-        figures.push(Figure { path, caption: "The error of each estimate against the truth file, in arcsec and in percent".into() });
+        figures.push(Figure {
+            path,
+            caption: "The error of each estimate against the truth file, in arcsec and in percent"
+                .into(),
+        });
     }
 
     // Status timeline: one lane per status of the core, then what happened to the rows.
@@ -309,7 +457,9 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
         let mut out: Vec<(f64, f64)> = Vec::new();
         for b in buckets.iter().filter(|b| hit(b)) {
             match out.last_mut() {
-                Some(last) if b.t0_s - last.1 <= (b.t1_s - b.t0_s).max(1e-9) * 1.01 => last.1 = b.t1_s,
+                Some(last) if b.t0_s - last.1 <= (b.t1_s - b.t0_s).max(1e-9) * 1.01 => {
+                    last.1 = b.t1_s
+                }
                 _ => out.push((b.t0_s, b.t1_s)),
             }
         }
@@ -318,17 +468,47 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
     let mut lanes: Vec<Lane> = Status::ALL
         .iter()
         .enumerate()
-        .map(|(k, status)| Lane { name: status.name().into(), color: PALETTE[k % PALETTE.len()], spans: spans(&|b: &Bucket| b.saw(*status)), ticks: vec![] })
+        .map(|(k, status)| Lane {
+            name: status.name().into(),
+            color: PALETTE[k % PALETTE.len()],
+            spans: spans(&|b: &Bucket| b.saw(*status)),
+            ticks: vec![],
+        })
         .collect();
     let red = RGBColor(200, 30, 30);
-    lanes.push(Lane { name: "rejected rows".into(), color: red, spans: spans(&|b: &Bucket| b.rejected > 0), ticks: vec![] });
-    lanes.push(Lane { name: "lost samples (gaps)".into(), color: GREY, spans: spans(&|b: &Bucket| b.lost_samples > 0), ticks: vec![] });
+    lanes.push(Lane {
+        name: "rejected rows".into(),
+        color: red,
+        spans: spans(&|b: &Bucket| b.rejected > 0),
+        ticks: vec![],
+    });
+    lanes.push(Lane {
+        name: "lost samples (gaps)".into(),
+        color: GREY,
+        spans: spans(&|b: &Bucket| b.lost_samples > 0),
+        ticks: vec![],
+    });
     if tl.knows_restarts {
-        lanes.push(Lane { name: "window restarts".into(), color: red, spans: spans(&|b: &Bucket| b.window_restarts > 0), ticks: vec![] });
+        lanes.push(Lane {
+            name: "window restarts".into(),
+            color: red,
+            spans: spans(&|b: &Bucket| b.window_restarts > 0),
+            ticks: vec![],
+        });
     }
-    lanes.push(Lane { name: "clock steps".into(), color: red, spans: spans(&|b: &Bucket| b.clock_steps > 0), ticks: vec![] });
+    lanes.push(Lane {
+        name: "clock steps".into(),
+        color: red,
+        spans: spans(&|b: &Bucket| b.clock_steps > 0),
+        ticks: vec![],
+    });
     let path = dir.join("status.png");
-    plots::lanes_figure(&path, &format!("Status over time ({method})"), &lanes, x_range)?;
+    plots::lanes_figure(
+        &path,
+        &format!("Status over time ({method})"),
+        &lanes,
+        x_range,
+    )?;
     figures.push(Figure {
         path,
         caption: "What the estimator reported row by row (one lane per status), and the rows rejected, the samples lost, the restarts of the moving average and the clock steps".into(),
@@ -341,7 +521,9 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
         let span = 2.0 * period_s.unwrap_or(960.0 / 2.0);
         all.into_iter().filter(|r| r.time_s >= end - span).collect()
     };
-    let envelope_bands = |pick: &dyn Fn(&Bucket) -> Option<crate::timeline::Envelope<3>>, from_s: f64| -> Vec<Band> {
+    let envelope_bands = |pick: &dyn Fn(&Bucket) -> Option<crate::timeline::Envelope<3>>,
+                          from_s: f64|
+     -> Vec<Band> {
         (0..3)
             .map(|a| Band {
                 label: AXES[a].into(),
@@ -349,38 +531,80 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
                 points: buckets
                     .iter()
                     .filter(|b| b.t0_s >= from_s)
-                    .map(|b| pick(b).map_or((f64::NAN, f64::NAN, f64::NAN), |e| (0.5 * (b.t0_s + b.t1_s), e.min[a], e.max[a])))
+                    .map(|b| {
+                        pick(b).map_or((f64::NAN, f64::NAN, f64::NAN), |e| {
+                            (0.5 * (b.t0_s + b.t1_s), e.min[a], e.max[a])
+                        })
+                    })
                     .collect(),
             })
             .collect()
     };
-    let band_range = |bands: &[Band], floor: f64| symmetric_range(bands.iter().flat_map(|b| b.points.iter().flat_map(|p| [p.1, p.2])), floor);
+    let band_range = |bands: &[Band], floor: f64| {
+        symmetric_range(
+            bands
+                .iter()
+                .flat_map(|b| b.points.iter().flat_map(|p| [p.1, p.2])),
+            floor,
+        )
+    };
     let first_estimate_s = tl.first_estimate_s.unwrap_or(x_range.0);
     let mut panels = Vec::new();
     if tl.has_truth {
         let before = envelope_bands(&|b| b.before_arcsec, f64::NEG_INFINITY);
-        let mut p = time_panel("Attitude error of eq (2) before compensation (envelope), arcsec".into(), "arcsec", band_range(&before, 1.0), false);
+        let mut p = time_panel(
+            "Attitude error of eq (2) before compensation (envelope), arcsec".into(),
+            "arcsec",
+            band_range(&before, 1.0),
+            false,
+        );
         p.bands = before;
         panels.push(p);
         let after = envelope_bands(&|b| b.after_arcsec, first_estimate_s);
         // The scale of the last three quarters from the first estimate on: what is left once the
         // estimate has settled; the first estimates' larger errors are cut at the axis.
         let settled_s = first_estimate_s + 0.25 * (x_range.1 - first_estimate_s);
-        let settled: Vec<Band> =
-            after.iter().map(|b| Band { points: b.points.iter().copied().filter(|p| p.0 >= settled_s).collect(), ..b.clone() }).collect();
+        let settled: Vec<Band> = after
+            .iter()
+            .map(|b| Band {
+                points: b
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|p| p.0 >= settled_s)
+                    .collect(),
+                ..b.clone()
+            })
+            .collect();
         let mut p = time_panel(
-            "After compensation from the first estimate (envelope; scale of its last 3/4), arcsec".to_string(),
+            "After compensation from the first estimate (envelope; scale of its last 3/4), arcsec"
+                .to_string(),
             "arcsec",
             band_range(&settled, 0.01),
             false,
         );
         p.bands = after;
         panels.push(p);
-        let mut p = time_panel("After compensation, the last two rotation periods, every row, arcsec".into(), "arcsec", (0.0, 0.0), false);
+        let mut p = time_panel(
+            "After compensation, the last two rotation periods, every row, arcsec".into(),
+            "arcsec",
+            (0.0, 0.0),
+            false,
+        );
         for a in 0..3 {
-            p.series.push(Series { label: AXES[a].into(), color: PALETTE[a], points: tail.iter().filter_map(|r| r.after_arcsec.map(|v| (r.time_s, v[a]))).collect() });
+            p.series.push(Series {
+                label: AXES[a].into(),
+                color: PALETTE[a],
+                points: tail
+                    .iter()
+                    .filter_map(|r| r.after_arcsec.map(|v| (r.time_s, v[a])))
+                    .collect(),
+            });
         }
-        p.y_range = symmetric_range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)), 0.1);
+        p.y_range = symmetric_range(
+            p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)),
+            0.1,
+        );
         panels.push(p);
     } else {
         let removed = envelope_bands(&|b| b.removed_arcsec, f64::NEG_INFINITY);
@@ -392,11 +616,26 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
         );
         p.bands = removed;
         panels.push(p);
-        let mut p = time_panel("The same, the last two rotation periods, every row, arcsec".into(), "arcsec", (0.0, 0.0), false);
+        let mut p = time_panel(
+            "The same, the last two rotation periods, every row, arcsec".into(),
+            "arcsec",
+            (0.0, 0.0),
+            false,
+        );
         for a in 0..3 {
-            p.series.push(Series { label: AXES[a].into(), color: PALETTE[a], points: tail.iter().map(|r| (r.time_s, r.removed_arcsec[a])).collect() });
+            p.series.push(Series {
+                label: AXES[a].into(),
+                color: PALETTE[a],
+                points: tail
+                    .iter()
+                    .map(|r| (r.time_s, r.removed_arcsec[a]))
+                    .collect(),
+            });
         }
-        p.y_range = symmetric_range(p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)), 1.0);
+        p.y_range = symmetric_range(
+            p.series.iter().flat_map(|s| s.points.iter().map(|q| q.1)),
+            1.0,
+        );
         panels.push(p);
     }
     let path = dir.join("attitude.png");
@@ -416,7 +655,15 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
             .map(|c| Band {
                 label: CHANNELS[c].into(),
                 color: PALETTE[c],
-                points: buckets.iter().map(|b| b.residual_arcsec.map_or((f64::NAN, f64::NAN, f64::NAN), |e| (0.5 * (b.t0_s + b.t1_s), e.min[c], e.max[c]))).collect(),
+                points: buckets
+                    .iter()
+                    .map(|b| {
+                        b.residual_arcsec
+                            .map_or((f64::NAN, f64::NAN, f64::NAN), |e| {
+                                (0.5 * (b.t0_s + b.t1_s), e.min[c], e.max[c])
+                            })
+                    })
+                    .collect(),
             })
             .collect();
         // Their mean over about one rotation period (the buckets it spans), as the filter's
@@ -441,19 +688,43 @@ pub fn timeline_figures(dir: &Path, tl: &Timeline, method: &str, period_s: Optio
                         points.push((f64::NAN, f64::NAN));
                         continue;
                     }
-                    let (sum, rows) = window.iter().fold((0.0, 0u64), |(s, n), w| (s + w.1, n + w.2));
+                    let (sum, rows) = window
+                        .iter()
+                        .fold((0.0, 0u64), |(s, n), w| (s + w.1, n + w.2));
                     points.push((b.t1_s, sum / rows.max(1) as f64));
                 }
-                Series { label: format!("{} mean over a period", CHANNELS[c]), color: PALETTE[c], points }
+                Series {
+                    label: format!("{} mean over a period", CHANNELS[c]),
+                    color: PALETTE[c],
+                    points,
+                }
             })
             .collect();
         // The scale of the second half: the first windows' sway residuals are cut and marked.
         let mid = 0.5 * (x_range.0 + x_range.1);
-        let range = symmetric_range(bands.iter().flat_map(|b| b.points.iter().filter(|p| p.0 >= mid).flat_map(|p| [p.1, p.2])), 0.01);
+        let range = symmetric_range(
+            bands.iter().flat_map(|b| {
+                b.points
+                    .iter()
+                    .filter(|p| p.0 >= mid)
+                    .flat_map(|p| [p.1, p.2])
+            }),
+            0.01,
+        );
         let mut p = time_panel(format!("Post-fit residuals z - H x of the correlation channels (envelope), arcsec ({method})"), "arcsec", range, false);
         p.bands = bands;
-        let mean_range = symmetric_range(means.iter().flat_map(|s| s.points.iter().filter(|p| p.0 >= mid).map(|p| p.1)), 0.01);
-        let mut m = time_panel("Their mean over one rotation period, arcsec".into(), "arcsec", mean_range, false);
+        let mean_range = symmetric_range(
+            means
+                .iter()
+                .flat_map(|s| s.points.iter().filter(|p| p.0 >= mid).map(|p| p.1)),
+            0.01,
+        );
+        let mut m = time_panel(
+            "Their mean over one rotation period, arcsec".into(),
+            "arcsec",
+            mean_range,
+            false,
+        );
         m.series = means;
         let path = dir.join("residuals.png");
         plots::draw_png(&path, &[p, m], 1000, 330)?;
@@ -477,15 +748,33 @@ pub fn monte_carlo_figure(path: &Path, s: &Summary, title: &str) -> anyhow::Resu
         log_y: true,
         ..Panel::default()
     };
-    let over_time = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> { s.times_s.iter().enumerate().map(|(k, t)| (*t, f(k))).collect() };
+    let over_time = |f: &dyn Fn(usize) -> f64| -> Vec<(f64, f64)> {
+        s.times_s
+            .iter()
+            .enumerate()
+            .map(|(k, t)| (*t, f(k)))
+            .collect()
+    };
     for i in 0..4 {
-        errors.series.push(Series { label: format!("{} median", X_NAMES[i]), color: PALETTE[i], points: over_time(&|k| s.median_abs_error_arcsec[k][i]) });
-        errors.series.push(Series { label: format!("{} p95", X_NAMES[i]), color: lighter(PALETTE[i]), points: over_time(&|k| s.p95_abs_error_arcsec[k][i]) });
+        errors.series.push(Series {
+            label: format!("{} median", X_NAMES[i]),
+            color: PALETTE[i],
+            points: over_time(&|k| s.median_abs_error_arcsec[k][i]),
+        });
+        errors.series.push(Series {
+            label: format!("{} p95", X_NAMES[i]),
+            color: lighter(PALETTE[i]),
+            points: over_time(&|k| s.p95_abs_error_arcsec[k][i]),
+        });
     }
     errors.series.push(Series {
         label: "largest of the four".into(),
         color: GREY,
-        points: over_time(&|k| s.max_abs_error_arcsec[k].iter().fold(0.0f64, |m, v| m.max(*v))),
+        points: over_time(&|k| {
+            s.max_abs_error_arcsec[k]
+                .iter()
+                .fold(0.0f64, |m, v| m.max(*v))
+        }),
     });
     let coverage = Panel {
         title: "Errors within twice their reported 1-sigma, % of (run, error) pairs".into(),
@@ -494,8 +783,16 @@ pub fn monte_carlo_figure(path: &Path, s: &Summary, title: &str) -> anyhow::Resu
         y_range: (0.0, 100.0),
         log_y: false,
         series: vec![
-            Series { label: "within 2-sigma".into(), color: PALETTE[1], points: over_time(&|k| 100.0 * s.coverage_2sigma[k]) },
-            Series { label: "95 % (an honest 1-sigma)".into(), color: GREY, points: over_time(&|_| 95.0) },
+            Series {
+                label: "within 2-sigma".into(),
+                color: PALETTE[1],
+                points: over_time(&|k| 100.0 * s.coverage_2sigma[k]),
+            },
+            Series {
+                label: "95 % (an honest 1-sigma)".into(),
+                color: GREY,
+                points: over_time(&|_| 95.0),
+            },
         ],
         bands: vec![],
     };
@@ -509,6 +806,9 @@ mod tests {
     #[test]
     fn moving_average_of_ramp() {
         let pts: Vec<(f64, f64)> = (0..5).map(|i| (i as f64, i as f64)).collect();
-        assert_eq!(moving_average(&pts, 3), vec![(2.0, 1.0), (3.0, 2.0), (4.0, 3.0)]);
+        assert_eq!(
+            moving_average(&pts, 3),
+            vec![(2.0, 1.0), (3.0, 2.0), (4.0, 3.0)]
+        );
     }
 }

@@ -8,11 +8,13 @@
 
 use crate::flash_model::{FlashCounts, FlashModel};
 use crate::replay::sample_of;
-use crate::scenario::{ScenarioKind, ScenarioParams, Samples};
+use crate::scenario::{Samples, ScenarioKind, ScenarioParams};
 use anyhow::{ensure, Context};
 use estimator_core::checkpoint::CHECKPOINT_LEN;
 use estimator_core::{Config, Estimator};
-use firmware::checkpoint_store::{CheckpointStore, Restored, SaveSchedule, StoreBuffers, CHECKPOINT_INTERVAL_S};
+use firmware::checkpoint_store::{
+    CheckpointStore, Restored, SaveSchedule, StoreBuffers, CHECKPOINT_INTERVAL_S,
+};
 use firmware::flash_layout::{FlashLayout, MPS2_AN386, STM32F405};
 use std::io::Write;
 
@@ -84,16 +86,22 @@ fn run_on<const SECTOR: usize, const WORD: usize>(
     // a month of sea time.
     params.course_deg = 90.0;
     let mut flash = FlashModel::<SECTOR, WORD>::for_layout(&layout);
-    let mut estimator: Estimator = Estimator::new(Config::default()).context("the default configuration")?;
+    let mut estimator: Estimator =
+        Estimator::new(Config::default()).context("the default configuration")?;
     let mut schedule = SaveSchedule::new(interval_s, None);
     let mut buffers = StoreBuffers::new();
     let (mut saves, mut erasing_saves, mut save_bytes) = (0u64, 0u64, [0u64, u64::MAX]);
     for (row, _truth) in Samples::new(&params) {
-        let output = estimator.step(&sample_of(&row)).map_err(|e| anyhow::anyhow!("row at {} s rejected: {e}", row.time_s))?;
+        let output = estimator
+            .step(&sample_of(&row))
+            .map_err(|e| anyhow::anyhow!("row at {} s rejected: {e}", row.time_s))?;
         if !schedule.due(output.time_s) {
             continue;
         }
-        let before = (flash.counts().programmed_bytes, flash.counts().erases.iter().sum::<u64>());
+        let before = (
+            flash.counts().programmed_bytes,
+            flash.counts().erases.iter().sum::<u64>(),
+        );
         // The store keeps nothing between operations but its buffer (no cache): one made for
         // each save, as the firmware's lives for ever, does the same to the flash, and lets the
         // model's counters be read between saves.
@@ -107,21 +115,48 @@ fn run_on<const SECTOR: usize, const WORD: usize>(
         }
         save_bytes = [save_bytes[0].max(bytes), save_bytes[1].min(bytes)];
     }
-    ensure!(saves > 0, "no checkpoint was saved in {days} days at one every {interval_s} s");
+    ensure!(
+        saves > 0,
+        "no checkpoint was saved in {days} days at one every {interval_s} s"
+    );
     // The newest image restores.
     let mut restored: Estimator = Estimator::new(Config::default())?;
     let found = CheckpointStore::new(&mut flash, &mut buffers)
         .and_then(|mut store| store.restore(&mut restored))
         .map_err(|e| anyhow::anyhow!("restore: {e}"))?;
-    ensure!(matches!(found, Restored::Image { .. }), "the last checkpoint did not restore: {found:?}");
-    ensure!(flash.counts().impossible_writes == 0, "the store programmed flash that was not erased");
-    Ok(FlashLife { layout, days, saves, counts: flash.counts().clone(), save_bytes, erasing_saves })
+    ensure!(
+        matches!(found, Restored::Image { .. }),
+        "the last checkpoint did not restore: {found:?}"
+    );
+    ensure!(
+        flash.counts().impossible_writes == 0,
+        "the store programmed flash that was not erased"
+    );
+    Ok(FlashLife {
+        layout,
+        days,
+        saves,
+        counts: flash.counts().clone(),
+        save_bytes,
+        erasing_saves,
+    })
 }
 
 /// Runs the store on `board`'s flash model for `days` with a save every `interval_s`.
-pub fn measure(board: BoardArg, days: f64, interval_s: f64, seed: u64) -> anyhow::Result<FlashLife> {
-    ensure!(days.is_finite() && days > 0.0, "--days must be positive, got {days}");
-    ensure!(interval_s.is_finite() && interval_s >= 1.0, "--interval-s must be at least 1 s, got {interval_s}");
+pub fn measure(
+    board: BoardArg,
+    days: f64,
+    interval_s: f64,
+    seed: u64,
+) -> anyhow::Result<FlashLife> {
+    ensure!(
+        days.is_finite() && days > 0.0,
+        "--days must be positive, got {days}"
+    );
+    ensure!(
+        interval_s.is_finite() && interval_s >= 1.0,
+        "--interval-s must be at least 1 s, got {interval_s}"
+    );
     match board {
         BoardArg::Stm32f405 => run_on::<{ 128 * 1024 }, 4>(STM32F405, days, interval_s, seed),
         BoardArg::Mps2An386 => run_on::<4096, 4>(MPS2_AN386, days, interval_s, seed),
@@ -150,7 +185,10 @@ pub fn report(life: &FlashLife, interval_s: f64, out: &mut impl Write) -> std::i
         life.saves as f64 / life.erasing_saves.max(1) as f64,
         life.days * 24.0 / life.erasing_saves.max(1) as f64
     )?;
-    let erases: Vec<String> = (0u32..).zip(&life.counts.erases).map(|(i, n)| format!("{} {n}", sector_name(l, i))).collect();
+    let erases: Vec<String> = (0u32..)
+        .zip(&life.counts.erases)
+        .map(|(i, n)| format!("{} {n}", sector_name(l, i)))
+        .collect();
     writeln!(out, "erases per sector: {}", erases.join(", "))?;
     if let (Some(erase), Some(program)) = (l.sector_erase_s, l.byte_program_s) {
         let bytes = life.save_bytes[0] as f64;

@@ -49,7 +49,10 @@ impl<const SECTOR: usize, const WORD: usize> FlashModel<SECTOR, WORD> {
         FlashModel {
             bytes: vec![0xFF; sectors * SECTOR],
             unit: unit.clamp(1, WORD),
-            counts: FlashCounts { erases: vec![0; sectors], ..FlashCounts::default() },
+            counts: FlashCounts {
+                erases: vec![0; sectors],
+                ..FlashCounts::default()
+            },
             cut_at: None,
             powered: true,
             rng: ChaCha8Rng::seed_from_u64(0x0F1A_5400),
@@ -58,8 +61,16 @@ impl<const SECTOR: usize, const WORD: usize> FlashModel<SECTOR, WORD> {
 
     /// The board's flash: its sector count, and units of a byte where its program is byte-wise.
     pub fn for_layout(layout: &FlashLayout) -> Self {
-        assert_eq!(layout.sector_bytes as usize, SECTOR, "{}: the model's sector size", layout.board);
-        let unit = if layout.byte_program_s.is_some() { 1 } else { WORD };
+        assert_eq!(
+            layout.sector_bytes as usize, SECTOR,
+            "{}: the model's sector size",
+            layout.board
+        );
+        let unit = if layout.byte_program_s.is_some() {
+            1
+        } else {
+            WORD
+        };
         Self::new(layout.sectors as usize, unit)
     }
 
@@ -105,7 +116,7 @@ impl<const SECTOR: usize, const WORD: usize> FlashModel<SECTOR, WORD> {
 
     fn check(&self, offset: u32, len: usize, align: usize) -> Result<usize, NorFlashErrorKind> {
         let at = offset as usize;
-        if at % align != 0 || len % align != 0 {
+        if !at.is_multiple_of(align) || !len.is_multiple_of(align) {
             return Err(NorFlashErrorKind::NotAligned);
         }
         if at + len > self.bytes.len() {
@@ -171,7 +182,11 @@ impl<const SECTOR: usize, const WORD: usize> NorFlash for FlashModel<SECTOR, WOR
             }
             for (b, d) in old.iter_mut().zip(chunk) {
                 // A torn unit: a random part of the bits that were to be cleared are.
-                let cleared = if whole { !*d } else { !*d & self.rng.r#gen::<u8>() };
+                let cleared = if whole {
+                    !*d
+                } else {
+                    !*d & self.rng.r#gen::<u8>()
+                };
                 *b &= !cleared;
             }
             self.counts.programmed_bytes += chunk.len() as u64;
@@ -213,7 +228,10 @@ mod tests {
         assert_eq!(f.write(64, &[0, 0, 0, 0]), Err(NorFlashErrorKind::Other));
         assert!(f.was_cut());
         assert_eq!(f.bytes()[64], 0);
-        assert!(f.bytes()[66..68].iter().all(|b| *b == 0xFF), "after the torn byte nothing is written");
+        assert!(
+            f.bytes()[66..68].iter().all(|b| *b == 0xFF),
+            "after the torn byte nothing is written"
+        );
         assert_eq!(f.read(0, &mut [0; 4]), Err(NorFlashErrorKind::Other));
         f.power_on();
         assert!(f.read(0, &mut [0; 4]).is_ok());

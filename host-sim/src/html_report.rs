@@ -25,7 +25,10 @@ pub enum Block {
     /// Name-value pairs.
     Facts(Vec<(String, String)>),
     /// A table: its head and rows.
-    Table { head: Vec<String>, rows: Vec<Vec<String>> },
+    Table {
+        head: Vec<String>,
+        rows: Vec<Vec<String>>,
+    },
     Figure(Figure),
 }
 
@@ -37,7 +40,10 @@ pub struct Section {
 
 impl Section {
     pub fn new(title: impl Into<String>) -> Section {
-        Section { title: title.into(), blocks: vec![] }
+        Section {
+            title: title.into(),
+            blocks: vec![],
+        }
     }
 
     pub fn with(mut self, block: Block) -> Section {
@@ -125,8 +131,13 @@ fn write_block(h: &mut String, block: &Block) -> anyhow::Result<()> {
             h.push_str("</table>\n");
         }
         Block::Figure(f) => {
-            let png = std::fs::read(&f.path).with_context(|| format!("{}:0: cannot read the plot", f.path.display()))?;
-            let name = f.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            let png = std::fs::read(&f.path)
+                .with_context(|| format!("{}:0: cannot read the plot", f.path.display()))?;
+            let name = f
+                .path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
             let _ = writeln!(
                 h,
                 "<figure id=\"{}\"><img alt=\"{}\" src=\"data:image/png;base64,{}\"><figcaption>{} ({})</figcaption></figure>",
@@ -145,15 +156,29 @@ fn write_block(h: &mut String, block: &Block) -> anyhow::Result<()> {
 /// quoted).
 pub fn command_line() -> String {
     let quote = |a: String| {
-        if !a.is_empty() && a.chars().all(|c| c.is_ascii_alphanumeric() || "-_./,=:+".contains(c)) {
+        if !a.is_empty()
+            && a.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_./,=:+".contains(c))
+        {
             a
         } else {
             format!("'{}'", a.replace('\'', "'\\''"))
         }
     };
     let mut args = std::env::args();
-    let program = args.next().map(|p| Path::new(&p).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or(p)).unwrap_or_default();
-    std::iter::once(program).chain(args.map(quote)).collect::<Vec<_>>().join(" ")
+    let program = args
+        .next()
+        .map(|p| {
+            Path::new(&p)
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or(p)
+        })
+        .unwrap_or_default();
+    std::iter::once(program)
+        .chain(args.map(quote))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 #[cfg(test)]
@@ -171,13 +196,31 @@ mod tests {
             command: "host-sim estimate '<x>.csv'".into(),
             sections: vec![Section::new("S")
                 .with(Block::Facts(vec![("k".into(), "v<".into())]))
-                .with(Block::Table { head: vec!["h".into()], rows: vec![vec!["1 & 2".into()]] })
-                .with(Block::Figure(Figure { path: png.clone(), caption: "the \"plot\"".into() }))],
+                .with(Block::Table {
+                    head: vec!["h".into()],
+                    rows: vec![vec!["1 & 2".into()]],
+                })
+                .with(Block::Figure(Figure {
+                    path: png.clone(),
+                    caption: "the \"plot\"".into(),
+                }))],
         };
         let html = page.to_html().unwrap();
         let _ = std::fs::remove_dir_all(&dir);
-        assert!(html.contains("<h1>Log &lt;a&amp;b&gt;.csv</h1>") && html.contains("<dd>v&lt;</dd>") && html.contains("<td>1 &amp; 2</td>"), "{html}");
-        assert!(html.contains("src=\"data:image/png;base64,iVBORw==\"") && html.contains("alt=\"the &quot;plot&quot;\""), "{html}");
-        assert!(!html.contains("<script") && !html.contains("http"), "self-contained, no script: {html}");
+        assert!(
+            html.contains("<h1>Log &lt;a&amp;b&gt;.csv</h1>")
+                && html.contains("<dd>v&lt;</dd>")
+                && html.contains("<td>1 &amp; 2</td>"),
+            "{html}"
+        );
+        assert!(
+            html.contains("src=\"data:image/png;base64,iVBORw==\"")
+                && html.contains("alt=\"the &quot;plot&quot;\""),
+            "{html}"
+        );
+        assert!(
+            !html.contains("<script") && !html.contains("http"),
+            "self-contained, no script: {html}"
+        );
     }
 }

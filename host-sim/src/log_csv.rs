@@ -30,10 +30,19 @@ use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 
 /// The attitude log's header as `generate` writes it.
-pub const HEADER: &str = "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg";
+pub const HEADER: &str =
+    "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg";
 /// The columns a log must have (in any order); the time may also be `time_ms` or `time_utc`
 /// ([`TimeColumn`]).
-pub const COLUMNS: [&str; 7] = ["time_s", "rotation_deg", "platform_deg", "latitude_deg", "heading_deg", "roll_deg", "pitch_deg"];
+pub const COLUMNS: [&str; 7] = [
+    "time_s",
+    "rotation_deg",
+    "platform_deg",
+    "latitude_deg",
+    "heading_deg",
+    "roll_deg",
+    "pitch_deg",
+];
 /// The separators a log may use; the one that splits the header into the most fields is used.
 pub const SEPARATORS: [u8; 3] = [b',', b';', b'\t'];
 /// The name that stands for standard input (and, for outputs, standard output).
@@ -54,12 +63,20 @@ pub struct LogError {
 impl LogError {
     /// An error of the whole file: nothing after it can be read.
     pub fn new(path: &Path, line: usize, message: impl Into<String>) -> LogError {
-        LogError { path: path.display().to_string(), line, message: message.into(), row: false }
+        LogError {
+            path: path.display().to_string(),
+            line,
+            message: message.into(),
+            row: false,
+        }
     }
 
     /// An unreadable row.
     pub fn unreadable_row(path: &Path, line: usize, message: impl Into<String>) -> LogError {
-        LogError { row: true, ..LogError::new(path, line, message) }
+        LogError {
+            row: true,
+            ..LogError::new(path, line, message)
+        }
     }
 }
 
@@ -88,7 +105,9 @@ fn open_input_gz(path: &Path) -> Result<(Box<dyn Read + Send>, bool), LogError> 
         Box::new(File::open(path).map_err(|e| LogError::new(path, 0, format!("cannot open: {e}")))?)
     };
     let mut buffered = BufReader::with_capacity(1 << 16, raw);
-    let head = buffered.fill_buf().map_err(|e| LogError::new(path, 0, format!("cannot read: {e}")))?;
+    let head = buffered
+        .fill_buf()
+        .map_err(|e| LogError::new(path, 0, format!("cannot read: {e}")))?;
     Ok(if head.starts_with(&[0x1f, 0x8b]) {
         (Box::new(flate2::read::MultiGzDecoder::new(buffered)), true)
     } else {
@@ -110,7 +129,8 @@ impl<R: Read> Read for LineCounter<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = self.inner.read(buf)?;
         let offset = self.offset;
-        self.ahead.extend(memchr::memchr_iter(b'\n', &buf[..n]).map(|i| offset + i as u64));
+        self.ahead
+            .extend(memchr::memchr_iter(b'\n', &buf[..n]).map(|i| offset + i as u64));
         self.offset += n as u64;
         Ok(n)
     }
@@ -151,7 +171,11 @@ fn scan_header<R: Read>(reader: &mut R) -> std::io::Result<(u8, Vec<u8>)> {
         };
         if n == 0 {
             // The whole input is shorter: its last line may be the header, without a line end.
-            let line = head.split(|b| *b == b'\n').map(trim_line).find(|l| is_content(l)).unwrap_or(&[]);
+            let line = head
+                .split(|b| *b == b'\n')
+                .map(trim_line)
+                .find(|l| is_content(l))
+                .unwrap_or(&[]);
             return Ok((separator_of(line), head));
         }
         head.extend_from_slice(&chunk[..n]);
@@ -174,7 +198,11 @@ fn header_line(head: &[u8]) -> Option<&[u8]> {
     let mut lines = head.split(|b| *b == b'\n');
     // The last piece has no line end yet: it may be incomplete.
     let complete = head.iter().filter(|b| **b == b'\n').count();
-    lines.by_ref().take(complete).map(trim_line).find(|l| is_content(l))
+    lines
+        .by_ref()
+        .take(complete)
+        .map(trim_line)
+        .find(|l| is_content(l))
 }
 
 /// The separator of [`SEPARATORS`] that occurs most often in `line` outside double quotes (`,` on
@@ -191,7 +219,8 @@ pub fn separator_of(line: &[u8]) -> u8 {
             }
         }
     }
-    let best = (0..SEPARATORS.len()).fold(0, |best, i| if counts[i] > counts[best] { i } else { best });
+    let best =
+        (0..SEPARATORS.len()).fold(0, |best, i| if counts[i] > counts[best] { i } else { best });
     SEPARATORS[best]
 }
 
@@ -226,7 +255,11 @@ impl Layout {
     fn of(header: &[String]) -> Result<Layout, String> {
         let normalized: Vec<String> = header.iter().map(|n| normalize_column_name(n)).collect();
         let find = |want: &str| -> Result<Option<usize>, String> {
-            let mut found = normalized.iter().enumerate().filter(|(_, n)| *n == want).map(|(i, _)| i);
+            let mut found = normalized
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| *n == want)
+                .map(|(i, _)| i);
             match (found.next(), found.next()) {
                 (Some(_), Some(_)) => Err(format!("column {want:?} appears twice in the header")),
                 (first, _) => Ok(first),
@@ -239,12 +272,29 @@ impl Layout {
             }
         }
         let missing = |want: &str| {
-            let times: Vec<String> = TimeColumn::ALL.iter().skip(1).map(|c| format!("{:?}", c.name())).collect();
-            let or_time = if want == COLUMNS[0] { format!(" (or {})", times.join(", ")) } else { String::new() };
-            let header: Vec<&str> = header.iter().map(|n| n.trim_start_matches('\u{feff}')).collect();
-            format!("no column {want:?}{or_time} in the header {:?} (needs {})", header.join(","), COLUMNS.join(","))
+            let times: Vec<String> = TimeColumn::ALL
+                .iter()
+                .skip(1)
+                .map(|c| format!("{:?}", c.name()))
+                .collect();
+            let or_time = if want == COLUMNS[0] {
+                format!(" (or {})", times.join(", "))
+            } else {
+                String::new()
+            };
+            let header: Vec<&str> = header
+                .iter()
+                .map(|n| n.trim_start_matches('\u{feff}'))
+                .collect();
+            format!(
+                "no column {want:?}{or_time} in the header {:?} (needs {})",
+                header.join(","),
+                COLUMNS.join(",")
+            )
         };
-        let Some((time, time_index)) = time else { return Err(missing(COLUMNS[0])) };
+        let Some((time, time_index)) = time else {
+            return Err(missing(COLUMNS[0]));
+        };
         let mut index = [time_index; 7];
         for (k, want) in COLUMNS.iter().enumerate().skip(1) {
             index[k] = find(want)?.ok_or_else(|| missing(want))?;
@@ -271,7 +321,10 @@ impl LogReader<Box<dyn Read + Send>> {
     /// Opens a log file (or standard input for `-`; gzip decompressed).
     pub fn open(path: &Path) -> Result<Self, LogError> {
         let (input, gzip) = open_input_gz(path)?;
-        Ok(LogReader { gzip, ..LogReader::new(path, input) })
+        Ok(LogReader {
+            gzip,
+            ..LogReader::new(path, input)
+        })
     }
 }
 
@@ -289,8 +342,22 @@ impl<R: Read> LogReader<R> {
             .delimiter(separator)
             .comment(Some(b'#'))
             .buffer_capacity(1 << 16)
-            .from_reader(LineCounter { inner: std::io::Cursor::new(head).chain(reader), offset: 0, ahead: Default::default(), passed: 0 });
-        LogReader { path: path.to_path_buf(), csv, layout: None, record: csv::ByteRecord::new(), separator, scan_error, failed: false, gzip: false }
+            .from_reader(LineCounter {
+                inner: std::io::Cursor::new(head).chain(reader),
+                offset: 0,
+                ahead: Default::default(),
+                passed: 0,
+            });
+        LogReader {
+            path: path.to_path_buf(),
+            csv,
+            layout: None,
+            record: csv::ByteRecord::new(),
+            separator,
+            scan_error,
+            failed: false,
+            gzip: false,
+        }
     }
 
     /// Bytes of (decompressed) log read so far.
@@ -326,12 +393,26 @@ impl<R: Read> LogReader<R> {
 
     /// The current record as a row, or why it is unreadable.
     fn parse_row(&self, layout: &Layout) -> Result<Row, String> {
-        let missing: Vec<&str> = COLUMNS.iter().zip(&layout.index).filter(|(_, i)| **i >= self.record.len()).map(|(c, _)| *c).collect();
+        let missing: Vec<&str> = COLUMNS
+            .iter()
+            .zip(&layout.index)
+            .filter(|(_, i)| **i >= self.record.len())
+            .map(|(c, _)| *c)
+            .collect();
         if !missing.is_empty() {
-            return Err(format!("short row: {} fields, no {}", self.record.len(), missing.join(", ")));
+            return Err(format!(
+                "short row: {} fields, no {}",
+                self.record.len(),
+                missing.join(", ")
+            ));
         }
-        let cell = |k: usize| String::from_utf8_lossy(self.record.get(layout.index[k]).unwrap_or_default());
-        let time_s = layout.time.parse(&cell(0)).map_err(|m| format!("{}: {m}", layout.names[0]))?;
+        let cell = |k: usize| {
+            String::from_utf8_lossy(self.record.get(layout.index[k]).unwrap_or_default())
+        };
+        let time_s = layout
+            .time
+            .parse(&cell(0))
+            .map_err(|m| format!("{}: {m}", layout.names[0]))?;
         let mut v = [0.0; 6];
         for (k, slot) in v.iter_mut().enumerate() {
             let text = cell(k + 1);
@@ -346,7 +427,15 @@ impl<R: Read> LogReader<R> {
                 }
             })?;
         }
-        Ok(Row { time_s, rotation_deg: v[0], platform_deg: v[1], latitude_deg: v[2], heading_deg: v[3], roll_deg: v[4], pitch_deg: v[5] })
+        Ok(Row {
+            time_s,
+            rotation_deg: v[0],
+            platform_deg: v[1],
+            latitude_deg: v[2],
+            heading_deg: v[3],
+            roll_deg: v[4],
+            pitch_deg: v[5],
+        })
     }
 }
 
@@ -365,7 +454,11 @@ impl<R: Read> Iterator for LogReader<R> {
                 Ok(true) => {}
                 Ok(false) if self.layout.is_none() => {
                     let line = self.line();
-                    return self.fail(LogError::new(&self.path, line, format!("no header, expected the columns {HEADER:?}")));
+                    return self.fail(LogError::new(
+                        &self.path,
+                        line,
+                        format!("no header, expected the columns {HEADER:?}"),
+                    ));
                 }
                 Ok(false) => return None,
                 Err(e) => {
@@ -378,12 +471,20 @@ impl<R: Read> Iterator for LogReader<R> {
                 continue;
             }
             let Some(layout) = &self.layout else {
-                let header: Vec<String> = self.record.iter().map(|f| String::from_utf8_lossy(f).into_owned()).collect();
+                let header: Vec<String> = self
+                    .record
+                    .iter()
+                    .map(|f| String::from_utf8_lossy(f).into_owned())
+                    .collect();
                 match Layout::of(&header) {
                     Ok(layout) => self.layout = Some(layout),
                     Err(m) => {
                         let line = self.line();
-                        return self.fail(LogError::new(&self.path, line, format!("bad header: {m}")));
+                        return self.fail(LogError::new(
+                            &self.path,
+                            line,
+                            format!("bad header: {m}"),
+                        ));
                     }
                 }
                 continue;
@@ -405,7 +506,10 @@ const READ_AHEAD_BATCH: usize = 4096;
 /// same items in the same order: parsing the CSV and the work done with its rows then share two
 /// cores. At most 4 batches of [`READ_AHEAD_BATCH`] rows wait at any time, so memory does not grow
 /// with the log. If `consume` returns early, the reader stops at its next batch.
-pub fn read_ahead<R, T>(reader: LogReader<R>, consume: impl FnOnce(&mut dyn Iterator<Item = Result<LogLine, LogError>>) -> T) -> T
+pub fn read_ahead<R, T>(
+    reader: LogReader<R>,
+    consume: impl FnOnce(&mut dyn Iterator<Item = Result<LogLine, LogError>>) -> T,
+) -> T
 where
     R: Read + Send,
 {
@@ -449,13 +553,20 @@ impl RowFilter {
 
     /// `strict`: the first unreadable row refuses the log.
     pub fn new(strict: bool) -> RowFilter {
-        RowFilter { strict, ..RowFilter::default() }
+        RowFilter {
+            strict,
+            ..RowFilter::default()
+        }
     }
 
     /// The row of a reader's item: `Ok(None)` for an unreadable row that is skipped; errors for a
     /// fatal error, or for any unreadable row when strict. `warn` is told each skipped row (up to
     /// [`RowFilter::KEPT`]).
-    pub fn admit(&mut self, item: Result<LogLine, LogError>, warn: &mut dyn FnMut(&LogError)) -> Result<Option<LogLine>, LogError> {
+    pub fn admit(
+        &mut self,
+        item: Result<LogLine, LogError>,
+        warn: &mut dyn FnMut(&LogError),
+    ) -> Result<Option<LogLine>, LogError> {
         match item {
             Ok(line) => Ok(Some(line)),
             Err(e) if e.row && !self.strict => {
@@ -474,9 +585,15 @@ impl RowFilter {
 /// The name a log's companion files are made from: `dir/trial.csv` and `dir/trial.csv.gz` both
 /// give `dir/trial`.
 pub fn log_stem(log_path: &Path) -> PathBuf {
-    let name = log_path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = log_path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let name = name.strip_suffix(".gz").unwrap_or(&name);
-    let stem = Path::new(name).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = Path::new(name)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     log_path.with_file_name(stem)
 }
 
@@ -492,7 +609,13 @@ where
         writeln!(
             w,
             "{},{},{},{},{},{},{}",
-            r.time_s, r.rotation_deg, r.platform_deg, r.latitude_deg, r.heading_deg, r.roll_deg, r.pitch_deg
+            r.time_s,
+            r.rotation_deg,
+            r.platform_deg,
+            r.latitude_deg,
+            r.heading_deg,
+            r.roll_deg,
+            r.pitch_deg
         )?;
     }
     w.flush()
@@ -506,7 +629,8 @@ where
     I::Item: std::borrow::Borrow<Row>,
 {
     let mut out = crate::output_file::OutputFile::create(path)?;
-    write_log_to(&mut out, rows).map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))?;
+    write_log_to(&mut out, rows)
+        .map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))?;
     out.commit()
 }
 
@@ -521,20 +645,29 @@ pub struct Truth {
 
 impl Truth {
     pub fn new(params: &ScenarioParams) -> Truth {
-        Truth { x_arcsec: params.errors_arcsec, params: params.clone() }
+        Truth {
+            x_arcsec: params.errors_arcsec,
+            params: params.clone(),
+        }
     }
 }
 
 /// `<dir>/<stem>.truth.json` beside the log `<dir>/<stem>.csv` (or `.csv.gz`).
 pub fn truth_path(log_path: &Path) -> PathBuf {
     let stem = log_stem(log_path);
-    let name = format!("{}.truth.json", stem.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
+    let name = format!(
+        "{}.truth.json",
+        stem.file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    );
     stem.with_file_name(name)
 }
 
 /// Writes the truth file (through a temporary file beside it).
 pub fn write_truth(path: &Path, truth: &Truth) -> anyhow::Result<()> {
-    let text = serde_json::to_string_pretty(truth).map_err(|e| LogError::new(path, 0, format!("cannot encode: {e}")))?;
+    let text = serde_json::to_string_pretty(truth)
+        .map_err(|e| LogError::new(path, 0, format!("cannot encode: {e}")))?;
     crate::output_file::write_bytes(path, (text + "\n").as_bytes())
 }
 
@@ -556,9 +689,13 @@ pub fn read_truth(path: &Path) -> Result<Option<TruthFile>, LogError> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(LogError::new(path, 0, format!("cannot read: {e}"))),
     };
-    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| LogError::new(path, e.line(), e.to_string()))?;
-    let x = value.get("x_arcsec").ok_or_else(|| LogError::new(path, 0, "no \"x_arcsec\": [x1, x2, x3, x4] (arcsec)"))?;
-    let x_arcsec: [f64; 4] = serde_json::from_value(x.clone()).map_err(|e| LogError::new(path, 0, format!("x_arcsec: {e}")))?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| LogError::new(path, e.line(), e.to_string()))?;
+    let x = value
+        .get("x_arcsec")
+        .ok_or_else(|| LogError::new(path, 0, "no \"x_arcsec\": [x1, x2, x3, x4] (arcsec)"))?;
+    let x_arcsec: [f64; 4] = serde_json::from_value(x.clone())
+        .map_err(|e| LogError::new(path, 0, format!("x_arcsec: {e}")))?;
     let (params, params_error) = match value.get("scenario") {
         None => (None, None),
         Some(_) => match ScenarioParams::deserialize(&value) {
@@ -566,7 +703,11 @@ pub fn read_truth(path: &Path) -> Result<Option<TruthFile>, LogError> {
             Err(e) => (None, Some(e.to_string())),
         },
     };
-    Ok(Some(TruthFile { x_arcsec, params, params_error }))
+    Ok(Some(TruthFile {
+        x_arcsec,
+        params,
+        params_error,
+    }))
 }
 
 #[cfg(test)]
@@ -579,7 +720,10 @@ mod tests {
     }
 
     fn rows(text: &str) -> Vec<LogLine> {
-        parse(text).into_iter().collect::<Result<Vec<_>, _>>().unwrap()
+        parse(text)
+            .into_iter()
+            .collect::<Result<Vec<_>, _>>()
+            .unwrap()
     }
 
     #[test]
@@ -598,14 +742,18 @@ mod tests {
 
     #[test]
     fn columns_are_matched_by_name_in_any_order_extra_ones_ignored() {
-        let plain = rows(&format!("{HEADER}\n0,1,2,40,4,5,6\n1,1.75,2,40,4,5.5,6.5\n"));
+        let plain = rows(&format!(
+            "{HEADER}\n0,1,2,40,4,5,6\n1,1.75,2,40,4,5.5,6.5\n"
+        ));
         let shuffled = rows(" pitch_deg , speed_kn,roll_deg,heading_deg,latitude_deg,platform_deg,rotation_deg,time_s,flags\n6,12.5,5,4,40,2,1,0,ok\n6.5,12.5,5.5,4,40,2,1.75,1,\n");
         assert_eq!(plain, shuffled);
     }
 
     #[test]
     fn header_names_in_any_case_with_spaces_and_any_separator_read_the_same() {
-        let plain = rows(&format!("{HEADER}\n0,1,2,40,4,5,6\n1,1.75,2,40,4,5.5,6.5\n"));
+        let plain = rows(&format!(
+            "{HEADER}\n0,1,2,40,4,5,6\n1,1.75,2,40,4,5.5,6.5\n"
+        ));
         let variants = [
             "TIME_S,Rotation_Deg,PLATFORM DEG,Latitude Deg,heading  deg,Roll_deg, pitch_DEG \n0,1,2,40,4,5,6\n1,1.75,2,40,4,5.5,6.5\n",
             "# a ; comment, with \t separators\nTime S;Rotation Deg;Platform Deg;Latitude Deg;Heading Deg;Roll Deg;Pitch Deg\n0;1;2;40;4;5;6\n1;1.75;2;40;4;5.5;6.5\n",
@@ -616,15 +764,29 @@ mod tests {
             assert_eq!(values(rows(text)), values(plain.clone()), "{text}");
         }
         assert_eq!(separator_of(b"a;b;c,d"), b';');
-        assert_eq!(separator_of(b"\"a;b\",c"), b',', "separators inside quotes do not count");
+        assert_eq!(
+            separator_of(b"\"a;b\",c"),
+            b',',
+            "separators inside quotes do not count"
+        );
         assert_eq!(normalize_column_name("\u{feff} Time__ S "), "time_s");
         let twice = parse("time_s,Roll Deg,roll_deg,rotation_deg,platform_deg,latitude_deg,heading_deg,pitch_deg\n");
-        assert!(twice[0].as_ref().unwrap_err().to_string().contains("\"roll_deg\" appears twice"), "{:?}", twice[0]);
+        assert!(
+            twice[0]
+                .as_ref()
+                .unwrap_err()
+                .to_string()
+                .contains("\"roll_deg\" appears twice"),
+            "{:?}",
+            twice[0]
+        );
     }
 
     #[test]
     fn time_in_milliseconds_or_utc_reads_as_seconds() {
-        let plain = rows(&format!("{HEADER}\n1700000000,1,2,40,4,5,6\n1700000001.5,1.75,2,40,4,5.5,6.5\n"));
+        let plain = rows(&format!(
+            "{HEADER}\n1700000000,1,2,40,4,5,6\n1700000001.5,1.75,2,40,4,5.5,6.5\n"
+        ));
         let ms = rows("time_ms,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n1700000000000,1,2,40,4,5,6\n1700000001500,1.75,2,40,4,5.5,6.5\n");
         let utc = rows("Time UTC;rotation_deg;platform_deg;latitude_deg;heading_deg;roll_deg;pitch_deg\n2023-11-14T22:13:20Z;1;2;40;4;5;6\n2023-11-14 22:13:21.5;1.75;2;40;4;5.5;6.5\n");
         let iso_in_seconds = rows(&format!("{HEADER}\n2023-11-14T22:13:20Z,1,2,40,4,5,6\n2023-11-15T00:13:21.500+02:00,1.75,2,40,4,5.5,6.5\n"));
@@ -632,11 +794,19 @@ mod tests {
         assert_eq!(utc, plain);
         assert_eq!(iso_in_seconds, plain);
         let mut reader = LogReader::new(Path::new("t.csv"), "time_utc,time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n2023-11-14T22:13:20Z,5,1,2,40,4,5,6\n".as_bytes());
-        assert_eq!(reader.next().unwrap().unwrap().row.time_s, 5.0, "time_s is used before time_utc");
+        assert_eq!(
+            reader.next().unwrap().unwrap().row.time_s,
+            5.0,
+            "time_s is used before time_utc"
+        );
         assert_eq!(reader.time_column(), Some(TimeColumn::Seconds));
-        let missing = parse("time,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n");
+        let missing =
+            parse("time,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n");
         let e = missing[0].as_ref().unwrap_err().to_string();
-        assert!(e.contains("no column \"time_s\" (or \"time_ms\", \"time_utc\")"), "{e}");
+        assert!(
+            e.contains("no column \"time_s\" (or \"time_ms\", \"time_utc\")"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -649,18 +819,26 @@ mod tests {
 
     #[test]
     fn a_bad_row_is_an_error_of_that_row_and_the_next_rows_are_read() {
-        let text = format!("{HEADER}\n0,1,2,40,4,5,6\n1,1,x2,40,4,5,6\n2,1,2,40,,5,6\n3,1,2,40,4,5,6\n4,1,2,40");
+        let text = format!(
+            "{HEADER}\n0,1,2,40,4,5,6\n1,1,x2,40,4,5,6\n2,1,2,40,,5,6\n3,1,2,40,4,5,6\n4,1,2,40"
+        );
         let items = parse(&text);
         assert_eq!(items.len(), 5);
         assert!(items[0].is_ok() && items[3].is_ok());
         let bad = items[1].as_ref().unwrap_err();
         assert!(bad.row);
-        assert_eq!(bad.to_string(), "t.csv:3: platform_deg: not a number: \"x2\"");
+        assert_eq!(
+            bad.to_string(),
+            "t.csv:3: platform_deg: not a number: \"x2\""
+        );
         let blank = items[2].as_ref().unwrap_err();
         assert_eq!(blank.to_string(), "t.csv:4: heading_deg: blank cell");
         let truncated = items[4].as_ref().unwrap_err();
         assert!(truncated.row);
-        assert_eq!(truncated.to_string(), "t.csv:6: short row: 4 fields, no heading_deg, roll_deg, pitch_deg");
+        assert_eq!(
+            truncated.to_string(),
+            "t.csv:6: short row: 4 fields, no heading_deg, roll_deg, pitch_deg"
+        );
     }
 
     #[test]
@@ -669,12 +847,23 @@ mod tests {
         assert_eq!(items.len(), 1);
         let e = items[0].as_ref().unwrap_err();
         assert!(!e.row);
-        assert!(e.to_string().starts_with("t.csv:1: bad header: no column \"platform_deg\""), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("t.csv:1: bad header: no column \"platform_deg\""),
+            "{e}"
+        );
         let twice = parse(&format!("{HEADER},roll_deg\n"));
-        assert!(twice[0].as_ref().unwrap_err().to_string().contains("\"roll_deg\" appears twice"));
+        assert!(twice[0]
+            .as_ref()
+            .unwrap_err()
+            .to_string()
+            .contains("\"roll_deg\" appears twice"));
         let empty = parse("# only\n");
         let e = empty[0].as_ref().unwrap_err();
-        assert!(e.to_string().starts_with("t.csv:") && e.to_string().contains("no header"), "{e}");
+        assert!(
+            e.to_string().starts_with("t.csv:") && e.to_string().contains("no header"),
+            "{e}"
+        );
         assert!(!e.to_string().contains('\n'));
     }
 
@@ -690,7 +879,11 @@ mod tests {
         assert_eq!(kept.len(), 2);
         assert_eq!((lenient.skipped, warned), (1, vec![3]));
         let mut strict = RowFilter::new(true);
-        let err = parse(&text).into_iter().map(|i| strict.admit(i, &mut |_| {})).find_map(Result::err).unwrap();
+        let err = parse(&text)
+            .into_iter()
+            .map(|i| strict.admit(i, &mut |_| {}))
+            .find_map(Result::err)
+            .unwrap();
         assert_eq!(err.line, 3);
     }
 
@@ -701,7 +894,9 @@ mod tests {
         let g = generate(&p);
         let mut buf = Vec::new();
         write_log_to(&mut buf, &g.rows).unwrap();
-        let back = LogReader::new(Path::new("g.csv"), buf.as_slice()).collect::<Result<Vec<_>, _>>().unwrap();
+        let back = LogReader::new(Path::new("g.csv"), buf.as_slice())
+            .collect::<Result<Vec<_>, _>>()
+            .unwrap();
         assert_eq!(back.len(), g.rows.len());
         for (a, b) in back.iter().zip(&g.rows) {
             assert_eq!(a.row, *b);
@@ -709,7 +904,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("host-sim-log-csv-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let gz = dir.join("g.csv.gz");
-        let mut enc = flate2::write::GzEncoder::new(File::create(&gz).unwrap(), flate2::Compression::fast());
+        let mut enc =
+            flate2::write::GzEncoder::new(File::create(&gz).unwrap(), flate2::Compression::fast());
         enc.write_all(&buf).unwrap();
         enc.finish().unwrap();
         let unzipped = read_log(&gz).unwrap();
@@ -722,7 +918,10 @@ mod tests {
         let p = crate::scenario::ScenarioParams::new(ScenarioKind::Paper, 9);
         let truth = Truth::new(&p);
         let text = serde_json::to_string(&truth).unwrap();
-        assert!(text.starts_with("{\"x_arcsec\":[200.0,-150.0,300.0,-250.0],"), "{text}");
+        assert!(
+            text.starts_with("{\"x_arcsec\":[200.0,-150.0,300.0,-250.0],"),
+            "{text}"
+        );
         let dir = std::env::temp_dir().join(format!("host-sim-truth-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let full = dir.join("full.truth.json");
@@ -731,19 +930,46 @@ mod tests {
         std::fs::write(&minimal, "{\"x_arcsec\": [1, -2, 3.5, 0]}").unwrap();
         let broken = dir.join("broken.truth.json");
         std::fs::write(&broken, "{\"x\": 1}").unwrap();
-        let (full, minimal, broken, missing) =
-            (read_truth(&full), read_truth(&minimal), read_truth(&broken), read_truth(&dir.join("none.json")));
+        let (full, minimal, broken, missing) = (
+            read_truth(&full),
+            read_truth(&minimal),
+            read_truth(&broken),
+            read_truth(&dir.join("none.json")),
+        );
         let _ = std::fs::remove_dir_all(&dir);
-        assert_eq!(full.unwrap().unwrap(), TruthFile { x_arcsec: truth.x_arcsec, params: Some(p), params_error: None });
-        assert_eq!(minimal.unwrap().unwrap(), TruthFile { x_arcsec: [1.0, -2.0, 3.5, 0.0], params: None, params_error: None });
+        assert_eq!(
+            full.unwrap().unwrap(),
+            TruthFile {
+                x_arcsec: truth.x_arcsec,
+                params: Some(p),
+                params_error: None
+            }
+        );
+        assert_eq!(
+            minimal.unwrap().unwrap(),
+            TruthFile {
+                x_arcsec: [1.0, -2.0, 3.5, 0.0],
+                params: None,
+                params_error: None
+            }
+        );
         assert!(broken.unwrap_err().to_string().contains("x_arcsec"));
         assert_eq!(missing.unwrap(), None);
     }
 
     #[test]
     fn companion_files_drop_csv_and_gz() {
-        assert_eq!(truth_path(Path::new("/a/b/log.csv")), PathBuf::from("/a/b/log.truth.json"));
-        assert_eq!(truth_path(Path::new("/a/b/log.csv.gz")), PathBuf::from("/a/b/log.truth.json"));
-        assert_eq!(log_stem(Path::new("x/trial.csv.gz")), PathBuf::from("x/trial"));
+        assert_eq!(
+            truth_path(Path::new("/a/b/log.csv")),
+            PathBuf::from("/a/b/log.truth.json")
+        );
+        assert_eq!(
+            truth_path(Path::new("/a/b/log.csv.gz")),
+            PathBuf::from("/a/b/log.truth.json")
+        );
+        assert_eq!(
+            log_stem(Path::new("x/trial.csv.gz")),
+            PathBuf::from("x/trial")
+        );
     }
 }

@@ -4,21 +4,31 @@ use anyhow::Context;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Method, RejectReason};
-use host_sim::cli_args::{method_label, LogShapeArgs, MethodArg, RecorderArgs, ScenarioArg, ScenarioOverrides, SchemeList, TimingArgs, TuningArgs};
-use host_sim::log_csv::{self, LogError, Truth};
+use host_sim::cli_args::{
+    method_label, LogShapeArgs, MethodArg, RecorderArgs, ScenarioArg, ScenarioOverrides,
+    SchemeList, TimingArgs, TuningArgs,
+};
 use host_sim::exit_status::{RunEnd, HELP as EXIT_HELP};
-use host_sim::pipeline::{default_estimates_path, estimate_log, inputs_of, load_truth, log_name, truth_rows, EstimateOptions};
+use host_sim::log_csv::{self, LogError, Truth};
+use host_sim::monte_carlo::{format_summary, run_all, summarize, Draw, MC_TIMES_S};
+use host_sim::pipeline::{
+    default_estimates_path, estimate_log, inputs_of, load_truth, log_name, truth_rows,
+    EstimateOptions,
+};
 use host_sim::recorder::{recorded_rows, Recorder};
 use host_sim::replay::{Replay, Step};
 use host_sim::report::{format_accuracy, format_rms, Report, TruthRows};
-use host_sim::monte_carlo::{format_summary, run_all, summarize, Draw, MC_TIMES_S};
 use host_sim::rotation_scheme::RotationScheme;
 use host_sim::scenario::{generate, Mismatch, Samples, ScenarioKind};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 #[derive(Parser, Debug)]
-#[command(name = "host-sim", version, about = "RINS installation-error estimator: scenarios, log replay, reports and plots")]
+#[command(
+    name = "host-sim",
+    version,
+    about = "RINS installation-error estimator: scenarios, log replay, reports and plots"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -172,23 +182,43 @@ struct SpreadArgs {
     #[arg(long, value_name = "DEG")]
     max_roll_deg: Option<f64>,
     /// Model mismatch: relative error of the true rotation period (0.005 = 0.5 % slower).
-    #[arg(long, value_name = "FRACTION", default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "FRACTION",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     period_error: f64,
     /// Model mismatch: white jitter on the rotation angle, 1-sigma deg.
     #[arg(long, value_name = "DEG", default_value_t = 0.0)]
     rotation_jitter_deg: f64,
     /// Model mismatch: linear drift of every installation error, arcsec per day.
-    #[arg(long, value_name = "ARCSEC", default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "ARCSEC",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     error_drift_arcsec_per_day: f64,
     /// Model mismatch: frequency error of the low-frequency errors relative to the Earth rate (0.2 = 20 % faster).
-    #[arg(long, value_name = "FRACTION", default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "FRACTION",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     lowfreq_rate_error: f64,
     /// Model mismatch: coloured (Gauss-Markov, 60 s) attitude noise, 1-sigma arcsec.
     #[arg(long, value_name = "ARCSEC", default_value_t = 0.0)]
     coloured_noise_arcsec: f64,
     /// Heel in turns: a 90 deg course change at 0.5 deg/s every hour, alternately to starboard
     /// and port, the ship heeling outward by this much while it turns, deg.
-    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
     heel_in_turns_deg: f64,
     #[command(flatten)]
     timing: TimingArgs,
@@ -205,11 +235,17 @@ impl SpreadArgs {
         d.sample_interval_s = self.timing.sample_interval;
         d.recorder = self.recorder.settings();
         if let Some(v) = self.lat_range {
-            anyhow::ensure!(v[0] <= v[1] && v[0] > -90.0 && v[1] < 90.0, "--lat-range needs MIN,MAX inside (-90, 90) with MIN <= MAX");
+            anyhow::ensure!(
+                v[0] <= v[1] && v[0] > -90.0 && v[1] < 90.0,
+                "--lat-range needs MIN,MAX inside (-90, 90) with MIN <= MAX"
+            );
             d.lat_range_deg = Some((v[0], v[1]));
         }
         if let Some(m) = self.max_roll_deg {
-            anyhow::ensure!(m.is_finite() && m > 0.0 && m < 90.0, "--max-roll-deg must be inside (0, 90)");
+            anyhow::ensure!(
+                m.is_finite() && m > 0.0 && m < 90.0,
+                "--max-roll-deg must be inside (0, 90)"
+            );
             d.max_roll_deg = Some(m);
         }
         if let Some(t) = self.duration {
@@ -223,9 +259,15 @@ impl SpreadArgs {
             self.coloured_noise_arcsec,
             self.heel_in_turns_deg,
         ];
-        anyhow::ensure!(finite.iter().all(|v| v.is_finite()), "mismatch switches must be finite");
+        anyhow::ensure!(
+            finite.iter().all(|v| v.is_finite()),
+            "mismatch switches must be finite"
+        );
         anyhow::ensure!(self.period_error > -1.0, "--period-error must be above -1");
-        anyhow::ensure!(self.rotation_jitter_deg >= 0.0 && self.coloured_noise_arcsec >= 0.0, "noise levels must be >= 0");
+        anyhow::ensure!(
+            self.rotation_jitter_deg >= 0.0 && self.coloured_noise_arcsec >= 0.0,
+            "noise levels must be >= 0"
+        );
         d.mismatch = Mismatch {
             rotation_period_error: self.period_error,
             rotation_jitter_deg: self.rotation_jitter_deg,
@@ -304,11 +346,17 @@ fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
     // Row by row from the generator through the recorder into the file: nothing held in memory.
     let mut recorder = Recorder::new(&params.recording, params.seed);
     let mut written = 0usize;
-    let rows = Samples::new(&params).filter_map(|(row, _)| recorder.record(&row)).inspect(|_| written += 1);
+    let rows = Samples::new(&params)
+        .filter_map(|(row, _)| recorder.record(&row))
+        .inspect(|_| written += 1);
     log_csv::write_log(&a.out, rows)?;
     let truth_path = log_csv::truth_path(&a.out);
     log_csv::write_truth(&truth_path, &Truth::new(&params))?;
-    println!("wrote {} ({written} rows) and {}", a.out.display(), truth_path.display());
+    println!(
+        "wrote {} ({written} rows) and {}",
+        a.out.display(),
+        truth_path.display()
+    );
     Ok(())
 }
 
@@ -318,10 +366,16 @@ fn warn_row(e: &LogError) {
 }
 
 fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
-    let out = a.out.clone().unwrap_or_else(|| default_estimates_path(&a.log));
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_estimates_path(&a.log));
     let method: Method = a.method.into();
     let mut restart_at = a.restart_at.clone();
-    anyhow::ensure!(restart_at.iter().all(|t| t.is_finite()), "--restart-at needs finite times");
+    anyhow::ensure!(
+        restart_at.iter().all(|t| t.is_finite()),
+        "--restart-at needs finite times"
+    );
     restart_at.sort_by(f64::total_cmp);
     a.timing.check()?;
     if let Some(dir) = &a.report {
@@ -334,20 +388,41 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
         timeline: a.report.is_some(),
     };
     let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
-    let rows = truth.as_ref().map(|t| truth_rows(&t.file, t.generated.as_ref()));
+    let rows = truth
+        .as_ref()
+        .map(|t| truth_rows(&t.file, t.generated.as_ref()));
     let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_| {})?;
     // The summary goes where the estimates do not.
-    let mut info: Box<dyn Write> = if log_csv::is_stdio(&out) { Box::new(std::io::stderr()) } else { Box::new(std::io::stdout().lock()) };
+    let mut info: Box<dyn Write> = if log_csv::is_stdio(&out) {
+        Box::new(std::io::stderr())
+    } else {
+        Box::new(std::io::stdout().lock())
+    };
     if !restart_at.is_empty() {
-        writeln!(info, "restarted from a checkpoint after the rows at {restart_at:?} s")?;
+        writeln!(
+            info,
+            "restarted from a checkpoint after the rows at {restart_at:?} s"
+        )?;
     }
-    let out_name = if log_csv::is_stdio(&out) { "standard output".to_string() } else { out.display().to_string() };
+    let out_name = if log_csv::is_stdio(&out) {
+        "standard output".to_string()
+    } else {
+        out.display().to_string()
+    };
     print_summary(&mut info, &a.log, method, &est.replay, &out_name)?;
     if let Some(rep) = &est.report {
         print_report(&mut info, method, rep)?;
     }
     if let (Some(dir), Some(tl)) = (&a.report, &est.timeline) {
-        let page = host_sim::trial_report::write_replay_report(dir, &log_name(&a.log), method_label(method), &est.replay, est.report.as_ref(), tl, vec![])?;
+        let page = host_sim::trial_report::write_replay_report(
+            dir,
+            &log_name(&a.log),
+            method_label(method),
+            &est.replay,
+            est.report.as_ref(),
+            tl,
+            vec![],
+        )?;
         writeln!(info, "report in {}", page.display())?;
     }
     info.flush()?;
@@ -366,8 +441,18 @@ fn no_estimate_end(r: &Replay) -> anyhow::Result<()> {
     Err(RunEnd::NoEstimate { reason }.into())
 }
 
-fn print_summary(w: &mut dyn Write, log: &Path, method: Method, r: &Replay, out: &str) -> std::io::Result<()> {
-    let log = if log_csv::is_stdio(log) { "standard input".to_string() } else { log.display().to_string() };
+fn print_summary(
+    w: &mut dyn Write,
+    log: &Path,
+    method: Method,
+    r: &Replay,
+    out: &str,
+) -> std::io::Result<()> {
+    let log = if log_csv::is_stdio(log) {
+        "standard input".to_string()
+    } else {
+        log.display().to_string()
+    };
     let c = &r.counters;
     writeln!(
         w,
@@ -383,11 +468,22 @@ fn print_summary(w: &mut dyn Write, log: &Path, method: Method, r: &Replay, out:
     for change in &r.error_changes {
         writeln!(w, "  {}", host_sim::replay::describe_error_change(change))?;
     }
-    writeln!(w, "  final status: {}", r.final_status.map_or("none (no row accepted)", |s| s.name()))?;
+    writeln!(
+        w,
+        "  final status: {}",
+        r.final_status
+            .map_or("none (no row accepted)", |s| s.name())
+    )?;
     match (r.final_estimate, r.holdup) {
         (Some(e), holdup) => {
             for i in 0..4 {
-                writeln!(w, "  x{} = {:+.3} arcsec (1-sigma {:.3})", i + 1, rad_to_arcsec(e.x_rad[i] as f64), rad_to_arcsec(e.sigma_rad[i] as f64))?;
+                writeln!(
+                    w,
+                    "  x{} = {:+.3} arcsec (1-sigma {:.3})",
+                    i + 1,
+                    rad_to_arcsec(e.x_rad[i] as f64),
+                    rad_to_arcsec(e.sigma_rad[i] as f64)
+                )?;
             }
             if let Some(h) = holdup {
                 writeln!(w, "  estimates frozen: {h}")?;
@@ -396,12 +492,34 @@ fn print_summary(w: &mut dyn Write, log: &Path, method: Method, r: &Replay, out:
         (None, Some(h)) => writeln!(w, "  no estimate: {h}")?,
         (None, None) => writeln!(w, "  no estimate: no row accepted")?,
     }
-    let reasons: Vec<String> = RejectReason::ALL.iter().map(|&reason| format!("{} {}", reason.name(), r.rejected.of(reason))).collect();
-    writeln!(w, "  rejected rows: {} ({})", r.rejected.total(), reasons.join(", "))?;
+    let reasons: Vec<String> = RejectReason::ALL
+        .iter()
+        .map(|&reason| format!("{} {}", reason.name(), r.rejected.of(reason)))
+        .collect();
+    writeln!(
+        w,
+        "  rejected rows: {} ({})",
+        r.rejected.total(),
+        reasons.join(", ")
+    )?;
     if r.unreadable.skipped > 0 {
-        let lines: Vec<String> = r.unreadable.first.iter().map(|e| e.line.to_string()).collect();
-        let more = if r.unreadable.skipped as usize > lines.len() { ", ..." } else { "" };
-        writeln!(w, "  unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)", r.unreadable.skipped, lines.join(", "))?;
+        let lines: Vec<String> = r
+            .unreadable
+            .first
+            .iter()
+            .map(|e| e.line.to_string())
+            .collect();
+        let more = if r.unreadable.skipped as usize > lines.len() {
+            ", ..."
+        } else {
+            ""
+        };
+        writeln!(
+            w,
+            "  unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)",
+            r.unreadable.skipped,
+            lines.join(", ")
+        )?;
     }
     Ok(())
 }
@@ -421,8 +539,11 @@ fn print_report(w: &mut dyn Write, method: Method, rep: &Report) -> std::io::Res
 fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     let mut params = a.overrides.params(a.scenario.into(), a.seed)?;
     a.shape.apply(&mut params)?;
-    let dir = a.out_dir.clone().unwrap_or_else(|| PathBuf::from(format!("out/{}-{}", params.scenario.name(), params.seed)));
-    std::fs::create_dir_all(&dir).with_context(|| format!("{}:0: cannot create directory", dir.display()))?;
+    let dir = a.out_dir.clone().unwrap_or_else(|| {
+        PathBuf::from(format!("out/{}-{}", params.scenario.name(), params.seed))
+    });
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("{}:0: cannot create directory", dir.display()))?;
     let log = dir.join(format!("{}.csv", params.scenario.name()));
     if let Some(report_dir) = &a.report {
         host_sim::trial_report::check_dir(report_dir, &inputs_of(&log))?;
@@ -432,22 +553,58 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     log_csv::write_log(&log, &logged)?;
     let truth = Truth::new(&params);
     log_csv::write_truth(&log_csv::truth_path(&log), &truth)?;
-    println!("wrote {} ({} rows) and its truth file", log.display(), logged.len());
+    println!(
+        "wrote {} ({} rows) and its truth file",
+        log.display(),
+        logged.len()
+    );
     let mut runs: Vec<(Method, Vec<Step>)> = Vec::new();
     let mut reports: Vec<(Method, Report)> = Vec::new();
     let mut ours = None;
     let mut stdout = std::io::stdout().lock();
     for method in [Method::Windowed, Method::Paper, Method::Traditional] {
-        let out = dir.join(format!("{}.estimates.{}.csv", params.scenario.name(), method.name()));
+        let out = dir.join(format!(
+            "{}.estimates.{}.csv",
+            params.scenario.name(),
+            method.name()
+        ));
         let timeline = a.report.is_some() && method == Method::Windowed;
-        let options = EstimateOptions { config: a.tuning.config(method), restart_at_s: vec![], strict: true, timeline };
+        let options = EstimateOptions {
+            config: a.tuning.config(method),
+            restart_at_s: vec![],
+            strict: true,
+            timeline,
+        };
         let mut steps = Vec::with_capacity(generated.rows.len());
-        let rows = TruthRows::Generated { rows: &generated.rows, truth: &generated.truth, time_offset_s: params.recording.time_offset_s };
-        let est = estimate_log(&log, &out, &options, Some(rows), &mut warn_row, &mut |view| {
-            steps.push(Step { time_s: view.line.row.time_s, result: *view.result })
-        })?;
-        print_summary(&mut stdout, &log, method, &est.replay, &out.display().to_string())?;
-        let rep = est.report.clone().context("a report against the generated truth")?;
+        let rows = TruthRows::Generated {
+            rows: &generated.rows,
+            truth: &generated.truth,
+            time_offset_s: params.recording.time_offset_s,
+        };
+        let est = estimate_log(
+            &log,
+            &out,
+            &options,
+            Some(rows),
+            &mut warn_row,
+            &mut |view| {
+                steps.push(Step {
+                    time_s: view.line.row.time_s,
+                    result: *view.result,
+                })
+            },
+        )?;
+        print_summary(
+            &mut stdout,
+            &log,
+            method,
+            &est.replay,
+            &out.display().to_string(),
+        )?;
+        let rep = est
+            .report
+            .clone()
+            .context("a report against the generated truth")?;
         print_report(&mut stdout, method, &rep)?;
         writeln!(stdout)?;
         runs.push((method, steps));
@@ -457,12 +614,21 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
         }
     }
     drop(stdout);
-    println!("side by side ({} scenario, seed {}):", params.scenario.name(), params.seed);
+    println!(
+        "side by side ({} scenario, seed {}):",
+        params.scenario.name(),
+        params.seed
+    );
     let side: Vec<(&str, &Report)> = reports.iter().map(|(m, r)| (method_label(*m), r)).collect();
     let side_by_side = host_sim::report::format_side_by_side(&side);
     print!("{side_by_side}");
     // The figures index the truth by sample instant: stamps moved back onto it.
-    let grid = |t: f64| params.recording.sample_time_s(t, params.sample_interval_s).unwrap_or(f64::NAN);
+    let grid = |t: f64| {
+        params
+            .recording
+            .sample_time_s(t, params.sample_interval_s)
+            .unwrap_or(f64::NAN)
+    };
     let on_grid: Vec<(Method, Vec<Step>)> = runs
         .iter()
         .map(|(m, steps)| {
@@ -480,11 +646,29 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
             (*m, moved)
         })
         .collect();
-    let steps: Vec<(&str, &[Step])> = on_grid.iter().map(|(m, s)| (m.name(), s.as_slice())).collect();
+    let steps: Vec<(&str, &[Step])> = on_grid
+        .iter()
+        .map(|(m, s)| (m.name(), s.as_slice()))
+        .collect();
     let window = (params.rotation_period_s / params.sample_interval_s).round() as usize;
-    let grid_rows: Vec<_> = logged.iter().map(|r| host_sim::scenario::Row { time_s: grid(r.time_s), ..*r }).collect();
-    let paper_figures =
-        |into: &Path| host_sim::figures::write_figures(into, &grid_rows, &generated.truth, &params.errors_arcsec, params.sample_interval_s, window, &steps);
+    let grid_rows: Vec<_> = logged
+        .iter()
+        .map(|r| host_sim::scenario::Row {
+            time_s: grid(r.time_s),
+            ..*r
+        })
+        .collect();
+    let paper_figures = |into: &Path| {
+        host_sim::figures::write_figures(
+            into,
+            &grid_rows,
+            &generated.truth,
+            &params.errors_arcsec,
+            params.sample_interval_s,
+            window,
+            &steps,
+        )
+    };
     if !a.no_plots {
         println!("plots:");
         for f in paper_figures(&dir)? {
@@ -500,9 +684,20 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
             let caption = host_sim::figures::caption_of(&path);
             paper = paper.with(Block::Figure(Figure { path, caption }));
         }
-        let extra = vec![Section::new("The three methods side by side").with(Block::Code(side_by_side)), paper];
+        let extra = vec![
+            Section::new("The three methods side by side").with(Block::Code(side_by_side)),
+            paper,
+        ];
         let tl = est.timeline.as_ref().context("our method's timeline")?;
-        let page = host_sim::trial_report::write_replay_report(report_dir, &log.display().to_string(), method_label(Method::Windowed), &est.replay, est.report.as_ref(), tl, extra)?;
+        let page = host_sim::trial_report::write_replay_report(
+            report_dir,
+            &log.display().to_string(),
+            method_label(Method::Windowed),
+            &est.replay,
+            est.report.as_ref(),
+            tl,
+            extra,
+        )?;
         println!("report in {}", page.display());
     }
     Ok(())
@@ -524,7 +719,9 @@ fn progress_bar(len: u64, unit: &str) -> indicatif::ProgressBar {
         return indicatif::ProgressBar::hidden();
     }
     let bar = indicatif::ProgressBar::new(len);
-    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!("{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{eta}} left")) {
+    if let Ok(style) = indicatif::ProgressStyle::with_template(&format!(
+        "{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {unit}, {{eta}} left"
+    )) {
         bar.set_style(style.progress_chars("=> "));
     }
     bar
@@ -587,14 +784,28 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
             ("rotation scheme".into(), draw.scheme.name().to_string()),
             ("runs".into(), format!("{} of {duration_s:.0} s", a.runs)),
             ("master seed".into(), draw.seed.to_string()),
-            ("wall time".into(), format!("{elapsed:.1} s on {} threads", pool.current_num_threads())),
+            (
+                "wall time".into(),
+                format!("{elapsed:.1} s on {} threads", pool.current_num_threads()),
+            ),
         ];
-        let study = host_sim::trial_report::MonteCarloStudy { description, facts, summary: &over_time, table };
+        let study = host_sim::trial_report::MonteCarloStudy {
+            description,
+            facts,
+            summary: &over_time,
+            table,
+        };
         let page = host_sim::trial_report::write_monte_carlo_report(dir, &study)?;
         println!("report in {}", page.display());
     }
     if summary.no_estimate() {
-        return Err(RunEnd::NoEstimate { reason: format!("no run reached an estimate by the table's times ({} s and after)", MC_TIMES_S[0]) }.into());
+        return Err(RunEnd::NoEstimate {
+            reason: format!(
+                "no run reached an estimate by the table's times ({} s and after)",
+                MC_TIMES_S[0]
+            ),
+        }
+        .into());
     }
     Ok(())
 }
@@ -602,7 +813,11 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
 fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.seeds >= 1, "--seeds must be at least 1");
     let scenarios: Vec<ScenarioKind> = if a.scenarios.is_empty() {
-        vec![ScenarioKind::Paper, ScenarioKind::Turntable, ScenarioKind::Sea]
+        vec![
+            ScenarioKind::Paper,
+            ScenarioKind::Turntable,
+            ScenarioKind::Sea,
+        ]
     } else {
         a.scenarios.iter().map(|s| (*s).into()).collect()
     };
@@ -611,7 +826,10 @@ fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
     } else {
         a.methods.iter().map(|m| (*m).into()).collect()
     };
-    let schemes = a.schemes.as_ref().map_or(vec![RotationScheme::Continuous], |l| l.0.clone());
+    let schemes = a
+        .schemes
+        .as_ref()
+        .map_or(vec![RotationScheme::Continuous], |l| l.0.clone());
     let start = std::time::Instant::now();
     for (i, &scheme) in schemes.iter().enumerate() {
         let mut rows = Vec::new();
@@ -620,7 +838,11 @@ fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
             let draw = a.spread.draw(kind, scheme, a.seed)?;
             heading = host_sim::compare::describe(&draw);
             for &method in &methods {
-                rows.push(host_sim::compare::compare_one(&draw, a.tuning.config(method), a.seeds)?);
+                rows.push(host_sim::compare::compare_one(
+                    &draw,
+                    a.tuning.config(method),
+                    a.seeds,
+                )?);
             }
         }
         if i > 0 {
@@ -649,7 +871,10 @@ mod tests {
     fn every_option_takes_a_negative_number() {
         fn walk(cmd: &clap::Command, missing: &mut Vec<String>) {
             for arg in cmd.get_arguments() {
-                if arg.get_action().takes_values() && !arg.is_positional() && !arg.is_allow_negative_numbers_set() {
+                if arg.get_action().takes_values()
+                    && !arg.is_positional()
+                    && !arg.is_allow_negative_numbers_set()
+                {
                     missing.push(format!("{} --{}", cmd.get_name(), arg.get_id()));
                 }
             }

@@ -3,9 +3,9 @@
 //! recorder), each generated, recorded and replayed row by row in memory, in parallel (rayon), with
 //! the error statistics per report time.
 
+use crate::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
 use crate::replay::sample_of;
 use crate::report::{Accuracy, Tracker};
-use crate::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
 use crate::rotation_scheme::RotationScheme;
 use crate::scenario::{Mismatch, Samples, ScenarioKind, ScenarioParams, SwayComponent};
 use estimator_core::Config;
@@ -24,7 +24,11 @@ pub const PLOT_POINTS: usize = 80;
 /// over the run for the plot, ascending.
 pub fn tracked_times_s(duration_s: f64) -> Vec<f64> {
     let step = duration_s / PLOT_POINTS as f64;
-    let mut times: Vec<f64> = (1..=PLOT_POINTS).map(|k| (k as f64 * step).round()).chain(MC_TIMES_S).filter(|t| *t > 0.0).collect();
+    let mut times: Vec<f64> = (1..=PLOT_POINTS)
+        .map(|k| (k as f64 * step).round())
+        .chain(MC_TIMES_S)
+        .filter(|t| *t > 0.0)
+        .collect();
     times.sort_by(f64::total_cmp);
     times.dedup();
     times
@@ -39,7 +43,11 @@ pub enum StudyError {
          (a first estimate takes about two rotation periods, {two_periods_s} s here, after the sample interval is learned); \
          give --duration {first_s} or more"
     )]
-    TooShort { duration_s: f64, first_s: f64, two_periods_s: f64 },
+    TooShort {
+        duration_s: f64,
+        first_s: f64,
+        two_periods_s: f64,
+    },
 }
 
 impl Draw {
@@ -48,7 +56,11 @@ impl Draw {
         let p = self.params(0);
         let first_s = MC_TIMES_S[0];
         if p.duration_s < first_s {
-            return Err(StudyError::TooShort { duration_s: p.duration_s, first_s, two_periods_s: 2.0 * p.rotation_period_s });
+            return Err(StudyError::TooShort {
+                duration_s: p.duration_s,
+                first_s,
+                two_periods_s: 2.0 * p.rotation_period_s,
+            });
         }
         Ok(())
     }
@@ -58,7 +70,10 @@ impl Draw {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ScenarioError {
     /// The rotation scheme needs a longer period (its stops and turns do not fit).
-    PeriodTooShortForScheme { scheme: &'static str, min_period_s: f64 },
+    PeriodTooShortForScheme {
+        scheme: &'static str,
+        min_period_s: f64,
+    },
     /// The log is shorter than one sample interval.
     ShorterThanOneSample { duration_s: f64, interval_s: f64 },
     /// The recorder's settings.
@@ -74,11 +89,23 @@ impl From<RecorderError> for ScenarioError {
 impl std::fmt::Display for ScenarioError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            ScenarioError::PeriodTooShortForScheme { scheme, min_period_s } => {
-                write!(f, "the {scheme} scheme needs a rotation period of at least {min_period_s} s")
+            ScenarioError::PeriodTooShortForScheme {
+                scheme,
+                min_period_s,
+            } => {
+                write!(
+                    f,
+                    "the {scheme} scheme needs a rotation period of at least {min_period_s} s"
+                )
             }
-            ScenarioError::ShorterThanOneSample { duration_s, interval_s } => {
-                write!(f, "the log ({duration_s} s) is shorter than one sample interval ({interval_s} s)")
+            ScenarioError::ShorterThanOneSample {
+                duration_s,
+                interval_s,
+            } => {
+                write!(
+                    f,
+                    "the log ({duration_s} s) is shorter than one sample interval ({interval_s} s)"
+                )
             }
             ScenarioError::Recorder(e) => e.fmt(f),
         }
@@ -138,19 +165,30 @@ impl Draw {
     pub fn check(&self) -> Result<(), ScenarioError> {
         let p = self.params(0);
         if p.rotation_period_s < p.scheme.min_period_s() {
-            return Err(ScenarioError::PeriodTooShortForScheme { scheme: p.scheme.name(), min_period_s: p.scheme.min_period_s() });
+            return Err(ScenarioError::PeriodTooShortForScheme {
+                scheme: p.scheme.name(),
+                min_period_s: p.scheme.min_period_s(),
+            });
         }
         if p.duration_s < p.sample_interval_s {
-            return Err(ScenarioError::ShorterThanOneSample { duration_s: p.duration_s, interval_s: p.sample_interval_s });
+            return Err(ScenarioError::ShorterThanOneSample {
+                duration_s: p.duration_s,
+                interval_s: p.sample_interval_s,
+            });
         }
-        self.recorder.recording(self.run_seed(0), p.duration_s, p.sample_interval_s)?;
+        self.recorder
+            .recording(self.run_seed(0), p.duration_s, p.sample_interval_s)?;
         Ok(())
     }
 
     /// Seed of run `i` (distinct runs, reproducible).
     pub fn run_seed(&self, i: usize) -> u64 {
         // SplitMix64 of (seed, i).
-        let mut z = self.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(i as u64).wrapping_add(0x632B_E59B_D9B4_E019);
+        let mut z = self
+            .seed
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .wrapping_add(i as u64)
+            .wrapping_add(0x632B_E59B_D9B4_E019);
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^ (z >> 31)
@@ -177,7 +215,11 @@ impl Draw {
         if let Some(max) = self.max_roll_deg {
             let nominal = sway_amplitude_deg(&p.roll_sway);
             if nominal > 0.0 {
-                let target = if max > nominal { rng.gen_range(nominal..max) } else { max };
+                let target = if max > nominal {
+                    rng.gen_range(nominal..max)
+                } else {
+                    max
+                };
                 let k = target / nominal;
                 for c in &mut p.roll_sway {
                     c.amplitude_deg *= k;
@@ -196,42 +238,71 @@ impl Draw {
             p.sample_interval_s = d;
         }
         // Outages fit in every run alike (checked once by `check`).
-        p.recording = self.recorder.recording(seed, p.duration_s, p.sample_interval_s).unwrap_or_else(|_| Recording::default());
+        p.recording = self
+            .recorder
+            .recording(seed, p.duration_s, p.sample_interval_s)
+            .unwrap_or_else(|_| Recording::default());
         p
     }
 }
 
 /// Sinusoid-equivalent amplitude of a sway (sqrt(2) x RMS), deg.
 pub fn sway_amplitude_deg(comps: &[SwayComponent]) -> f64 {
-    comps.iter().map(|c| c.amplitude_deg * c.amplitude_deg).sum::<f64>().sqrt()
+    comps
+        .iter()
+        .map(|c| c.amplitude_deg * c.amplitude_deg)
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// Generates, records and replays one scenario, tracking accuracy at `times_s` (at the logged
 /// rows' sample instants, from the log's start).
-pub fn track_run(params: &ScenarioParams, config: Config, times_s: &[f64]) -> anyhow::Result<Accuracy> {
-    track_run_with_capacity::<{ estimator_core::estimator::DEFAULT_CAPACITY }>(params, config, times_s)
+pub fn track_run(
+    params: &ScenarioParams,
+    config: Config,
+    times_s: &[f64],
+) -> anyhow::Result<Accuracy> {
+    track_run_with_capacity::<{ estimator_core::estimator::DEFAULT_CAPACITY }>(
+        params, config, times_s,
+    )
 }
 
 /// As [`track_run`], with an estimator of another ring capacity (to measure what binning costs).
-pub fn track_run_with_capacity<const CAP: usize>(params: &ScenarioParams, config: Config, times_s: &[f64]) -> anyhow::Result<Accuracy> {
-    let mut est = estimator_core::Estimator::<CAP>::new(config).map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
+pub fn track_run_with_capacity<const CAP: usize>(
+    params: &ScenarioParams,
+    config: Config,
+    times_s: &[f64],
+) -> anyhow::Result<Accuracy> {
+    let mut est = estimator_core::Estimator::<CAP>::new(config)
+        .map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
     let mut recorder = Recorder::new(&params.recording, params.seed);
     let mut tracker = Tracker::new(times_s);
     let mut held = None;
     let mut status = None;
     for (row, truth) in Samples::new(params) {
-        let Some(logged) = recorder.record(&row) else { continue };
+        let Some(logged) = recorder.record(&row) else {
+            continue;
+        };
         if let Ok(out) = est.step(&sample_of(&logged)) {
             held = out.estimate;
             status = Some(out.status);
         }
         tracker.observe(row.time_s, held.as_ref(), &truth.errors_arcsec);
     }
-    Ok(Accuracy { final_status: status, ..tracker.finish(params.sample_interval_s) })
+    Ok(Accuracy {
+        final_status: status,
+        ..tracker.finish(params.sample_interval_s)
+    })
 }
 
 /// Runs `runs` draws in parallel; `on_done` is called after each run (progress).
-pub fn run_all(draw: &Draw, config: Config, runs: usize, times_s: &[f64], on_done: &(dyn Fn() + Sync)) -> anyhow::Result<Vec<Accuracy>> {
+pub fn run_all(
+    draw: &Draw,
+    config: Config,
+    runs: usize,
+    times_s: &[f64],
+    on_done: &(dyn Fn() + Sync),
+) -> anyhow::Result<Vec<Accuracy>> {
     (0..runs)
         .into_par_iter()
         .map(|i| {
@@ -289,21 +360,31 @@ pub struct Summary {
 impl Summary {
     /// The statistics at those of its times that are in `times_s`.
     pub fn at_times(&self, times_s: &[f64]) -> Summary {
-        let keep: Vec<usize> = (0..self.times_s.len()).filter(|&k| times_s.contains(&self.times_s[k])).collect();
+        let keep: Vec<usize> = (0..self.times_s.len())
+            .filter(|&k| times_s.contains(&self.times_s[k]))
+            .collect();
         Summary {
             runs: self.runs,
             times_s: keep.iter().map(|&k| self.times_s[k]).collect(),
-            median_abs_error_arcsec: keep.iter().map(|&k| self.median_abs_error_arcsec[k]).collect(),
+            median_abs_error_arcsec: keep
+                .iter()
+                .map(|&k| self.median_abs_error_arcsec[k])
+                .collect(),
             p95_abs_error_arcsec: keep.iter().map(|&k| self.p95_abs_error_arcsec[k]).collect(),
             max_abs_error_arcsec: keep.iter().map(|&k| self.max_abs_error_arcsec[k]).collect(),
-            share_within_10_arcsec: keep.iter().map(|&k| self.share_within_10_arcsec[k]).collect(),
+            share_within_10_arcsec: keep
+                .iter()
+                .map(|&k| self.share_within_10_arcsec[k])
+                .collect(),
             coverage_2sigma: keep.iter().map(|&k| self.coverage_2sigma[k]).collect(),
         }
     }
 
     /// Whether no run had an estimate at any of the times.
     pub fn no_estimate(&self) -> bool {
-        self.median_abs_error_arcsec.iter().all(|m| m.iter().all(|v| v.is_infinite()))
+        self.median_abs_error_arcsec
+            .iter()
+            .all(|m| m.iter().all(|v| v.is_infinite()))
     }
 }
 
@@ -331,13 +412,19 @@ pub struct StudyJson {
 /// Share of the (run, error) pairs at report time `k` whose |error| is within twice the reported
 /// 1-sigma. A run without an estimate at that time counts as four pairs outside.
 pub fn coverage_2sigma(results: &[Accuracy], k: usize) -> f64 {
-    let within: usize = results.iter().map(|r| r.points.get(k).map_or(0, |p| p.within_sigmas(2.0))).sum();
+    let within: usize = results
+        .iter()
+        .map(|r| r.points.get(k).map_or(0, |p| p.within_sigmas(2.0)))
+        .sum();
     within as f64 / (4 * results.len()).max(1) as f64
 }
 
 /// Statistics over runs at each report time inside the runs.
 pub fn summarize(results: &[Accuracy]) -> Summary {
-    let times_s: Vec<f64> = results.first().map(|r| r.points.iter().map(|p| p.time_s).collect()).unwrap_or_default();
+    let times_s: Vec<f64> = results
+        .first()
+        .map(|r| r.points.iter().map(|p| p.time_s).collect())
+        .unwrap_or_default();
     let mut s = Summary {
         runs: results.len(),
         times_s: times_s.clone(),
@@ -348,7 +435,12 @@ pub fn summarize(results: &[Accuracy]) -> Summary {
         coverage_2sigma: vec![],
     };
     for k in 0..times_s.len() {
-        let abs = |r: &Accuracy, i: usize| r.points.get(k).and_then(|p| p.error_arcsec).map_or(f64::INFINITY, |e| e[i].abs());
+        let abs = |r: &Accuracy, i: usize| {
+            r.points
+                .get(k)
+                .and_then(|p| p.error_arcsec)
+                .map_or(f64::INFINITY, |e| e[i].abs())
+        };
         let mut med = [0.0; 4];
         let mut p95 = [0.0; 4];
         let mut max = [0.0; 4];
@@ -361,8 +453,12 @@ pub fn summarize(results: &[Accuracy]) -> Summary {
         s.median_abs_error_arcsec.push(med);
         s.p95_abs_error_arcsec.push(p95);
         s.max_abs_error_arcsec.push(max);
-        let within = results.iter().filter(|r| (0..4).all(|i| abs(r, i) <= crate::report::ARCSEC_THRESHOLD)).count();
-        s.share_within_10_arcsec.push(within as f64 / results.len().max(1) as f64);
+        let within = results
+            .iter()
+            .filter(|r| (0..4).all(|i| abs(r, i) <= crate::report::ARCSEC_THRESHOLD))
+            .count();
+        s.share_within_10_arcsec
+            .push(within as f64 / results.len().max(1) as f64);
         s.coverage_2sigma.push(coverage_2sigma(results, k));
     }
     s
@@ -374,15 +470,26 @@ pub fn format_summary(s: &Summary) -> String {
         "| time s | stat | x1 arcsec | x2 arcsec | x3 arcsec | x4 arcsec | runs within 10 arcsec | errors within 2 sigma |\n|---|---|---|---|---|---|---|---|\n",
     );
     for (k, t) in s.times_s.iter().enumerate() {
-        let row = |v: &[f64; 4]| v.iter().map(|x| format!("{x:.2}")).collect::<Vec<_>>().join(" | ");
+        let row = |v: &[f64; 4]| {
+            v.iter()
+                .map(|x| format!("{x:.2}"))
+                .collect::<Vec<_>>()
+                .join(" | ")
+        };
         out.push_str(&format!(
             "| {t:.0} | median | {} | {:.1} % | {:.1} % |\n",
             row(&s.median_abs_error_arcsec[k]),
             100.0 * s.share_within_10_arcsec[k],
             100.0 * s.coverage_2sigma[k]
         ));
-        out.push_str(&format!("| | p95 | {} | | |\n", row(&s.p95_abs_error_arcsec[k])));
-        out.push_str(&format!("| | max | {} | | |\n", row(&s.max_abs_error_arcsec[k])));
+        out.push_str(&format!(
+            "| | p95 | {} | | |\n",
+            row(&s.p95_abs_error_arcsec[k])
+        ));
+        out.push_str(&format!(
+            "| | max | {} | | |\n",
+            row(&s.max_abs_error_arcsec[k])
+        ));
     }
     out
 }
@@ -393,27 +500,81 @@ mod tests {
 
     #[test]
     fn a_draw_that_cannot_make_its_scenarios_is_refused_with_a_typed_error() {
-        let ok = Draw { duration_s: Some(3000.0), ..Draw::new(ScenarioKind::Paper, 1) };
+        let ok = Draw {
+            duration_s: Some(3000.0),
+            ..Draw::new(ScenarioKind::Paper, 1)
+        };
         assert_eq!(ok.check(), Ok(()));
-        let four_position = Draw { scheme: RotationScheme::FourPosition, rotation_period_s: Some(1.0), ..ok.clone() };
+        let four_position = Draw {
+            scheme: RotationScheme::FourPosition,
+            rotation_period_s: Some(1.0),
+            ..ok.clone()
+        };
         let min_period_s = RotationScheme::FourPosition.min_period_s();
         assert!(min_period_s > 1.0);
-        assert_eq!(four_position.check(), Err(ScenarioError::PeriodTooShortForScheme { scheme: "four-position", min_period_s }));
-        let short = Draw { duration_s: Some(0.5), ..ok.clone() };
-        assert_eq!(short.check(), Err(ScenarioError::ShorterThanOneSample { duration_s: 0.5, interval_s: 1.0 }));
-        let outages = Draw { recorder: RecorderSettings { outages: 100, ..RecorderSettings::default() }, ..ok.clone() };
+        assert_eq!(
+            four_position.check(),
+            Err(ScenarioError::PeriodTooShortForScheme {
+                scheme: "four-position",
+                min_period_s
+            })
+        );
+        let short = Draw {
+            duration_s: Some(0.5),
+            ..ok.clone()
+        };
+        assert_eq!(
+            short.check(),
+            Err(ScenarioError::ShorterThanOneSample {
+                duration_s: 0.5,
+                interval_s: 1.0
+            })
+        );
+        let outages = Draw {
+            recorder: RecorderSettings {
+                outages: 100,
+                ..RecorderSettings::default()
+            },
+            ..ok.clone()
+        };
         let e = outages.check().unwrap_err();
-        assert!(matches!(e, ScenarioError::Recorder(RecorderError::OutagesDoNotFit { count: 100, .. })), "{e:?}");
+        assert!(
+            matches!(
+                e,
+                ScenarioError::Recorder(RecorderError::OutagesDoNotFit { count: 100, .. })
+            ),
+            "{e:?}"
+        );
         assert!(e.to_string().starts_with("--outages: 100 outages"), "{e}");
     }
 
     #[test]
     fn a_study_shorter_than_the_first_report_time_is_refused() {
-        let short = Draw { duration_s: Some(1500.0), ..Draw::new(ScenarioKind::Paper, 1) };
+        let short = Draw {
+            duration_s: Some(1500.0),
+            ..Draw::new(ScenarioKind::Paper, 1)
+        };
         let e = short.check_duration().unwrap_err();
-        assert_eq!(e, StudyError::TooShort { duration_s: 1500.0, first_s: 2000.0, two_periods_s: 960.0 });
-        assert!(e.to_string().contains("give --duration 2000 or more"), "{e}");
-        assert_eq!(Draw { duration_s: Some(2000.0), ..short }.check_duration(), Ok(()));
+        assert_eq!(
+            e,
+            StudyError::TooShort {
+                duration_s: 1500.0,
+                first_s: 2000.0,
+                two_periods_s: 960.0
+            }
+        );
+        assert!(
+            e.to_string().contains("give --duration 2000 or more"),
+            "{e}"
+        );
+        assert_eq!(
+            Draw {
+                duration_s: Some(2000.0),
+                ..short
+            }
+            .check_duration(),
+            Ok(())
+        );
     }
 
     #[test]
@@ -432,7 +593,10 @@ mod tests {
             coverage_2sigma: vec![0.0, 1.0],
         };
         let table = s.at_times(&MC_TIMES_S);
-        assert_eq!((table.times_s, table.p95_abs_error_arcsec), (vec![2000.0], vec![[2.0; 4]]));
+        assert_eq!(
+            (table.times_s, table.p95_abs_error_arcsec),
+            (vec![2000.0], vec![[2.0; 4]])
+        );
         assert!(!s.no_estimate() && s.at_times(&[250.0]).no_estimate());
     }
 
@@ -447,12 +611,26 @@ mod tests {
         assert_eq!(quantile(&with_inf, 0.25), f64::INFINITY);
     }
 
-    fn point(time_s: f64, error_arcsec: Option<[f64; 4]>, sigma_arcsec: [f64; 4]) -> crate::report::AccuracyAt {
-        crate::report::AccuracyAt { time_s, error_arcsec, sigma_arcsec: error_arcsec.map(|_| sigma_arcsec), percent: None }
+    fn point(
+        time_s: f64,
+        error_arcsec: Option<[f64; 4]>,
+        sigma_arcsec: [f64; 4],
+    ) -> crate::report::AccuracyAt {
+        crate::report::AccuracyAt {
+            time_s,
+            error_arcsec,
+            sigma_arcsec: error_arcsec.map(|_| sigma_arcsec),
+            percent: None,
+        }
     }
 
     fn accuracy(points: Vec<crate::report::AccuracyAt>) -> Accuracy {
-        Accuracy { points, within_percent_from_s: [None; 4], within_arcsec_from_s: [None; 4], final_status: None }
+        Accuracy {
+            points,
+            within_percent_from_s: [None; 4],
+            within_arcsec_from_s: [None; 4],
+            final_status: None,
+        }
     }
 
     #[test]
@@ -468,15 +646,26 @@ mod tests {
                 point(1.0, Some([10.0, -10.0, 5.0, 0.0]), [5.0, 5.0, 2.5, 0.1]),
                 point(2.0, Some([10.0, -10.0, 5.0, 1.0]), [4.0, 4.0, 2.0, 0.1]),
             ]),
-            accuracy(vec![point(1.0, None, [0.0; 4]), point(2.0, Some([0.0; 4]), [1.0; 4])]),
+            accuracy(vec![
+                point(1.0, None, [0.0; 4]),
+                point(2.0, Some([0.0; 4]), [1.0; 4]),
+            ]),
         ];
         assert!((coverage_2sigma(&runs, 0) - 7.0 / 12.0).abs() < 1e-12);
         assert!((coverage_2sigma(&runs, 1) - 6.0 / 12.0).abs() < 1e-12);
-        assert_eq!(coverage_2sigma(&runs, 2), 0.0, "a time past every run: nothing covered");
+        assert_eq!(
+            coverage_2sigma(&runs, 2),
+            0.0,
+            "a time past every run: nothing covered"
+        );
         let s = summarize(&runs);
         assert_eq!(s.coverage_2sigma.len(), 2);
         assert!((s.coverage_2sigma[1] - 0.5).abs() < 1e-12);
-        assert!(format_summary(&s).contains("| 58.3 % |"), "{}", format_summary(&s));
+        assert!(
+            format_summary(&s).contains("| 58.3 % |"),
+            "{}",
+            format_summary(&s)
+        );
     }
 
     #[test]
@@ -489,11 +678,19 @@ mod tests {
         assert_ne!(a.errors_arcsec, b.errors_arcsec);
         assert_eq!(a, d.params(0));
         for (i, p) in [&a, &b].into_iter().enumerate() {
-            assert!(p.errors_arcsec.iter().all(|x| (100.0..=500.0).contains(&x.abs())));
+            assert!(p
+                .errors_arcsec
+                .iter()
+                .all(|x| (100.0..=500.0).contains(&x.abs())));
             assert!((-60.0..60.0).contains(&p.latitude_deg));
             let amp = sway_amplitude_deg(&p.roll_sway);
-            let nominal = sway_amplitude_deg(&ScenarioParams::new(ScenarioKind::Sea, d.run_seed(i)).roll_sway);
-            assert!(nominal < 10.0 && amp <= 10.0 + 1e-9 && amp >= nominal - 1e-9, "{amp} {nominal}");
+            let nominal = sway_amplitude_deg(
+                &ScenarioParams::new(ScenarioKind::Sea, d.run_seed(i)).roll_sway,
+            );
+            assert!(
+                nominal < 10.0 && amp <= 10.0 + 1e-9 && amp >= nominal - 1e-9,
+                "{amp} {nominal}"
+            );
         }
     }
 }

@@ -27,27 +27,46 @@ fn temp_beside(target: &Path) -> anyhow::Result<NamedTempFile> {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let suffix = Path::new(&name).extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let suffix = Path::new(&name)
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
     tempfile::Builder::new()
         .prefix(&format!(".{name}."))
         .suffix(&suffix)
         // As `File::create` makes files: 0666 less the umask (tempfile's own default is 0600).
         .permissions(Permissions::from_mode(0o666))
         .tempfile_in(dir)
-        .with_context(|| format!("{}:0: cannot create a temporary file in {}", target.display(), dir.display()))
+        .with_context(|| {
+            format!(
+                "{}:0: cannot create a temporary file in {}",
+                target.display(),
+                dir.display()
+            )
+        })
 }
 
 /// Flushes a finished temporary file to disk and renames it over `target`.
 fn persist(temp: NamedTempFile, target: &Path) -> anyhow::Result<()> {
-    temp.as_file().sync_all().with_context(|| format!("{}:0: cannot write", target.display()))?;
-    temp.persist(target).map_err(|e| e.error).with_context(|| format!("{}:0: cannot write", target.display()))?;
+    temp.as_file()
+        .sync_all()
+        .with_context(|| format!("{}:0: cannot write", target.display()))?;
+    temp.persist(target)
+        .map_err(|e| e.error)
+        .with_context(|| format!("{}:0: cannot write", target.display()))?;
     Ok(())
 }
 
 /// Writes `target` through `write`, which is given the path of a temporary file beside it to
 /// create and fill; renamed over `target` only if `write` succeeds.
-pub fn write_via_temp(target: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
+pub fn write_via_temp(
+    target: &Path,
+    write: impl FnOnce(&Path) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
     let temp = temp_beside(target)?;
     write(temp.path())?;
     persist(temp, target)
@@ -56,7 +75,8 @@ pub fn write_via_temp(target: &Path, write: impl FnOnce(&Path) -> anyhow::Result
 /// Writes `bytes` to `target` (see the module doc).
 pub fn write_bytes(target: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let mut temp = temp_beside(target)?;
-    temp.write_all(bytes).with_context(|| format!("{}:0: cannot write", target.display()))?;
+    temp.write_all(bytes)
+        .with_context(|| format!("{}:0: cannot write", target.display()))?;
     persist(temp, target)
 }
 
@@ -80,16 +100,24 @@ impl OutputFile {
         } else {
             Sink::File(BufWriter::with_capacity(1 << 16, temp_beside(target)?))
         };
-        Ok(OutputFile { target: target.to_path_buf(), sink })
+        Ok(OutputFile {
+            target: target.to_path_buf(),
+            sink,
+        })
     }
 
     /// The output is complete: flushed, and the file renamed over the target.
     pub fn commit(self) -> anyhow::Result<()> {
         let target = self.target;
         match self.sink {
-            Sink::Stdout(mut w) => w.flush().with_context(|| "standard output: cannot write".to_string()),
+            Sink::Stdout(mut w) => w
+                .flush()
+                .with_context(|| "standard output: cannot write".to_string()),
             Sink::File(w) => {
-                let temp = w.into_inner().map_err(|e| e.into_error()).with_context(|| format!("{}:0: cannot write", target.display()))?;
+                let temp = w
+                    .into_inner()
+                    .map_err(|e| e.into_error())
+                    .with_context(|| format!("{}:0: cannot write", target.display()))?;
                 persist(temp, &target)
             }
         }
@@ -155,7 +183,11 @@ pub fn check_not_input(output: &Path, option: &str, inputs: &[Input]) -> anyhow:
     }
     for input in inputs {
         if input.path.as_os_str() != STDOUT && same_file(output, &input.path) {
-            anyhow::bail!("{}:0: {option} names {}; it is an input of this run and is never overwritten", output.display(), input.what);
+            anyhow::bail!(
+                "{}:0: {option} names {}; it is an input of this run and is never overwritten",
+                output.display(),
+                input.what
+            );
         }
     }
     Ok(())
@@ -173,7 +205,10 @@ mod tests {
     }
 
     fn listing(d: &Path) -> Vec<String> {
-        let mut v: Vec<String> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
         v.sort();
         v
     }
@@ -185,7 +220,11 @@ mod tests {
         std::fs::write(&target, "earlier\n").unwrap();
         let mut out = OutputFile::create(&target).unwrap();
         out.write_all(b"half a run").unwrap();
-        assert_eq!(listing(&d).len(), 2, "the temporary file sits beside the target");
+        assert_eq!(
+            listing(&d).len(),
+            2,
+            "the temporary file sits beside the target"
+        );
         drop(out);
         let (kept, files) = (std::fs::read_to_string(&target).unwrap(), listing(&d));
         let mut out = OutputFile::create(&target).unwrap();
@@ -193,7 +232,10 @@ mod tests {
         out.commit().unwrap();
         let (new, after) = (std::fs::read_to_string(&target).unwrap(), listing(&d));
         let _ = std::fs::remove_dir_all(&d);
-        assert_eq!((kept.as_str(), files), ("earlier\n", vec!["e.csv".to_string()]));
+        assert_eq!(
+            (kept.as_str(), files),
+            ("earlier\n", vec!["e.csv".to_string()])
+        );
         assert_eq!((new.as_str(), after), ("new\n", vec!["e.csv".to_string()]));
     }
 
@@ -213,9 +255,20 @@ mod tests {
         let mode = std::fs::metadata(&target).unwrap().permissions().mode();
         let _ = std::fs::remove_dir_all(&d);
         assert!(failed.is_err() && files.is_empty(), "{files:?}");
-        assert!(seen.file_name().unwrap().to_string_lossy().starts_with(".plot.png.") && seen.extension().unwrap() == "png", "{seen:?}");
+        assert!(
+            seen.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with(".plot.png.")
+                && seen.extension().unwrap() == "png",
+            "{seen:?}"
+        );
         assert_eq!(written, b"png");
-        assert_ne!(mode & 0o044, 0, "readable by others as File::create makes files (umask permitting): {mode:o}");
+        assert_ne!(
+            mode & 0o044,
+            0,
+            "readable by others as File::create makes files (umask permitting): {mode:o}"
+        );
     }
 
     #[test]
@@ -223,13 +276,29 @@ mod tests {
         let d = dir("inputs");
         let log = d.join("trial.csv");
         std::fs::write(&log, "x").unwrap();
-        let inputs = [Input { path: log.clone(), what: "the log itself" }, Input { path: d.join("trial.truth.json"), what: "the log's truth file" }];
-        let same = check_not_input(&d.join(".").join("trial.csv"), "--out", &inputs).unwrap_err().to_string();
-        let truth = check_not_input(&d.join("trial.truth.json"), "--out", &inputs).unwrap_err().to_string();
+        let inputs = [
+            Input {
+                path: log.clone(),
+                what: "the log itself",
+            },
+            Input {
+                path: d.join("trial.truth.json"),
+                what: "the log's truth file",
+            },
+        ];
+        let same = check_not_input(&d.join(".").join("trial.csv"), "--out", &inputs)
+            .unwrap_err()
+            .to_string();
+        let truth = check_not_input(&d.join("trial.truth.json"), "--out", &inputs)
+            .unwrap_err()
+            .to_string();
         let other = check_not_input(&d.join("trial.estimates.csv"), "--out", &inputs);
         let _ = std::fs::remove_dir_all(&d);
         assert!(same.contains("--out names the log itself"), "{same}");
-        assert!(truth.contains("--out names the log's truth file"), "a truth file that does not exist yet is still the log's: {truth}");
+        assert!(
+            truth.contains("--out names the log's truth file"),
+            "a truth file that does not exist yet is still the log's: {truth}"
+        );
         assert!(other.is_ok());
         assert!(check_not_input(Path::new("-"), "--out", &inputs).is_ok());
     }

@@ -30,7 +30,12 @@ pub fn default_estimates_path(log: &Path) -> PathBuf {
         return PathBuf::from(log_csv::STDIO);
     }
     let stem = log_csv::log_stem(log);
-    let name = format!("{}.estimates.csv", stem.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
+    let name = format!(
+        "{}.estimates.csv",
+        stem.file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    );
     stem.with_file_name(name)
 }
 
@@ -39,7 +44,16 @@ pub fn inputs_of(log: &Path) -> Vec<Input> {
     if is_stdio(log) {
         return vec![];
     }
-    vec![Input { path: log.to_path_buf(), what: "the log itself" }, Input { path: log_csv::truth_path(log), what: "the log's truth file" }]
+    vec![
+        Input {
+            path: log.to_path_buf(),
+            what: "the log itself",
+        },
+        Input {
+            path: log_csv::truth_path(log),
+            what: "the log's truth file",
+        },
+    ]
 }
 
 /// The name of a log in messages.
@@ -77,7 +91,10 @@ pub fn load_truth(log: &Path, warn: &mut dyn FnMut(String)) -> Option<LogTruth> 
                 ));
             }
             let generated = truth.params.as_ref().map(generate);
-            Some(LogTruth { file: truth, generated })
+            Some(LogTruth {
+                file: truth,
+                generated,
+            })
         }
     }
 }
@@ -88,7 +105,10 @@ pub fn truth_rows<'a>(truth: &'a TruthFile, generated: Option<&'a Generated>) ->
         Some(g) => TruthRows::Generated {
             rows: &g.rows,
             truth: &g.truth,
-            time_offset_s: truth.params.as_ref().map_or(0.0, |p| p.recording.time_offset_s),
+            time_offset_s: truth
+                .params
+                .as_ref()
+                .map_or(0.0, |p| p.recording.time_offset_s),
         },
         None => TruthRows::Constant(truth.x_arcsec),
     }
@@ -123,45 +143,72 @@ pub fn estimate_log(
 ) -> anyhow::Result<Estimated> {
     check_not_input(out, "--out", &inputs_of(log))?;
     let lines = log_csv::LogReader::open(log)?;
-    let mut writer = EstimatesWriter::new(OutputFile::create(out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
+    let mut writer = EstimatesWriter::new(OutputFile::create(out)?)
+        .with_context(|| format!("{}:0: cannot write", out.display()))?;
     let mut report = truth.map(ReportBuilder::new);
     let mut timeline = options.timeline.then(Timeline::new);
     let replay = read_ahead(lines, |lines| {
-        replay_each(lines, options.config, &options.restart_at_s, RowFilter::new(options.strict), warn, |view| {
-            let row = &view.line.row;
-            writer.write_step(row.time_s, view.result).map_err(ReplayError::Write)?;
-            let truth = report.as_mut().and_then(|r| r.observe(row, view.result));
-            if let Some(t) = timeline.as_mut() {
-                t.observe(TimelineRow {
-                    row,
-                    result: view.result,
-                    placement: view.placement,
-                    counters: Some(view.estimator.counters()),
-                    residuals_rad: view.residuals_rad(),
-                    truth,
-                });
-            }
-            each(view);
-            Ok(())
-        })
+        replay_each(
+            lines,
+            options.config,
+            &options.restart_at_s,
+            RowFilter::new(options.strict),
+            warn,
+            |view| {
+                let row = &view.line.row;
+                writer
+                    .write_step(row.time_s, view.result)
+                    .map_err(ReplayError::Write)?;
+                let truth = report.as_mut().and_then(|r| r.observe(row, view.result));
+                if let Some(t) = timeline.as_mut() {
+                    t.observe(TimelineRow {
+                        row,
+                        result: view.result,
+                        placement: view.placement,
+                        counters: Some(view.estimator.counters()),
+                        residuals_rad: view.residuals_rad(),
+                        truth,
+                    });
+                }
+                each(view);
+                Ok(())
+            },
+        )
     })
     .map_err(|e| match e {
         ReplayError::Interval(i) => anyhow::anyhow!("{}: {i}", log_name(log)),
-        ReplayError::Write(io) => anyhow::Error::new(io).context(format!("{}:0: cannot write", out.display())),
+        ReplayError::Write(io) => {
+            anyhow::Error::new(io).context(format!("{}:0: cannot write", out.display()))
+        }
         other => other.into(),
     })?;
     if replay.rows == 0 {
         // Nothing to write: an earlier estimates file stays as it was.
-        return Err(RunEnd::nothing_read(&log_name(log), replay.unreadable.skipped, replay.unreadable.first.first()).into());
+        return Err(RunEnd::nothing_read(
+            &log_name(log),
+            replay.unreadable.skipped,
+            replay.unreadable.first.first(),
+        )
+        .into());
     }
-    writer.finish().with_context(|| format!("{}:0: cannot write", out.display()))?.commit()?;
+    writer
+        .finish()
+        .with_context(|| format!("{}:0: cannot write", out.display()))?
+        .commit()?;
     // The interval the estimator used (pinned or learned; 1 s if it never learned one).
     let interval_s = replay.sample_interval_s.unwrap_or(1.0);
-    Ok(Estimated { replay, report: report.map(|r| r.finish(interval_s)), timeline })
+    Ok(Estimated {
+        replay,
+        report: report.map(|r| r.finish(interval_s)),
+        timeline,
+    })
 }
 
 /// [`estimate_log`] with no truth, no restarts, unreadable rows skipped: the benchmark's path.
 pub fn estimate_file(log: &Path, out: &Path, config: Config) -> anyhow::Result<Estimated> {
-    let options = EstimateOptions { config, ..EstimateOptions::default() };
+    let options = EstimateOptions {
+        config,
+        ..EstimateOptions::default()
+    };
     estimate_log(log, out, &options, None, &mut |_| {}, &mut |_| {})
 }

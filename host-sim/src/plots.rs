@@ -109,7 +109,12 @@ fn band_is_cut(band: &Band, (y0, y1): (f64, f64)) -> bool {
 const MAX_CLIP_MARKS: usize = 200;
 
 /// Colours of x1..x4 (and of heading, roll, pitch).
-pub const PALETTE: [RGBColor; 4] = [RGBColor(200, 30, 30), RGBColor(30, 90, 200), RGBColor(20, 150, 60), RGBColor(150, 60, 170)];
+pub const PALETTE: [RGBColor; 4] = [
+    RGBColor(200, 30, 30),
+    RGBColor(30, 90, 200),
+    RGBColor(20, 150, 60),
+    RGBColor(150, 60, 170),
+];
 pub const BLUE_LINE: RGBColor = RGBColor(30, 90, 200);
 pub const RED_LINE: RGBColor = RGBColor(210, 30, 30);
 
@@ -118,9 +123,16 @@ fn x_extent(panel: &Panel) -> (f64, f64) {
         .series
         .iter()
         .flat_map(|s| s.points.iter().map(|p| p.0))
-        .chain(panel.bands.iter().flat_map(|b| b.points.iter().map(|p| p.0)))
+        .chain(
+            panel
+                .bands
+                .iter()
+                .flat_map(|b| b.points.iter().map(|p| p.0)),
+        )
         .filter(|x| x.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
     if lo < hi {
         (lo, hi)
     } else {
@@ -128,7 +140,11 @@ fn x_extent(panel: &Panel) -> (f64, f64) {
     }
 }
 
-fn draw_panel<DB, Y>(area: &DrawingArea<DB, plotters::coord::Shift>, panel: &Panel, y: Y) -> Result<()>
+fn draw_panel<DB, Y>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    panel: &Panel,
+    y: Y,
+) -> Result<()>
 where
     DB: DrawingBackend,
     DB::ErrorType: 'static,
@@ -161,14 +177,29 @@ where
             .points
             .split(|p| !(p.0.is_finite() && p.1.is_finite() && p.2.is_finite()))
             .filter(|run| !run.is_empty())
-            .map(|run| run.iter().map(|p| (p.0, p.1.clamp(y0, y1))).chain(run.iter().rev().map(|p| (p.0, p.2.clamp(y0, y1)))).collect())
+            .map(|run| {
+                run.iter()
+                    .map(|p| (p.0, p.1.clamp(y0, y1)))
+                    .chain(run.iter().rev().map(|p| (p.0, p.2.clamp(y0, y1))))
+                    .collect()
+            })
             .collect();
-        let label = if band_is_cut(b, panel.y_range) { format!("{} (cut at the axis)", b.label) } else { b.label.clone() };
+        let label = if band_is_cut(b, panel.y_range) {
+            format!("{} (cut at the axis)", b.label)
+        } else {
+            b.label.clone()
+        };
         chart
-            .draw_series(polygons.into_iter().map(|polygon| Polygon::new(polygon, color.mix(0.4).filled())))
+            .draw_series(
+                polygons
+                    .into_iter()
+                    .map(|polygon| Polygon::new(polygon, color.mix(0.4).filled())),
+            )
             .map_err(|e| anyhow!("plot: {e}"))?
             .label(label)
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 20, y + 5)], color.mix(0.4).filled()));
+            .legend(move |(x, y)| {
+                Rectangle::new([(x, y - 5), (x + 20, y + 5)], color.mix(0.4).filled())
+            });
     }
     for s in &panel.series {
         let color = s.color;
@@ -180,10 +211,15 @@ where
             .map(|run| run.iter().map(|&(x, v)| (x, v.clamp(y0, y1))).collect())
             .collect();
         chart
-            .draw_series(runs.into_iter().map(|run| PathElement::new(run, color.stroke_width(1))))
+            .draw_series(
+                runs.into_iter()
+                    .map(|run| PathElement::new(run, color.stroke_width(1))),
+            )
             .map_err(|e| anyhow!("plot: {e}"))?
             .label(legend_label(s, panel.y_range))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
         let marks = clip_marks(&s.points, panel.y_range);
         chart
             .draw_series(marks.into_iter().take(MAX_CLIP_MARKS).map(|(x, above)| {
@@ -206,14 +242,23 @@ where
 
 /// Draws panels stacked vertically into one PNG of `width` x (`panel_height` x panels).
 pub fn draw_png(path: &Path, panels: &[Panel], width: u32, panel_height: u32) -> Result<()> {
-    crate::output_file::write_via_temp(path, |temp| draw_png_at(temp, path, panels, width, panel_height))
+    crate::output_file::write_via_temp(path, |temp| {
+        draw_png_at(temp, path, panels, width, panel_height)
+    })
 }
 
-fn draw_png_at(file: &Path, path: &Path, panels: &[Panel], width: u32, panel_height: u32) -> Result<()> {
+fn draw_png_at(
+    file: &Path,
+    path: &Path,
+    panels: &[Panel],
+    width: u32,
+    panel_height: u32,
+) -> Result<()> {
     let height = panel_height * panels.len().max(1) as u32;
     let root = BitMapBackend::new(file, (width, height)).into_drawing_area();
     draw_panels(&root, panels)?;
-    root.present().with_context(|| format!("{}:0: cannot write PNG", path.display()))?;
+    root.present()
+        .with_context(|| format!("{}:0: cannot write PNG", path.display()))?;
     Ok(())
 }
 
@@ -252,7 +297,11 @@ pub fn percent_error_figure(path: &Path, title: &str, curves: &[Vec<(f64, f64)>;
     let series = curves
         .iter()
         .enumerate()
-        .map(|(i, c)| Series { label: format!("x{}", i + 1), color: PALETTE[i], points: decimate(c.clone(), 4000) })
+        .map(|(i, c)| Series {
+            label: format!("x{}", i + 1),
+            color: PALETTE[i],
+            points: decimate(c.clone(), 4000),
+        })
         .collect();
     let panel = Panel {
         title: title.to_string(),
@@ -269,18 +318,37 @@ pub fn percent_error_figure(path: &Path, title: &str, curves: &[Vec<(f64, f64)>;
 /// Fig. 3: one panel per roll component, each with
 /// the correlation value of eq (8) (blue) and its average of eq (11) (red); `target_arcsec` is
 /// x3 cos L / 2 drawn on the oscillatory panel.
-pub fn correlation_figure(path: &Path, panels: &[CorrelationPanel], target_arcsec: f64) -> Result<()> {
+pub fn correlation_figure(
+    path: &Path,
+    panels: &[CorrelationPanel],
+    target_arcsec: f64,
+) -> Result<()> {
     let span = 3.0 * target_arcsec.abs().max(50.0);
     let out: Vec<Panel> = panels
         .iter()
         .map(|(name, corr, avg)| {
             let mut series = vec![
-                Series { label: "correlation value (eq 8)".into(), color: BLUE_LINE, points: decimate(corr.clone(), 6000) },
-                Series { label: "average (eq 11)".into(), color: RED_LINE, points: decimate(avg.clone(), 6000) },
+                Series {
+                    label: "correlation value (eq 8)".into(),
+                    color: BLUE_LINE,
+                    points: decimate(corr.clone(), 6000),
+                },
+                Series {
+                    label: "average (eq 11)".into(),
+                    color: RED_LINE,
+                    points: decimate(avg.clone(), 6000),
+                },
             ];
             if name.starts_with("oscillatory") || name.starts_with("roll as logged") {
-                let (x0, x1) = (corr.first().map_or(0.0, |p| p.0), corr.last().map_or(1.0, |p| p.0));
-                series.push(Series { label: "x3 cos L / 2".into(), color: BLACK, points: vec![(x0, target_arcsec), (x1, target_arcsec)] });
+                let (x0, x1) = (
+                    corr.first().map_or(0.0, |p| p.0),
+                    corr.last().map_or(1.0, |p| p.0),
+                );
+                series.push(Series {
+                    label: "x3 cos L / 2".into(),
+                    color: BLACK,
+                    points: vec![(x0, target_arcsec), (x1, target_arcsec)],
+                });
             }
             Panel {
                 title: format!("Fig. 3 analogue: {name}"),
@@ -297,12 +365,21 @@ pub fn correlation_figure(path: &Path, panels: &[CorrelationPanel], target_arcse
 }
 
 /// Figs. 7 / 8: attitude error (heading, roll, pitch), arcsec, against time.
-pub fn attitude_error_figure(path: &Path, title: &str, curves: &[Vec<(f64, f64)>; 3], y_span_arcsec: f64) -> Result<()> {
+pub fn attitude_error_figure(
+    path: &Path,
+    title: &str,
+    curves: &[Vec<(f64, f64)>; 3],
+    y_span_arcsec: f64,
+) -> Result<()> {
     let names = ["heading", "roll", "pitch"];
     let series = curves
         .iter()
         .enumerate()
-        .map(|(i, c)| Series { label: names[i].into(), color: PALETTE[i], points: decimate(c.clone(), 20000) })
+        .map(|(i, c)| Series {
+            label: names[i].into(),
+            color: PALETTE[i],
+            points: decimate(c.clone(), 20000),
+        })
         .collect();
     let panel = Panel {
         title: title.to_string(),
@@ -333,7 +410,11 @@ pub fn lanes_figure(path: &Path, title: &str, lanes: &[Lane], x_range: (f64, f64
         let height = 120 + 28 * lanes.len().max(1) as u32;
         let root = BitMapBackend::new(temp, (1000, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow!("plot: {e}"))?;
-        let (x0, x1) = if x_range.0 < x_range.1 { x_range } else { (x_range.0, x_range.0 + 1.0) };
+        let (x0, x1) = if x_range.0 < x_range.1 {
+            x_range
+        } else {
+            (x_range.0, x_range.0 + 1.0)
+        };
         let n = lanes.len().max(1) as f64;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 20))
@@ -355,7 +436,11 @@ pub fn lanes_figure(path: &Path, title: &str, lanes: &[Lane], x_range: (f64, f64
                 // Lane k (from the top) spans (n - k - 1, n - k); its name sits at the middle.
                 let k = n - v - 0.5;
                 let i = k.round();
-                if (k - i).abs() < 1e-6 && i >= 0.0 { names.get(i as usize).cloned().unwrap_or_default() } else { String::new() }
+                if (k - i).abs() < 1e-6 && i >= 0.0 {
+                    names.get(i as usize).cloned().unwrap_or_default()
+                } else {
+                    String::new()
+                }
             })
             .draw()
             .map_err(|e| anyhow!("plot: {e}"))?;
@@ -365,13 +450,18 @@ pub fn lanes_figure(path: &Path, title: &str, lanes: &[Lane], x_range: (f64, f64
             let (lo, hi) = (n - k as f64 - 0.85, n - k as f64 - 0.15);
             let color = lane.color;
             chart
-                .draw_series(lane.spans.iter().map(|&(a, b)| Rectangle::new([(a, lo), (b.max(a + min_width), hi)], color.filled())))
+                .draw_series(lane.spans.iter().map(|&(a, b)| {
+                    Rectangle::new([(a, lo), (b.max(a + min_width), hi)], color.filled())
+                }))
                 .map_err(|e| anyhow!("plot: {e}"))?;
             chart
-                .draw_series(lane.ticks.iter().map(|&t| PathElement::new(vec![(t, lo - 0.1), (t, hi + 0.1)], color.stroke_width(2))))
+                .draw_series(lane.ticks.iter().map(|&t| {
+                    PathElement::new(vec![(t, lo - 0.1), (t, hi + 0.1)], color.stroke_width(2))
+                }))
                 .map_err(|e| anyhow!("plot: {e}"))?;
         }
-        root.present().with_context(|| format!("{}:0: cannot write PNG", path.display()))?;
+        root.present()
+            .with_context(|| format!("{}:0: cannot write PNG", path.display()))?;
         Ok(())
     })
 }
@@ -406,7 +496,10 @@ mod tests {
         };
         let with = dark_in_title("WWWWWWWWWWWWWWWW Title text", "with.png");
         let without = dark_in_title("", "without.png");
-        assert!(with > without + 300, "title adds no pixels: {with} vs {without} bytes");
+        assert!(
+            with > without + 300,
+            "title adds no pixels: {with} vs {without} bytes"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -414,27 +507,62 @@ mod tests {
     fn a_line_beyond_the_axis_is_marked_where_it_leaves_it() {
         // The paper method's percentage error: thousands of percent at first, inside the axis
         // later, an infinite value (a true error of 0) once.
-        let pts = vec![(0.0, 5e4), (1.0, 2e3), (2.0, 50.0), (3.0, 0.5), (4.0, f64::INFINITY), (5.0, 1e-4), (6.0, f64::NAN), (7.0, 1.0)];
-        assert_eq!(clip_marks(&pts, (1e-3, 1e3)), vec![(0.0, true), (4.0, true), (5.0, false)]);
-        let series = Series { label: "x3".into(), color: BLACK, points: pts };
-        assert_eq!(legend_label(&series, (1e-3, 1e3)), "x3 (beyond the axis: triangles)");
+        let pts = vec![
+            (0.0, 5e4),
+            (1.0, 2e3),
+            (2.0, 50.0),
+            (3.0, 0.5),
+            (4.0, f64::INFINITY),
+            (5.0, 1e-4),
+            (6.0, f64::NAN),
+            (7.0, 1.0),
+        ];
+        assert_eq!(
+            clip_marks(&pts, (1e-3, 1e3)),
+            vec![(0.0, true), (4.0, true), (5.0, false)]
+        );
+        let series = Series {
+            label: "x3".into(),
+            color: BLACK,
+            points: pts,
+        };
+        assert_eq!(
+            legend_label(&series, (1e-3, 1e3)),
+            "x3 (beyond the axis: triangles)"
+        );
         assert_eq!(legend_label(&series, (1e-5, f64::INFINITY)), "x3");
         // Drawn: a line wholly above the axis lies along its top edge, and its triangle points up
         // out of the chart, above that edge.
         let color = RGBColor(1, 201, 2);
-        let above = Series { label: "above".into(), color, points: (0..50).map(|k| (k as f64, 5.0)).collect() };
+        let above = Series {
+            label: "above".into(),
+            color,
+            points: (0..50).map(|k| (k as f64, 5.0)).collect(),
+        };
         let (w, h) = (400u32, 200u32);
         let mut rgb = vec![0u8; (w * h * 3) as usize];
         {
             let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
-            let panel = Panel { title: "t".into(), y_range: (-1.0, 1.0), series: vec![above], ..Panel::default() };
+            let panel = Panel {
+                title: "t".into(),
+                y_range: (-1.0, 1.0),
+                series: vec![above],
+                ..Panel::default()
+            };
             draw_panels(&root, &[panel]).unwrap();
             root.present().unwrap();
         }
-        let rows: Vec<u32> = (0..w * h).filter(|i| rgb[(3 * i) as usize..(3 * i + 3) as usize] == [1, 201, 2]).map(|i| i / w).collect();
+        let rows: Vec<u32> = (0..w * h)
+            .filter(|i| rgb[(3 * i) as usize..(3 * i + 3) as usize] == [1, 201, 2])
+            .map(|i| i / w)
+            .collect();
         let mut counts = std::collections::BTreeMap::new();
-        rows.iter().for_each(|r| *counts.entry(*r).or_insert(0) += 1);
+        rows.iter()
+            .for_each(|r| *counts.entry(*r).or_insert(0) += 1);
         let (&edge, _) = counts.iter().max_by_key(|(_, n)| **n).unwrap();
-        assert!(rows.iter().any(|r| *r + 4 < edge), "a triangle above the top edge (row {edge}): {counts:?}");
+        assert!(
+            rows.iter().any(|r| *r + 4 < edge),
+            "a triangle above the top edge (row {edge}): {counts:?}"
+        );
     }
 }

@@ -52,17 +52,27 @@ impl Recording {
             return Err(RecorderError::DropFraction(self.drop_fraction));
         }
         if !(self.time_offset_s.is_finite() && self.time_offset_s.abs() <= MAX_TIME_OFFSET_S) {
-            return Err(RecorderError::TimeOffset { value_s: self.time_offset_s });
+            return Err(RecorderError::TimeOffset {
+                value_s: self.time_offset_s,
+            });
         }
-        if !(self.time_jitter_s.is_finite() && self.time_jitter_s >= 0.0 && self.time_jitter_s < interval_s / 2.0) {
-            return Err(RecorderError::TimeJitter { value_s: self.time_jitter_s, limit_s: interval_s / 2.0 });
+        if !(self.time_jitter_s.is_finite()
+            && self.time_jitter_s >= 0.0
+            && self.time_jitter_s < interval_s / 2.0)
+        {
+            return Err(RecorderError::TimeJitter {
+                value_s: self.time_jitter_s,
+                limit_s: interval_s / 2.0,
+            });
         }
         Ok(())
     }
 
     /// Whether a sample instant falls inside an outage.
     pub fn in_outage(&self, t_s: f64) -> bool {
-        self.outage_starts_s.iter().any(|&s| t_s >= s && t_s < s + self.outage_duration_s)
+        self.outage_starts_s
+            .iter()
+            .any(|&s| t_s >= s && t_s < s + self.outage_duration_s)
     }
 
     /// The sample instant a recorded stamp belongs to, s from the log's start (exactly the
@@ -87,7 +97,11 @@ pub enum RecorderError {
     /// could leave their order.
     TimeJitter { value_s: f64, limit_s: f64 },
     /// The outages (each [`OUTAGE_S`], `gap_s` apart) do not fit in the log.
-    OutagesDoNotFit { count: usize, gap_s: f64, duration_s: f64 },
+    OutagesDoNotFit {
+        count: usize,
+        gap_s: f64,
+        duration_s: f64,
+    },
 }
 
 impl std::fmt::Display for RecorderError {
@@ -124,7 +138,12 @@ pub struct RecorderSettings {
 impl RecorderSettings {
     /// The recording of a log of `duration_s` with rows every `interval_s`, outage start times
     /// drawn from `seed`; checked.
-    pub fn recording(&self, seed: u64, duration_s: f64, interval_s: f64) -> Result<Recording, RecorderError> {
+    pub fn recording(
+        &self,
+        seed: u64,
+        duration_s: f64,
+        interval_s: f64,
+    ) -> Result<Recording, RecorderError> {
         let r = Recording {
             drop_fraction: self.drop_fraction,
             outage_starts_s: draw_outage_starts_s(seed, self.outages, duration_s, interval_s)?,
@@ -151,7 +170,10 @@ pub struct Recorder<'a> {
 impl<'a> Recorder<'a> {
     /// The recorder of a scenario with `seed`.
     pub fn new(recording: &'a Recording, seed: u64) -> Recorder<'a> {
-        Recorder { recording, rng: ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xD6E8_FEB8_6659_FD93) ^ 0x2EC0_2DE2) }
+        Recorder {
+            recording,
+            rng: ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xD6E8_FEB8_6659_FD93) ^ 0x2EC0_2DE2),
+        }
     }
 
     /// The row as logged (`row.time_s` is its sample instant), or `None` when it is lost.
@@ -163,7 +185,10 @@ impl<'a> Recorder<'a> {
             return None;
         }
         let jitter_s = r.time_jitter_s * (2.0 * jitter_draw - 1.0);
-        Some(Row { time_s: round_to_us(row.time_s + r.time_offset_s + jitter_s), ..*row })
+        Some(Row {
+            time_s: round_to_us(row.time_s + r.time_offset_s + jitter_s),
+            ..*row
+        })
     }
 }
 
@@ -176,21 +201,34 @@ pub fn recorded_rows(recording: &Recording, seed: u64, rows: &[Row]) -> Vec<Row>
 /// Start times of `count` outages of [`OUTAGE_S`] in a log of `duration_s`, s, rounded to the
 /// millisecond, ascending: uniformly placed, not overlapping, at least two sample intervals apart
 /// (at least one row between two outages). Deterministic for a seed.
-pub fn draw_outage_starts_s(seed: u64, count: usize, duration_s: f64, interval_s: f64) -> Result<Vec<f64>, RecorderError> {
+pub fn draw_outage_starts_s(
+    seed: u64,
+    count: usize,
+    duration_s: f64,
+    interval_s: f64,
+) -> Result<Vec<f64>, RecorderError> {
     if count == 0 {
         return Ok(Vec::new());
     }
     let gap_s = 2.0 * interval_s;
     let free_s = duration_s - count as f64 * OUTAGE_S - (count - 1) as f64 * gap_s;
     if free_s.is_nan() || free_s < 0.0 {
-        return Err(RecorderError::OutagesDoNotFit { count, gap_s, duration_s });
+        return Err(RecorderError::OutagesDoNotFit {
+            count,
+            gap_s,
+            duration_s,
+        });
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xA24B_AED4_963E_E407) ^ 0x0007_A6E5);
     // Uniform non-overlapping placement: sorted uniform points in the free time, each then
     // pushed right by the outages (and gaps) before it.
     let mut points: Vec<f64> = (0..count).map(|_| rng.gen::<f64>() * free_s).collect();
     points.sort_by(f64::total_cmp);
-    Ok(points.iter().enumerate().map(|(i, p)| ((p + i as f64 * (OUTAGE_S + gap_s)) * 1e3).floor() / 1e3).collect())
+    Ok(points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| ((p + i as f64 * (OUTAGE_S + gap_s)) * 1e3).floor() / 1e3)
+        .collect())
 }
 
 #[cfg(test)]
@@ -198,7 +236,15 @@ mod tests {
     use super::*;
 
     fn row(t: f64) -> Row {
-        Row { time_s: t, rotation_deg: 1.0, platform_deg: 2.0, latitude_deg: 3.0, heading_deg: 4.0, roll_deg: 5.0, pitch_deg: 6.0 }
+        Row {
+            time_s: t,
+            rotation_deg: 1.0,
+            platform_deg: 2.0,
+            latitude_deg: 3.0,
+            heading_deg: 4.0,
+            roll_deg: 5.0,
+            pitch_deg: 6.0,
+        }
     }
 
     #[test]
@@ -213,13 +259,23 @@ mod tests {
         for (a, b) in out.iter().zip(&rows) {
             assert!((a.time_s - b.time_s).abs() < 1e-12);
             assert_eq!(rec.sample_time_s(a.time_s, 0.1), Some(b.time_s));
-            assert_eq!(Row { time_s: b.time_s, ..*a }, *b);
+            assert_eq!(
+                Row {
+                    time_s: b.time_s,
+                    ..*a
+                },
+                *b
+            );
         }
     }
 
     #[test]
     fn stamps_are_offset_jittered_within_bounds_and_map_back() {
-        let rec = Recording { time_offset_s: 1.7e9, time_jitter_s: 0.02, ..Recording::default() };
+        let rec = Recording {
+            time_offset_s: 1.7e9,
+            time_jitter_s: 0.02,
+            ..Recording::default()
+        };
         let rows: Vec<Row> = (0..2000).map(|k| row(k as f64 * 0.1)).collect();
         let out = recorded_rows(&rec, 1, &rows);
         assert_eq!(out.len(), rows.len());
@@ -236,7 +292,10 @@ mod tests {
         assert!(largest > 0.015, "jitter spans its range: {largest}");
         assert!(out.windows(2).all(|w| w[1].time_s > w[0].time_s));
         assert_eq!(rec.sample_time_s(1.7e9 + 0.05, 0.1), None);
-        assert_eq!(round_to_us(1_700_000_123.0 + 0.02).to_string(), "1700000123.02");
+        assert_eq!(
+            round_to_us(1_700_000_123.0 + 0.02).to_string(),
+            "1700000123.02"
+        );
     }
 
     #[test]
@@ -245,36 +304,82 @@ mod tests {
             let s = draw_outage_starts_s(seed, 5, 1000.0, 1.0).unwrap();
             assert_eq!(s.len(), 5);
             assert!(s[0] >= 0.0 && s[4] + OUTAGE_S <= 1000.0, "{s:?}");
-            assert!(s.windows(2).all(|w| w[1] - w[0] >= OUTAGE_S + 2.0 - 1e-3), "{s:?}");
+            assert!(
+                s.windows(2).all(|w| w[1] - w[0] >= OUTAGE_S + 2.0 - 1e-3),
+                "{s:?}"
+            );
         }
-        assert_eq!(draw_outage_starts_s(3, 2, 500.0, 1.0), draw_outage_starts_s(3, 2, 500.0, 1.0));
-        assert_ne!(draw_outage_starts_s(3, 2, 500.0, 1.0), draw_outage_starts_s(4, 2, 500.0, 1.0));
+        assert_eq!(
+            draw_outage_starts_s(3, 2, 500.0, 1.0),
+            draw_outage_starts_s(3, 2, 500.0, 1.0)
+        );
+        assert_ne!(
+            draw_outage_starts_s(3, 2, 500.0, 1.0),
+            draw_outage_starts_s(4, 2, 500.0, 1.0)
+        );
         assert_eq!(
             draw_outage_starts_s(1, 3, 180.0, 1.0),
-            Err(RecorderError::OutagesDoNotFit { count: 3, gap_s: 2.0, duration_s: 180.0 })
+            Err(RecorderError::OutagesDoNotFit {
+                count: 3,
+                gap_s: 2.0,
+                duration_s: 180.0
+            })
         );
         assert_eq!(draw_outage_starts_s(1, 0, 10.0, 1.0), Ok(vec![]));
     }
 
     #[test]
     fn check_rejects_bad_settings() {
-        let ok = Recording { drop_fraction: 0.05, time_offset_s: -1.7e9, time_jitter_s: 0.4, ..Recording::default() };
+        let ok = Recording {
+            drop_fraction: 0.05,
+            time_offset_s: -1.7e9,
+            time_jitter_s: 0.4,
+            ..Recording::default()
+        };
         assert_eq!(ok.check(1.0), Ok(()));
         for bad in [
-            Recording { drop_fraction: 1.0, ..ok.clone() },
-            Recording { drop_fraction: f64::NAN, ..ok.clone() },
-            Recording { time_offset_s: 5e9, ..ok.clone() },
-            Recording { time_jitter_s: 0.5, ..ok.clone() },
-            Recording { time_jitter_s: -0.1, ..ok.clone() },
+            Recording {
+                drop_fraction: 1.0,
+                ..ok.clone()
+            },
+            Recording {
+                drop_fraction: f64::NAN,
+                ..ok.clone()
+            },
+            Recording {
+                time_offset_s: 5e9,
+                ..ok.clone()
+            },
+            Recording {
+                time_jitter_s: 0.5,
+                ..ok.clone()
+            },
+            Recording {
+                time_jitter_s: -0.1,
+                ..ok.clone()
+            },
         ] {
             assert!(bad.check(1.0).is_err(), "{bad:?}");
         }
-        assert_eq!(Recording { drop_fraction: 1.0, ..ok.clone() }.check(1.0), Err(RecorderError::DropFraction(1.0)));
         assert_eq!(
-            Recording { time_jitter_s: 0.5, ..ok.clone() }.check(1.0),
-            Err(RecorderError::TimeJitter { value_s: 0.5, limit_s: 0.5 })
+            Recording {
+                drop_fraction: 1.0,
+                ..ok.clone()
+            }
+            .check(1.0),
+            Err(RecorderError::DropFraction(1.0))
         );
-        {
-        }
+        assert_eq!(
+            Recording {
+                time_jitter_s: 0.5,
+                ..ok.clone()
+            }
+            .check(1.0),
+            Err(RecorderError::TimeJitter {
+                value_s: 0.5,
+                limit_s: 0.5
+            })
+        );
+        {}
     }
 }

@@ -6,7 +6,8 @@ use crate::scenario::Row;
 use crate::time_stamps::{IntervalCheck, IntervalError};
 use estimator_core::time_grid::{Placement, TimeGrid};
 use estimator_core::{
-    Config, ConfigError, Counters, ErrorChange, Estimator, Holdup, Output, Real, RejectCounts, RotationSummary, Sample, SampleError,
+    Config, ConfigError, Counters, ErrorChange, Estimator, Holdup, Output, Real, RejectCounts,
+    RotationSummary, Sample, SampleError,
 };
 use std::io::Write;
 
@@ -61,7 +62,10 @@ pub enum ReplayError {
 
 /// Checkpoints the estimator, drops it and restores a fresh one from the bytes.
 fn restart(est: HostEstimator, time_s: f64) -> Result<HostEstimator, ReplayError> {
-    let fail = |e: estimator_core::checkpoint::CheckpointError| ReplayError::Checkpoint { time_s, message: e.to_string() };
+    let fail = |e: estimator_core::checkpoint::CheckpointError| ReplayError::Checkpoint {
+        time_s,
+        message: e.to_string(),
+    };
     let mut buf = vec![0u8; HostEstimator::CHECKPOINT_LEN];
     let n = est.checkpoint(&mut buf).map_err(fail)?;
     // `est` was moved in and is gone after this function: only the bytes carry the state.
@@ -90,15 +94,24 @@ pub fn pattern_summary(r: &Replay) -> String {
         _ => "period not yet detected".to_string(),
     };
     let pinned = if r.rotation.pinned { " (pinned)" } else { "" };
-    let bins = if r.rotation.samples_per_entry > 1 { format!(", {} samples a window entry", r.rotation.samples_per_entry) } else { String::new() };
-    let interval = r.sample_interval_s.map_or("not yet learned".to_string(), |d| format!("{} s", round(d)));
+    let bins = if r.rotation.samples_per_entry > 1 {
+        format!(", {} samples a window entry", r.rotation.samples_per_entry)
+    } else {
+        String::new()
+    };
+    let interval = r
+        .sample_interval_s
+        .map_or("not yet learned".to_string(), |d| format!("{} s", round(d)));
     format!("rotation: {rotation}{pinned}{bins}; sample interval {interval}")
 }
 
 /// A change of the installation errors, for people: e.g. `change of the installation errors
 /// detected at 13440 s (residuals showing it since 12240 s): x1, x3 learned again`.
 pub fn describe_error_change(c: &ErrorChange) -> String {
-    let which: Vec<String> = (0..4).filter(|i| c.relearned[*i]).map(|i| format!("x{}", i + 1)).collect();
+    let which: Vec<String> = (0..4)
+        .filter(|i| c.relearned[*i])
+        .map(|i| format!("x{}", i + 1))
+        .collect();
     format!(
         "change of the installation errors detected at {} s (residuals showing it since {} s): {} learned again",
         c.detected_s,
@@ -109,7 +122,15 @@ pub fn describe_error_change(c: &ErrorChange) -> String {
 
 /// The core's sample for a log row.
 pub fn sample_of(row: &Row) -> Sample {
-    Sample::from_degrees(row.time_s, row.rotation_deg, row.platform_deg, row.latitude_deg, row.heading_deg, row.roll_deg, row.pitch_deg)
+    Sample::from_degrees(
+        row.time_s,
+        row.rotation_deg,
+        row.platform_deg,
+        row.latitude_deg,
+        row.heading_deg,
+        row.roll_deg,
+        row.pitch_deg,
+    )
 }
 
 /// One row as the replay saw it: handed to the caller of [`replay_each`] after each step.
@@ -135,7 +156,9 @@ impl StepView<'_> {
         }
         let m = w.window().sums().measurement()?;
         let x = w.filter().state();
-        Some(core::array::from_fn(|ch| m.z[ch] - (0..4).map(|i| m.rows[ch][i] * x[i]).sum::<Real>()))
+        Some(core::array::from_fn(|ch| {
+            m.z[ch] - (0..4).map(|i| m.rows[ch][i] * x[i]).sum::<Real>()
+        }))
     }
 }
 
@@ -152,11 +175,18 @@ pub struct GridFollower {
 
 impl GridFollower {
     pub fn new(config: &Config) -> GridFollower {
-        GridFollower { grid: TimeGrid::new(config.sample_interval_s), clock_steps: 0 }
+        GridFollower {
+            grid: TimeGrid::new(config.sample_interval_s),
+            clock_steps: 0,
+        }
     }
 
     /// A row's result: where an accepted row fell; `None` for a rejected one.
-    pub fn follow(&mut self, time_s: f64, result: &Result<Output, SampleError>) -> Option<Placement> {
+    pub fn follow(
+        &mut self,
+        time_s: f64,
+        result: &Result<Output, SampleError>,
+    ) -> Option<Placement> {
         result.as_ref().ok()?;
         let placement = self.grid.place(time_s).ok()?;
         self.grid.accept(time_s, placement);
@@ -179,18 +209,29 @@ impl GridFollower {
 
 /// Runs rows through a fresh estimator; writes one estimates row per input row when `writer` is
 /// given. Any unreadable row is an error.
-pub fn replay<I, W>(rows: I, config: Config, writer: Option<&mut EstimatesWriter<W>>) -> Result<Replay, ReplayError>
+pub fn replay<I, W>(
+    rows: I,
+    config: Config,
+    writer: Option<&mut EstimatesWriter<W>>,
+) -> Result<Replay, ReplayError>
 where
     I: IntoIterator<Item = Result<LogLine, LogError>>,
     W: Write,
 {
     let mut writer = writer;
-    replay_each(rows, config, &[], RowFilter::new(true), &mut |_| {}, |view| {
-        if let Some(w) = writer.as_deref_mut() {
-            w.write_step(view.line.row.time_s, view.result)?;
-        }
-        Ok(())
-    })
+    replay_each(
+        rows,
+        config,
+        &[],
+        RowFilter::new(true),
+        &mut |_| {},
+        |view| {
+            if let Some(w) = writer.as_deref_mut() {
+                w.write_step(view.line.row.time_s, view.result)?;
+            }
+            Ok(())
+        },
+    )
 }
 
 /// Steps the estimator through `rows` as they come and hands each row and its result to `each`
@@ -221,7 +262,9 @@ where
     let mut interval_check = IntervalCheck::new(config.sample_interval_s);
     let mut grid = GridFollower::new(&config);
     for item in rows {
-        let Some(line) = filter.admit(item, warn)? else { continue };
+        let Some(line) = filter.admit(item, warn)? else {
+            continue;
+        };
         interval_check.observe(line.row.time_s)?;
         let result = est.step(&sample_of(&line.row));
         count += 1;
@@ -232,7 +275,12 @@ where
             }
         }
         let placement = grid.follow(line.row.time_s, &result);
-        each(&StepView { line: &line, result: &result, placement, estimator: &est })?;
+        each(&StepView {
+            line: &line,
+            result: &result,
+            placement,
+            estimator: &est,
+        })?;
         let mut due = false;
         while next_restart < restart_at_s.len() && line.row.time_s >= restart_at_s[next_restart] {
             next_restart += 1;

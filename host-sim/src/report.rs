@@ -94,12 +94,17 @@ impl Tracker {
         }
         self.last_time_s = time_s;
         let err = errors_arcsec(estimate, truth_arcsec);
-        self.last = err.zip(sigmas_arcsec(estimate)).map(|(e, sigma)| (e, *truth_arcsec, sigma));
+        self.last = err
+            .zip(sigmas_arcsec(estimate))
+            .map(|(e, sigma)| (e, *truth_arcsec, sigma));
         for i in 0..4 {
             let (in_pct, in_as) = match err {
                 Some(e) => {
                     let in_as = e[i].abs() <= ARCSEC_THRESHOLD;
-                    (percent_of(e[i], truth_arcsec[i]).map_or(in_as, |p| p <= PERCENT_THRESHOLD), in_as)
+                    (
+                        percent_of(e[i], truth_arcsec[i]).map_or(in_as, |p| p <= PERCENT_THRESHOLD),
+                        in_as,
+                    )
                 }
                 None => (false, false),
             };
@@ -127,7 +132,11 @@ impl Tracker {
             if t > self.last_time_s + interval_s {
                 break;
             }
-            let state = if k < self.next_time { self.at[k] } else { self.last };
+            let state = if k < self.next_time {
+                self.at[k]
+            } else {
+                self.last
+            };
             points.push(AccuracyAt {
                 time_s: t,
                 error_arcsec: state.map(|s| s.0),
@@ -191,7 +200,8 @@ impl Accuracy {
 }
 
 fn latest(v: &[Option<f64>; 4]) -> Option<f64> {
-    v.iter().try_fold(f64::NEG_INFINITY, |m, t| t.map(|t| m.max(t)))
+    v.iter()
+        .try_fold(f64::NEG_INFINITY, |m, t| t.map(|t| m.max(t)))
 }
 
 /// RMS of the attitude error of eq (2) before and after compensation, arcsec, per axis
@@ -207,9 +217,18 @@ pub struct AttitudeRms {
 
 /// Attitude error left after compensation of one accepted row, arcsec (heading, roll, pitch):
 /// oscillation put in minus oscillation removed.
-pub fn residual_arcsec(row: &Row, corrected: &estimator_core::Attitude, truth: &RowTruth) -> [f64; 3] {
+pub fn residual_arcsec(
+    row: &Row,
+    corrected: &estimator_core::Attitude,
+    truth: &RowTruth,
+) -> [f64; 3] {
     let raw = [row.heading_deg, row.roll_deg, row.pitch_deg];
-    let cor = [corrected.heading_rad as f64, corrected.roll_rad as f64, corrected.pitch_rad as f64].map(|r| r.to_degrees());
+    let cor = [
+        corrected.heading_rad as f64,
+        corrected.roll_rad as f64,
+        corrected.pitch_rad as f64,
+    ]
+    .map(|r| r.to_degrees());
     core::array::from_fn(|a| {
         let mut removed_deg = raw[a] - cor[a];
         if a == 0 {
@@ -231,7 +250,13 @@ pub struct RmsAccumulator {
 
 impl RmsAccumulator {
     pub fn new(from_s: f64) -> Self {
-        RmsAccumulator { from_s, to_s: from_s, rows: 0, before: [0.0; 3], after: [0.0; 3] }
+        RmsAccumulator {
+            from_s,
+            to_s: from_s,
+            rows: 0,
+            before: [0.0; 3],
+            after: [0.0; 3],
+        }
     }
 
     pub fn add(&mut self, time_s: f64, residual_arcsec: &[f64; 3], truth: &RowTruth) {
@@ -268,7 +293,11 @@ pub fn oscillation_deg(row: &Row, x_arcsec: &[f64; 4]) -> [f64; 3] {
     use estimator_core::Real;
     let rad = |deg: f64| (wrap_deg(deg) * RAD_PER_DEG) as Real;
     let lat = row.latitude_deg * RAD_PER_DEG;
-    let angles = Angles::new(rad(row.rotation_deg), rad(row.platform_deg), (lat.sin() as Real, lat.cos() as Real));
+    let angles = Angles::new(
+        rad(row.rotation_deg),
+        rad(row.platform_deg),
+        (lat.sin() as Real, lat.cos() as Real),
+    );
     let d = angles.oscillation(&x_arcsec.map(|x| arcsec_to_rad(x) as Real));
     [d.heading_rad, d.roll_rad, d.pitch_rad].map(|r| r as f64 / RAD_PER_DEG)
 }
@@ -309,7 +338,11 @@ pub enum TruthRows<'a> {
     /// The generator's rows and their truth: accuracy against the errors in force, and the
     /// attitude error of eq (2) before and after compensation. `time_offset_s`: what the recorder
     /// added to the log's time stamps (its `--time-offset`), taken off before matching.
-    Generated { rows: &'a [Row], truth: &'a [RowTruth], time_offset_s: f64 },
+    Generated {
+        rows: &'a [Row],
+        truth: &'a [RowTruth],
+        time_offset_s: f64,
+    },
 }
 
 /// Builds a [`Report`] row by row, as the replay goes: it holds no rows of its own.
@@ -329,11 +362,22 @@ impl<'a> ReportBuilder<'a> {
         let rms_quarter = match truth {
             TruthRows::Constant(_) => None,
             TruthRows::Generated { rows, .. } => {
-                let end_s = rows.iter().map(|r| r.time_s).filter(|t| t.is_finite()).fold(0.0, f64::max);
+                let end_s = rows
+                    .iter()
+                    .map(|r| r.time_s)
+                    .filter(|t| t.is_finite())
+                    .fold(0.0, f64::max);
                 Some(RmsAccumulator::new(0.75 * end_s))
             }
         };
-        ReportBuilder { truth, tracker: Tracker::new(&REPORT_TIMES_S), rms_all: None, rms_quarter, held: None, cursor: 0 }
+        ReportBuilder {
+            truth,
+            tracker: Tracker::new(&REPORT_TIMES_S),
+            rms_all: None,
+            rms_quarter,
+            held: None,
+            cursor: 0,
+        }
     }
 
     /// Index of the generated row nearest in time to `time_s` (moves from the last one found).
@@ -360,7 +404,11 @@ impl<'a> ReportBuilder<'a> {
         }
         let (truth_errors, oscillation_deg) = match self.truth {
             TruthRows::Constant(x) => (x, oscillation_deg(row, &x)),
-            TruthRows::Generated { rows, truth, time_offset_s } => {
+            TruthRows::Generated {
+                rows,
+                truth,
+                time_offset_s,
+            } => {
                 let t = row.time_s - time_offset_s;
                 let k = self.nearest(rows, t)?;
                 let tr = truth.get(k)?;
@@ -383,8 +431,12 @@ impl<'a> ReportBuilder<'a> {
             TruthRows::Generated { time_offset_s, .. } => time_offset_s,
             TruthRows::Constant(_) => 0.0,
         };
-        self.tracker.observe(row.time_s - offset_s, self.held.as_ref(), &truth_errors);
-        Some(TruthAt { errors_arcsec: truth_errors, oscillation_deg })
+        self.tracker
+            .observe(row.time_s - offset_s, self.held.as_ref(), &truth_errors);
+        Some(TruthAt {
+            errors_arcsec: truth_errors,
+            oscillation_deg,
+        })
     }
 
     /// The report; `interval_s` is the log's sample interval.
@@ -398,8 +450,18 @@ impl<'a> ReportBuilder<'a> {
 }
 
 /// Evaluates a replay of `rows` (the log as read) against the generator's rows and truth.
-pub fn evaluate(rows: &[Row], steps: &[Step], generated_rows: &[Row], truth: &[RowTruth], interval_s: f64) -> Report {
-    let mut builder = ReportBuilder::new(TruthRows::Generated { rows: generated_rows, truth, time_offset_s: 0.0 });
+pub fn evaluate(
+    rows: &[Row],
+    steps: &[Step],
+    generated_rows: &[Row],
+    truth: &[RowTruth],
+    interval_s: f64,
+) -> Report {
+    let mut builder = ReportBuilder::new(TruthRows::Generated {
+        rows: generated_rows,
+        truth,
+        time_offset_s: 0.0,
+    });
     for (row, step) in rows.iter().zip(steps) {
         builder.observe(row, &step.result);
     }
@@ -407,7 +469,8 @@ pub fn evaluate(rows: &[Row], steps: &[Step], generated_rows: &[Row], truth: &[R
 }
 
 fn fmt_time(t: Option<f64>) -> String {
-    t.map(|t| format!("{t:.0} s")).unwrap_or_else(|| "not within at end".to_string())
+    t.map(|t| format!("{t:.0} s"))
+        .unwrap_or_else(|| "not within at end".to_string())
 }
 
 /// A table's head and rows, as text cells.
@@ -430,7 +493,11 @@ pub fn markdown(head: &[String], rows: &[Vec<String>]) -> String {
 /// settling times.
 pub fn accuracy_table(a: &Accuracy) -> Table {
     let mut head = vec!["x".to_string()];
-    head.extend(a.points.iter().map(|p| format!("{:.0} s: % / arcsec", p.time_s)));
+    head.extend(
+        a.points
+            .iter()
+            .map(|p| format!("{:.0} s: % / arcsec", p.time_s)),
+    );
     head.push("within 0.5 % from".into());
     head.push("within 10 arcsec from".into());
     let rows = (0..4)
@@ -461,14 +528,30 @@ pub fn format_accuracy(a: &Accuracy) -> String {
 
 /// The title of an attitude RMS table.
 pub fn rms_title(label: &str, r: &AttitudeRms) -> String {
-    format!("attitude error of eq (2), RMS arcsec, {label} ({:.0}-{:.0} s, {} rows)", r.from_s, r.to_s, r.rows)
+    format!(
+        "attitude error of eq (2), RMS arcsec, {label} ({:.0}-{:.0} s, {} rows)",
+        r.from_s, r.to_s, r.rows
+    )
 }
 
 /// The attitude RMS table: before and after compensation, per axis.
 pub fn rms_table(r: &AttitudeRms) -> Table {
     let head = ["", "heading", "roll", "pitch"].map(String::from).to_vec();
-    let row = |name: &str, v: &[f64; 3]| vec![name.to_string(), format!("{:.2}", v[0]), format!("{:.2}", v[1]), format!("{:.2}", v[2])];
-    (head, vec![row("before compensation", &r.before_arcsec), row("after compensation", &r.after_arcsec)])
+    let row = |name: &str, v: &[f64; 3]| {
+        vec![
+            name.to_string(),
+            format!("{:.2}", v[0]),
+            format!("{:.2}", v[1]),
+            format!("{:.2}", v[2]),
+        ]
+    };
+    (
+        head,
+        vec![
+            row("before compensation", &r.before_arcsec),
+            row("after compensation", &r.after_arcsec),
+        ],
+    )
 }
 
 /// The attitude RMS table as text (markdown).
@@ -480,7 +563,10 @@ pub fn format_rms(label: &str, r: &AttitudeRms) -> String {
 /// Methods side by side (one line each): largest percentage error of the four at each report
 /// time, settling times of all four, attitude RMS after compensation over the last quarter.
 pub fn format_side_by_side(reports: &[(&str, &Report)]) -> String {
-    let times: Vec<f64> = reports.first().map(|(_, r)| r.accuracy.points.iter().map(|p| p.time_s).collect()).unwrap_or_default();
+    let times: Vec<f64> = reports
+        .first()
+        .map(|(_, r)| r.accuracy.points.iter().map(|p| p.time_s).collect())
+        .unwrap_or_default();
     let mut s = String::from("| method | ");
     for t in &times {
         s.push_str(&format!("max % at {t:.0} s | "));
@@ -492,7 +578,10 @@ pub fn format_side_by_side(reports: &[(&str, &Report)]) -> String {
         s.push_str(&format!("| {name} | "));
         for p in &r.accuracy.points {
             match p.percent {
-                Some(pc) => s.push_str(&format!("{:.3} | ", pc.iter().flatten().fold(0.0f64, |m, v| m.max(*v)))),
+                Some(pc) => s.push_str(&format!(
+                    "{:.3} | ",
+                    pc.iter().flatten().fold(0.0f64, |m, v| m.max(*v))
+                )),
                 None => s.push_str("no estimate | "),
             }
         }
@@ -520,7 +609,10 @@ mod tests {
     }
 
     fn est_sigma(x: [f64; 4], sigma_arcsec: [f64; 4]) -> Estimate {
-        Estimate { x_rad: x.map(|a| arcsec_to_rad(a) as Real), sigma_rad: sigma_arcsec.map(|a| arcsec_to_rad(a) as Real) }
+        Estimate {
+            x_rad: x.map(|a| arcsec_to_rad(a) as Real),
+            sigma_rad: sigma_arcsec.map(|a| arcsec_to_rad(a) as Real),
+        }
     }
 
     #[test]
@@ -531,12 +623,26 @@ mod tests {
         t.observe(1.0, None, &truth);
         // Errors 1, -2.5, 0.5, 10 arcsec against 1-sigma 1, 1, 0.2, 4: within 2 sigma is x1 only
         // (1 <= 2; 2.5 > 2, 0.5 > 0.4, 10 > 8); within 3 sigma all four.
-        t.observe(2.0, Some(&est_sigma([101.0, -102.5, 200.5, 1010.0], [1.0, 1.0, 0.2, 4.0])), &truth);
+        t.observe(
+            2.0,
+            Some(&est_sigma(
+                [101.0, -102.5, 200.5, 1010.0],
+                [1.0, 1.0, 0.2, 4.0],
+            )),
+            &truth,
+        );
         let a = t.finish(1.0);
         assert_eq!(a.points[0].sigma_arcsec, None);
-        assert_eq!(a.points[0].within_sigmas(2.0), 0, "no estimate counts as outside");
+        assert_eq!(
+            a.points[0].within_sigmas(2.0),
+            0,
+            "no estimate counts as outside"
+        );
         let s = a.points[1].sigma_arcsec.unwrap();
-        assert!((s[3] - 4.0).abs() < 1e-4 && (s[2] - 0.2).abs() < 1e-5, "{s:?}");
+        assert!(
+            (s[3] - 4.0).abs() < 1e-4 && (s[2] - 0.2).abs() < 1e-5,
+            "{s:?}"
+        );
         assert_eq!(a.points[1].within_sigmas(2.0), 1);
         assert_eq!(a.points[1].within_sigmas(3.0), 4);
     }
@@ -571,7 +677,10 @@ mod tests {
         t.observe(0.0, Some(&est([100.0, 100.0, 100.0, 100.0])), &truth);
         t.observe(1.0, Some(&est([100.0, 100.0, 100.0, 120.0])), &truth);
         let a = t.finish(1.0);
-        assert_eq!(a.within_arcsec_from_s, [Some(0.0), Some(0.0), Some(0.0), None]);
+        assert_eq!(
+            a.within_arcsec_from_s,
+            [Some(0.0), Some(0.0), Some(0.0), None]
+        );
         assert_eq!(a.all_within_arcsec_from_s(), None);
     }
 
@@ -583,8 +692,15 @@ mod tests {
         t.observe(1.0, Some(&est([100.0, 0.0, 200.0, 3.0])), &truth);
         let a = t.finish(1.0);
         let pc = a.points[0].percent.unwrap();
-        assert!(pc[0].unwrap() < 1e-5 && pc[2].unwrap() < 1e-5 && pc[1].is_none() && pc[3].is_none(), "{pc:?}");
-        assert_eq!(a.within_percent_from_s, [Some(0.0); 4], "x4 is 3 arcsec off a true 0: within 10 arcsec");
+        assert!(
+            pc[0].unwrap() < 1e-5 && pc[2].unwrap() < 1e-5 && pc[1].is_none() && pc[3].is_none(),
+            "{pc:?}"
+        );
+        assert_eq!(
+            a.within_percent_from_s,
+            [Some(0.0); 4],
+            "x4 is 3 arcsec off a true 0: within 10 arcsec"
+        );
         let text = format_accuracy(&a);
         assert!(!text.contains("inf") && !text.contains("NaN"), "{text}");
         assert!(text.contains("| x4 | - / 3.00 |"), "{text}");
@@ -595,12 +711,24 @@ mod tests {
             time_s,
             status: estimator_core::Status::Estimating,
             estimate: Some(est(x)),
-            corrected: estimator_core::Attitude { heading_rad: 0.0, roll_rad: 0.0, pitch_rad: 0.0 },
+            corrected: estimator_core::Attitude {
+                heading_rad: 0.0,
+                roll_rad: 0.0,
+                pitch_rad: 0.0,
+            },
         })
     }
 
     fn row(time_s: f64) -> Row {
-        Row { time_s, rotation_deg: 0.0, platform_deg: 0.0, latitude_deg: 40.0, heading_deg: 0.0, roll_deg: 0.0, pitch_deg: 0.0 }
+        Row {
+            time_s,
+            rotation_deg: 0.0,
+            platform_deg: 0.0,
+            latitude_deg: 40.0,
+            heading_deg: 0.0,
+            roll_deg: 0.0,
+            pitch_deg: 0.0,
+        }
     }
 
     #[test]
@@ -609,15 +737,42 @@ mod tests {
         // truth's grid, and a jittered one neither.
         let generated: Vec<Row> = (0..20).map(|k| row(k as f64)).collect();
         let truth: Vec<RowTruth> = (0..20)
-            .map(|k| RowTruth { true_attitude_deg: [0.0; 3], oscillation_deg: [0.0; 3], errors_arcsec: if k < 10 { [10.0; 4] } else { [20.0; 4] } })
+            .map(|k| RowTruth {
+                true_attitude_deg: [0.0; 3],
+                oscillation_deg: [0.0; 3],
+                errors_arcsec: if k < 10 { [10.0; 4] } else { [20.0; 4] },
+            })
             .collect();
-        let mut b = ReportBuilder::new(TruthRows::Generated { rows: &generated, truth: &truth, time_offset_s: 0.0 });
-        for (k, jitter) in [0.3, -0.2, 0.1, 0.45, -0.4, 0.0, 0.2, -0.1, 0.3, 0.0, 0.2, -0.3, 0.1, 0.0].iter().enumerate() {
+        let mut b = ReportBuilder::new(TruthRows::Generated {
+            rows: &generated,
+            truth: &truth,
+            time_offset_s: 0.0,
+        });
+        for (k, jitter) in [
+            0.3, -0.2, 0.1, 0.45, -0.4, 0.0, 0.2, -0.1, 0.3, 0.0, 0.2, -0.3, 0.1, 0.0,
+        ]
+        .iter()
+        .enumerate()
+        {
             let t = k as f64 + jitter;
-            b.observe(&row(t), &output(t, if t.round() < 10.0 { [10.0; 4] } else { [20.0; 4] }));
+            b.observe(
+                &row(t),
+                &output(
+                    t,
+                    if t.round() < 10.0 {
+                        [10.0; 4]
+                    } else {
+                        [20.0; 4]
+                    },
+                ),
+            );
         }
         let a = b.finish(1.0).accuracy;
-        assert_eq!(a.within_percent_from_s[0], Some(0.3), "every row exact against its nearest truth: {a:?}");
+        assert_eq!(
+            a.within_percent_from_s[0],
+            Some(0.3),
+            "every row exact against its nearest truth: {a:?}"
+        );
         // Constant truth, any start time.
         let mut c = ReportBuilder::new(TruthRows::Constant([200.0, -150.0, 300.0, 0.0]));
         for k in 0..30_000 {
@@ -627,7 +782,14 @@ mod tests {
         let r = c.finish(1.0);
         assert!(r.rms_last_quarter.is_none());
         assert_eq!(r.accuracy.points.len(), 1);
-        assert_eq!(r.accuracy.points[0].error_arcsec.map(|e| e.map(f64::abs).iter().fold(0.0, |m: f64, v| m.max(*v)) < 1e-3), Some(true));
+        assert_eq!(
+            r.accuracy.points[0].error_arcsec.map(|e| e
+                .map(f64::abs)
+                .iter()
+                .fold(0.0, |m: f64, v| m.max(*v))
+                < 1e-3),
+            Some(true)
+        );
         assert_eq!(r.accuracy.within_percent_from_s, [Some(1000.5); 4]);
         assert_eq!(r.accuracy.within_arcsec_from_s, [Some(1000.5); 4]);
     }
@@ -636,7 +798,10 @@ mod tests {
     fn the_cores_oscillation_of_eq_2_is_the_generators() {
         // The oscillation a constant truth file puts into each row, from the core's rows, against
         // the generator's own eq (2), over a one-way and a reciprocating log.
-        for scheme in [crate::rotation_scheme::RotationScheme::Continuous, crate::rotation_scheme::RotationScheme::Reciprocating] {
+        for scheme in [
+            crate::rotation_scheme::RotationScheme::Continuous,
+            crate::rotation_scheme::RotationScheme::Reciprocating,
+        ] {
             let mut p = crate::scenario::ScenarioParams::new(crate::scenario::ScenarioKind::Sea, 3);
             p.duration_s = 2000.0;
             p.scheme = scheme;
@@ -645,7 +810,11 @@ mod tests {
                 let ours = oscillation_deg(row, &truth.errors_arcsec);
                 for (a, (o, t)) in ours.iter().zip(&truth.oscillation_deg).enumerate() {
                     let diff_arcsec = (o - t).abs() * 3600.0;
-                    assert!(diff_arcsec < 1e-3, "{scheme:?} t = {}: axis {a} off by {diff_arcsec} arcsec", row.time_s);
+                    assert!(
+                        diff_arcsec < 1e-3,
+                        "{scheme:?} t = {}: axis {a} off by {diff_arcsec} arcsec",
+                        row.time_s
+                    );
                 }
             }
         }

@@ -61,8 +61,13 @@ struct StopAndGo {
 
 impl RotationScheme {
     /// Every scheme, in the order tables list them.
-    pub const ALL: [RotationScheme; 5] =
-        [RotationScheme::Continuous, RotationScheme::Reversed, RotationScheme::Reciprocating, RotationScheme::FourPosition, RotationScheme::EightPosition];
+    pub const ALL: [RotationScheme; 5] = [
+        RotationScheme::Continuous,
+        RotationScheme::Reversed,
+        RotationScheme::Reciprocating,
+        RotationScheme::FourPosition,
+        RotationScheme::EightPosition,
+    ];
 
     /// The scheme's name on the command line and in truth files.
     pub fn name(self) -> &'static str {
@@ -82,15 +87,22 @@ impl RotationScheme {
 
     fn stop_and_go(self) -> Option<StopAndGo> {
         match self {
-            RotationScheme::FourPosition => Some(StopAndGo { steps: 4, forward_steps: 4 }),
-            RotationScheme::EightPosition => Some(StopAndGo { steps: 8, forward_steps: 4 }),
+            RotationScheme::FourPosition => Some(StopAndGo {
+                steps: 4,
+                forward_steps: 4,
+            }),
+            RotationScheme::EightPosition => Some(StopAndGo {
+                steps: 8,
+                forward_steps: 4,
+            }),
             _ => None,
         }
     }
 
     /// Dwell at each position for a period of `period_s`, s (`None`: the scheme does not stop).
     pub fn dwell_s(self, period_s: f64) -> Option<f64> {
-        self.stop_and_go().map(|g| (period_s / g.steps as f64 - MOVE_S).max(0.0))
+        self.stop_and_go()
+            .map(|g| (period_s / g.steps as f64 - MOVE_S).max(0.0))
     }
 
     /// Shortest period whose moves leave a dwell of zero or more, s (0: any period).
@@ -124,7 +136,10 @@ impl RotationScheme {
                 }
             }
             RotationScheme::FourPosition | RotationScheme::EightPosition => {
-                let g = self.stop_and_go().unwrap_or(StopAndGo { steps: 4, forward_steps: 4 });
+                let g = self.stop_and_go().unwrap_or(StopAndGo {
+                    steps: 4,
+                    forward_steps: 4,
+                });
                 let cycles = (t_s / period_s).floor();
                 let u = (t_s - cycles * period_s).max(0.0);
                 let step_s = period_s / g.steps as f64;
@@ -158,7 +173,10 @@ mod tests {
     fn names_round_trip() {
         for s in RotationScheme::ALL {
             assert_eq!(RotationScheme::parse(s.name()), Some(s));
-            assert_eq!(serde_json::to_string(&s).unwrap(), format!("\"{}\"", s.name()));
+            assert_eq!(
+                serde_json::to_string(&s).unwrap(),
+                format!("\"{}\"", s.name())
+            );
         }
         assert_eq!(RotationScheme::parse("four_position"), None);
     }
@@ -169,7 +187,11 @@ mod tests {
             for period in [360.0, 480.0, 720.0] {
                 for t in [0.0, 3.0, 14.0, 100.0, 239.5, 241.0, 300.0, 359.0] {
                     let d = s.rho_rad(t + 2.0 * period, period) - s.rho_rad(t, period);
-                    assert!((d - 2.0 * s.net_rad_per_period()).abs() < 1e-9, "{} T {period} t {t}: {d}", s.name());
+                    assert!(
+                        (d - 2.0 * s.net_rad_per_period()).abs() < 1e-9,
+                        "{} T {period} t {t}: {d}",
+                        s.name()
+                    );
                 }
             }
             assert_eq!(s.rho_rad(0.0, T), 0.0, "{}", s.name());
@@ -191,7 +213,10 @@ mod tests {
         let s = RotationScheme::Reciprocating;
         assert!((deg(s.rho_rad(60.0, T)) - 90.0).abs() < 1e-9);
         assert!((deg(s.rho_rad(239.0, T)) - 358.5).abs() < 1e-9);
-        assert!((deg(s.rho_rad(240.0, T)) - 360.0).abs() < 1e-9, "turnaround at T/2");
+        assert!(
+            (deg(s.rho_rad(240.0, T)) - 360.0).abs() < 1e-9,
+            "turnaround at T/2"
+        );
         assert!((deg(s.rho_rad(241.0, T)) - 358.5).abs() < 1e-9);
         assert!((deg(s.rho_rad(420.0, T)) - 90.0).abs() < 1e-9);
         // 1.5 deg/s out, -1.5 deg/s back.
@@ -273,7 +298,8 @@ mod tests {
         assert!((s.dwell_s(period).unwrap() - (period / 4.0 - 15.0)).abs() < 1e-12);
         // Too short a period: moves fill the steps, no dwell, still 360 deg per period.
         assert_eq!(RotationScheme::EightPosition.dwell_s(100.0), Some(0.0));
-        let d = RotationScheme::FourPosition.rho_rad(50.0 + 40.0, 40.0) - RotationScheme::FourPosition.rho_rad(50.0, 40.0);
+        let d = RotationScheme::FourPosition.rho_rad(50.0 + 40.0, 40.0)
+            - RotationScheme::FourPosition.rho_rad(50.0, 40.0);
         assert!((d - 2.0 * PI).abs() < 1e-9);
     }
 }

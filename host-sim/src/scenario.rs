@@ -124,7 +124,10 @@ fn turns_deg(heel_deg: f64, t: f64) -> (f64, f64) {
         (TURN_DEG, 0.0)
     } else {
         let ramp = |u: f64| 0.5 - 0.5 * (PI * (u / TURN_HEEL_RAMP_S).clamp(0.0, 1.0)).cos();
-        (TURN_RATE_DEG_S * into, heel_deg * ramp(into).min(ramp(duration - into)))
+        (
+            TURN_RATE_DEG_S * into,
+            heel_deg * ramp(into).min(ramp(duration - into)),
+        )
     };
     // Outward: a turn to starboard heels the ship to port (roll < 0).
     if starboard {
@@ -246,10 +249,18 @@ fn wave_spectrum(
             // A random frequency inside each bin, so the sum does not repeat.
             let w = w_min + (i as f64 + rng.gen_range(0.0..1.0)) * dw;
             let s = (wp / w).powi(5) * (-1.25 * (wp / w).powi(4)).exp();
-            SwayComponent { amplitude_deg: (2.0 * s * dw).sqrt(), period_s: 2.0 * PI / w, phase_rad: rng.gen_range(0.0..2.0 * PI) }
+            SwayComponent {
+                amplitude_deg: (2.0 * s * dw).sqrt(),
+                period_s: 2.0 * PI / w,
+                phase_rad: rng.gen_range(0.0..2.0 * PI),
+            }
         })
         .collect();
-    let rms = (comps.iter().map(|c| c.amplitude_deg * c.amplitude_deg / 2.0).sum::<f64>()).sqrt();
+    let rms = (comps
+        .iter()
+        .map(|c| c.amplitude_deg * c.amplitude_deg / 2.0)
+        .sum::<f64>())
+    .sqrt();
     let scale = significant_deg / (2.0 * rms);
     for c in &mut comps {
         c.amplitude_deg *= scale;
@@ -261,7 +272,7 @@ impl ScenarioParams {
     /// The scenario's defaults for `seed`. Phases (and for `sea` the spectrum components) are drawn
     /// from the seed; everything else is fixed.
     pub fn new(kind: ScenarioKind, seed: u64) -> ScenarioParams {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0f_5ea);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0005_eed0_f5ea);
         let rotation_phase_deg = rng.gen_range(0.0..360.0);
         let platform_phase_deg = rng.gen_range(0.0..360.0);
         let base = ScenarioParams {
@@ -306,8 +317,20 @@ impl ScenarioParams {
                 latitude_deg: 18.0,
                 speed_m_s: 5.0,
                 course_deg: 40.0,
-                roll_sway: wave_spectrum(&mut rng, 6.0 * 2.0 / std::f64::consts::SQRT_2, 10.0, 6.0, 14.0),
-                pitch_sway: wave_spectrum(&mut rng, 1.5 * 2.0 / std::f64::consts::SQRT_2, 9.0, 6.0, 14.0),
+                roll_sway: wave_spectrum(
+                    &mut rng,
+                    6.0 * 2.0 / std::f64::consts::SQRT_2,
+                    10.0,
+                    6.0,
+                    14.0,
+                ),
+                pitch_sway: wave_spectrum(
+                    &mut rng,
+                    1.5 * 2.0 / std::f64::consts::SQRT_2,
+                    9.0,
+                    6.0,
+                    14.0,
+                ),
                 heading_sway: wave_spectrum(&mut rng, 0.5, 10.0, 6.0, 14.0),
                 heading_weave_rate_deg_s: 0.5,
                 ..base
@@ -329,7 +352,10 @@ pub fn oscillation_rad(x: &[f64; 4], rho: f64, s: f64, lat: f64) -> [f64; 3] {
 }
 
 fn sway(comps: &[SwayComponent], t: f64) -> f64 {
-    comps.iter().map(|c| c.amplitude_deg * (2.0 * PI * t / c.period_s + c.phase_rad).sin()).sum()
+    comps
+        .iter()
+        .map(|c| c.amplitude_deg * (2.0 * PI * t / c.period_s + c.phase_rad).sin())
+        .sum()
 }
 
 /// A generated log: one row per sample instant (before the recorder) and its truth.
@@ -373,9 +399,12 @@ pub struct Samples<'a> {
 
 impl<'a> Samples<'a> {
     pub fn new(p: &'a ScenarioParams) -> Samples<'a> {
-        let mut rng = ChaCha8Rng::seed_from_u64(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xA77_17D3);
-        let white = Normal::new(0.0, arcsec_to_rad(p.noise_arcsec).max(0.0)).unwrap_or(Normal::new(0.0, 0.0).unwrap());
-        let jitter = Normal::new(0.0, (p.mismatch.rotation_jitter_deg * RAD_PER_DEG).max(0.0)).unwrap_or(Normal::new(0.0, 0.0).unwrap());
+        let mut rng =
+            ChaCha8Rng::seed_from_u64(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xA77_17D3);
+        let white = Normal::new(0.0, arcsec_to_rad(p.noise_arcsec).max(0.0))
+            .unwrap_or(Normal::new(0.0, 0.0).unwrap());
+        let jitter = Normal::new(0.0, (p.mismatch.rotation_jitter_deg * RAD_PER_DEG).max(0.0))
+            .unwrap_or(Normal::new(0.0, 0.0).unwrap());
         // Eq (5) coefficients per axis (heading, roll, pitch): random directions with norm = amplitude.
         let lf_amp = p.low_frequency_deg * RAD_PER_DEG;
         let lf: Vec<[f64; 5]> = (0..3)
@@ -389,7 +418,8 @@ impl<'a> Samples<'a> {
         let gm_tau = 60.0;
         let gm_sigma = arcsec_to_rad(p.mismatch.coloured_noise_arcsec);
         let gm_a = (-p.sample_interval_s / gm_tau).exp();
-        let gm_drive = Normal::new(0.0, (gm_sigma * (1.0 - gm_a * gm_a).sqrt()).max(0.0)).unwrap_or(Normal::new(0.0, 0.0).unwrap());
+        let gm_drive = Normal::new(0.0, (gm_sigma * (1.0 - gm_a * gm_a).sqrt()).max(0.0))
+            .unwrap_or(Normal::new(0.0, 0.0).unwrap());
         let mut gm = [0.0f64; 3];
         if gm_sigma > 0.0 {
             let init = Normal::new(0.0, gm_sigma).unwrap_or(Normal::new(0.0, 0.0).unwrap());
@@ -445,22 +475,33 @@ impl Iterator for Samples<'_> {
         let x: [f64; 4] = core::array::from_fn(|i| arcsec_to_rad(x_arcsec[i]));
         // The angle actually applied: the scheme at the true period, plus the angle jitter. Eq (2)
         // is evaluated at it and the log reports it.
-        let rho = p.rotation_phase_deg * RAD_PER_DEG + p.scheme.rho_rad(t, self.period_s) + self.jitter.sample(&mut self.rng);
+        let rho = p.rotation_phase_deg * RAD_PER_DEG
+            + p.scheme.rho_rad(t, self.period_s)
+            + self.jitter.sample(&mut self.rng);
         let s = p.platform_phase_deg * RAD_PER_DEG + EARTH_RATE_RAD_PER_S * t;
         let lat = p.latitude_deg * RAD_PER_DEG + self.north_rate_rad_s * t;
         let weave = if p.heading_weave_rate_deg_s > 0.0 {
-            p.heading_weave_rate_deg_s * weave_period_s / (2.0 * PI) * (2.0 * PI * t / weave_period_s).sin()
+            p.heading_weave_rate_deg_s * weave_period_s / (2.0 * PI)
+                * (2.0 * PI * t / weave_period_s).sin()
         } else {
             0.0
         };
         let (turned_deg, heel_deg) = turns_deg(p.mismatch.heel_in_turns_deg, t);
-        let true_att = [p.heading_deg + weave + turned_deg + sway(&p.heading_sway, t), sway(&p.roll_sway, t) + heel_deg, sway(&p.pitch_sway, t)];
+        let true_att = [
+            p.heading_deg + weave + turned_deg + sway(&p.heading_sway, t),
+            sway(&p.roll_sway, t) + heel_deg,
+            sway(&p.pitch_sway, t),
+        ];
         let osc = oscillation_rad(&x, rho, s, lat);
         let we = self.w_lf * t;
         let mut out = [0.0; 3];
         for axis in 0..3 {
             let a = &self.lf[axis];
-            let low = a[0] + a[1] * we.sin() + a[2] * we.cos() + a[3] * (2.0 * we).sin() + a[4] * (2.0 * we).cos();
+            let low = a[0]
+                + a[1] * we.sin()
+                + a[2] * we.cos()
+                + a[3] * (2.0 * we).sin()
+                + a[4] * (2.0 * we).cos();
             if self.gm_sigma > 0.0 {
                 self.gm[axis] = self.gm_a * self.gm[axis] + self.gm_drive.sample(&mut self.rng);
             }
@@ -478,7 +519,11 @@ impl Iterator for Samples<'_> {
         };
         let truth = RowTruth {
             true_attitude_deg: true_att,
-            oscillation_deg: [osc[0] / RAD_PER_DEG, osc[1] / RAD_PER_DEG, osc[2] / RAD_PER_DEG],
+            oscillation_deg: [
+                osc[0] / RAD_PER_DEG,
+                osc[1] / RAD_PER_DEG,
+                osc[2] / RAD_PER_DEG,
+            ],
             errors_arcsec: x_arcsec,
         };
         Some((row, truth))
@@ -497,8 +542,18 @@ mod tests {
     fn parameters_without_scheme_or_recording_read_as_one_way_and_lossless() {
         let p = ScenarioParams::new(ScenarioKind::Paper, 2);
         let mut v = serde_json::to_value(&p).unwrap();
-        for key in ["scheme", "drop_fraction", "outage_starts_s", "outage_duration_s", "time_offset_s", "time_jitter_s"] {
-            assert!(v.as_object_mut().unwrap().remove(key).is_some(), "{key} written");
+        for key in [
+            "scheme",
+            "drop_fraction",
+            "outage_starts_s",
+            "outage_duration_s",
+            "time_offset_s",
+            "time_jitter_s",
+        ] {
+            assert!(
+                v.as_object_mut().unwrap().remove(key).is_some(),
+                "{key} written"
+            );
         }
         let back: ScenarioParams = serde_json::from_value(v).unwrap();
         assert_eq!(back, p);
@@ -514,11 +569,29 @@ mod tests {
             p.scheme = scheme;
             let x = p.errors_arcsec.map(arcsec_to_rad);
             for (row, tr) in Samples::new(&p) {
-                let rho = (p.rotation_phase_deg + scheme.rho_rad(row.time_s, p.rotation_period_s).to_degrees()).rem_euclid(360.0);
-                assert!((row.rotation_deg - rho).abs() < 1e-9 || (row.rotation_deg - rho).abs() > 360.0 - 1e-9, "{} at {}", scheme.name(), row.time_s);
-                let osc = oscillation_rad(&x, row.rotation_deg * RAD_PER_DEG, row.platform_deg * RAD_PER_DEG, row.latitude_deg * RAD_PER_DEG);
+                let rho = (p.rotation_phase_deg
+                    + scheme.rho_rad(row.time_s, p.rotation_period_s).to_degrees())
+                .rem_euclid(360.0);
+                assert!(
+                    (row.rotation_deg - rho).abs() < 1e-9
+                        || (row.rotation_deg - rho).abs() > 360.0 - 1e-9,
+                    "{} at {}",
+                    scheme.name(),
+                    row.time_s
+                );
+                let osc = oscillation_rad(
+                    &x,
+                    row.rotation_deg * RAD_PER_DEG,
+                    row.platform_deg * RAD_PER_DEG,
+                    row.latitude_deg * RAD_PER_DEG,
+                );
                 for a in 0..3 {
-                    assert!((tr.oscillation_deg[a] - osc[a] / RAD_PER_DEG).abs() < 1e-12, "{} at {}", scheme.name(), row.time_s);
+                    assert!(
+                        (tr.oscillation_deg[a] - osc[a] / RAD_PER_DEG).abs() < 1e-12,
+                        "{} at {}",
+                        scheme.name(),
+                        row.time_s
+                    );
                 }
             }
         }
@@ -530,17 +603,27 @@ mod tests {
         p.duration_s = 1000.0;
         for scheme in RotationScheme::ALL {
             p.scheme = scheme;
-            p.mismatch = Mismatch { rotation_period_error: 0.01, ..Mismatch::default() };
+            p.mismatch = Mismatch {
+                rotation_period_error: 0.01,
+                ..Mismatch::default()
+            };
             let true_period_s = 480.0 * 1.01;
             for (row, _) in Samples::new(&p) {
-                let expected = (p.rotation_phase_deg + scheme.rho_rad(row.time_s, true_period_s).to_degrees()).rem_euclid(360.0);
+                let expected = (p.rotation_phase_deg
+                    + scheme.rho_rad(row.time_s, true_period_s).to_degrees())
+                .rem_euclid(360.0);
                 let d = (row.rotation_deg - expected + 180.0).rem_euclid(360.0) - 180.0;
                 assert!(d.abs() < 1e-9, "{} at {}", scheme.name(), row.time_s);
             }
-            p.mismatch = Mismatch { rotation_jitter_deg: 0.05, ..Mismatch::default() };
+            p.mismatch = Mismatch {
+                rotation_jitter_deg: 0.05,
+                ..Mismatch::default()
+            };
             let dev: Vec<f64> = Samples::new(&p)
                 .map(|(row, _)| {
-                    let expected = (p.rotation_phase_deg + scheme.rho_rad(row.time_s, 480.0).to_degrees()).rem_euclid(360.0);
+                    let expected = (p.rotation_phase_deg
+                        + scheme.rho_rad(row.time_s, 480.0).to_degrees())
+                    .rem_euclid(360.0);
                     (row.rotation_deg - expected + 180.0).rem_euclid(360.0) - 180.0
                 })
                 .collect();

@@ -40,7 +40,9 @@ use cost::{CostStats, CostUnit};
 use estimator_core::{Output, RejectReason, SampleError};
 use link::FirmwareLink;
 use link_protocol::frame::FrameError;
-use link_protocol::{ClockSource, Counters, Request, ResetCause, Response, SampleMsg, StatusReply, PROTOCOL_VERSION};
+use link_protocol::{
+    ClockSource, Counters, Request, ResetCause, Response, SampleMsg, StatusReply, PROTOCOL_VERSION,
+};
 use push::{stream_log_push, PushOptions};
 use qemu::{Machine, Qemu};
 use std::io::{IsTerminal, Read, Write};
@@ -157,16 +159,20 @@ impl Target {
             .timeout(timeout)
             .open()
             .with_context(|| format!("cannot open serial port {device} at {baud} baud"))?;
-        let mut reader = port
-            .try_clone()
-            .with_context(|| format!("cannot open serial port {device} a second time for reading"))?;
+        let mut reader = port.try_clone().with_context(|| {
+            format!("cannot open serial port {device} a second time for reading")
+        })?;
         reader.set_timeout(READER_POLL)?;
         let link = FirmwareLink::new(Box::new(reader), Box::new(port), timeout);
         Target::hello(link, None, |hz| CostUnit::BoardCycles { counter_hz: hz })
     }
 
     /// `ReadStatus`; a `Ready` before the answer (a board that has just booted) is passed over.
-    fn hello(mut link: FirmwareLink, mut qemu: Option<Qemu>, unit: impl Fn(u32) -> CostUnit) -> anyhow::Result<Target> {
+    fn hello(
+        mut link: FirmwareLink,
+        mut qemu: Option<Qemu>,
+        unit: impl Fn(u32) -> CostUnit,
+    ) -> anyhow::Result<Target> {
         if let Err(e) = link.send(&Request::ReadStatus) {
             return Err(e.context(describe_exit(&mut qemu)));
         }
@@ -245,7 +251,11 @@ pub(crate) fn answer_of(msg: &SampleMsg, response: Response) -> anyhow::Result<A
     match response {
         Response::Step(r) => {
             if r.time_s.to_bits() != msg.time_s.to_bits() {
-                bail!("answer for time {} to the sample of time {}", r.time_s, msg.time_s);
+                bail!(
+                    "answer for time {} to the sample of time {}",
+                    r.time_s,
+                    msg.time_s
+                );
             }
             let output = r
                 .output()
@@ -258,7 +268,11 @@ pub(crate) fn answer_of(msg: &SampleMsg, response: Response) -> anyhow::Result<A
         }
         Response::Rejected(r) => {
             if r.time_s.to_bits() != msg.time_s.to_bits() {
-                bail!("rejection of time {} for the sample of time {}", r.time_s, msg.time_s);
+                bail!(
+                    "rejection of time {} for the sample of time {}",
+                    r.time_s,
+                    msg.time_s
+                );
             }
             let error = r
                 .error()
@@ -270,7 +284,9 @@ pub(crate) fn answer_of(msg: &SampleMsg, response: Response) -> anyhow::Result<A
             })
         }
         Response::Status(_) => bail!("the firmware answered a sample with a status"),
-        Response::Ready { .. } => bail!("the firmware restarted (it announced Ready instead of answering)"),
+        Response::Ready { .. } => {
+            bail!("the firmware restarted (it announced Ready instead of answering)")
+        }
     }
 }
 
@@ -318,7 +334,12 @@ fn describe_state(s: &StatusReply) -> String {
 
 /// Decides, from the firmware's state and `--resume` / `--reset`, where the log starts: `Ok(Some(t))`
 /// to skip the rows up to `t` s. Refuses to feed a log into a state it did not come from.
-pub fn prepare_firmware(target: &mut Target, resume: bool, reset: bool, info: &mut dyn Write) -> anyhow::Result<Option<f64>> {
+pub fn prepare_firmware(
+    target: &mut Target,
+    resume: bool,
+    reset: bool,
+    info: &mut dyn Write,
+) -> anyhow::Result<Option<f64>> {
     let before = target.boot_status;
     if reset {
         let after = match target.request(&Request::Reset)? {
@@ -332,14 +353,21 @@ pub fn prepare_firmware(target: &mut Target, resume: bool, reset: bool, info: &m
             );
         }
         if holds_state(&before) {
-            writeln!(info, "reset the firmware: it forgot {} and erased its checkpoints", describe_state(&before))?;
+            writeln!(
+                info,
+                "reset the firmware: it forgot {} and erased its checkpoints",
+                describe_state(&before)
+            )?;
         }
         target.boot_status = after;
         return Ok(None);
     }
     if !holds_state(&before) {
         if resume {
-            writeln!(info, "nothing to resume (the firmware holds no state): streaming the whole log")?;
+            writeln!(
+                info,
+                "nothing to resume (the firmware holds no state): streaming the whole log"
+            )?;
         }
         return Ok(None);
     }
@@ -354,7 +382,11 @@ pub fn prepare_firmware(target: &mut Target, resume: bool, reset: bool, info: &m
     }
     match before.checkpoint_time_s {
         Some(t) => {
-            writeln!(info, "resuming after the firmware's checkpoint of {t} s ({} samples accepted)", before.accepted)?;
+            writeln!(
+                info,
+                "resuming after the firmware's checkpoint of {t} s ({} samples accepted)",
+                before.accepted
+            )?;
             Ok(Some(t))
         }
         None => {
@@ -381,25 +413,33 @@ impl Progress {
             indicatif::ProgressBar::hidden()
         } else if let Some(n) = total_bytes {
             let bar = indicatif::ProgressBar::new(n);
-            if let Ok(style) = indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {percent:>3}% {msg}, {eta} left") {
+            if let Ok(style) = indicatif::ProgressStyle::with_template(
+                "{elapsed_precise} [{bar:30}] {percent:>3}% {msg}, {eta} left",
+            ) {
                 bar.set_style(style.progress_chars("=> "));
             }
             bar
         } else {
             let bar = indicatif::ProgressBar::new_spinner();
-            if let Ok(style) = indicatif::ProgressStyle::with_template("{elapsed_precise} {spinner} {msg}") {
+            if let Ok(style) =
+                indicatif::ProgressStyle::with_template("{elapsed_precise} {spinner} {msg}")
+            {
                 bar.set_style(style);
             }
             bar
         };
-        Progress { bar, start: Instant::now() }
+        Progress {
+            bar,
+            start: Instant::now(),
+        }
     }
 
     pub(crate) fn update(&self, rows: u64, bytes: u64) {
-        if rows % 256 == 0 && !self.bar.is_hidden() {
+        if rows.is_multiple_of(256) && !self.bar.is_hidden() {
             let rate = rows as f64 / self.start.elapsed().as_secs_f64().max(1e-9);
             self.bar.set_position(bytes);
-            self.bar.set_message(format!("{rows} rows, {rate:.0} rows/s"));
+            self.bar
+                .set_message(format!("{rows} rows, {rate:.0} rows/s"));
         }
     }
 }
@@ -430,7 +470,9 @@ pub fn stream_log<R: Read, W: Write>(
     let mut interval_check = IntervalCheck::new(None);
     while let Some(item) = lines.next() {
         let Some(line) = filter.admit(item, &mut |e| {
-            progress.bar.suspend(|| eprintln!("warning: {e} (row skipped)"));
+            progress
+                .bar
+                .suspend(|| eprintln!("warning: {e} (row skipped)"));
         })?
         else {
             continue;
@@ -440,8 +482,8 @@ pub fn stream_log<R: Read, W: Write>(
         }
         interval_check.observe(line.row.time_s)?;
         let sample = sample_of(&line.row);
-        let answer =
-            step_remote(target, &SampleMsg::from(&sample)).with_context(|| format!("log line {}", line.line))?;
+        let answer = step_remote(target, &SampleMsg::from(&sample))
+            .with_context(|| format!("log line {}", line.line))?;
         cost.add(answer.step_cost_ticks);
         writer.write_step(line.row.time_s, &answer.result)?;
         each(&line, &answer.result);
@@ -469,13 +511,19 @@ pub fn stream_log<R: Read, W: Write>(
 /// `host-sim stream`.
 pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let timeout = Duration::from_secs_f64(args.timeout_s.max(0.001));
-    let out = args.out.clone().unwrap_or_else(|| default_estimates_path(&args.log));
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| default_estimates_path(&args.log));
     check_not_input(&out, "--out", &inputs_of(&args.log))?;
     if let Some(dir) = &args.report {
         crate::trial_report::create_dir(dir)?;
     }
     let mut lines = LogReader::open(&args.log)?;
-    let plain_size = (!is_stdio(&args.log)).then(|| std::fs::metadata(&args.log).ok()).flatten().map(|m| m.len());
+    let plain_size = (!is_stdio(&args.log))
+        .then(|| std::fs::metadata(&args.log).ok())
+        .flatten()
+        .map(|m| m.len());
     let (mut target, what) = match (&args.qemu, &args.port) {
         (Some(elf), _) => (
             Target::boot_qemu(
@@ -500,37 +548,75 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         Box::new(std::io::stdout().lock())
     };
     let resume_after_s = prepare_firmware(&mut target, args.resume, args.reset, &mut info)?;
-    let mut writer =
-        EstimatesWriter::new(OutputFile::create(&out)?).with_context(|| format!("{}:0: cannot write", out.display()))?;
+    let mut writer = EstimatesWriter::new(OutputFile::create(&out)?)
+        .with_context(|| format!("{}:0: cannot write", out.display()))?;
     // A gzip log's size says nothing of its rows: no time left then.
     let gzip = plain_size.is_some() && lines.is_gzip();
     let total = if gzip { None } else { plain_size };
     // The report's record of the answers: the truth beside the log, the grid from the stamps.
-    let truth = args.report.as_ref().and_then(|_| load_truth(&args.log, &mut |w| eprintln!("warning: {w}")));
-    let mut judge = truth.as_ref().map(|t| ReportBuilder::new(truth_rows(&t.file, t.generated.as_ref())));
+    let truth = args
+        .report
+        .as_ref()
+        .and_then(|_| load_truth(&args.log, &mut |w| eprintln!("warning: {w}")));
+    let mut judge = truth
+        .as_ref()
+        .map(|t| ReportBuilder::new(truth_rows(&t.file, t.generated.as_ref())));
     let mut grid = GridFollower::new(&estimator_core::Config::default());
     let mut timeline = args.report.as_ref().map(|_| Timeline::new());
     let mut each = |line: &LogLine, result: &Result<Output, SampleError>| {
         if let Some(tl) = timeline.as_mut() {
             let truth = judge.as_mut().and_then(|j| j.observe(&line.row, result));
             let placement = grid.follow(line.row.time_s, result);
-            tl.observe(TimelineRow { row: &line.row, result, placement, counters: None, residuals_rad: None, truth });
+            tl.observe(TimelineRow {
+                row: &line.row,
+                result,
+                placement,
+                counters: None,
+                residuals_rad: None,
+                truth,
+            });
         }
     };
     let filter = RowFilter::new(args.strict);
     let summary = if args.push {
         let options = PushOptions {
             realtime: args.realtime,
-            window: args.window.map_or_else(|| PushOptions::default_window(&target.boot_status), |w| w as usize),
+            window: args.window.map_or_else(
+                || PushOptions::default_window(&target.boot_status),
+                |w| w as usize,
+            ),
             inject: None,
         };
-        stream_log_push(&mut target, &mut lines, filter, resume_after_s, &mut writer, total, &options, &mut info, &mut each)?
+        stream_log_push(
+            &mut target,
+            &mut lines,
+            filter,
+            resume_after_s,
+            &mut writer,
+            total,
+            &options,
+            &mut info,
+            &mut each,
+        )?
     } else {
-        stream_log(&mut target, &mut lines, filter, resume_after_s, &mut writer, total, &mut each)?
+        stream_log(
+            &mut target,
+            &mut lines,
+            filter,
+            resume_after_s,
+            &mut writer,
+            total,
+            &mut each,
+        )?
     };
     if summary.rows == 0 {
         // Nothing to write: an earlier estimates file stays as it was.
-        return Err(RunEnd::nothing_read(&log_name(&args.log), summary.unreadable.skipped, summary.unreadable.first.first()).into());
+        return Err(RunEnd::nothing_read(
+            &log_name(&args.log),
+            summary.unreadable.skipped,
+            summary.unreadable.first.first(),
+        )
+        .into());
     }
     writer
         .finish()
@@ -541,20 +627,45 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     if let (Some(dir), Some(tl)) = (&args.report, &timeline) {
         let interval_s = grid.interval_s().unwrap_or(1.0);
         let report = judge.map(|j| j.finish(interval_s));
-        let page = crate::trial_report::write_stream_report(dir, &log_name(&args.log), &what, &summary.final_status, report.as_ref(), tl)?;
+        let page = crate::trial_report::write_stream_report(
+            dir,
+            &log_name(&args.log),
+            &what,
+            &summary.final_status,
+            report.as_ref(),
+            tl,
+        )?;
         writeln!(info, "report in {}", page.display())?;
     }
     info.flush()?;
     if summary.final_status.estimate.is_none() {
-        return Err(RunEnd::NoEstimate { reason: "the firmware reports no estimate at the end of the log".into() }.into());
+        return Err(RunEnd::NoEstimate {
+            reason: "the firmware reports no estimate at the end of the log".into(),
+        }
+        .into());
     }
     Ok(())
 }
 
-fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &StreamSummary, target: &Target) -> std::io::Result<()> {
+fn print_summary(
+    w: &mut dyn Write,
+    log: &Path,
+    out: &Path,
+    what: &str,
+    s: &StreamSummary,
+    target: &Target,
+) -> std::io::Result<()> {
     let st = &s.final_status;
-    let out = if is_stdio(out) { "standard output".to_string() } else { out.display().to_string() };
-    let log = if is_stdio(log) { "standard input".to_string() } else { log.display().to_string() };
+    let out = if is_stdio(out) {
+        "standard output".to_string()
+    } else {
+        out.display().to_string()
+    };
+    let log = if is_stdio(log) {
+        "standard input".to_string()
+    } else {
+        log.display().to_string()
+    };
     writeln!(
         w,
         "{log}: {} rows streamed through {what} in {:.1} s ({:.0} rows/s); estimates in {out}",
@@ -563,9 +674,23 @@ fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &Stre
         s.rows as f64 / s.wall.as_secs_f64().max(1e-9),
     )?;
     if s.unreadable.skipped > 0 {
-        let lines: Vec<String> = s.unreadable.first.iter().map(|e| e.line.to_string()).collect();
-        let more = if s.unreadable.skipped as usize > lines.len() { ", ..." } else { "" };
-        writeln!(w, "  unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)", s.unreadable.skipped, lines.join(", "))?;
+        let lines: Vec<String> = s
+            .unreadable
+            .first
+            .iter()
+            .map(|e| e.line.to_string())
+            .collect();
+        let more = if s.unreadable.skipped as usize > lines.len() {
+            ", ..."
+        } else {
+            ""
+        };
+        writeln!(
+            w,
+            "  unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)",
+            s.unreadable.skipped,
+            lines.join(", ")
+        )?;
     }
     writeln!(
         w,
@@ -584,7 +709,13 @@ fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &Stre
     )?;
     let samples: Vec<String> = RejectReason::ALL
         .iter()
-        .map(|&reason| format!("{} {}", reason.name(), st.counters.rejected_samples[reason as usize]))
+        .map(|&reason| {
+            format!(
+                "{} {}",
+                reason.name(),
+                st.counters.rejected_samples[reason as usize]
+            )
+        })
         .collect();
     writeln!(
         w,
@@ -614,7 +745,11 @@ fn print_summary(w: &mut dyn Write, log: &Path, out: &Path, what: &str, s: &Stre
     let clock = ClockSource::try_from(st.clock_source).map_or("unknown", |c| c.name());
     writeln!(w, "  firmware's last reset: {cause}; clock: {clock}")?;
     if s.link.restarts > 0 {
-        writeln!(w, "  the firmware restarted {} times during the stream", s.link.restarts)?;
+        writeln!(
+            w,
+            "  the firmware restarted {} times during the stream",
+            s.link.restarts
+        )?;
     }
     writeln!(
         w,

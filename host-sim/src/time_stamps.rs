@@ -35,7 +35,11 @@ pub enum TimeColumn {
 
 impl TimeColumn {
     /// The time columns by name, in the order one is chosen when a log has several.
-    pub const ALL: [TimeColumn; 3] = [TimeColumn::Seconds, TimeColumn::Milliseconds, TimeColumn::Utc];
+    pub const ALL: [TimeColumn; 3] = [
+        TimeColumn::Seconds,
+        TimeColumn::Milliseconds,
+        TimeColumn::Utc,
+    ];
 
     /// The column's name in a log header.
     pub fn name(self) -> &'static str {
@@ -76,7 +80,9 @@ pub fn parse_utc(cell: &str) -> Result<f64, String> {
     let timestamp = match cell.parse::<Timestamp>() {
         Ok(t) => t,
         Err(with_offset) => match cell.parse::<DateTime>() {
-            Ok(civil) => TimeZone::UTC.to_timestamp(civil).map_err(|e| format!("not a date and time: {cell:?}: {e}"))?,
+            Ok(civil) => TimeZone::UTC
+                .to_timestamp(civil)
+                .map_err(|e| format!("not a date and time: {cell:?}: {e}"))?,
             Err(_) => return Err(format!("not a date and time: {cell:?}: {with_offset}")),
         },
     };
@@ -111,13 +117,22 @@ pub enum IntervalError {
         "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every 0.01 to 10 s: \
          they look like {unit} ({interval_s} {unit_short} a row is {as_seconds} s){hint}"
     )]
-    WrongUnit { interval_s: f64, unit: &'static str, unit_short: &'static str, as_seconds: f64, hint: &'static str },
+    WrongUnit {
+        interval_s: f64,
+        unit: &'static str,
+        unit_short: &'static str,
+        as_seconds: f64,
+        hint: &'static str,
+    },
     /// The stamps step by more than 10 s or less than 10 ms, and no unit explains it.
     #[error(
         "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every 0.01 to 10 s: \
          {cause}"
     )]
-    Implausible { interval_s: f64, cause: &'static str },
+    Implausible {
+        interval_s: f64,
+        cause: &'static str,
+    },
     /// `--sample-interval` says one interval, the stamps another.
     #[error(
         "--sample-interval {pinned_s} s contradicts the log's time stamps, which step by {shortest_s} s (the shortest of the first {CHECKED_STEPS} steps): \
@@ -139,7 +154,12 @@ pub struct IntervalCheck {
 impl IntervalCheck {
     /// `pinned_s`: the `--sample-interval`, if given.
     pub fn new(pinned_s: Option<f64>) -> IntervalCheck {
-        IntervalCheck { pinned_s, last_s: None, steps: Vec::with_capacity(CHECKED_STEPS), done: false }
+        IntervalCheck {
+            pinned_s,
+            last_s: None,
+            steps: Vec::with_capacity(CHECKED_STEPS),
+            done: false,
+        }
     }
 
     /// One stamp; an error once the first steps show an interval that makes no sense.
@@ -210,7 +230,10 @@ pub fn judge(median_s: f64, shortest_s: f64, pinned_s: Option<f64>) -> Result<()
     if let Some(pinned_s) = pinned_s {
         // The estimator snaps steps within a quarter of an interval to the grid.
         if (shortest_s - pinned_s).abs() > estimator_core::time_grid::SNAP_TOLERANCE * pinned_s {
-            return Err(IntervalError::ContradictsPinned { pinned_s, shortest_s: round4(shortest_s) });
+            return Err(IntervalError::ContradictsPinned {
+                pinned_s,
+                shortest_s: round4(shortest_s),
+            });
         }
     }
     Ok(())
@@ -222,29 +245,68 @@ mod tests {
 
     #[test]
     fn seconds_milliseconds_and_utc_stamps_read_as_seconds() {
-        assert_eq!(TimeColumn::Seconds.parse("1700000000.25"), Ok(1_700_000_000.25));
-        assert_eq!(TimeColumn::Milliseconds.parse("1700000000250"), Ok(1_700_000_000.25));
+        assert_eq!(
+            TimeColumn::Seconds.parse("1700000000.25"),
+            Ok(1_700_000_000.25)
+        );
+        assert_eq!(
+            TimeColumn::Milliseconds.parse("1700000000250"),
+            Ok(1_700_000_000.25)
+        );
         assert_eq!(TimeColumn::Milliseconds.parse("1500"), Ok(1.5));
         // 2023-11-14T22:13:20Z is Unix 1700000000.
-        for cell in ["2023-11-14T22:13:20Z", "2023-11-14 22:13:20Z", "2023-11-14T22:13:20", "2023-11-15T00:13:20+02:00", "2023-11-14t22:13:20z"] {
+        for cell in [
+            "2023-11-14T22:13:20Z",
+            "2023-11-14 22:13:20Z",
+            "2023-11-14T22:13:20",
+            "2023-11-15T00:13:20+02:00",
+            "2023-11-14t22:13:20z",
+        ] {
             assert_eq!(TimeColumn::Utc.parse(cell), Ok(1_700_000_000.0), "{cell}");
-            assert_eq!(TimeColumn::Seconds.parse(cell), Ok(1_700_000_000.0), "a date in time_s: {cell}");
+            assert_eq!(
+                TimeColumn::Seconds.parse(cell),
+                Ok(1_700_000_000.0),
+                "a date in time_s: {cell}"
+            );
         }
-        assert_eq!(TimeColumn::Utc.parse("2023-11-14T22:13:20.250Z"), Ok(1_700_000_000.25));
-        assert_eq!(TimeColumn::Utc.parse("12.5"), Ok(12.5), "a number in time_utc is seconds");
-        assert!(TimeColumn::Utc.parse("2023-13-14T22:13:20Z").unwrap_err().contains("not a date and time"));
+        assert_eq!(
+            TimeColumn::Utc.parse("2023-11-14T22:13:20.250Z"),
+            Ok(1_700_000_000.25)
+        );
+        assert_eq!(
+            TimeColumn::Utc.parse("12.5"),
+            Ok(12.5),
+            "a number in time_utc is seconds"
+        );
+        assert!(TimeColumn::Utc
+            .parse("2023-13-14T22:13:20Z")
+            .unwrap_err()
+            .contains("not a date and time"));
         assert_eq!(TimeColumn::Seconds.parse(""), Err("blank cell".to_string()));
-        assert!(TimeColumn::Seconds.parse("12:00:00").unwrap_err().contains("not a number"));
+        assert!(TimeColumn::Seconds
+            .parse("12:00:00")
+            .unwrap_err()
+            .contains("not a number"));
     }
 
     #[test]
     fn utc_is_formatted_for_unix_times_only() {
-        assert_eq!(format_utc(1_700_000_000.25).as_deref(), Some("2023-11-14T22:13:20.250Z"));
-        assert_eq!(format_utc(45_000.0), None, "seconds since the log's start are no date");
+        assert_eq!(
+            format_utc(1_700_000_000.25).as_deref(),
+            Some("2023-11-14T22:13:20.250Z")
+        );
+        assert_eq!(
+            format_utc(45_000.0),
+            None,
+            "seconds since the log's start are no date"
+        );
         assert_eq!(format_utc(f64::NAN), None);
     }
 
-    fn check(stamps: impl IntoIterator<Item = f64>, pinned: Option<f64>) -> Result<(), IntervalError> {
+    fn check(
+        stamps: impl IntoIterator<Item = f64>,
+        pinned: Option<f64>,
+    ) -> Result<(), IntervalError> {
         let mut c = IntervalCheck::new(pinned);
         stamps.into_iter().try_for_each(|t| c.observe(t))
     }
@@ -252,37 +314,98 @@ mod tests {
     #[test]
     fn plausible_intervals_pass_with_lost_rows_and_jitter() {
         assert_eq!(check((0..100).map(f64::from), None), Ok(()));
-        assert_eq!(check((0..100).map(|k| 1.7e9 + 0.1 * f64::from(k)), Some(0.1)), Ok(()));
+        assert_eq!(
+            check((0..100).map(|k| 1.7e9 + 0.1 * f64::from(k)), Some(0.1)),
+            Ok(())
+        );
         // Every other row lost (the median is 2 s, the shortest step 1 s), 20 ms of jitter.
-        let stamps = (0..100).filter(|k| k % 4 == 0 || k % 4 == 1).map(|k| f64::from(k) + 0.02 * f64::from(k % 2));
+        let stamps = (0..100)
+            .filter(|k| k % 4 == 0 || k % 4 == 1)
+            .map(|k| f64::from(k) + 0.02 * f64::from(k % 2));
         assert_eq!(check(stamps, Some(1.0)), Ok(()));
-        assert_eq!(check((0..100).map(|k| 10.0 * f64::from(k)), None), Ok(()), "10 s is the slowest RINS rate");
+        assert_eq!(
+            check((0..100).map(|k| 10.0 * f64::from(k)), None),
+            Ok(()),
+            "10 s is the slowest RINS rate"
+        );
     }
 
     #[test]
     fn implausible_intervals_name_their_likely_cause() {
         let ms = check((0..100).map(|k| 1000.0 * f64::from(k)), None).unwrap_err();
-        assert!(matches!(ms, IntervalError::WrongUnit { unit: "milliseconds", .. }), "{ms:?}");
-        assert!(ms.to_string().contains("step by 1000 s") && ms.to_string().contains("time_ms"), "{ms}");
+        assert!(
+            matches!(
+                ms,
+                IntervalError::WrongUnit {
+                    unit: "milliseconds",
+                    ..
+                }
+            ),
+            "{ms:?}"
+        );
+        assert!(
+            ms.to_string().contains("step by 1000 s") && ms.to_string().contains("time_ms"),
+            "{ms}"
+        );
         let us = check((0..100).map(|k| 2e6 * f64::from(k)), None).unwrap_err();
-        assert!(matches!(us, IntervalError::WrongUnit { unit: "microseconds", .. }), "{us:?}");
+        assert!(
+            matches!(
+                us,
+                IntervalError::WrongUnit {
+                    unit: "microseconds",
+                    ..
+                }
+            ),
+            "{us:?}"
+        );
         let hours = check((0..100).map(|k| f64::from(k) / 3600.0), None).unwrap_err();
         // 1 s in hours is 0.0002778 h; read as minutes it would be 16.7 ms: hours is nearer 1 s.
-        assert!(matches!(hours, IntervalError::WrongUnit { unit: "hours", .. }), "{hours:?}");
-        assert!(hours.to_string().contains("0.0002778 h a row is 1 s"), "{hours}");
+        assert!(
+            matches!(hours, IntervalError::WrongUnit { unit: "hours", .. }),
+            "{hours:?}"
+        );
+        assert!(
+            hours.to_string().contains("0.0002778 h a row is 1 s"),
+            "{hours}"
+        );
         let thinned = check((0..100).map(|k| 60.0 * f64::from(k)), None).unwrap_err();
-        assert!(thinned.to_string().contains("milliseconds") && thinned.to_string().contains("thinned out"), "{thinned}");
+        assert!(
+            thinned.to_string().contains("milliseconds")
+                && thinned.to_string().contains("thinned out"),
+            "{thinned}"
+        );
         let rounded = check((0..100).map(|k| 1e-9 * f64::from(k)), None).unwrap_err();
-        assert!(matches!(rounded, IntervalError::Implausible { .. }) && rounded.to_string().contains("too few digits"), "{rounded}");
+        assert!(
+            matches!(rounded, IntervalError::Implausible { .. })
+                && rounded.to_string().contains("too few digits"),
+            "{rounded}"
+        );
     }
 
     #[test]
     fn a_pinned_interval_that_contradicts_the_stamps_is_refused() {
         let e = check((0..100).map(f64::from), Some(2.0)).unwrap_err();
-        assert_eq!(e, IntervalError::ContradictsPinned { pinned_s: 2.0, shortest_s: 1.0 });
-        assert!(e.to_string().starts_with("--sample-interval 2 s contradicts"), "{e}");
-        assert_eq!(check((0..100).map(|k| 1.1 * f64::from(k)), Some(1.0)), Ok(()), "within the grid's snap");
+        assert_eq!(
+            e,
+            IntervalError::ContradictsPinned {
+                pinned_s: 2.0,
+                shortest_s: 1.0
+            }
+        );
+        assert!(
+            e.to_string()
+                .starts_with("--sample-interval 2 s contradicts"),
+            "{e}"
+        );
+        assert_eq!(
+            check((0..100).map(|k| 1.1 * f64::from(k)), Some(1.0)),
+            Ok(()),
+            "within the grid's snap"
+        );
         let half = check((0..100).map(f64::from), Some(0.5)).unwrap_err();
-        assert!(matches!(half, IntervalError::ContradictsPinned { .. }), "every step two pinned intervals: {half:?}");
+        assert!(
+            matches!(half, IntervalError::ContradictsPinned { .. }),
+            "every step two pinned intervals: {half:?}"
+        );
     }
 }

@@ -47,7 +47,12 @@ impl<const N: usize> Envelope<N> {
         if v.iter().any(|x| !x.is_finite()) {
             return;
         }
-        let e = this.get_or_insert(Envelope { min: *v, max: *v, sum: [0.0; N], rows: 0 });
+        let e = this.get_or_insert(Envelope {
+            min: *v,
+            max: *v,
+            sum: [0.0; N],
+            rows: 0,
+        });
         for (i, x) in v.iter().enumerate() {
             e.min[i] = e.min[i].min(*x);
             e.max[i] = e.max[i].max(*x);
@@ -86,7 +91,10 @@ pub struct EstimateArcsec {
 
 impl EstimateArcsec {
     pub fn of(e: &Estimate) -> EstimateArcsec {
-        EstimateArcsec { x: e.x_rad.map(|v| rad_to_arcsec(v as f64)), sigma: e.sigma_rad.map(|v| rad_to_arcsec(v as f64)) }
+        EstimateArcsec {
+            x: e.x_rad.map(|v| rad_to_arcsec(v as f64)),
+            sigma: e.sigma_rad.map(|v| rad_to_arcsec(v as f64)),
+        }
     }
 }
 
@@ -143,7 +151,11 @@ impl Bucket {
 }
 
 fn status_bit(status: Status) -> Option<u64> {
-    Status::ALL.iter().position(|s| *s == status).filter(|i| *i < 64).map(|i| 1u64 << i)
+    Status::ALL
+        .iter()
+        .position(|s| *s == status)
+        .filter(|i| *i < 64)
+        .map(|i| 1u64 << i)
 }
 
 /// One accepted row kept whole (arcsec, heading, roll, pitch).
@@ -159,7 +171,10 @@ pub struct TailRow {
 #[derive(Clone, Debug, PartialEq)]
 pub enum EventKind {
     /// The status changed (the first status too).
-    Status { from: Option<&'static str>, to: &'static str },
+    Status {
+        from: Option<&'static str>,
+        to: &'static str,
+    },
     /// Samples lost before this row (from the stamps).
     Gap { lost: u64 },
     /// The moving average restarted (the estimator's counter; not known from a stream).
@@ -216,7 +231,10 @@ pub struct Timeline {
 
 impl Timeline {
     pub fn new() -> Timeline {
-        Timeline { rows_per_bucket: 1, ..Timeline::default() }
+        Timeline {
+            rows_per_bucket: 1,
+            ..Timeline::default()
+        }
     }
 
     fn event(&mut self, time_s: f64, kind: EventKind) {
@@ -255,7 +273,13 @@ impl Timeline {
                 if self.last_status != Some(out.status) {
                     let from = self.last_status.map(|s| s.name());
                     self.last_status = Some(out.status);
-                    self.event(t, EventKind::Status { from, to: out.status.name() });
+                    self.event(
+                        t,
+                        EventKind::Status {
+                            from,
+                            to: out.status.name(),
+                        },
+                    );
                 }
                 self.observe_attitude(&r, out);
             }
@@ -265,7 +289,8 @@ impl Timeline {
             self.current.estimate = Some(e);
             if let Some(truth) = &r.truth {
                 self.current.truth_x_arcsec = Some(truth.errors_arcsec);
-                self.current.error_arcsec = Some(core::array::from_fn(|i| e.x[i] - truth.errors_arcsec[i]));
+                self.current.error_arcsec =
+                    Some(core::array::from_fn(|i| e.x[i] - truth.errors_arcsec[i]));
             }
         }
         if r.truth.is_some() {
@@ -285,7 +310,9 @@ impl Timeline {
         }
         if let Some(c) = r.counters {
             self.knows_restarts = true;
-            let restarts = c.window_restarts.saturating_sub(self.last_counters.window_restarts);
+            let restarts = c
+                .window_restarts
+                .saturating_sub(self.last_counters.window_restarts);
             if restarts > 0 {
                 self.current.window_restarts += u64::from(restarts);
                 self.event(t, EventKind::WindowRestart);
@@ -294,13 +321,21 @@ impl Timeline {
         }
         if let Some(res) = r.residuals_rad {
             self.has_residuals = true;
-            Envelope::add(&mut self.current.residual_arcsec, &res.map(|v| rad_to_arcsec(v as f64)));
+            Envelope::add(
+                &mut self.current.residual_arcsec,
+                &res.map(|v| rad_to_arcsec(v as f64)),
+            );
         }
     }
 
     fn observe_attitude(&mut self, r: &TimelineRow, out: &Output) {
         let raw = [r.row.heading_deg, r.row.roll_deg, r.row.pitch_deg];
-        let corrected = [out.corrected.heading_rad, out.corrected.roll_rad, out.corrected.pitch_rad].map(|v| (v as f64).to_degrees());
+        let corrected = [
+            out.corrected.heading_rad,
+            out.corrected.roll_rad,
+            out.corrected.pitch_rad,
+        ]
+        .map(|v| (v as f64).to_degrees());
         let removed: [f64; 3] = core::array::from_fn(|a| {
             let d = raw[a] - corrected[a];
             (if a == 0 { wrap_deg(d) } else { d }) * 3600.0
@@ -315,7 +350,12 @@ impl Timeline {
         if self.tail.len() == TAIL_ROWS {
             self.tail.pop_front();
         }
-        self.tail.push_back(TailRow { time_s: r.row.time_s, removed_arcsec: removed, before_arcsec: before, after_arcsec: after });
+        self.tail.push_back(TailRow {
+            time_s: r.row.time_s,
+            removed_arcsec: removed,
+            before_arcsec: before,
+            after_arcsec: after,
+        });
     }
 
     fn close_bucket(&mut self) {
@@ -339,7 +379,9 @@ impl Timeline {
 
     /// The buckets, the last one possibly partial.
     pub fn buckets(&self) -> impl Iterator<Item = &Bucket> {
-        self.buckets.iter().chain((self.current.rows > 0).then_some(&self.current))
+        self.buckets
+            .iter()
+            .chain((self.current.rows > 0).then_some(&self.current))
     }
 
     /// The accepted rows kept whole at the end.
@@ -365,15 +407,35 @@ mod tests {
     use estimator_core::{Attitude, Field, Real};
 
     fn row(t: f64) -> Row {
-        Row { time_s: t, rotation_deg: 0.0, platform_deg: 0.0, latitude_deg: 40.0, heading_deg: 10.0, roll_deg: 0.0, pitch_deg: 0.0 }
+        Row {
+            time_s: t,
+            rotation_deg: 0.0,
+            platform_deg: 0.0,
+            latitude_deg: 40.0,
+            heading_deg: 10.0,
+            roll_deg: 0.0,
+            pitch_deg: 0.0,
+        }
     }
 
-    fn output(t: f64, status: Status, x: Option<f64>, roll_removed_arcsec: f64) -> Result<Output, SampleError> {
+    fn output(
+        t: f64,
+        status: Status,
+        x: Option<f64>,
+        roll_removed_arcsec: f64,
+    ) -> Result<Output, SampleError> {
         Ok(Output {
             time_s: t,
             status,
-            estimate: x.map(|x| Estimate { x_rad: [arcsec_to_rad(x) as Real; 4], sigma_rad: [arcsec_to_rad(1.0) as Real; 4] }),
-            corrected: Attitude { heading_rad: 10f64.to_radians() as Real, roll_rad: -(arcsec_to_rad(roll_removed_arcsec) as Real), pitch_rad: 0.0 },
+            estimate: x.map(|x| Estimate {
+                x_rad: [arcsec_to_rad(x) as Real; 4],
+                sigma_rad: [arcsec_to_rad(1.0) as Real; 4],
+            }),
+            corrected: Attitude {
+                heading_rad: 10f64.to_radians() as Real,
+                roll_rad: -(arcsec_to_rad(roll_removed_arcsec) as Real),
+                pitch_rad: 0.0,
+            },
         })
     }
 
@@ -385,46 +447,122 @@ mod tests {
             let t = k as f64;
             // A spike of 500 arcsec once, in the middle; 10 otherwise.
             let removed = if k == n / 2 { 500.0 } else { 10.0 };
-            let status = if k < 100 { Status::WarmingUp } else { Status::Estimating };
+            let status = if k < 100 {
+                Status::WarmingUp
+            } else {
+                Status::Estimating
+            };
             let result = output(t, status, (k >= 100).then_some(200.0), removed);
-            tl.observe(TimelineRow { row: &row(t), result: &result, placement: None, counters: None, residuals_rad: None, truth: None });
+            tl.observe(TimelineRow {
+                row: &row(t),
+                result: &result,
+                placement: None,
+                counters: None,
+                residuals_rad: None,
+                truth: None,
+            });
         }
         let buckets: Vec<&Bucket> = tl.buckets().collect();
-        assert!(buckets.len() <= MAX_BUCKETS && buckets.len() >= MAX_BUCKETS / 2, "{}", buckets.len());
-        assert_eq!(buckets.iter().map(|b| b.rows).sum::<u64>(), n as u64, "every row in one bucket");
-        let peak = buckets.iter().filter_map(|b| b.removed_arcsec).map(|e| e.max[1]).fold(0.0, f64::max);
-        assert!((peak - 500.0).abs() < 1e-3, "the spike survives the merging: {peak}");
-        let (sum, rows) = buckets.iter().filter_map(|b| b.removed_arcsec).fold((0.0, 0), |(s, n), e| (s + e.sum[1], n + e.rows));
+        assert!(
+            buckets.len() <= MAX_BUCKETS && buckets.len() >= MAX_BUCKETS / 2,
+            "{}",
+            buckets.len()
+        );
+        assert_eq!(
+            buckets.iter().map(|b| b.rows).sum::<u64>(),
+            n as u64,
+            "every row in one bucket"
+        );
+        let peak = buckets
+            .iter()
+            .filter_map(|b| b.removed_arcsec)
+            .map(|e| e.max[1])
+            .fold(0.0, f64::max);
+        assert!(
+            (peak - 500.0).abs() < 1e-3,
+            "the spike survives the merging: {peak}"
+        );
+        let (sum, rows) = buckets
+            .iter()
+            .filter_map(|b| b.removed_arcsec)
+            .fold((0.0, 0), |(s, n), e| (s + e.sum[1], n + e.rows));
         assert_eq!(rows, n as u64);
-        assert!((sum / rows as f64 - (10.0 + 490.0 / n as f64)).abs() < 1e-6, "means over merged buckets");
-        assert!(buckets[0].saw(Status::WarmingUp) && !buckets.last().unwrap().saw(Status::WarmingUp));
+        assert!(
+            (sum / rows as f64 - (10.0 + 490.0 / n as f64)).abs() < 1e-6,
+            "means over merged buckets"
+        );
+        assert!(
+            buckets[0].saw(Status::WarmingUp) && !buckets.last().unwrap().saw(Status::WarmingUp)
+        );
         assert_eq!(tl.tail().count(), TAIL_ROWS);
         assert_eq!(tl.first_estimate_s, Some(100.0));
-        let changes: Vec<_> = tl.events().iter().filter(|e| matches!(e.kind, EventKind::Status { .. })).collect();
+        let changes: Vec<_> = tl
+            .events()
+            .iter()
+            .filter(|e| matches!(e.kind, EventKind::Status { .. }))
+            .collect();
         assert_eq!(changes.len(), 2, "warming_up, then estimating");
     }
 
     #[test]
     fn gaps_clock_steps_restarts_rejections_and_truth_are_recorded() {
         let mut tl = Timeline::new();
-        let truth = TruthAt { errors_arcsec: [190.0; 4], oscillation_deg: [0.0, 15.0 / 3600.0, 0.0] };
-        let steps: [(f64, Option<Placement>, u32); 4] =
-            [(0.0, None, 0), (4.0, Some(Placement::OnGrid { intervals: 4 }), 1), (5.0, Some(Placement::ClockStep), 2), (6.0, None, 2)];
+        let truth = TruthAt {
+            errors_arcsec: [190.0; 4],
+            oscillation_deg: [0.0, 15.0 / 3600.0, 0.0],
+        };
+        let steps: [(f64, Option<Placement>, u32); 4] = [
+            (0.0, None, 0),
+            (4.0, Some(Placement::OnGrid { intervals: 4 }), 1),
+            (5.0, Some(Placement::ClockStep), 2),
+            (6.0, None, 2),
+        ];
         for (t, placement, restarts) in steps {
-            let result = if t == 6.0 { Err(SampleError::NonFinite(Field::Roll)) } else { output(t, Status::Estimating, Some(200.0), 10.0) };
-            let counters = Counters { window_restarts: restarts, ..Counters::default() };
-            tl.observe(TimelineRow { row: &row(t), result: &result, placement, counters: Some(counters), residuals_rad: Some([0.0; 4]), truth: Some(truth) });
+            let result = if t == 6.0 {
+                Err(SampleError::NonFinite(Field::Roll))
+            } else {
+                output(t, Status::Estimating, Some(200.0), 10.0)
+            };
+            let counters = Counters {
+                window_restarts: restarts,
+                ..Counters::default()
+            };
+            tl.observe(TimelineRow {
+                row: &row(t),
+                result: &result,
+                placement,
+                counters: Some(counters),
+                residuals_rad: Some([0.0; 4]),
+                truth: Some(truth),
+            });
         }
         let total = tl.buckets().fold(Bucket::default(), |mut acc, b| {
             acc.merge(b);
             acc
         });
-        assert_eq!((total.lost_samples, total.clock_steps, total.window_restarts, total.rejected), (3, 1, 2, 1));
+        assert_eq!(
+            (
+                total.lost_samples,
+                total.clock_steps,
+                total.window_restarts,
+                total.rejected
+            ),
+            (3, 1, 2, 1)
+        );
         let e = total.error_arcsec.unwrap();
         assert!((e[0] - 10.0).abs() < 1e-3, "{e:?}");
         let after = total.after_arcsec.unwrap();
-        assert!((after.max[1] - 5.0).abs() < 1e-3, "15 arcsec put in, 10 removed: {after:?}");
+        assert!(
+            (after.max[1] - 5.0).abs() < 1e-3,
+            "15 arcsec put in, 10 removed: {after:?}"
+        );
         assert!(tl.has_truth && tl.has_residuals && tl.knows_restarts);
-        assert_eq!(tl.events().iter().filter(|e| e.kind == EventKind::WindowRestart).count(), 2);
+        assert_eq!(
+            tl.events()
+                .iter()
+                .filter(|e| e.kind == EventKind::WindowRestart)
+                .count(),
+            2
+        );
     }
 }

@@ -24,16 +24,27 @@ pub const PAGE: &str = "report.html";
 
 /// Every file a report directory may get.
 /// (`run --report` also writes the paper's figures, named by [`crate::figures::write_figures`].)
-pub const FILES: [&str; 7] = [PAGE, "estimates.png", "error.png", "status.png", "attitude.png", "residuals.png", "monte_carlo.png"];
+pub const FILES: [&str; 7] = [
+    PAGE,
+    "estimates.png",
+    "error.png",
+    "status.png",
+    "attitude.png",
+    "residuals.png",
+    "monte_carlo.png",
+];
 
 /// Refuses a report directory in which a report would overwrite one of the run's inputs.
 pub fn check_dir(dir: &Path, inputs: &[crate::output_file::Input]) -> anyhow::Result<()> {
-    FILES.iter().try_for_each(|name| crate::output_file::check_not_input(&dir.join(name), "--report", inputs))
+    FILES.iter().try_for_each(|name| {
+        crate::output_file::check_not_input(&dir.join(name), "--report", inputs)
+    })
 }
 
 /// Creates the report directory (and its parents).
 pub fn create_dir(dir: &Path) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("{}:0: cannot create the report directory", dir.display()))
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}:0: cannot create the report directory", dir.display()))
 }
 
 /// A time for people: seconds, and the UTC date and time when the stamps are Unix time.
@@ -44,14 +55,41 @@ fn when(t: f64) -> String {
     }
 }
 
-fn final_estimate_section(estimate: Option<EstimateArcsec>, status: Option<&str>, no_estimate: Option<String>) -> Section {
-    let mut s = Section::new("Final estimate").with(Block::Facts(vec![("final status".into(), status.unwrap_or("none (no row accepted)").into())]));
+fn final_estimate_section(
+    estimate: Option<EstimateArcsec>,
+    status: Option<&str>,
+    no_estimate: Option<String>,
+) -> Section {
+    let mut s = Section::new("Final estimate").with(Block::Facts(vec![(
+        "final status".into(),
+        status.unwrap_or("none (no row accepted)").into(),
+    )]));
     match estimate {
         Some(e) => {
-            let rows = (0..4).map(|i| vec![format!("x{}", i + 1), format!("{:+.3}", e.x[i]), format!("{:.3}", e.sigma[i])]).collect();
-            s = s.with(Block::Table { head: vec!["error".into(), "estimate, arcsec".into(), "1-sigma, arcsec".into()], rows });
+            let rows = (0..4)
+                .map(|i| {
+                    vec![
+                        format!("x{}", i + 1),
+                        format!("{:+.3}", e.x[i]),
+                        format!("{:.3}", e.sigma[i]),
+                    ]
+                })
+                .collect();
+            s = s.with(Block::Table {
+                head: vec![
+                    "error".into(),
+                    "estimate, arcsec".into(),
+                    "1-sigma, arcsec".into(),
+                ],
+                rows,
+            });
         }
-        None => s = s.with(Block::Paragraph(format!("No estimate: {}.", no_estimate.unwrap_or_else(|| "no row accepted".into())))),
+        None => {
+            s = s.with(Block::Paragraph(format!(
+                "No estimate: {}.",
+                no_estimate.unwrap_or_else(|| "no row accepted".into())
+            )))
+        }
     }
     s
 }
@@ -61,10 +99,19 @@ fn timeline_facts(tl: &Timeline) -> Vec<(String, String)> {
     if let (Some(a), Some(b)) = (tl.first_time_s, tl.last_time_s) {
         f.push(("first row".into(), when(a)));
         f.push(("last row".into(), when(b)));
-        f.push(("span".into(), format!("{:.0} s ({:.2} h)", b - a, (b - a) / 3600.0)));
+        f.push((
+            "span".into(),
+            format!("{:.0} s ({:.2} h)", b - a, (b - a) / 3600.0),
+        ));
     }
-    f.push(("first estimate at".into(), tl.first_estimate_s.map_or("-".into(), when)));
-    f.push(("first converged at".into(), tl.first_converged_s.map_or("-".into(), when)));
+    f.push((
+        "first estimate at".into(),
+        tl.first_estimate_s.map_or("-".into(), when),
+    ));
+    f.push((
+        "first converged at".into(),
+        tl.first_converged_s.map_or("-".into(), when),
+    ));
     f
 }
 
@@ -75,7 +122,10 @@ fn events_section(tl: &Timeline) -> Section {
         .map(|e| {
             let what = match &e.kind {
                 EventKind::Status { from: None, to } => format!("status {to}"),
-                EventKind::Status { from: Some(from), to } => format!("status {from} -> {to}"),
+                EventKind::Status {
+                    from: Some(from),
+                    to,
+                } => format!("status {from} -> {to}"),
                 EventKind::Gap { lost } => format!("{lost} samples lost before this row"),
                 EventKind::WindowRestart => "moving average restarted".into(),
                 EventKind::ClockStep => "clock step (jump or step back)".into(),
@@ -86,31 +136,49 @@ fn events_section(tl: &Timeline) -> Section {
     let shown = rows.len() as u64;
     let mut s = Section::new("Events");
     if tl.event_count > shown {
-        s = s.with(Block::Paragraph(format!("The first {shown} of {} events.", tl.event_count)));
+        s = s.with(Block::Paragraph(format!(
+            "The first {shown} of {} events.",
+            tl.event_count
+        )));
     }
-    s.with(Block::Table { head: vec!["time".into(), "event".into()], rows })
+    s.with(Block::Table {
+        head: vec!["time".into(), "event".into()],
+        rows,
+    })
 }
 
 fn accuracy_sections(report: &Report, method: &str) -> Section {
     let (head, rows) = accuracy_table(&report.accuracy);
-    let mut s = Section::new(format!("Accuracy against the truth ({method})")).with(Block::Table { head, rows });
-    for (label, rms) in [("from the first estimate", &report.rms_from_first_estimate), ("last quarter of the run", &report.rms_last_quarter)] {
+    let mut s = Section::new(format!("Accuracy against the truth ({method})"))
+        .with(Block::Table { head, rows });
+    for (label, rms) in [
+        ("from the first estimate", &report.rms_from_first_estimate),
+        ("last quarter of the run", &report.rms_last_quarter),
+    ] {
         if let Some(r) = rms {
             let (head, rows) = rms_table(r);
-            s = s.with(Block::Paragraph(rms_title(label, r))).with(Block::Table { head, rows });
+            s = s
+                .with(Block::Paragraph(rms_title(label, r)))
+                .with(Block::Table { head, rows });
         }
     }
     s
 }
 
 fn figures_section(figures: Vec<Figure>) -> Section {
-    figures.into_iter().fold(Section::new("Plots"), |s, f| s.with(Block::Figure(f)))
+    figures
+        .into_iter()
+        .fold(Section::new("Plots"), |s, f| s.with(Block::Figure(f)))
 }
 
 /// What the core counted of the rows, for the summary facts.
 fn rejected_text(counts: impl Fn(RejectReason) -> u32) -> String {
     let total: u32 = RejectReason::ALL.iter().map(|r| counts(*r)).sum();
-    let by: Vec<String> = RejectReason::ALL.iter().filter(|r| counts(**r) > 0).map(|r| format!("{} {}", r.name(), counts(*r))).collect();
+    let by: Vec<String> = RejectReason::ALL
+        .iter()
+        .filter(|r| counts(**r) > 0)
+        .map(|r| format!("{} {}", r.name(), counts(*r)))
+        .collect();
     if by.is_empty() {
         total.to_string()
     } else {
@@ -120,37 +188,75 @@ fn rejected_text(counts: impl Fn(RejectReason) -> u32) -> String {
 
 /// Writes the plots and `report.html` of a replayed log into `dir`; returns the page's path.
 /// `extra` sections go after the plots.
-pub fn write_replay_report(dir: &Path, log: &str, method: &str, r: &Replay, report: Option<&Report>, tl: &Timeline, extra: Vec<Section>) -> anyhow::Result<PathBuf> {
+pub fn write_replay_report(
+    dir: &Path,
+    log: &str,
+    method: &str,
+    r: &Replay,
+    report: Option<&Report>,
+    tl: &Timeline,
+    extra: Vec<Section>,
+) -> anyhow::Result<PathBuf> {
     create_dir(dir)?;
     let figures = timeline_figures(dir, tl, method, r.rotation.period_s)?;
     let c = &r.counters;
     let mut rows = vec![
         ("log".to_string(), log.to_string()),
         ("method".into(), method.into()),
-        ("rows".into(), format!("{} stepped, {} accepted", r.rows, c.accepted)),
-        ("rejected rows".into(), rejected_text(|reason| r.rejected.of(reason))),
-        ("unreadable rows skipped".into(), r.unreadable.skipped.to_string()),
+        (
+            "rows".into(),
+            format!("{} stepped, {} accepted", r.rows, c.accepted),
+        ),
+        (
+            "rejected rows".into(),
+            rejected_text(|reason| r.rejected.of(reason)),
+        ),
+        (
+            "unreadable rows skipped".into(),
+            r.unreadable.skipped.to_string(),
+        ),
         ("lost samples filled".into(), c.filled.to_string()),
         ("window restarts".into(), c.window_restarts.to_string()),
         ("clock steps".into(), c.clock_steps.to_string()),
     ];
     rows.extend(timeline_facts(tl));
     let learned = vec![
-        ("sample interval".to_string(), r.sample_interval_s.map_or("not yet learned".into(), |d| format!("{} s", significant_4(d)))),
-        ("rotation pattern".into(), r.rotation.kind.map_or("not yet learned".into(), |k| k.name().to_string())),
+        (
+            "sample interval".to_string(),
+            r.sample_interval_s.map_or("not yet learned".into(), |d| {
+                format!("{} s", significant_4(d))
+            }),
+        ),
+        (
+            "rotation pattern".into(),
+            r.rotation
+                .kind
+                .map_or("not yet learned".into(), |k| k.name().to_string()),
+        ),
         (
             "rotation period".into(),
             match r.rotation.period_s {
-                Some(p) => format!("{} s{}", significant_4(p), if r.rotation.pinned { " (pinned)" } else { "" }),
+                Some(p) => format!(
+                    "{} s{}",
+                    significant_4(p),
+                    if r.rotation.pinned { " (pinned)" } else { "" }
+                ),
                 None => "not yet detected".into(),
             },
         ),
-        ("samples per window entry".into(), r.rotation.samples_per_entry.to_string()),
+        (
+            "samples per window entry".into(),
+            r.rotation.samples_per_entry.to_string(),
+        ),
         ("in one line".into(), crate::replay::pattern_summary(r)),
     ];
     let mut sections = vec![
         Section::new("Summary").with(Block::Facts(rows)),
-        final_estimate_section(tl.final_estimate(), r.final_status.map(|s| s.name()), r.holdup.map(|h| h.to_string())),
+        final_estimate_section(
+            tl.final_estimate(),
+            r.final_status.map(|s| s.name()),
+            r.holdup.map(|h| h.to_string()),
+        ),
         Section::new("What was learned from the log").with(Block::Facts(learned)),
     ];
     if let Some(rep) = report {
@@ -159,7 +265,11 @@ pub fn write_replay_report(dir: &Path, log: &str, method: &str, r: &Replay, repo
     sections.push(figures_section(figures));
     sections.extend(extra);
     sections.push(events_section(tl));
-    let page = Page { title: format!("RINS installation errors: {log}"), command: command_line(), sections };
+    let page = Page {
+        title: format!("RINS installation errors: {log}"),
+        command: command_line(),
+        sections,
+    };
     let path = dir.join(PAGE);
     page.write(&path)?;
     Ok(path)
@@ -181,12 +291,31 @@ pub fn write_stream_report(
         ("log".to_string(), log.to_string()),
         ("streamed through".into(), through.to_string()),
         ("method (the firmware's)".into(), method.to_string()),
-        ("samples accepted by the firmware".into(), status.accepted.to_string()),
-        ("rejected samples".into(), rejected_text(|reason| status.counters.rejected_samples.get(reason as usize).copied().unwrap_or(0))),
-        ("bad frames".into(), status.counters.bad_frames_total().to_string()),
+        (
+            "samples accepted by the firmware".into(),
+            status.accepted.to_string(),
+        ),
+        (
+            "rejected samples".into(),
+            rejected_text(|reason| {
+                status
+                    .counters
+                    .rejected_samples
+                    .get(reason as usize)
+                    .copied()
+                    .unwrap_or(0)
+            }),
+        ),
+        (
+            "bad frames".into(),
+            status.counters.bad_frames_total().to_string(),
+        ),
         ("lost samples filled".into(), status.filled.to_string()),
         ("window restarts".into(), status.window_restarts.to_string()),
-        ("clock steps (from the stamps)".into(), tl.buckets().map(|b| b.clock_steps).sum::<u64>().to_string()),
+        (
+            "clock steps (from the stamps)".into(),
+            tl.buckets().map(|b| b.clock_steps).sum::<u64>().to_string(),
+        ),
     ];
     facts.extend(timeline_facts(tl));
     let final_status = tl.events().iter().rev().find_map(|e| match e.kind {
@@ -205,7 +334,11 @@ pub fn write_stream_report(
     }
     sections.push(figures_section(figures));
     sections.push(events_section(tl));
-    let page = Page { title: format!("RINS installation errors, streamed through the firmware: {log}"), command: command_line(), sections };
+    let page = Page {
+        title: format!("RINS installation errors, streamed through the firmware: {log}"),
+        command: command_line(),
+        sections,
+    };
     let path = dir.join(PAGE);
     page.write(&path)?;
     Ok(path)
@@ -233,7 +366,14 @@ pub fn write_monte_carlo_report(dir: &Path, study: &MonteCarloStudy) -> anyhow::
             caption: "Median, 95th percentile and largest absolute error over the runs, and the share of errors within twice their reported 1-sigma, over time".into(),
         }]),
     ];
-    let page = Page { title: format!("RINS installation errors: Monte Carlo, {}", study.description), command: command_line(), sections };
+    let page = Page {
+        title: format!(
+            "RINS installation errors: Monte Carlo, {}",
+            study.description
+        ),
+        command: command_line(),
+        sections,
+    };
     let path = dir.join(PAGE);
     page.write(&path)?;
     Ok(path)

@@ -60,7 +60,8 @@ impl<const N: usize> FrameAccumulator<N> {
 
     /// Takes one byte; at a frame's end returns the decoded message or why the frame was bad.
     pub fn push_decode<T: DeserializeOwned>(&mut self, byte: u8) -> Option<Result<T, FrameError>> {
-        self.push(byte).map(|frame| frame.and_then(|bytes| decode_frame(bytes)))
+        self.push(byte)
+            .map(|frame| frame.and_then(|bytes| decode_frame(bytes)))
     }
 
     /// Drops the frame being received (its bytes were cut by a hole in the stream); the bytes up
@@ -124,7 +125,10 @@ mod tests {
     }
 
     fn feed(rx: &mut Rx, bytes: &[u8]) -> Vec<Result<Request, FrameError>> {
-        bytes.iter().filter_map(|b| rx.push_decode::<Request>(*b)).collect()
+        bytes
+            .iter()
+            .filter_map(|b| rx.push_decode::<Request>(*b))
+            .collect()
     }
 
     #[test]
@@ -138,7 +142,10 @@ mod tests {
         for r in &sent {
             stream.extend(frame(r));
         }
-        let got: Vec<Request> = feed(&mut rx, &stream).into_iter().map(|r| r.unwrap()).collect();
+        let got: Vec<Request> = feed(&mut rx, &stream)
+            .into_iter()
+            .map(|r| r.unwrap())
+            .collect();
         assert_eq!(got, sent);
     }
 
@@ -174,7 +181,10 @@ mod tests {
             let got = feed(&mut rx, &stream);
             assert_eq!(got.len(), 2, "cut {cut}");
             assert!(
-                matches!(got[0], Err(FrameError::Cobs | FrameError::TooShort | FrameError::Crc)),
+                matches!(
+                    got[0],
+                    Err(FrameError::Cobs | FrameError::TooShort | FrameError::Crc)
+                ),
                 "cut {cut}: {:?}",
                 got[0]
             );
@@ -186,7 +196,7 @@ mod tests {
     fn oversized_frame_is_reported_once_and_resyncs() {
         let mut rx = Rx::new();
         let mut stream = std::vec![0u8];
-        stream.extend(std::iter::repeat(0x5A).take(1000));
+        stream.extend(core::iter::repeat_n(0x5A, 1000));
         stream.extend(frame(&sample(4.0)));
         let got = feed(&mut rx, &stream);
         assert_eq!(got, std::vec![Err(FrameError::Oversize), Ok(sample(4.0))]);
@@ -224,7 +234,10 @@ mod tests {
             assert!(rx.push(*b).is_none());
             assert_eq!(rx.pending(), i, "after {} bytes", i + 1);
         }
-        assert_eq!(rx.push(0).map(|r| r.map(|bytes| bytes.to_vec())), Some(Ok(f[1..5].to_vec())));
+        assert_eq!(
+            rx.push(0).map(|r| r.map(|bytes| bytes.to_vec())),
+            Some(Ok(f[1..5].to_vec()))
+        );
         assert_eq!(rx.pending(), 0);
         assert!(rx.push(0x02).is_none());
         assert_eq!(rx.pending(), 1, "a new frame starts after the ended one");
@@ -260,7 +273,11 @@ mod tests {
             x ^= x << 13;
             x ^= x >> 17;
             x ^= x << 5;
-            let b = if x % 17 == 0 { 0 } else { (x >> 8) as u8 };
+            let b = if x.is_multiple_of(17) {
+                0
+            } else {
+                (x >> 8) as u8
+            };
             let _ = rx.push_decode::<Request>(b);
         }
     }

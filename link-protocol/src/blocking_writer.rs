@@ -131,7 +131,11 @@ mod tests {
         w.write_all(&frame).unwrap();
         w.flush().unwrap();
         assert_eq!(w.inner_mut().sent, frame);
-        assert_eq!(w.inner_mut().writes, 256 * 6, "five busy polls, then the byte, for each byte");
+        assert_eq!(
+            w.inner_mut().writes,
+            256 * 6,
+            "five busy polls, then the byte, for each byte"
+        );
     }
 
     #[test]
@@ -150,7 +154,10 @@ mod tests {
             let mut bare = MockUsart::new(1);
             let _ = bare.write_all(b"frame");
         });
-        assert!(result.is_err(), "write_all over a transmitter that returns Ok(0) panics");
+        assert!(
+            result.is_err(),
+            "write_all over a transmitter that returns Ok(0) panics"
+        );
     }
 
     #[test]

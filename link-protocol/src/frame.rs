@@ -63,7 +63,10 @@ impl TryFrom<u8> for FrameError {
         Self::ALL
             .into_iter()
             .find(|kind| *kind as u8 == code)
-            .ok_or(UnknownCode { what: "bad-frame", code })
+            .ok_or(UnknownCode {
+                what: "bad-frame",
+                code,
+            })
     }
 }
 
@@ -117,7 +120,9 @@ pub const MAX_FRAME: usize = cobs::max_encoding_length(MAX_MESSAGE + 2) + 2;
 pub fn encode_frame<T: Serialize>(message: &T, out: &mut [u8]) -> Result<usize, EncodeError> {
     let mut raw = [0u8; MAX_MESSAGE + 2];
     let n = {
-        let body = raw.get_mut(..MAX_MESSAGE).ok_or(EncodeError::MessageTooLarge)?;
+        let body = raw
+            .get_mut(..MAX_MESSAGE)
+            .ok_or(EncodeError::MessageTooLarge)?;
         postcard::to_slice(message, body)
             .map_err(|_| EncodeError::MessageTooLarge)?
             .len()
@@ -146,7 +151,13 @@ pub fn encode_response_frame(
     response: &crate::message::Response,
     out: &mut [u8],
 ) -> Result<usize, EncodeError> {
-    encode_frame(&crate::message::Numbered { seq, message: *response }, out)
+    encode_frame(
+        &crate::message::Numbered {
+            seq,
+            message: *response,
+        },
+        out,
+    )
 }
 
 /// COBS-decodes a received frame (without its 0x00 delimiters) in place; returns the decoded
@@ -208,7 +219,9 @@ mod tests {
     }
 
     fn sample() -> SampleMsg {
-        SampleMsg::from(&Sample::from_degrees(49_999.0, 123.4, -56.7, 30.0, 10.0, 2.9, -0.4))
+        SampleMsg::from(&Sample::from_degrees(
+            49_999.0, 123.4, -56.7, 30.0, 10.0, 2.9, -0.4,
+        ))
     }
 
     fn step_reply() -> StepReply {
@@ -267,7 +280,12 @@ mod tests {
 
     #[test]
     fn requests_and_responses_round_trip() {
-        let requests = [Request::Sample(sample()), Request::Reset, Request::ReadStatus, Request::Hang];
+        let requests = [
+            Request::Sample(sample()),
+            Request::Reset,
+            Request::ReadStatus,
+            Request::Hang,
+        ];
         for r in requests {
             for seq in [UNNUMBERED, 1, u32::MAX] {
                 let numbered = Numbered { seq, message: r };
@@ -290,7 +308,10 @@ mod tests {
                 protocol_version: crate::PROTOCOL_VERSION,
             },
         ] {
-            let numbered = Numbered { seq: u32::MAX, message: r };
+            let numbered = Numbered {
+                seq: u32::MAX,
+                message: r,
+            };
             let mut inner = body(&frame_of(&numbered));
             assert!(inner.len() <= MAX_RESPONSE_ENCODED, "{} bytes", inner.len());
             assert_eq!(decode_frame::<Numbered<Response>>(&mut inner), Ok(numbered));
@@ -328,7 +349,9 @@ mod tests {
             pitch_rad: 0.125,
         };
         let mut raw = [0u8; 64];
-        let bytes = postcard::to_slice(&Request::Sample(m), &mut raw).unwrap().to_vec();
+        let bytes = postcard::to_slice(&Request::Sample(m), &mut raw)
+            .unwrap()
+            .to_vec();
         let mut expect = std::vec![0u8];
         expect.extend_from_slice(&1.0f64.to_le_bytes());
         for v in [2.0f32, 0.0, 0.5, -1.0, 0.25, 0.125] {
@@ -337,41 +360,74 @@ mod tests {
         assert_eq!(bytes, expect);
         assert_eq!(bytes.len(), 33);
         // A numbered message is its sequence number (varint), then the message.
-        let numbered = postcard::to_slice(&Numbered { seq: 300, message: Request::Sample(m) }, &mut raw)
-            .unwrap()
-            .to_vec();
+        let numbered = postcard::to_slice(
+            &Numbered {
+                seq: 300,
+                message: Request::Sample(m),
+            },
+            &mut raw,
+        )
+        .unwrap()
+        .to_vec();
         assert_eq!(numbered[..2], [0xac, 0x02]);
         assert_eq!(numbered[2..], expect[..]);
         // The examples of docs/link-protocol.md, byte for byte.
         let sample_frame = [
-            0x00, 0x02, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xf0, 0x3f, 0x01, 0x01, 0x02, 0x40, 0x01, 0x01,
-            0x01, 0x01, 0x01, 0x01, 0x02, 0x3f, 0x01, 0x03, 0x80, 0xbf, 0x01, 0x03, 0x80, 0x3e, 0x01, 0x01, 0x04, 0x3e,
-            0xd9, 0xe4, 0x00,
+            0x00, 0x02, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x03, 0xf0, 0x3f, 0x01, 0x01,
+            0x02, 0x40, 0x01, 0x01, 0x01, 0x01, 0x01, 0x01, 0x02, 0x3f, 0x01, 0x03, 0x80, 0xbf,
+            0x01, 0x03, 0x80, 0x3e, 0x01, 0x01, 0x04, 0x3e, 0xd9, 0xe4, 0x00,
         ];
-        assert_eq!(frame_of(&Numbered { seq: 1, message: Request::Sample(m) }), sample_frame.to_vec());
         assert_eq!(
-            frame_of(&Numbered { seq: 2, message: Request::Reset }),
+            frame_of(&Numbered {
+                seq: 1,
+                message: Request::Sample(m)
+            }),
+            sample_frame.to_vec()
+        );
+        assert_eq!(
+            frame_of(&Numbered {
+                seq: 2,
+                message: Request::Reset
+            }),
             [0x00, 0x05, 0x02, 0x01, 0x4c, 0x6b, 0x00].to_vec()
         );
         assert_eq!(
-            frame_of(&Numbered { seq: 3, message: Request::ReadStatus }),
+            frame_of(&Numbered {
+                seq: 3,
+                message: Request::ReadStatus
+            }),
             [0x00, 0x05, 0x03, 0x02, 0x1e, 0x68, 0x00].to_vec()
         );
         assert_eq!(
-            frame_of(&Numbered { seq: 300, message: Request::Hang }),
+            frame_of(&Numbered {
+                seq: 300,
+                message: Request::Hang
+            }),
             [0x00, 0x06, 0xac, 0x02, 0x03, 0x60, 0x52, 0x00].to_vec()
         );
         // The firmware's boot announcement (protocol 5), unnumbered: M = 00 03 05.
         let ready = Numbered {
             seq: UNNUMBERED,
-            message: Response::Ready { protocol_version: crate::PROTOCOL_VERSION },
+            message: Response::Ready {
+                protocol_version: crate::PROTOCOL_VERSION,
+            },
         };
         let bytes = postcard::to_slice(&ready, &mut raw).unwrap().to_vec();
         assert_eq!(bytes, [0x00, 0x03, 0x05]);
         assert_eq!(crate::crc::crc16(&bytes), 0xc96a);
-        assert_eq!(frame_of(&ready), [0x00, 0x01, 0x05, 0x03, 0x05, 0x6a, 0xc9, 0x00].to_vec());
+        assert_eq!(
+            frame_of(&ready),
+            [0x00, 0x01, 0x05, 0x03, 0x05, 0x6a, 0xc9, 0x00].to_vec()
+        );
         // No sample frame is longer than 43 bytes: 5 + 33 + 2 bytes COBS-encoded into at most 41.
-        assert!(frame_of(&Numbered { seq: u32::MAX, message: Request::Sample(sample()) }).len() <= MAX_SAMPLE_FRAME);
+        assert!(
+            frame_of(&Numbered {
+                seq: u32::MAX,
+                message: Request::Sample(sample())
+            })
+            .len()
+                <= MAX_SAMPLE_FRAME
+        );
         assert_eq!(MAX_SAMPLE_FRAME, 43);
     }
 
@@ -379,9 +435,15 @@ mod tests {
     #[test]
     fn the_longest_answers_are_as_documented() {
         let mut raw = [0u8; 300];
-        let status = Numbered { seq: u32::MAX, message: Response::Status(longest_status()) };
+        let status = Numbered {
+            seq: u32::MAX,
+            message: Response::Status(longest_status()),
+        };
         assert_eq!(postcard::to_slice(&status, &mut raw).unwrap().len(), 177);
-        let step = Numbered { seq: u32::MAX, message: Response::Step(step_reply()) };
+        let step = Numbered {
+            seq: u32::MAX,
+            message: Response::Step(step_reply()),
+        };
         assert_eq!(postcard::to_slice(&step, &mut raw).unwrap().len(), 111);
         assert!(frame_of(&status).len() - 2 <= MAX_RESPONSE_ENCODED);
     }
@@ -415,7 +477,10 @@ mod tests {
         for data in [&[0x01u8][..], &[0x01, 0x02]] {
             let mut enc = std::vec![0u8; 8];
             let n = cobs::try_encode(data, &mut enc).unwrap();
-            assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::TooShort));
+            assert_eq!(
+                decode_frame::<Request>(&mut enc[..n]),
+                Err(FrameError::TooShort)
+            );
         }
         // Unknown variant 7, and a valid Reset followed by a stray byte: CRC fine, message wrong.
         for msg in [&[0x07u8][..], &[0x01, 0x55]] {
@@ -423,7 +488,10 @@ mod tests {
             data.extend_from_slice(&crate::crc::crc16(msg).to_le_bytes());
             let mut enc = std::vec![0u8; 8];
             let n = cobs::try_encode(&data, &mut enc).unwrap();
-            assert_eq!(decode_frame::<Request>(&mut enc[..n]), Err(FrameError::Message));
+            assert_eq!(
+                decode_frame::<Request>(&mut enc[..n]),
+                Err(FrameError::Message)
+            );
         }
     }
 
@@ -436,12 +504,20 @@ mod tests {
         );
         // Every length short of the frame, including the one that lacks only the last code byte
         // (which the COBS encoder alone does not report), is an error; the exact length is enough.
-        let requests = [Request::Sample(sample()), Request::Reset, Request::ReadStatus];
+        let requests = [
+            Request::Sample(sample()),
+            Request::Reset,
+            Request::ReadStatus,
+        ];
         for r in requests {
             let full = frame_of(&r);
             for len in 0..full.len() {
                 let mut out = std::vec![0u8; len];
-                assert_eq!(encode_frame(&r, &mut out), Err(EncodeError::BufferTooSmall), "{r:?} in {len}");
+                assert_eq!(
+                    encode_frame(&r, &mut out),
+                    Err(EncodeError::BufferTooSmall),
+                    "{r:?} in {len}"
+                );
             }
             let mut out = std::vec![0u8; full.len()];
             assert_eq!(encode_frame(&r, &mut out), Ok(full.len()));
@@ -452,7 +528,13 @@ mod tests {
     #[test]
     fn frame_error_codes_are_the_documented_indices_and_round_trip() {
         // docs/link-protocol.md's table: index, kind.
-        let table = [(0u8, "oversize"), (1, "cobs"), (2, "too_short"), (3, "crc"), (4, "message")];
+        let table = [
+            (0u8, "oversize"),
+            (1, "cobs"),
+            (2, "too_short"),
+            (3, "crc"),
+            (4, "message"),
+        ];
         assert_eq!(FrameError::COUNT, table.len());
         for (kind, (code, name)) in FrameError::ALL.into_iter().zip(table) {
             assert_eq!(kind as u8, code);
@@ -460,7 +542,13 @@ mod tests {
             assert_eq!(FrameError::try_from(code), Ok(kind));
         }
         for code in FrameError::COUNT as u8..=u8::MAX {
-            assert_eq!(FrameError::try_from(code), Err(UnknownCode { what: "bad-frame", code }));
+            assert_eq!(
+                FrameError::try_from(code),
+                Err(UnknownCode {
+                    what: "bad-frame",
+                    code
+                })
+            );
         }
     }
 
@@ -475,7 +563,10 @@ mod tests {
             EncodeError::BufferTooSmall.to_string(),
             "output buffer too small for the frame"
         );
-        assert_eq!(FrameError::try_from(9).unwrap_err().to_string(), "9 is not a known bad-frame code");
+        assert_eq!(
+            FrameError::try_from(9).unwrap_err().to_string(),
+            "9 is not a known bad-frame code"
+        );
         let boxed: std::boxed::Box<dyn core::error::Error> = std::boxed::Box::new(FrameError::Crc);
         assert_eq!(boxed.to_string(), "frame CRC does not match");
     }
@@ -488,7 +579,11 @@ mod tests {
         assert_eq!(&enc[..n], [0x07, 1, 2, 3, 4, 5, 6]);
         for cut in 1..n {
             let mut part = enc[..cut].to_vec();
-            assert_eq!(cobs_decode_strict(&mut part), Err(FrameError::Cobs), "cut at {cut}");
+            assert_eq!(
+                cobs_decode_strict(&mut part),
+                Err(FrameError::Cobs),
+                "cut at {cut}"
+            );
         }
         assert_eq!(cobs_decode_strict(&mut []), Err(FrameError::Cobs));
         // A frame of one group (a bare Ready message) cut anywhere.
@@ -498,15 +593,28 @@ mod tests {
         assert_eq!(ready, [0x05, 0x03, 0x05, 0xf9, 0x18]);
         for cut in 0..ready.len() {
             let mut part = ready[..cut].to_vec();
-            assert_eq!(decode_frame::<Response>(&mut part), Err(FrameError::Cobs), "cut at {cut}");
+            assert_eq!(
+                decode_frame::<Response>(&mut part),
+                Err(FrameError::Cobs),
+                "cut at {cut}"
+            );
         }
     }
 
     #[test]
     fn a_zero_byte_inside_a_frame_is_a_cobs_error() {
-        for frame in [&[0x02u8, 0x00][..], &[0x00], &[0x01, 0x00, 0x05], &[0x02, 0x11, 0x00, 0x05]] {
+        for frame in [
+            &[0x02u8, 0x00][..],
+            &[0x00],
+            &[0x01, 0x00, 0x05],
+            &[0x02, 0x11, 0x00, 0x05],
+        ] {
             let mut f = frame.to_vec();
-            assert_eq!(cobs_decode_strict(&mut f), Err(FrameError::Cobs), "{frame:02x?}");
+            assert_eq!(
+                cobs_decode_strict(&mut f),
+                Err(FrameError::Cobs),
+                "{frame:02x?}"
+            );
         }
         // A whole, valid frame followed by a 0x00 and more bytes is refused, not read up to the 0x00.
         for r in [Request::Sample(sample()), Request::Reset] {

@@ -44,17 +44,33 @@ fn counting(from: u8, to: u8) -> Vec<u8> {
 
 #[test]
 fn cobs_matches_the_published_examples_both_ways() {
-    let mut long_runs: Vec<(Vec<u8>, Vec<u8>)> = Vec::new();
-    // 01..FE: one full group, no empty group after it.
-    long_runs.push((counting(0x01, 0xFE), [std::vec![0xFF], counting(0x01, 0xFE)].concat()));
-    // 00 01..FE
-    long_runs.push(([std::vec![0x00], counting(0x01, 0xFE)].concat(), [std::vec![0x01, 0xFF], counting(0x01, 0xFE)].concat()));
-    // 01..FF: the full group, then a group for the last byte.
-    long_runs.push((counting(0x01, 0xFF), [std::vec![0xFF], counting(0x01, 0xFE), std::vec![0x02, 0xFF]].concat()));
-    // 02..FF 00
-    long_runs.push(([counting(0x02, 0xFF), std::vec![0x00]].concat(), [std::vec![0xFF], counting(0x02, 0xFF), std::vec![0x01, 0x01]].concat()));
-    // 03..FF 00 01
-    long_runs.push(([counting(0x03, 0xFF), std::vec![0x00, 0x01]].concat(), [std::vec![0xFE], counting(0x03, 0xFF), std::vec![0x02, 0x01]].concat()));
+    let long_runs: Vec<(Vec<u8>, Vec<u8>)> = std::vec![
+        // 01..FE: one full group, no empty group after it.
+        (
+            counting(0x01, 0xFE),
+            [std::vec![0xFF], counting(0x01, 0xFE)].concat(),
+        ),
+        // 00 01..FE
+        (
+            [std::vec![0x00], counting(0x01, 0xFE)].concat(),
+            [std::vec![0x01, 0xFF], counting(0x01, 0xFE)].concat(),
+        ),
+        // 01..FF: the full group, then a group for the last byte.
+        (
+            counting(0x01, 0xFF),
+            [std::vec![0xFF], counting(0x01, 0xFE), std::vec![0x02, 0xFF]].concat(),
+        ),
+        // 02..FF 00
+        (
+            [counting(0x02, 0xFF), std::vec![0x00]].concat(),
+            [std::vec![0xFF], counting(0x02, 0xFF), std::vec![0x01, 0x01]].concat(),
+        ),
+        // 03..FF 00 01
+        (
+            [counting(0x03, 0xFF), std::vec![0x00, 0x01]].concat(),
+            [std::vec![0xFE], counting(0x03, 0xFF), std::vec![0x02, 0x01]].concat(),
+        ),
+    ];
     let short: [(&[u8], &[u8]); 5] = [
         (&[0x00], &[0x01, 0x01]),
         (&[0x00, 0x00], &[0x01, 0x01, 0x01]),
@@ -62,35 +78,82 @@ fn cobs_matches_the_published_examples_both_ways() {
         (&[0x11, 0x22, 0x00, 0x33], &[0x03, 0x11, 0x22, 0x02, 0x33]),
         (&[0x11, 0x22, 0x33, 0x44], &[0x05, 0x11, 0x22, 0x33, 0x44]),
     ];
-    let examples = short.iter().map(|(d, e)| (d.to_vec(), e.to_vec())).chain(long_runs);
+    let examples = short
+        .iter()
+        .map(|(d, e)| (d.to_vec(), e.to_vec()))
+        .chain(long_runs);
     let mut n = 0;
     for (data, encoded) in examples {
         assert_eq!(crate_encode(&data), encoded, "encoding {}", hex(&data));
-        assert_eq!(strict_decode(&encoded), Some(data.clone()), "decoding {}", hex(&encoded));
+        assert_eq!(
+            strict_decode(&encoded),
+            Some(data.clone()),
+            "decoding {}",
+            hex(&encoded)
+        );
         n += 1;
     }
     assert_eq!(n, 10);
     // 11 00 00 00 (the last published short example).
-    assert_eq!(crate_encode(&[0x11, 0x00, 0x00, 0x00]), [0x02, 0x11, 0x01, 0x01, 0x01]);
+    assert_eq!(
+        crate_encode(&[0x11, 0x00, 0x00, 0x00]),
+        [0x02, 0x11, 0x01, 0x01, 0x01]
+    );
 }
 
 /// The frames of real messages, exact bytes (hex, delimiters included).
 fn golden() -> [(&'static str, Vec<u8>, &'static str); 5] {
-    let sample = SampleMsg::from(&estimator_core::Sample::from_degrees(86_399.0, 359.0, -3.0, 61.5, 271.0, -9.5, 4.25));
+    let sample = SampleMsg::from(&estimator_core::Sample::from_degrees(
+        86_399.0, 359.0, -3.0, 61.5, 271.0, -9.5, 4.25,
+    ));
     [
-        ("sample, seq 7", frame(&Numbered { seq: 7, message: Request::Sample(sample) }), GOLDEN_SAMPLE),
-        ("reset, seq 8", frame(&Numbered { seq: 8, message: Request::Reset }), GOLDEN_RESET),
-        ("read status, seq 300", frame(&Numbered { seq: 300, message: Request::ReadStatus }), GOLDEN_READ_STATUS),
+        (
+            "sample, seq 7",
+            frame(&Numbered {
+                seq: 7,
+                message: Request::Sample(sample),
+            }),
+            GOLDEN_SAMPLE,
+        ),
+        (
+            "reset, seq 8",
+            frame(&Numbered {
+                seq: 8,
+                message: Request::Reset,
+            }),
+            GOLDEN_RESET,
+        ),
+        (
+            "read status, seq 300",
+            frame(&Numbered {
+                seq: 300,
+                message: Request::ReadStatus,
+            }),
+            GOLDEN_READ_STATUS,
+        ),
         (
             "ready",
-            frame(&Numbered { seq: UNNUMBERED, message: Response::Ready { protocol_version: crate::PROTOCOL_VERSION } }),
+            frame(&Numbered {
+                seq: UNNUMBERED,
+                message: Response::Ready {
+                    protocol_version: crate::PROTOCOL_VERSION,
+                },
+            }),
             GOLDEN_READY,
         ),
-        ("seq 0xFFFF_FFFF", frame(&Numbered { seq: u32::MAX, message: Request::Reset }), GOLDEN_LAST_SEQ),
+        (
+            "seq 0xFFFF_FFFF",
+            frame(&Numbered {
+                seq: u32::MAX,
+                message: Request::Reset,
+            }),
+            GOLDEN_LAST_SEQ,
+        ),
     ]
 }
 
-const GOLDEN_SAMPLE: &str = "000207010101011ff017f54035fa8ebc507756bd6f64893ff2d3c6bf1fc929bed8e9973d0b6a00";
+const GOLDEN_SAMPLE: &str =
+    "000207010101011ff017f54035fa8ebc507756bd6f64893ff2d3c6bf1fc929bed8e9973d0b6a00";
 const GOLDEN_RESET: &str = "00050801878400";
 const GOLDEN_READ_STATUS: &str = "0006ac0202414200";
 const GOLDEN_READY: &str = "00010503056ac900";
@@ -98,7 +161,11 @@ const GOLDEN_LAST_SEQ: &str = "0009ffffffff0f01df8400";
 
 #[test]
 fn golden_frames_are_the_bytes_of_protocol_version_5() {
-    assert_eq!(crate::PROTOCOL_VERSION, 5, "a new protocol version needs new golden frames (see this module's doc)");
+    assert_eq!(
+        crate::PROTOCOL_VERSION,
+        5,
+        "a new protocol version needs new golden frames (see this module's doc)"
+    );
     let frames = golden();
     for (what, bytes, _) in &frames {
         std::println!("{what}: {}", hex(bytes));
@@ -115,13 +182,22 @@ fn golden_frames_decode_and_every_cut_of_them_is_refused() {
         .filter(|(what, ..)| *what != "ready")
         .map(|(_, bytes, _)| decode_frame(&mut bytes[1..bytes.len() - 1].to_vec()).unwrap())
         .collect();
-    assert_eq!(decoded.iter().map(|m| m.seq).collect::<Vec<_>>(), [7, 8, 300, u32::MAX]);
+    assert_eq!(
+        decoded.iter().map(|m| m.seq).collect::<Vec<_>>(),
+        [7, 8, 300, u32::MAX]
+    );
     assert_eq!(decoded[1].message, Request::Reset);
     for (what, bytes, _) in golden() {
         let body = &bytes[1..bytes.len() - 1];
         for cut in 0..body.len() {
-            assert!(decode_frame::<Numbered<Request>>(&mut body[..cut].to_vec()).is_err(), "{what} cut at {cut}");
-            assert!(decode_frame::<Numbered<Response>>(&mut body[..cut].to_vec()).is_err(), "{what} cut at {cut}");
+            assert!(
+                decode_frame::<Numbered<Request>>(&mut body[..cut].to_vec()).is_err(),
+                "{what} cut at {cut}"
+            );
+            assert!(
+                decode_frame::<Numbered<Response>>(&mut body[..cut].to_vec()).is_err(),
+                "{what} cut at {cut}"
+            );
         }
     }
 }
@@ -136,7 +212,10 @@ fn a_run_of_254_at_the_end_decodes_in_both_forms() {
     let ours = crate_encode(&data);
     assert_eq!(ours, [std::vec![0xFF], data.clone()].concat());
     assert_eq!(strict_decode(&ours), Some(data.clone()));
-    assert_eq!(strict_decode(&[ours.as_slice(), &[0x01]].concat()), Some(data));
+    assert_eq!(
+        strict_decode(&[ours.as_slice(), &[0x01]].concat()),
+        Some(data)
+    );
 }
 
 /// Why [`cobs_decode_strict`] checks for 0x00 itself: the crate alone decodes up to the first 0x00.

@@ -8,7 +8,9 @@
 //! travel exactly as [`estimator_core::Output`] holds them, so the host rebuilds the same `Output`.
 //! Variants are only ever appended, never reordered.
 
-use estimator_core::{Attitude, Estimate, Field, Output, Real, RejectReason, Sample, SampleError, Status, UnknownCode};
+use estimator_core::{
+    Attitude, Estimate, Field, Output, Real, RejectReason, Sample, SampleError, Status, UnknownCode,
+};
 use serde::{Deserialize, Serialize};
 
 use crate::frame::FrameError;
@@ -151,12 +153,16 @@ impl Counters {
 
     /// All bad frames.
     pub fn bad_frames_total(&self) -> u32 {
-        self.bad_frames.iter().fold(0u32, |a, b| a.saturating_add(*b))
+        self.bad_frames
+            .iter()
+            .fold(0u32, |a, b| a.saturating_add(*b))
     }
 
     /// All rejected samples.
     pub fn rejected_samples_total(&self) -> u32 {
-        self.rejected_samples.iter().fold(0u32, |a, b| a.saturating_add(*b))
+        self.rejected_samples
+            .iter()
+            .fold(0u32, |a, b| a.saturating_add(*b))
     }
 }
 
@@ -371,7 +377,10 @@ impl TryFrom<u8> for ResetCause {
         Self::ALL
             .into_iter()
             .find(|c| *c as u8 == code)
-            .ok_or(UnknownCode { what: "reset-cause", code })
+            .ok_or(UnknownCode {
+                what: "reset-cause",
+                code,
+            })
     }
 }
 
@@ -391,7 +400,11 @@ pub enum ClockSource {
 
 impl ClockSource {
     /// Every source, in code order.
-    pub const ALL: [ClockSource; 3] = [ClockSource::Crystal, ClockSource::InternalFallback, ClockSource::Fixed];
+    pub const ALL: [ClockSource; 3] = [
+        ClockSource::Crystal,
+        ClockSource::InternalFallback,
+        ClockSource::Fixed,
+    ];
 
     /// Short name, as the host prints it.
     pub const fn name(&self) -> &'static str {
@@ -410,7 +423,10 @@ impl TryFrom<u8> for ClockSource {
         Self::ALL
             .into_iter()
             .find(|c| *c as u8 == code)
-            .ok_or(UnknownCode { what: "clock-source", code })
+            .ok_or(UnknownCode {
+                what: "clock-source",
+                code,
+            })
     }
 }
 
@@ -469,15 +485,39 @@ mod tests {
         };
         assert_eq!(c.errors_total(), 31);
         assert_eq!(c.overruns(), 6);
-        let saturated = LinkCounters { lost_frames: u32::MAX, ..c };
+        let saturated = LinkCounters {
+            lost_frames: u32::MAX,
+            ..c
+        };
         assert_eq!(saturated.errors_total(), u32::MAX);
     }
 
     #[test]
     fn a_reply_whose_codes_do_not_fit_is_no_error() {
-        let ok = RejectedReply::new(1.0, &SampleError::NonFinite(Field::Roll), 0, Counters::default());
-        for (reason, field) in [(0, NO_FIELD), (0, 7), (1, 5), (2, NO_FIELD), (5, NO_FIELD), (255, 0)] {
-            assert_eq!(RejectedReply { reason, field, ..ok }.error(), None, "reason {reason} field {field}");
+        let ok = RejectedReply::new(
+            1.0,
+            &SampleError::NonFinite(Field::Roll),
+            0,
+            Counters::default(),
+        );
+        for (reason, field) in [
+            (0, NO_FIELD),
+            (0, 7),
+            (1, 5),
+            (2, NO_FIELD),
+            (5, NO_FIELD),
+            (255, 0),
+        ] {
+            assert_eq!(
+                RejectedReply {
+                    reason,
+                    field,
+                    ..ok
+                }
+                .error(),
+                None,
+                "reason {reason} field {field}"
+            );
         }
     }
 }

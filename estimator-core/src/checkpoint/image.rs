@@ -2,7 +2,9 @@
 //! image (the layout is in the module doc of [`crate::checkpoint`]).
 
 use super::wire::{Reader, Writer};
-use super::{crc32, ensure, CheckpointError, CHECKPOINT_LEN, CRC_LEN, HEADER_LEN, MAGIC, R, VERSION};
+use super::{
+    crc32, ensure, CheckpointError, CHECKPOINT_LEN, CRC_LEN, HEADER_LEN, MAGIC, R, VERSION,
+};
 use crate::config::Method;
 
 /// Writes the header of an image of an estimator running `method`.
@@ -28,23 +30,48 @@ pub(crate) fn seal(image: &mut [u8]) {
 pub(crate) fn verified_image(buf: &[u8]) -> Result<(&[u8], Method), CheckpointError> {
     let len = CHECKPOINT_LEN;
     let Some(header) = buf.get(..HEADER_LEN) else {
-        return Err(CheckpointError::BufferTooSmall { needed: HEADER_LEN, available: buf.len() });
+        return Err(CheckpointError::BufferTooSmall {
+            needed: HEADER_LEN,
+            available: buf.len(),
+        });
     };
     let mut r = Reader::new(header, 0);
     ensure(r.array::<4>() == MAGIC, CheckpointError::BadMagic)?;
     let found = r.u16();
-    ensure(found == VERSION, CheckpointError::Version { found, expected: VERSION })?;
+    ensure(
+        found == VERSION,
+        CheckpointError::Version {
+            found,
+            expected: VERSION,
+        },
+    )?;
     let real_bytes = r.u8();
-    ensure(usize::from(real_bytes) == R, CheckpointError::RealWidthMismatch(real_bytes))?;
+    ensure(
+        usize::from(real_bytes) == R,
+        CheckpointError::RealWidthMismatch(real_bytes),
+    )?;
     let method_code = r.u8();
     let found = r.u32() as usize;
-    ensure(found == len, CheckpointError::LengthMismatch { expected: len, found })?;
+    ensure(
+        found == len,
+        CheckpointError::LengthMismatch {
+            expected: len,
+            found,
+        },
+    )?;
     let Some(image) = buf.get(..len) else {
-        return Err(CheckpointError::BufferTooSmall { needed: len, available: buf.len() });
+        return Err(CheckpointError::BufferTooSmall {
+            needed: len,
+            available: buf.len(),
+        });
     };
     let stored = u32::from_le_bytes(Reader::new(image, len - CRC_LEN).array());
     let computed = crc32(image.get(..len - CRC_LEN).unwrap_or(&[]));
-    ensure(stored == computed, CheckpointError::CrcMismatch { stored, computed })?;
-    let method = Method::try_from(method_code).map_err(|_| CheckpointError::UnknownMethod(method_code))?;
+    ensure(
+        stored == computed,
+        CheckpointError::CrcMismatch { stored, computed },
+    )?;
+    let method =
+        Method::try_from(method_code).map_err(|_| CheckpointError::UnknownMethod(method_code))?;
     Ok((image, method))
 }

@@ -28,7 +28,8 @@ fn log(n: u32) -> Vec<Sample> {
             let rho = 0.3 + 2.0 * core::f64::consts::PI * t / 120.0;
             let s = 1.1 + EARTH_RATE_RAD_PER_S * t;
             let lat = 0.7f64;
-            let roll = 0.035 * (t * 1.047).sin() - x[0] * lat.sin() * (rho - s).cos() + x[2] * lat.cos() * rho.sin();
+            let roll = 0.035 * (t * 1.047).sin() - x[0] * lat.sin() * (rho - s).cos()
+                + x[2] * lat.cos() * rho.sin();
             let pitch = 0.01 * (t * 0.698).sin() + x[0] * (rho - s).sin() - x[1] * (rho - s).cos();
             let deg = |r: f64| r.to_degrees();
             Sample::from_degrees(t, deg(rho), deg(s), deg(lat), 20.0, deg(roll), deg(pitch))
@@ -55,14 +56,29 @@ pub(crate) fn image_of<const CAP: usize>(est: &Estimator<CAP>) -> Vec<u8> {
 }
 
 /// `part` written (exactly [`Stored::LEN`] bytes, or the test fails) and read back with `context`.
-pub(crate) fn written_and_read<T: Stored>(part: &T, context: T::Context<'_>) -> Result<T, CheckpointError> {
+pub(crate) fn written_and_read<T: Stored>(
+    part: &T,
+    context: T::Context<'_>,
+) -> Result<T, CheckpointError> {
     let mut buf = vec![0u8; T::LEN];
     let mut w = Writer::new(&mut buf, 0);
     part.write(&mut w);
-    assert_eq!(w.pos(), T::LEN, "{} writes {} bytes, its LEN says {}", core::any::type_name::<T>(), w.pos(), T::LEN);
+    assert_eq!(
+        w.pos(),
+        T::LEN,
+        "{} writes {} bytes, its LEN says {}",
+        core::any::type_name::<T>(),
+        w.pos(),
+        T::LEN
+    );
     let mut r = Reader::new(&buf, 0);
     let back = T::read(&mut r, context);
-    assert!(back.is_err() || r.pos() == T::LEN, "{} reads {} bytes", core::any::type_name::<T>(), r.pos());
+    assert!(
+        back.is_err() || r.pos() == T::LEN,
+        "{} reads {} bytes",
+        core::any::type_name::<T>(),
+        r.pos()
+    );
     back
 }
 
@@ -94,7 +110,7 @@ fn image_length() {
     assert_eq!(CHECKPOINT_LEN, 860);
     #[cfg(feature = "f64")]
     assert_eq!(CHECKPOINT_LEN, 1032);
-    assert!(CHECKPOINT_LEN <= 2048);
+    const { assert!(CHECKPOINT_LEN <= 2048) };
     assert_eq!(Estimator::<720>::CHECKPOINT_LEN, CHECKPOINT_LEN);
     assert_eq!(Est::CHECKPOINT_LEN, CHECKPOINT_LEN);
     assert_eq!(CHECKPOINT_LEN % 4, 0);
@@ -112,8 +128,14 @@ fn bad_method_codes_and_padding_are_refused() {
         b
     };
     // Padding after the traditional method's state, and at the end of the image.
-    refused(&edit(good.len() - CRC_LEN - 100, 1), UnusedNotZero(Part::Padding));
-    refused(&edit(good.len() - 1 - CRC_LEN, 1), UnusedNotZero(Part::Padding));
+    refused(
+        &edit(good.len() - CRC_LEN - 100, 1),
+        UnusedNotZero(Part::Padding),
+    );
+    refused(
+        &edit(good.len() - 1 - CRC_LEN, 1),
+        UnusedNotZero(Part::Padding),
+    );
     // Unknown method code.
     refused(&edit(7, 9), UnknownMethod(9));
 
@@ -128,9 +150,20 @@ fn bad_method_codes_and_padding_are_refused() {
 #[test]
 fn errors_say_what_to_do_with_an_old_image() {
     use std::string::ToString;
-    let old = CheckpointError::Version { found: 4, expected: VERSION }.to_string();
-    assert!(old.contains("older firmware") && old.contains("discarded"), "{old}");
-    let new = CheckpointError::Version { found: VERSION + 1, expected: VERSION }.to_string();
+    let old = CheckpointError::Version {
+        found: 4,
+        expected: VERSION,
+    }
+    .to_string();
+    assert!(
+        old.contains("older firmware") && old.contains("discarded"),
+        "{old}"
+    );
+    let new = CheckpointError::Version {
+        found: VERSION + 1,
+        expected: VERSION,
+    }
+    .to_string();
     assert!(new.contains("newer firmware"), "{new}");
     let e: &dyn core::error::Error = &CheckpointError::Inconsistent(Part::TimeGrid);
     assert_eq!(e.to_string(), "checkpoint sample grid: inconsistent values");
@@ -165,21 +198,38 @@ const GOLDEN_V6: &str = concat!(
 #[cfg(not(feature = "f64"))]
 #[test]
 fn the_golden_image_decodes_to_its_state_and_is_written_back_byte_for_byte() {
-    assert_eq!(VERSION, 6, "a new format version needs a golden image of its own");
-    let golden: Vec<u8> = (0..GOLDEN_V6.len() / 2).map(|i| u8::from_str_radix(&GOLDEN_V6[2 * i..2 * i + 2], 16).unwrap()).collect();
+    assert_eq!(
+        VERSION, 6,
+        "a new format version needs a golden image of its own"
+    );
+    let golden: Vec<u8> = (0..GOLDEN_V6.len() / 2)
+        .map(|i| u8::from_str_radix(&GOLDEN_V6[2 * i..2 * i + 2], 16).unwrap())
+        .collect();
     assert_eq!(golden.len(), CHECKPOINT_LEN);
     let est = Est::from_checkpoint(&golden).expect("the golden image restores");
-    assert_eq!(image_of(&est), golden, "restored and written again, the golden image changed");
+    assert_eq!(
+        image_of(&est),
+        golden,
+        "restored and written again, the golden image changed"
+    );
     // What the bytes mean: the configuration, the grid, the pattern, the counters, the filter.
     assert_eq!(est.config(), &Config::with_method(Method::Windowed));
     assert_eq!(est.sample_interval_s(), Some(1.0));
     assert_eq!(est.last_sample_time_s(), Some(699.0));
     assert_eq!(est.rotation().period_s, Some(120.0));
     let c = est.counters();
-    assert_eq!((c.accepted, c.filled, c.window_restarts, c.clock_steps), (696, 4, 0, 0));
+    assert_eq!(
+        (c.accepted, c.filled, c.window_restarts, c.clock_steps),
+        (696, 4, 0, 0)
+    );
     // The filter's states and 1-sigma, bit for bit.
     let e = est.estimate().expect("an estimate");
-    assert_eq!(e.x_rad.map(f32::to_bits), [981_374_904, 3_124_701_906, 983_335_004, 3_121_692_917]);
-    assert_eq!(e.sigma_rad.map(f32::to_bits), [916_170_282, 916_312_074, 941_223_468, 922_092_567]);
+    assert_eq!(
+        e.x_rad.map(f32::to_bits),
+        [981_374_904, 3_124_701_906, 983_335_004, 3_121_692_917]
+    );
+    assert_eq!(
+        e.sigma_rad.map(f32::to_bits),
+        [916_170_282, 916_312_074, 941_223_468, 922_092_567]
+    );
 }
-

@@ -61,7 +61,9 @@ impl Stored for Config {
             change_detection_step_rad: r.real(),
             max_filled_gap_samples: r.u32(),
         };
-        config.check(cx.capacity).map_err(CheckpointError::InvalidConfig)?;
+        config
+            .check(cx.capacity)
+            .map_err(CheckpointError::InvalidConfig)?;
         Ok(config)
     }
 }

@@ -64,7 +64,10 @@ impl<const CAP: usize> Estimator<CAP> {
     pub fn checkpoint(&self, buf: &mut [u8]) -> Result<usize, CheckpointError> {
         let available = buf.len();
         let Some(image) = buf.get_mut(..CHECKPOINT_LEN) else {
-            return Err(CheckpointError::BufferTooSmall { needed: CHECKPOINT_LEN, available });
+            return Err(CheckpointError::BufferTooSmall {
+                needed: CHECKPOINT_LEN,
+                available,
+            });
         };
         image.fill(0);
         let mut w = Writer::new(image, 0);
@@ -101,7 +104,8 @@ impl<const CAP: usize> Estimator<CAP> {
         let (image, method) = verified_image(buf)?;
         let config = read_parts::<CAP>(image, method, None)?;
         // The same bytes pass the same checks again, so this cannot fail half-way.
-        self.reinit(config).map_err(CheckpointError::InvalidConfig)?;
+        self.reinit(config)
+            .map_err(CheckpointError::InvalidConfig)?;
         read_parts(image, method, Some(self)).map(|_| ())
     }
 
@@ -127,7 +131,13 @@ fn read_parts<const CAP: usize>(
     mut target: Option<&mut Estimator<CAP>>,
 ) -> Result<Config, CheckpointError> {
     let mut r = Reader::new(image, HEADER_LEN);
-    let config = Config::read(&mut r, ConfigContext { method, capacity: CAP })?;
+    let config = Config::read(
+        &mut r,
+        ConfigContext {
+            method,
+            capacity: CAP,
+        },
+    )?;
     let running = Running::read(&mut r, ())?;
     if let Some(e) = target.as_deref_mut() {
         running.apply(e);
@@ -152,7 +162,11 @@ fn read_parts<const CAP: usize>(
         if let (Some(_), Some(p)) = (e.feed, period) {
             e.method.configure(p);
         }
-        e.window_status = if period.is_some() { Status::WarmingUp } else { Status::DetectingPattern };
+        e.window_status = if period.is_some() {
+            Status::WarmingUp
+        } else {
+            Status::DetectingPattern
+        };
     }
     let padding_start = r.pos();
     r.skip(CHECKPOINT_LEN - CRC_LEN - padding_start);
@@ -202,7 +216,15 @@ impl Running {
 }
 
 impl Stored for Running {
-    const LEN: usize = 4 + (1 + 8) + 1 + 1 + 8 + SwayMonitor::LEN + RejectReason::ALL.len() * 4 + 4 * 4 + (1 + 8 + 8 + 1);
+    const LEN: usize = 4
+        + (1 + 8)
+        + 1
+        + 1
+        + 8
+        + SwayMonitor::LEN
+        + RejectReason::ALL.len() * 4
+        + 4 * 4
+        + (1 + 8 + 8 + 1);
     type Context<'a> = ();
 
     fn write(&self, w: &mut Writer<'_>) {
@@ -227,11 +249,19 @@ impl Stored for Running {
         for n in [c.accepted, c.filled, c.window_restarts, c.clock_steps] {
             w.u32(n);
         }
-        let zero = ErrorChange { detected_s: 0.0, seen_since_s: 0.0, relearned: [false; 4] };
+        let zero = ErrorChange {
+            detected_s: 0.0,
+            seen_since_s: 0.0,
+            relearned: [false; 4],
+        };
         w.option(self.error_change, zero, |w, c| {
             w.f64(c.detected_s);
             w.f64(c.seen_since_s);
-            w.u8(c.relearned.iter().enumerate().fold(0, |b, (i, f)| b | (u8::from(*f) << i)));
+            w.u8(c
+                .relearned
+                .iter()
+                .enumerate()
+                .fold(0, |b, (i, f)| b | (u8::from(*f) << i)));
         });
     }
 
@@ -239,7 +269,10 @@ impl Stored for Running {
         let index = r.u32();
         let feed_interval_s = r.option(Part::Estimator, |r| Ok(r.f64()))?;
         // The interval the grid's constants were fixed from: positive and finite.
-        ensure(feed_interval_s.is_none_or(|d| d.is_finite() && d > 0.0), CheckpointError::InvalidValue(Part::Estimator))?;
+        ensure(
+            feed_interval_s.is_none_or(|d| d.is_finite() && d > 0.0),
+            CheckpointError::InvalidValue(Part::Estimator),
+        )?;
         let gate_open = r.flag(Part::Estimator)?;
         let fault_code = r.u8();
         let since_start = r.pos();
@@ -250,17 +283,26 @@ impl Stored for Running {
                 None
             }
             (_, Some(Status::RotationFault(fault))) => {
-                ensure(since_s.is_finite(), CheckpointError::InvalidValue(Part::Fault))?;
+                ensure(
+                    since_s.is_finite(),
+                    CheckpointError::InvalidValue(Part::Fault),
+                )?;
                 Some((fault, since_s))
             }
             _ => return Err(CheckpointError::InvalidValue(Part::Fault)),
         };
         let sway = SwayMonitor::read(r, ())?;
         let rejected = RejectCounts(core::array::from_fn(|_| r.u32()));
-        let counters = Counters { accepted: r.u32(), filled: r.u32(), window_restarts: r.u32(), clock_steps: r.u32() };
+        let counters = Counters {
+            accepted: r.u32(),
+            filled: r.u32(),
+            window_restarts: r.u32(),
+            clock_steps: r.u32(),
+        };
         let error_change = r.option(Part::Estimator, |r| Ok((r.f64(), r.f64(), r.u8())))?;
         if let Some((detected_s, seen_since_s, bits)) = error_change {
-            let ok = detected_s.is_finite() && seen_since_s.is_finite() && bits != 0 && bits & 0xF0 == 0;
+            let ok =
+                detected_s.is_finite() && seen_since_s.is_finite() && bits != 0 && bits & 0xF0 == 0;
             ensure(ok, CheckpointError::InvalidValue(Part::Estimator))?;
         }
         let error_change = error_change.map(|(detected_s, seen_since_s, bits)| ErrorChange {
@@ -268,7 +310,16 @@ impl Stored for Running {
             seen_since_s,
             relearned: core::array::from_fn(|i| bits & (1 << i) != 0),
         });
-        Ok(Running { index, feed_interval_s, gate_open, fault, sway, rejected, counters, error_change })
+        Ok(Running {
+            index,
+            feed_interval_s,
+            gate_open,
+            fault,
+            sway,
+            rejected,
+            counters,
+            error_change,
+        })
     }
 }
 
@@ -290,12 +341,30 @@ mod tests {
         for &method in METHODS {
             let est = running(method);
             let config = est.config;
-            assert_eq!(written_and_read(&config, ConfigContext { method, capacity: 64 }), Ok(config));
-            assert_eq!(written_and_read(&Running::of(&est), ()), Ok(Running::of(&est)));
+            assert_eq!(
+                written_and_read(
+                    &config,
+                    ConfigContext {
+                        method,
+                        capacity: 64
+                    }
+                ),
+                Ok(config)
+            );
+            assert_eq!(
+                written_and_read(&Running::of(&est), ()),
+                Ok(Running::of(&est))
+            );
             assert_eq!(written_and_read(&est.grid, &config), Ok(est.grid));
             assert_eq!(written_and_read(&est.rotation, &config), Ok(est.rotation));
-            assert_eq!(written_and_read(&est.filler.fill_error(), ()), Ok(est.filler.fill_error()));
-            assert_eq!(written_and_read(&est.method.learned(), &config), Ok(est.method.learned()));
+            assert_eq!(
+                written_and_read(&est.filler.fill_error(), ()),
+                Ok(est.filler.fill_error())
+            );
+            assert_eq!(
+                written_and_read(&est.method.learned(), &config),
+                Ok(est.method.learned())
+            );
 
             // The whole image: what the restored estimator holds, it writes again byte for byte.
             let image = image_of(&est);
@@ -315,16 +384,41 @@ mod tests {
             edit(&mut t);
             written_and_read(&t, ())
         };
-        assert_eq!(with(&|r| r.feed_interval_s = Some(0.0)), Err(InvalidValue(Part::Estimator)));
-        assert_eq!(with(&|r| r.fault = Some((RotationFault::Stopped, f64::NAN))), Err(InvalidValue(Part::Fault)));
+        assert_eq!(
+            with(&|r| r.feed_interval_s = Some(0.0)),
+            Err(InvalidValue(Part::Estimator))
+        );
+        assert_eq!(
+            with(&|r| r.fault = Some((RotationFault::Stopped, f64::NAN))),
+            Err(InvalidValue(Part::Fault))
+        );
         assert!(with(&|r| r.fault = Some((RotationFault::Stopped, -1.0))).is_ok());
         assert!(with(&|r| r.fault = Some((RotationFault::Reversed, 12.0))).is_ok());
-        let change = ErrorChange { detected_s: 30_000.0, seen_since_s: 28_800.0, relearned: [true, false, false, true] };
-        assert_eq!(with(&|r| r.error_change = Some(change)).map(|r| r.error_change), Ok(Some(change)));
-        let no_error = ErrorChange { relearned: [false; 4], ..change };
-        assert_eq!(with(&|r| r.error_change = Some(no_error)), Err(InvalidValue(Part::Estimator)));
-        let no_time = ErrorChange { detected_s: f64::INFINITY, ..change };
-        assert_eq!(with(&|r| r.error_change = Some(no_time)), Err(InvalidValue(Part::Estimator)));
+        let change = ErrorChange {
+            detected_s: 30_000.0,
+            seen_since_s: 28_800.0,
+            relearned: [true, false, false, true],
+        };
+        assert_eq!(
+            with(&|r| r.error_change = Some(change)).map(|r| r.error_change),
+            Ok(Some(change))
+        );
+        let no_error = ErrorChange {
+            relearned: [false; 4],
+            ..change
+        };
+        assert_eq!(
+            with(&|r| r.error_change = Some(no_error)),
+            Err(InvalidValue(Part::Estimator))
+        );
+        let no_time = ErrorChange {
+            detected_s: f64::INFINITY,
+            ..change
+        };
+        assert_eq!(
+            with(&|r| r.error_change = Some(no_time)),
+            Err(InvalidValue(Part::Estimator))
+        );
 
         // Bytes no value can hold, in a whole image: the feed interval's flag, the fault's code
         // and a time without a fault.
@@ -348,15 +442,26 @@ mod tests {
         use crate::Real;
         use CheckpointError::InvalidConfig;
         let config = running(Method::Windowed).config;
-        let cx = ConfigContext { method: Method::Windowed, capacity: 64 };
+        let cx = ConfigContext {
+            method: Method::Windowed,
+            capacity: 64,
+        };
         let with = |edit: &dyn Fn(&mut Config)| {
             let mut c = config;
             edit(&mut c);
             written_and_read(&c, cx)
         };
-        let param = |name: &'static str, value: f64, bound: Bound| Err(InvalidConfig(ConfigError::Parameter { name, value, bound }));
-        assert_eq!(with(&|c| c.measurement_sigma_rad = -1.0), param("measurement_sigma_rad", -1.0, Bound::Positive));
-        assert_eq!(with(&|c| c.max_filled_gap_samples = 4), param("max_filled_gap_samples", 4.0, Bound::AtMost(3.0)));
+        let param = |name: &'static str, value: f64, bound: Bound| {
+            Err(InvalidConfig(ConfigError::Parameter { name, value, bound }))
+        };
+        assert_eq!(
+            with(&|c| c.measurement_sigma_rad = -1.0),
+            param("measurement_sigma_rad", -1.0, Bound::Positive)
+        );
+        assert_eq!(
+            with(&|c| c.max_filled_gap_samples = 4),
+            param("max_filled_gap_samples", 4.0, Bound::AtMost(3.0))
+        );
         // Regressions, fuzz target `checkpoint_restore`: a flipped exponent made the traditional
         // random walk 1e26 rad/sqrt(s), whose square is infinite in f32; a sigma whose square
         // underflows; a flipped top byte of the gap bridged made one step work for minutes.
@@ -366,16 +471,36 @@ mod tests {
             with(&|c| c.traditional_drift_rad_per_sqrt_s = huge),
             param("traditional_drift_rad_per_sqrt_s", huge as f64, bound)
         );
-        let tiny = (if crate::checkpoint::R == 4 { 1e-30 } else { 1e-200 }) as Real;
-        assert_eq!(with(&|c| c.measurement_sigma_rad = tiny), param("measurement_sigma_rad", tiny as f64, Bound::SquareUnderflows));
+        let tiny = (if crate::checkpoint::R == 4 {
+            1e-30
+        } else {
+            1e-200
+        }) as Real;
+        assert_eq!(
+            with(&|c| c.measurement_sigma_rad = tiny),
+            param(
+                "measurement_sigma_rad",
+                tiny as f64,
+                Bound::SquareUnderflows
+            )
+        );
         assert_eq!(
             with(&|c| c.max_filled_gap_samples = 0x6c00_0000),
-            param("max_filled_gap_samples", f64::from(0x6c00_0000u32), Bound::AtMost(3.0))
+            param(
+                "max_filled_gap_samples",
+                f64::from(0x6c00_0000u32),
+                Bound::AtMost(3.0)
+            )
         );
-        assert_eq!(with(&|c| c.rotation_period_s = Some(10.0)), Err(InvalidConfig(ConfigError::RotationPeriod { value_s: 10.0 })));
+        assert_eq!(
+            with(&|c| c.rotation_period_s = Some(10.0)),
+            Err(InvalidConfig(ConfigError::RotationPeriod { value_s: 10.0 }))
+        );
         assert_eq!(
             with(&|c| c.sample_interval_s = Some(f64::NAN)),
-            Err(InvalidConfig(ConfigError::SampleInterval { value_s: f64::NAN }))
+            Err(InvalidConfig(ConfigError::SampleInterval {
+                value_s: f64::NAN
+            }))
         );
         // An absent pinned period with a non-zero value.
         let mut b = image_of(&running(Method::Windowed));

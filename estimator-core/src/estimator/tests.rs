@@ -46,9 +46,18 @@ fn bad_samples_are_rejected_by_reason_and_change_nothing_else() {
     let mut inf_rot = good;
     inf_rot.rotation_rad = Real::NEG_INFINITY;
     bad.push((inf_rot, SampleError::NonFinite(Field::Rotation)));
-    bad.push((Sample::from_degrees(1000.0, 1.0, 1.0, 90.0, 1.0, 1.0, 1.0), SampleError::LatitudeOutOfRange));
-    bad.push((Sample::from_degrees(1000.0, 1.0, 1.0, -95.0, 1.0, 1.0, 1.0), SampleError::LatitudeOutOfRange));
-    bad.push((Sample::from_degrees(1000.0, 1.0, 1.0, 40.0, 1.0, 120.0, 1.0), SampleError::AngleOutOfRange(Field::Roll)));
+    bad.push((
+        Sample::from_degrees(1000.0, 1.0, 1.0, 90.0, 1.0, 1.0, 1.0),
+        SampleError::LatitudeOutOfRange,
+    ));
+    bad.push((
+        Sample::from_degrees(1000.0, 1.0, 1.0, -95.0, 1.0, 1.0, 1.0),
+        SampleError::LatitudeOutOfRange,
+    ));
+    bad.push((
+        Sample::from_degrees(1000.0, 1.0, 1.0, 40.0, 1.0, 120.0, 1.0),
+        SampleError::AngleOutOfRange(Field::Roll),
+    ));
     let mut huge_platform = good;
     huge_platform.platform_rad = 1e6;
     bad.push((huge_platform, SampleError::AngleOutOfRange(Field::Platform)));
@@ -76,7 +85,10 @@ fn bad_samples_are_rejected_by_reason_and_change_nothing_else() {
 
 /// Runs 8000 s, dropping sample `k` where `drop(k)`; returns the estimate errors of a plain and
 /// of the gappy run, the gappy run's counters and its 1-sigma.
-fn gappy_run(config: Config, drop: impl Fn(u32) -> bool) -> ([f64; 4], [f64; 4], Counters, [f64; 4]) {
+fn gappy_run(
+    config: Config,
+    drop: impl Fn(u32) -> bool,
+) -> ([f64; 4], [f64; 4], Counters, [f64; 4]) {
     let mut plain: Estimator = Estimator::new(Config::default()).unwrap();
     let mut gappy: Estimator = Estimator::new(config).unwrap();
     for k in 0..8000u32 {
@@ -84,11 +96,24 @@ fn gappy_run(config: Config, drop: impl Fn(u32) -> bool) -> ([f64; 4], [f64; 4],
         plain.step(&s).unwrap();
         if !drop(k) {
             let out = gappy.step(&s).unwrap();
-            assert!(k < 2000 || matches!(out.status, Status::Estimating | Status::Converged), "{k}: {:?}", out.status);
+            assert!(
+                k < 2000 || matches!(out.status, Status::Estimating | Status::Converged),
+                "{k}: {:?}",
+                out.status
+            );
         }
     }
-    let sigma = gappy.estimate().unwrap().sigma_rad.map(|s| rad_to_arcsec(s as f64));
-    (errors_arcsec(&plain), errors_arcsec(&gappy), gappy.counters(), sigma)
+    let sigma = gappy
+        .estimate()
+        .unwrap()
+        .sigma_rad
+        .map(|s| rad_to_arcsec(s as f64));
+    (
+        errors_arcsec(&plain),
+        errors_arcsec(&gappy),
+        gappy.counters(),
+        sigma,
+    )
 }
 
 /// One or two samples lost every ~15 min: filled, the window never restarts, and the estimates
@@ -106,7 +131,13 @@ fn short_gaps_are_filled_and_cost_little_accuracy() {
     // sample interval is learned (nothing is estimated from those).
     assert_eq!(counters.filled, 12);
     for i in 0..4 {
-        assert!((a[i] - b[i]).abs() < 0.3, "x{}: plain {:.3}, gappy {:.3}", i + 1, a[i], b[i]);
+        assert!(
+            (a[i] - b[i]).abs() < 0.3,
+            "x{}: plain {:.3}, gappy {:.3}",
+            i + 1,
+            a[i],
+            b[i]
+        );
     }
 }
 
@@ -117,22 +148,40 @@ fn frequent_drops_cost_accuracy_never_the_estimate() {
     let (a, b, counters, sigma) = gappy_run(Config::default(), |k| k % 97 == 5);
     assert_eq!(counters.window_restarts, 0);
     for i in 0..4 {
-        assert!((a[i] - b[i]).abs() < 0.3, "x{}: plain {:.3}, gappy {:.3}", i + 1, a[i], b[i]);
-        assert!(b[i].abs() < 3.0 * sigma[i], "x{}: error {:.3} vs 1-sigma {:.3}", i + 1, b[i], sigma[i]);
+        assert!(
+            (a[i] - b[i]).abs() < 0.3,
+            "x{}: plain {:.3}, gappy {:.3}",
+            i + 1,
+            a[i],
+            b[i]
+        );
+        assert!(
+            b[i].abs() < 3.0 * sigma[i],
+            "x{}: error {:.3} vs 1-sigma {:.3}",
+            i + 1,
+            b[i],
+            sigma[i]
+        );
     }
 }
 
 /// With filling switched off, every gap restarts the window: the estimates hold, then resume.
 #[test]
 fn without_filling_a_gap_restarts_the_window() {
-    let none = Config { max_filled_gap_samples: 0, ..Config::default() };
+    let none = Config {
+        max_filled_gap_samples: 0,
+        ..Config::default()
+    };
     let mut est: Estimator = Estimator::new(none).unwrap();
     for k in 0..3000u32 {
         if k != 2500 {
             est.step(&sample(k as f64, 3.0)).unwrap();
         }
     }
-    assert_eq!((est.counters().window_restarts, est.counters().filled), (1, 0));
+    assert_eq!(
+        (est.counters().window_restarts, est.counters().filled),
+        (1, 0)
+    );
 }
 
 #[test]
@@ -150,9 +199,17 @@ fn a_long_gap_restarts_the_window_and_holds_the_estimates() {
     assert_eq!(est.counters().window_restarts, 1);
     while est.step(&sample((k + 1) as f64, 3.0)).unwrap().status == Status::Holding {
         k += 1;
-        assert_eq!(est.estimate().unwrap(), held, "estimates moved while holding");
+        assert_eq!(
+            est.estimate().unwrap(),
+            held,
+            "estimates moved while holding"
+        );
     }
-    assert_eq!(k + 1, 2300 + 479 + NEIGHBOURS as u32, "refilled after one window and the filler's delay");
+    assert_eq!(
+        k + 1,
+        2300 + 479 + NEIGHBOURS as u32,
+        "refilled after one window and the filler's delay"
+    );
     for t in (k + 2)..6000 {
         est.step(&sample(t as f64, 3.0)).unwrap();
     }
@@ -163,7 +220,10 @@ fn a_long_gap_restarts_the_window_and_holds_the_estimates() {
 
 #[test]
 fn sway_gate_waits_for_enough_roll() {
-    let config = Config { sway_gate_rad: (3.0 * RAD_PER_DEG) as Real, ..Config::default() };
+    let config = Config {
+        sway_gate_rad: (3.0 * RAD_PER_DEG) as Real,
+        ..Config::default()
+    };
     let mut est: Estimator = Estimator::new(config).unwrap();
     for k in 0..1000u32 {
         let out = est.step(&sample(k as f64, 2.0)).unwrap();
@@ -178,7 +238,10 @@ fn sway_gate_waits_for_enough_roll() {
         }
     }
     let opened_at = opened_at.unwrap();
-    assert!(opened_at > 1000 && opened_at < 1100, "gate opened at {opened_at}");
+    assert!(
+        opened_at > 1000 && opened_at < 1100,
+        "gate opened at {opened_at}"
+    );
     for (i, e) in errors_arcsec(&est).iter().enumerate() {
         assert!(e.abs() < 1.5, "x{}: {e:.3}", i + 1);
     }
@@ -196,7 +259,11 @@ fn reinit_equals_new() {
             for k in 0..700 {
                 est.step(&sample(k as f64, 3.0)).unwrap();
             }
-            let config = Config { rotation_period_s: Some(300.0), sway_gate_rad: 0.01, ..Config::with_method(to) };
+            let config = Config {
+                rotation_period_s: Some(300.0),
+                sway_gate_rad: 0.01,
+                ..Config::with_method(to)
+            };
             est.reinit(config).unwrap();
             assert!(est == Estimator::new(config).unwrap(), "{from:?} -> {to:?}");
         }
@@ -206,9 +273,18 @@ fn reinit_equals_new() {
         est.step(&sample(k as f64, 3.0)).unwrap();
     }
     let before = est.clone();
-    let bad = Config { rotation_period_s: Some(4000.0), ..Config::default() };
-    assert_eq!(est.reinit(bad), Err(ConfigError::RotationPeriod { value_s: 4000.0 }));
-    assert!(est == before, "a refused configuration changed the estimator");
+    let bad = Config {
+        rotation_period_s: Some(4000.0),
+        ..Config::default()
+    };
+    assert_eq!(
+        est.reinit(bad),
+        Err(ConfigError::RotationPeriod { value_s: 4000.0 })
+    );
+    assert!(
+        est == before,
+        "a refused configuration changed the estimator"
+    );
 }
 
 #[test]
@@ -216,8 +292,13 @@ fn init_in_equals_new_and_refuses_what_new_refuses() {
     use crate::config::Method;
     use core::mem::MaybeUninit;
     for method in [Method::Windowed, Method::Paper, Method::Traditional] {
-        let config = Config { rotation_period_s: Some(300.0), sway_gate_rad: 0.01, ..Config::with_method(method) };
-        let mut slot: std::boxed::Box<MaybeUninit<Estimator>> = std::boxed::Box::new(MaybeUninit::uninit());
+        let config = Config {
+            rotation_period_s: Some(300.0),
+            sway_gate_rad: 0.01,
+            ..Config::with_method(method)
+        };
+        let mut slot: std::boxed::Box<MaybeUninit<Estimator>> =
+            std::boxed::Box::new(MaybeUninit::uninit());
         let est = Estimator::init_in(&mut slot, config).unwrap();
         assert!(*est == Estimator::new(config).unwrap(), "{method:?}");
         // And it runs as one.
@@ -225,14 +306,24 @@ fn init_in_equals_new_and_refuses_what_new_refuses() {
             est.step(&sample(k as f64, 3.0)).unwrap();
         }
     }
-    let mut slot: std::boxed::Box<MaybeUninit<Estimator>> = std::boxed::Box::new(MaybeUninit::uninit());
-    let bad = Config { rotation_period_s: Some(4000.0), ..Config::default() };
-    assert_eq!(Estimator::init_in(&mut slot, bad).err(), Some(ConfigError::RotationPeriod { value_s: 4000.0 }));
+    let mut slot: std::boxed::Box<MaybeUninit<Estimator>> =
+        std::boxed::Box::new(MaybeUninit::uninit());
+    let bad = Config {
+        rotation_period_s: Some(4000.0),
+        ..Config::default()
+    };
+    assert_eq!(
+        Estimator::init_in(&mut slot, bad).err(),
+        Some(ConfigError::RotationPeriod { value_s: 4000.0 })
+    );
 }
 
 #[test]
 fn reset_forgets_all_but_the_configuration_and_rejections() {
-    let config = Config { rotation_period_s: Some(300.0), ..Config::default() };
+    let config = Config {
+        rotation_period_s: Some(300.0),
+        ..Config::default()
+    };
     let mut est: Estimator = Estimator::new(config).unwrap();
     for k in 0..700 {
         est.step(&sample(k as f64, 3.0)).unwrap();
@@ -263,10 +354,13 @@ fn covariance_stays_symmetric_positive_definite_over_two_days() {
     }
 }
 
+/// One row of [`stepped_run`]: time, status, and the estimate's errors against the truth.
+type SteppedRow = (f64, Status, Option<[f64; 4]>);
+
 /// A 16,000 s log of the paper's sway with 5 arcsec of noise, whose errors step at 12,000 s by
 /// `step_arcsec`; per row the estimator's status and, once there is one, the estimate's errors
 /// against the errors in force. Returns the rows and the estimator at the end.
-fn stepped_run(config: Config, step_arcsec: [f64; 4]) -> (Vec<(f64, Status, Option<[f64; 4]>)>, Estimator) {
+fn stepped_run(config: Config, step_arcsec: [f64; 4]) -> (Vec<SteppedRow>, Estimator) {
     let after: [f64; 4] = core::array::from_fn(|i| X_ARCSEC[i] + step_arcsec[i]);
     let mut signal = Signal::new(X_ARCSEC, 40.0).with_seed(11);
     signal.noise_arcsec = 5.0;
@@ -278,7 +372,9 @@ fn stepped_run(config: Config, step_arcsec: [f64; 4]) -> (Vec<(f64, Status, Opti
             signal.x_arcsec = after;
         }
         let out = est.step(&signal.sample(t)).unwrap();
-        let errors = out.estimate.map(|e| core::array::from_fn(|i| rad_to_arcsec(e.x_rad[i] as f64) - signal.x_arcsec[i]));
+        let errors = out.estimate.map(|e| {
+            core::array::from_fn(|i| rad_to_arcsec(e.x_rad[i] as f64) - signal.x_arcsec[i])
+        });
         rows.push((t, out.status, errors));
     }
     (rows, est)
@@ -291,25 +387,59 @@ fn a_step_of_the_errors_is_declared_reported_and_learned_again() {
     let change = est.error_change().expect("a change declared");
     // Declared within 3.5 periods, x2 and x3 learned again (other errors may be too: they are
     // learned from the same block).
-    assert!(change.detected_s > 12_000.0 && change.detected_s <= 12_000.0 + 3.5 * 480.0, "{change:?}");
+    assert!(
+        change.detected_s > 12_000.0 && change.detected_s <= 12_000.0 + 3.5 * 480.0,
+        "{change:?}"
+    );
     assert!(change.relearned[1] && change.relearned[2], "{change:?}");
-    assert!(change.seen_since_s > 12_000.0 - 480.0 && change.seen_since_s < change.detected_s, "{change:?}");
+    assert!(
+        change.seen_since_s > 12_000.0 - 480.0 && change.seen_since_s < change.detected_s,
+        "{change:?}"
+    );
     // Said so in the status, from the detection, once; then estimating again.
-    let changed: Vec<f64> = rows.iter().filter(|r| r.1 == Status::ErrorsChanged).map(|r| r.0).collect();
+    let changed: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.1 == Status::ErrorsChanged)
+        .map(|r| r.0)
+        .collect();
     assert_eq!(changed.first(), Some(&change.detected_s));
-    assert!(changed.windows(2).all(|w| w[1] == w[0] + 1.0), "one run of errors_changed: {changed:?}");
-    assert!(matches!(rows.last().unwrap().1, Status::Estimating | Status::Converged), "{:?}", rows.last());
+    assert!(
+        changed.windows(2).all(|w| w[1] == w[0] + 1.0),
+        "one run of errors_changed: {changed:?}"
+    );
+    assert!(
+        matches!(
+            rows.last().unwrap().1,
+            Status::Estimating | Status::Converged
+        ),
+        "{:?}",
+        rows.last()
+    );
     // Every error within 10 arcsec of the new values from 2,000 s after the step on, within 1 at
     // the end; before the step, nothing was declared.
     for (t, _, e) in rows.iter().filter(|r| r.0 >= 14_000.0) {
         assert!(e.unwrap().iter().all(|v| v.abs() < 10.0), "{t}: {e:?}");
     }
-    assert!(rows.last().unwrap().2.unwrap().iter().all(|v| v.abs() < 1.0), "{:?}", rows.last());
-    assert!(rows.iter().all(|r| r.0 >= 12_000.0 || r.1 != Status::ErrorsChanged));
+    assert!(
+        rows.last()
+            .unwrap()
+            .2
+            .unwrap()
+            .iter()
+            .all(|v| v.abs() < 1.0),
+        "{:?}",
+        rows.last()
+    );
+    assert!(rows
+        .iter()
+        .all(|r| r.0 >= 12_000.0 || r.1 != Status::ErrorsChanged));
 
     // Detection off: nothing declared, and 2,000 s after the step x2 is still off by more than
     // 10 arcsec (the filter's memory is the whole log).
-    let off = Config { change_detection_step_rad: 0.0, ..Config::default() };
+    let off = Config {
+        change_detection_step_rad: 0.0,
+        ..Config::default()
+    };
     let (rows, est) = stepped_run(off, step);
     assert_eq!(est.error_change(), None);
     assert!(rows.iter().all(|r| r.1 != Status::ErrorsChanged));

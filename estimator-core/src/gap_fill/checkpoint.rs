@@ -27,7 +27,11 @@ pub(crate) struct FillError {
 impl GapFiller {
     /// The fill-error estimate.
     pub(crate) fn fill_error(&self) -> FillError {
-        FillError { roll_rad2: self.roll_error_rad2, pitch_rad2: self.pitch_error_rad2, samples: self.error_samples }
+        FillError {
+            roll_rad2: self.roll_error_rad2,
+            pitch_rad2: self.pitch_error_rad2,
+            samples: self.error_samples,
+        }
     }
 
     /// Takes over a fill-error estimate (into an empty filler, at restore).
@@ -49,7 +53,11 @@ impl Stored for FillError {
     }
 
     fn read(r: &mut Reader<'_>, (): ()) -> Result<FillError, CheckpointError> {
-        let e = FillError { roll_rad2: r.real(), pitch_rad2: r.real(), samples: r.u32() };
+        let e = FillError {
+            roll_rad2: r.real(),
+            pitch_rad2: r.real(),
+            samples: r.u32(),
+        };
         ensure(
             within_non_negative(e.roll_rad2, MAX_FILL_ERROR_RAD2)
                 && within_non_negative(e.pitch_rad2, MAX_FILL_ERROR_RAD2)
@@ -74,8 +82,35 @@ mod tests {
         assert!(e.samples > 0 && e.roll_rad2 > 0.0);
         assert_eq!(written_and_read(&e, ()), Ok(e));
         let refused = Err(CheckpointError::InvalidValue(Part::FillError));
-        assert_eq!(written_and_read(&FillError { roll_rad2: -1e-9, ..e }, ()), refused);
-        assert_eq!(written_and_read(&FillError { pitch_rad2: Real::NAN, ..e }, ()), refused);
-        assert_eq!(written_and_read(&FillError { samples: FILL_ERROR_SAMPLES + 1, ..e }, ()), refused);
+        assert_eq!(
+            written_and_read(
+                &FillError {
+                    roll_rad2: -1e-9,
+                    ..e
+                },
+                ()
+            ),
+            refused
+        );
+        assert_eq!(
+            written_and_read(
+                &FillError {
+                    pitch_rad2: Real::NAN,
+                    ..e
+                },
+                ()
+            ),
+            refused
+        );
+        assert_eq!(
+            written_and_read(
+                &FillError {
+                    samples: FILL_ERROR_SAMPLES + 1,
+                    ..e
+                },
+                ()
+            ),
+            refused
+        );
     }
 }

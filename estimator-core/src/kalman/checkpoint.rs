@@ -31,7 +31,10 @@ impl<T: Float, const N: usize> Stored for ConstantStateKalman<T, N> {
         let mut kf = Self::new([T::zero(); N]);
         for i in 0..N {
             let v: T = r.float();
-            ensure(v.is_finite() && v.to_f64().abs() <= MAX_STATE, CheckpointError::InvalidValue(Part::KalmanState))?;
+            ensure(
+                v.is_finite() && v.to_f64().abs() <= MAX_STATE,
+                CheckpointError::InvalidValue(Part::KalmanState),
+            )?;
             kf.x[i] = v;
         }
         for i in 0..N {
@@ -42,7 +45,10 @@ impl<T: Float, const N: usize> Stored for ConstantStateKalman<T, N> {
                 kf.p[(i, j)] = v;
             }
         }
-        ensure(kf.covariance_is_spd(), CheckpointError::NotPositiveDefinite(Part::KalmanCovariance))?;
+        ensure(
+            kf.covariance_is_spd(),
+            CheckpointError::NotPositiveDefinite(Part::KalmanCovariance),
+        )?;
         Ok(kf)
     }
 }
@@ -58,7 +64,12 @@ mod tests {
         let mut kf = ConstantStateKalman::<T, N>::new([prior; N]);
         for k in 0..N + 2 {
             let h: [T; N] = core::array::from_fn(|i| nalgebra::convert(((i + k) % 3) as f64 - 0.7));
-            kf.update(&h, nalgebra::convert(1e-4 * k as f64), nalgebra::convert(1e-10)).unwrap();
+            kf.update(
+                &h,
+                nalgebra::convert(1e-4 * k as f64),
+                nalgebra::convert(1e-10),
+            )
+            .unwrap();
         }
         kf
     }
@@ -73,12 +84,30 @@ mod tests {
             f(&mut t);
             written_and_read(&t, 1e12)
         };
-        assert_eq!(with(&|t| t.x[2] = f32::NAN), Err(InvalidValue(Part::KalmanState)));
-        assert_eq!(with(&|t| t.x[0] = 1e30), Err(InvalidValue(Part::KalmanState)));
-        assert_eq!(with(&|t| t.p[(3, 3)] = f32::INFINITY), Err(InvalidValue(Part::KalmanCovariance)));
-        assert_eq!(with(&|t| t.p[(1, 1)] = 1e30), Err(InvalidValue(Part::KalmanCovariance)));
-        assert_eq!(with(&|t| t.p[(0, 1)] += 1e-12), Err(NotPositiveDefinite(Part::KalmanCovariance)));
-        assert_eq!(with(&|t| t.p[(2, 2)] = -t.p[(2, 2)]), Err(NotPositiveDefinite(Part::KalmanCovariance)));
+        assert_eq!(
+            with(&|t| t.x[2] = f32::NAN),
+            Err(InvalidValue(Part::KalmanState))
+        );
+        assert_eq!(
+            with(&|t| t.x[0] = 1e30),
+            Err(InvalidValue(Part::KalmanState))
+        );
+        assert_eq!(
+            with(&|t| t.p[(3, 3)] = f32::INFINITY),
+            Err(InvalidValue(Part::KalmanCovariance))
+        );
+        assert_eq!(
+            with(&|t| t.p[(1, 1)] = 1e30),
+            Err(InvalidValue(Part::KalmanCovariance))
+        );
+        assert_eq!(
+            with(&|t| t.p[(0, 1)] += 1e-12),
+            Err(NotPositiveDefinite(Part::KalmanCovariance))
+        );
+        assert_eq!(
+            with(&|t| t.p[(2, 2)] = -t.p[(2, 2)]),
+            Err(NotPositiveDefinite(Part::KalmanCovariance))
+        );
 
         // The paper method's filters, in f64: a finite but absurd state or variance is refused
         // (narrowed to f32 on output it would be infinite).
@@ -89,8 +118,17 @@ mod tests {
             f(&mut t);
             written_and_read(&t, 1e12)
         };
-        assert_eq!(with(&|t| t.x[2] = 1e300), Err(InvalidValue(Part::KalmanState)));
-        assert_eq!(with(&|t| t.p[(0, 0)] = 1e200), Err(InvalidValue(Part::KalmanCovariance)));
-        assert_eq!(with(&|t| t.p[(1, 2)] = 2.0 * t.p[(1, 2)] + 1.0), Err(NotPositiveDefinite(Part::KalmanCovariance)));
+        assert_eq!(
+            with(&|t| t.x[2] = 1e300),
+            Err(InvalidValue(Part::KalmanState))
+        );
+        assert_eq!(
+            with(&|t| t.p[(0, 0)] = 1e200),
+            Err(InvalidValue(Part::KalmanCovariance))
+        );
+        assert_eq!(
+            with(&|t| t.p[(1, 2)] = 2.0 * t.p[(1, 2)] + 1.0),
+            Err(NotPositiveDefinite(Part::KalmanCovariance))
+        );
     }
 }

@@ -69,7 +69,10 @@ impl<const CAP: usize> MethodState<CAP> {
 
 /// Read for the configuration whose method the header names.
 impl Stored for MethodPart {
-    const LEN: usize = max(windowed::checkpoint::Learned::LEN, max(PAPER_LEN, Traditional::LEN));
+    const LEN: usize = max(
+        windowed::checkpoint::Learned::LEN,
+        max(PAPER_LEN, Traditional::LEN),
+    );
     type Context<'a> = &'a Config;
 
     fn write(&self, w: &mut Writer<'_>) {
@@ -87,12 +90,20 @@ impl Stored for MethodPart {
         let prior = f64::from(config.prior_sigma_rad);
         let max_variance = MAX_VARIANCE.max(4.0 * prior * prior);
         let part = match config.method {
-            Method::Windowed => MethodPart::Windowed(windowed::checkpoint::Learned::read(r, max_variance)?),
+            Method::Windowed => {
+                MethodPart::Windowed(windowed::checkpoint::Learned::read(r, max_variance)?)
+            }
             #[cfg(feature = "paper-method")]
-            Method::Paper => MethodPart::Paper(super::paper::checkpoint::Learned::read(r, max_variance)?),
+            Method::Paper => {
+                MethodPart::Paper(super::paper::checkpoint::Learned::read(r, max_variance)?)
+            }
             // Not reached: `Config::check` refused the configuration.
             #[cfg(not(feature = "paper-method"))]
-            Method::Paper => return Err(CheckpointError::InvalidConfig(crate::config::ConfigError::MethodUnavailable)),
+            Method::Paper => {
+                return Err(CheckpointError::InvalidConfig(
+                    crate::config::ConfigError::MethodUnavailable,
+                ))
+            }
             Method::Traditional => MethodPart::Traditional(Traditional::read(r, max_variance)?),
         };
         let padding_start = r.pos();

@@ -21,8 +21,8 @@ use crate::config::Config;
 use crate::correlation::products;
 use crate::gap_fill::GridSample;
 use crate::kalman::ConstantStateKalman;
-use crate::output::Estimate;
 use crate::moving_average::{WindowAverage, COUNTS_PER_UNIT};
+use crate::output::Estimate;
 use crate::sample::Attitude;
 use crate::units::EARTH_RATE_RAD_PER_S;
 use crate::Real;
@@ -87,7 +87,11 @@ impl<const CAP: usize> Paper<CAP> {
             self.start_time_s = time_s;
         }
         let angles = &sample.angles;
-        let attitude = Attitude { heading_rad: 0.0, roll_rad: sample.roll_rad, pitch_rad: sample.pitch_rad };
+        let attitude = Attitude {
+            heading_rad: 0.0,
+            roll_rad: sample.roll_rad,
+            pitch_rad: sample.pitch_rad,
+        };
         let p = products(&attitude, angles);
         let mut r_t = [0.0; 4];
         self.samples = self.samples.saturating_add(1);
@@ -109,7 +113,9 @@ impl<const CAP: usize> Paper<CAP> {
         let mut applied = false;
         for j in 0..4 {
             // No prediction step: eq (18) neglects the state equation (constant states, Q = 0).
-            applied |= self.kf[j].update(&[gains[j], cos_e, sin_e], r_bar[j] as f64, sigma * sigma).is_ok();
+            applied |= self.kf[j]
+                .update(&[gains[j], cos_e, sin_e], r_bar[j] as f64, sigma * sigma)
+                .is_ok();
         }
         if applied {
             self.updates = self.updates.saturating_add(1);

@@ -27,17 +27,28 @@ pub struct Traditional {
 impl Traditional {
     /// Fresh state with the prior covariance.
     pub fn new(config: &Config) -> Self {
-        Traditional { kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]), updates: 0 }
+        Traditional {
+            kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
+            updates: 0,
+        }
     }
 
     /// Updates with this sample's roll and pitch.
     pub fn step(&mut self, config: &Config, interval: Real, sample: &GridSample) -> bool {
         let angles = &sample.angles;
-        let q = config.traditional_drift_rad_per_sqrt_s * config.traditional_drift_rad_per_sqrt_s * interval;
+        let q = config.traditional_drift_rad_per_sqrt_s
+            * config.traditional_drift_rad_per_sqrt_s
+            * interval;
         self.kf.predict(&[q; 4]);
         let r = config.traditional_sigma_rad * config.traditional_sigma_rad;
-        let roll = self.kf.update(&angles.roll_row(), sample.roll_rad, r).is_ok();
-        let pitch = self.kf.update(&angles.pitch_row(), sample.pitch_rad, r).is_ok();
+        let roll = self
+            .kf
+            .update(&angles.roll_row(), sample.roll_rad, r)
+            .is_ok();
+        let pitch = self
+            .kf
+            .update(&angles.pitch_row(), sample.pitch_rad, r)
+            .is_ok();
         if roll || pitch {
             self.updates = self.updates.saturating_add(1);
         }
@@ -50,8 +61,18 @@ impl Traditional {
             return None;
         }
         Some(Estimate {
-            x_rad: [self.kf.state()[0], self.kf.state()[1], self.kf.state()[2], self.kf.state()[3]],
-            sigma_rad: [self.kf.sigma(0), self.kf.sigma(1), self.kf.sigma(2), self.kf.sigma(3)],
+            x_rad: [
+                self.kf.state()[0],
+                self.kf.state()[1],
+                self.kf.state()[2],
+                self.kf.state()[3],
+            ],
+            sigma_rad: [
+                self.kf.sigma(0),
+                self.kf.sigma(1),
+                self.kf.sigma(2),
+                self.kf.sigma(3),
+            ],
         })
     }
 }

@@ -484,7 +484,12 @@ impl<const CAP: usize> Windowed<CAP> {
     /// entries. `interval` is the sample interval, s, `fill_variance` a filled single sample's
     /// error variance of roll and of pitch ([`crate::gap_fill::GapFiller::single_fill_variance`]).
     /// Returns the change of the errors this update declared, if any (see [`change`]).
-    pub fn update(&mut self, config: &Config, interval: Real, fill_variance: FillVariance) -> Option<Alarm> {
+    pub fn update(
+        &mut self,
+        config: &Config,
+        interval: Real,
+        fill_variance: FillVariance,
+    ) -> Option<Alarm> {
         if !self.window.is_full() || self.entries_since_update == 0 {
             return None;
         }
@@ -493,7 +498,9 @@ impl<const CAP: usize> Windowed<CAP> {
         self.next_pair = 1 - pair as u8;
         let bin = self.window.bin() as Real;
         let elapsed_s = interval * bin * self.entries_since_update as Real;
-        self.changed_entries = self.changed_entries.saturating_sub(self.entries_since_update);
+        self.changed_entries = self
+            .changed_entries
+            .saturating_sub(self.entries_since_update);
         self.entries_since_update = 0;
         let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
         let (qp, qr) = (q * self.drift_share[0], q * self.drift_share[1]);
@@ -518,7 +525,9 @@ impl<const CAP: usize> Windowed<CAP> {
         let r = 0.5 * self.product_variance_rad2[pair];
         let detecting = config.change_detection_step_rad > 0.0;
         let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
-        let gate = (detecting && self.spread_count[pair] >= (horizon / RESIDUAL_PERIODS as u32).max(1)).then_some(GATE_SIGMAS);
+        let gate = (detecting
+            && self.spread_count[pair] >= (horizon / RESIDUAL_PERIODS as u32).max(1))
+        .then_some(GATE_SIGMAS);
         // Whether the measurement was taken (applied, or held out by the gate or the detector's
         // hold: its residuals still go on to the checks).
         let (mut applied, mut taken) = (false, false);
@@ -527,7 +536,12 @@ impl<const CAP: usize> Windowed<CAP> {
             taken = true;
         } else {
             for ch in 2 * pair..2 * pair + 2 {
-                match self.kf.update_gated(&m.rows[ch], m.z[ch], r, gate.map(|g| (self.spread_rad2[ch], g))) {
+                match self.kf.update_gated(
+                    &m.rows[ch],
+                    m.z[ch],
+                    r,
+                    gate.map(|g| (self.spread_rad2[ch], g)),
+                ) {
                     Ok(_) => applied = true,
                     Err(KalmanError::Gated) => {
                         taken = true;
@@ -572,7 +586,11 @@ impl<const CAP: usize> Windowed<CAP> {
         let weight = 1.0 / if gated { full } else { count } as Real;
         for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
             let e2 = residual[k] * residual[k];
-            let e2 = if learned == 0 { e2 } else { e2.min(SPREAD_CLIP_SIGMAS * SPREAD_CLIP_SIGMAS * self.spread_rad2[ch]) };
+            let e2 = if learned == 0 {
+                e2
+            } else {
+                e2.min(SPREAD_CLIP_SIGMAS * SPREAD_CLIP_SIGMAS * self.spread_rad2[ch])
+            };
             self.spread_rad2[ch] += weight * (e2 - self.spread_rad2[ch]);
         }
         self.spread_count[pair] = count;
@@ -591,9 +609,18 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// Passes the pair's residuals to the change detector; when it declares a change, the errors
     /// that changed are learned again (see "Changes of the errors" in the module doc).
-    fn detect_change(&mut self, config: &Config, pair: usize, residual: [Real; 2], rows: &[[Real; 4]; 4], entry_s: Real) -> Option<Alarm> {
+    fn detect_change(
+        &mut self,
+        config: &Config,
+        pair: usize,
+        residual: [Real; 2],
+        rows: &[[Real; 4]; 4],
+        entry_s: Real,
+    ) -> Option<Alarm> {
         self.block_held[pair] &= self.change.holding();
-        let block = self.change.accumulate(pair, residual, self.updates_per_block())?;
+        let block = self
+            .change
+            .accumulate(pair, residual, self.updates_per_block())?;
         // Kept for learning the errors again, should a change be declared while the filter holds.
         self.last_block_held[pair] = self.block_held[pair];
         if self.block_held[pair] {
@@ -614,7 +641,12 @@ impl<const CAP: usize> Windowed<CAP> {
             max_widening_rad: config.prior_sigma_rad,
         };
         let was_holding = self.change.holding();
-        let alarm = self.change.test(pair, block, [self.gains[2 * pair], self.gains[2 * pair + 1]], &ctx);
+        let alarm = self.change.test(
+            pair,
+            block,
+            [self.gains[2 * pair], self.gains[2 * pair + 1]],
+            &ctx,
+        );
         // Kept at the next update: this one has the block's work already.
         self.clean_state_due |= alarm.is_none() && pair == 1 && !self.change.holding();
         if self.change.holding() && !was_holding {
@@ -712,11 +744,23 @@ impl<const CAP: usize> Windowed<CAP> {
         let held = self.held_x_rad;
         let (block, rows) = if self.last_block_held[pair] {
             self.last_block_held[pair] = false;
-            ([self.last_block_rad[2 * pair], self.last_block_rad[2 * pair + 1]], self.last_block_rows)
+            (
+                [
+                    self.last_block_rad[2 * pair],
+                    self.last_block_rad[2 * pair + 1],
+                ],
+                self.last_block_rows,
+            )
         } else {
             let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
-            let residual = [z[2 * pair] - fit(2 * pair), z[2 * pair + 1] - fit(2 * pair + 1)];
-            let Some(block) = self.change.accumulate(pair, residual, self.updates_per_block()) else {
+            let residual = [
+                z[2 * pair] - fit(2 * pair),
+                z[2 * pair + 1] - fit(2 * pair + 1),
+            ];
+            let Some(block) = self
+                .change
+                .accumulate(pair, residual, self.updates_per_block())
+            else {
                 return false;
             };
             (block, *rows)
@@ -726,7 +770,10 @@ impl<const CAP: usize> Windowed<CAP> {
         let mut applied = false;
         for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
             let target = block[k] + fit(ch);
-            applied |= self.kf.update(&rows[ch], target, self.change.block_variance(ch, floor)).is_ok();
+            applied |= self
+                .kf
+                .update(&rows[ch], target, self.change.block_variance(ch, floor))
+                .is_ok();
             self.gains[ch] = rows[ch][ch].abs();
         }
         if applied {
@@ -748,7 +795,8 @@ impl<const CAP: usize> Windowed<CAP> {
         *count = count.saturating_add(1).min(LONG_HORIZONS * horizon.max(1));
         let alpha = 1.0 / *count as Real;
         // The model's variance of a residual mean, s_e^2 = r / n (as in `consistency`).
-        let sigma2 = config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
+        let sigma2 =
+            config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
         let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
         let inv_s_e2 = n / self.product_variance_rad2[pair].max(sigma2);
         let (mut power, mut bias) = (0.0, 0.0);
@@ -761,12 +809,20 @@ impl<const CAP: usize> Windowed<CAP> {
         }
         self.noise_scale[pair] = power.max(MIN_NOISE_SCALE);
         let share = if power > 0.0 { bias / power } else { 0.0 };
-        self.drift_share[pair] = ((share - BIAS_SHARE_NOISE) * (1.0 / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE))).clamp(0.0, 1.0);
+        self.drift_share[pair] = ((share - BIAS_SHARE_NOISE)
+            * (1.0 / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE)))
+            .clamp(0.0, 1.0);
     }
 
     /// The pair's post-fit residuals (returned, rad), averaged into the residual means when
     /// `average`.
-    fn average_residuals(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4], average: bool) -> [Real; 2] {
+    fn average_residuals(
+        &mut self,
+        pair: usize,
+        rows: &[[Real; 4]; 4],
+        z: &[Real; 4],
+        average: bool,
+    ) -> [Real; 2] {
         let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
         let count = &mut self.residual_count[pair];
         if average {
@@ -792,7 +848,8 @@ impl<const CAP: usize> Windowed<CAP> {
     fn refresh_report(&mut self, config: &Config, pair: usize) {
         // The residual mean of a pair averages `count` updates of two entries each, of per-entry
         // variance `r` (filled samples included); without an update yet, the configured sigma.
-        let sigma2 = config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
+        let sigma2 =
+            config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
         let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
         let s_e2 = self.product_variance_rad2[pair].max(sigma2) / n;
         for ch in 2 * pair..2 * pair + 2 {
@@ -818,12 +875,15 @@ impl<const CAP: usize> Windowed<CAP> {
             }
             // The persistent residual mean as a state error (a drift's lag), where a drift is seen.
             let lag = if self.drift_share[pair] > 0.0 && self.gains[ch] > 1e-6 {
-                (self.residual_mean_long[ch] / self.gains[ch]).abs().min(config.prior_sigma_rad)
+                (self.residual_mean_long[ch] / self.gains[ch])
+                    .abs()
+                    .min(config.prior_sigma_rad)
             } else {
                 0.0
             };
             let m = model.max(lag).max(self.change.widening_rad()[ch]);
-            self.reported_sigma_rad[ch] = sqrt(self.noise_scale[pair] * self.kf.covariance()[(ch, ch)].max(0.0) + m * m);
+            self.reported_sigma_rad[ch] =
+                sqrt(self.noise_scale[pair] * self.kf.covariance()[(ch, ch)].max(0.0) + m * m);
             self.channel_mismatch[ch] = mismatch;
         }
     }
@@ -844,7 +904,8 @@ impl<const CAP: usize> Windowed<CAP> {
         // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
         // stays: it is conservative).
         let horizon = RESIDUAL_PERIODS * self.window.len() / 2;
-        let mismatch = self.channel_mismatch.iter().any(|m| *m) && self.residual_count.iter().all(|c| *c as usize >= horizon);
+        let mismatch = self.channel_mismatch.iter().any(|m| *m)
+            && self.residual_count.iter().all(|c| *c as usize >= horizon);
         let x = self.kf.state();
         Some(MethodEstimate {
             x_rad: [x[0], x[1], x[2], x[3]],

@@ -29,7 +29,23 @@ use crate::Real;
 pub(crate) const MAX_PERIOD_SAMPLES: u32 = 1 << 24;
 
 impl Stored for RotationMonitor {
-    const LEN: usize = 5 + 1 + 7 + (1 + R) + LEVELS + LEVELS * 2 * 5 + 3 + (5 + R) + R + 4 + 5 + R + 4 + 4 + 1 + 1 + 4;
+    const LEN: usize = 5
+        + 1
+        + 7
+        + (1 + R)
+        + LEVELS
+        + LEVELS * 2 * 5
+        + 3
+        + (5 + R)
+        + R
+        + 4
+        + 5
+        + R
+        + 4
+        + 4
+        + 1
+        + 1
+        + 4;
     type Context<'a> = &'a Config;
 
     fn write(&self, w: &mut Writer<'_>) {
@@ -76,7 +92,11 @@ impl Stored for RotationMonitor {
         let period_samples = r.option(P, |r| Ok(r.u32()))?;
         let pinned = r.flag(P)?;
         let features = r.option(Part::Features, |r| {
-            Ok(Features { direction: r.i8(), reverses: r.flag(Part::Features)?, longest_dwell_samples: r.u32() })
+            Ok(Features {
+                direction: r.i8(),
+                reverses: r.flag(Part::Features)?,
+                longest_dwell_samples: r.u32(),
+            })
         })?;
         let levels_rad = r.option(P, |r| Ok(r.real()))?;
         let level_side: [i8; LEVELS] = core::array::from_fn(|_| r.i8());
@@ -107,15 +127,41 @@ impl Stored for RotationMonitor {
             learn_reversed: r.flag(P)?,
             reversed_run: r.u32(),
         };
-        ensure(m.period_samples.is_none_or(|p| (2..=MAX_PERIOD_SAMPLES).contains(&p)), invalid)?;
-        ensure(!m.pinned || (m.period_samples.is_some() && config.rotation_period_s.is_some()), CheckpointError::Inconsistent(P))?;
-        ensure(m.features.is_none_or(|f| direction(f.direction)), CheckpointError::InvalidValue(Part::Features))?;
+        ensure(
+            m.period_samples
+                .is_none_or(|p| (2..=MAX_PERIOD_SAMPLES).contains(&p)),
+            invalid,
+        )?;
+        ensure(
+            !m.pinned || (m.period_samples.is_some() && config.rotation_period_s.is_some()),
+            CheckpointError::Inconsistent(P),
+        )?;
+        ensure(
+            m.features.is_none_or(|f| direction(f.direction)),
+            CheckpointError::InvalidValue(Part::Features),
+        )?;
         let angle = |v: Real| within(v, MAX_WRAPPED_ANGLE_RAD);
-        ensure(m.levels_rad.is_none_or(angle) && m.previous.is_none_or(|(_, rho)| angle(rho)), invalid)?;
-        ensure(m.level_side.iter().all(|s| direction(*s)) && direction(m.learn_first_direction), invalid)?;
-        ensure(m.timing_pass.is_none_or(|(level, dir)| usize::from(level) < LEVELS && dir < 2), invalid)?;
-        ensure(angle(m.short_increment_rad) && m.short_steps <= SHORT_STEPS, invalid)?;
-        ensure(within(m.learn_rotation_rad, 4.0 * MAX_PERIOD_SAMPLES as Real), invalid)?;
+        ensure(
+            m.levels_rad.is_none_or(angle) && m.previous.is_none_or(|(_, rho)| angle(rho)),
+            invalid,
+        )?;
+        ensure(
+            m.level_side.iter().all(|s| direction(*s)) && direction(m.learn_first_direction),
+            invalid,
+        )?;
+        ensure(
+            m.timing_pass
+                .is_none_or(|(level, dir)| usize::from(level) < LEVELS && dir < 2),
+            invalid,
+        )?;
+        ensure(
+            angle(m.short_increment_rad) && m.short_steps <= SHORT_STEPS,
+            invalid,
+        )?;
+        ensure(
+            within(m.learn_rotation_rad, 4.0 * MAX_PERIOD_SAMPLES as Real),
+            invalid,
+        )?;
         Ok(m)
     }
 }
@@ -142,12 +188,21 @@ mod tests {
             written_and_read(&t, &config)
         };
         assert_eq!(with(&|_| {}), Ok(m));
-        assert_eq!(with(&|m| m.timing_pass = Some((8, 0))), Err(InvalidValue(P)));
-        assert_eq!(with(&|m| m.timing_pass = Some((1, 2))), Err(InvalidValue(P)));
+        assert_eq!(
+            with(&|m| m.timing_pass = Some((8, 0))),
+            Err(InvalidValue(P))
+        );
+        assert_eq!(
+            with(&|m| m.timing_pass = Some((1, 2))),
+            Err(InvalidValue(P))
+        );
         assert_eq!(with(&|m| m.level_side[2] = 2), Err(InvalidValue(P)));
         assert_eq!(with(&|m| m.period_samples = Some(1)), Err(InvalidValue(P)));
         assert_eq!(with(&|m| m.short_steps = 5), Err(InvalidValue(P)));
-        assert_eq!(with(&|m| m.levels_rad = Some(Real::NAN)), Err(InvalidValue(P)));
+        assert_eq!(
+            with(&|m| m.levels_rad = Some(Real::NAN)),
+            Err(InvalidValue(P))
+        );
         assert_eq!(with(&|m| m.previous = Some((3, 7.0))), Err(InvalidValue(P)));
         // Pinned, while the configuration detects the period.
         assert_eq!(with(&|m| m.pinned = true), Err(Inconsistent(P)));

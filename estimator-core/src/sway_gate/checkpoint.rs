@@ -19,7 +19,11 @@ impl Stored for SwayMonitor {
     }
 
     fn read(r: &mut Reader<'_>, (): ()) -> Result<Self, CheckpointError> {
-        let sway = SwayMonitor { mean_rad: r.real(), mean_square_rad2: r.real(), samples: r.u32() };
+        let sway = SwayMonitor {
+            mean_rad: r.real(),
+            mean_square_rad2: r.real(),
+            samples: r.u32(),
+        };
         ensure(
             within(sway.mean_rad, 2.0) && within_non_negative(sway.mean_square_rad2, 4.0),
             CheckpointError::InvalidValue(Part::SwayMonitor),
@@ -42,8 +46,29 @@ mod tests {
         }
         assert_eq!(written_and_read(&m, ()), Ok(m));
         let refused = CheckpointError::InvalidValue(Part::SwayMonitor);
-        assert_eq!(written_and_read(&SwayMonitor { mean_square_rad2: Real::NAN, ..m }, ()), Err(refused));
-        assert_eq!(written_and_read(&SwayMonitor { mean_square_rad2: -1e-3, ..m }, ()), Err(refused));
-        assert_eq!(written_and_read(&SwayMonitor { mean_rad: 2.5, ..m }, ()), Err(refused));
+        assert_eq!(
+            written_and_read(
+                &SwayMonitor {
+                    mean_square_rad2: Real::NAN,
+                    ..m
+                },
+                ()
+            ),
+            Err(refused)
+        );
+        assert_eq!(
+            written_and_read(
+                &SwayMonitor {
+                    mean_square_rad2: -1e-3,
+                    ..m
+                },
+                ()
+            ),
+            Err(refused)
+        );
+        assert_eq!(
+            written_and_read(&SwayMonitor { mean_rad: 2.5, ..m }, ()),
+            Err(refused)
+        );
     }
 }

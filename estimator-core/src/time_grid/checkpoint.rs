@@ -45,10 +45,19 @@ impl Stored for TimeGrid {
             clock_steps: r.u32(),
         };
         let non_negative = |v: f64| v.is_finite() && v >= 0.0;
-        ensure(g.interval_s.is_none_or(|v| v.is_finite() && v > 0.0), invalid)?;
+        ensure(
+            g.interval_s.is_none_or(|v| v.is_finite() && v > 0.0),
+            invalid,
+        )?;
         ensure(g.last_stamp_s.is_none_or(f64::is_finite), invalid)?;
-        ensure(g.learning_steps.iter().all(|v| non_negative(*v)) && non_negative(g.step_sum_s), invalid)?;
-        ensure(g.learned as usize <= LEARNING_STEPS && g.steps < REFINEMENT_STEPS, invalid)?;
+        ensure(
+            g.learning_steps.iter().all(|v| non_negative(*v)) && non_negative(g.step_sum_s),
+            invalid,
+        )?;
+        ensure(
+            g.learned as usize <= LEARNING_STEPS && g.steps < REFINEMENT_STEPS,
+            invalid,
+        )?;
         let pinned_ok = match config.sample_interval_s {
             Some(pinned) => g.pinned && g.interval_s.map(f64::to_bits) == Some(pinned.to_bits()),
             None => !g.pinned,
@@ -75,11 +84,23 @@ mod tests {
             written_and_read(&g, &config)
         };
         assert_eq!(with(&|_| {}), Ok(est.grid_for_test()));
-        assert_eq!(with(&|g| g.interval_s = Some(-1.0)), Err(InvalidValue(Part::TimeGrid)));
-        assert_eq!(with(&|g| g.last_stamp_s = Some(f64::INFINITY)), Err(InvalidValue(Part::TimeGrid)));
-        assert_eq!(with(&|g| g.learning_steps[3] = f64::NAN), Err(InvalidValue(Part::TimeGrid)));
+        assert_eq!(
+            with(&|g| g.interval_s = Some(-1.0)),
+            Err(InvalidValue(Part::TimeGrid))
+        );
+        assert_eq!(
+            with(&|g| g.last_stamp_s = Some(f64::INFINITY)),
+            Err(InvalidValue(Part::TimeGrid))
+        );
+        assert_eq!(
+            with(&|g| g.learning_steps[3] = f64::NAN),
+            Err(InvalidValue(Part::TimeGrid))
+        );
         assert_eq!(with(&|g| g.learned = 9), Err(InvalidValue(Part::TimeGrid)));
         // Pinned, while the configuration learns the interval.
-        assert_eq!(with(&|g| g.pinned = true), Err(Inconsistent(Part::TimeGrid)));
+        assert_eq!(
+            with(&|g| g.pinned = true),
+            Err(Inconsistent(Part::TimeGrid))
+        );
     }
 }

@@ -67,6 +67,9 @@ impl RingReceiver {
 
     /// The receive path's counters; `lost_frames` from the link's sequence numbers.
     pub fn counters(&self, lost_frames: u32) -> LinkCounters {
-        STATS.snapshot(InterruptRing::<INTERRUPT_RX_RING_ENTRIES>::CAPACITY, lost_frames)
+        STATS.snapshot(
+            InterruptRing::<INTERRUPT_RX_RING_ENTRIES>::CAPACITY,
+            lost_frames,
+        )
     }
 }

@@ -34,7 +34,9 @@ pub use super::interrupt_rx::RingReceiver as Receiver;
 pub use super::systick_cost::CostCounter;
 
 /// The checkpoint flash: the semihosted file, as big as the board's checkpoint region.
-pub type Flash = super::semihosted_flash::SemihostedFlash<{ firmware::flash_layout::MPS2_AN386.region_bytes() as usize }>;
+pub type Flash = super::semihosted_flash::SemihostedFlash<
+    { firmware::flash_layout::MPS2_AN386.region_bytes() as usize },
+>;
 
 /// Core (and SysTick) clock, Hz.
 pub const CORE_CLOCK_HZ: u32 = 25_000_000;
@@ -140,7 +142,10 @@ unsafe fn uart_init() {
     // SAFETY: UART0's registers, set up once here.
     unsafe {
         reg_write(UART_BAUDDIV, UART_CLOCK_HZ / BAUD);
-        reg_write(UART_CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_INT_EN | CTRL_TX_INT_EN);
+        reg_write(
+            UART_CTRL,
+            CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_INT_EN | CTRL_TX_INT_EN,
+        );
         reg_write(UART_INTSTATUS, INTSTATUS_TX | INTSTATUS_RX);
         // One dummy read: QEMU wakes its chardev only when DATA is read, so without it the first
         // input byte waits about a second (measured under QEMU).
@@ -165,7 +170,13 @@ fn uart_rx_interrupt() {
                 // Write 1 to clear.
                 reg_write(UART_STATE, STATE_RX_OVERRUN);
             }
-            super::interrupt_rx::push(byte, LineErrors { overrun, ..LineErrors::default() });
+            super::interrupt_rx::push(
+                byte,
+                LineErrors {
+                    overrun,
+                    ..LineErrors::default()
+                },
+            );
         }
     }
 }

@@ -29,5 +29,7 @@ pub fn take() -> Option<ResetCause> {
     if magic != MAGIC {
         return None;
     }
-    u8::try_from(code).ok().and_then(|c| ResetCause::try_from(c).ok())
+    u8::try_from(code)
+        .ok()
+        .and_then(|c| ResetCause::try_from(c).ok())
 }

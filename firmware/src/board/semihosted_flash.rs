@@ -61,7 +61,9 @@ impl<const CAPACITY: usize> SemihostedFlash<CAPACITY> {
             .seek(SeekFrom::Start(offset as u64))
             .map_err(|_| NorFlashErrorKind::Other)?;
         for page in bytes.chunks(256) {
-            self.file.write_all(page).map_err(|_| NorFlashErrorKind::Other)?;
+            self.file
+                .write_all(page)
+                .map_err(|_| NorFlashErrorKind::Other)?;
             cortex_m::asm::delay(self.page_program_cycles);
         }
         Ok(())

@@ -148,7 +148,14 @@ impl Board {
             Environment::Qemu => QEMU_CPU_CLOCK_HZ,
         };
         let gpioa = device.GPIOA.split(&mut rcc);
-        let (tx, rx) = match serial::init(environment, device.USART1, device.DMA2, gpioa.pa9, gpioa.pa10, &mut rcc) {
+        let (tx, rx) = match serial::init(
+            environment,
+            device.USART1,
+            device.DMA2,
+            gpioa.pa9,
+            gpioa.pa10,
+            &mut rcc,
+        ) {
             Ok(Some(ends)) => ends,
             Ok(None) => return None,
             Err(_) => {

@@ -9,7 +9,9 @@
 
 use anyhow::{bail, Context};
 use link_protocol::frame::MAX_FRAME;
-use link_protocol::{encode_frame, FrameAccumulator, Numbered, Request, Response, MAX_RESPONSE_ENCODED};
+use link_protocol::{
+    encode_frame, FrameAccumulator, Numbered, Request, Response, MAX_RESPONSE_ENCODED,
+};
 use std::io::{ErrorKind, Read, Write};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
@@ -38,7 +40,11 @@ pub struct FirmwareLink {
 impl FirmwareLink {
     /// Two ends of one port: `reader` (whose reads may time out: a timeout is only a pause) and
     /// `writer`. A response not there `timeout` after it is awaited means a lost firmware.
-    pub fn new(reader: Box<dyn PortReader>, writer: Box<dyn PortWriter>, timeout: Duration) -> Self {
+    pub fn new(
+        reader: Box<dyn PortReader>,
+        writer: Box<dyn PortWriter>,
+        timeout: Duration,
+    ) -> Self {
         let (tx, answers) = mpsc::channel();
         let stop = Arc::new(AtomicBool::new(false));
         let bytes_in = Arc::new(AtomicU64::new(0));
@@ -65,7 +71,9 @@ impl FirmwareLink {
         self.writer
             .write_all(bytes)
             .context("cannot write to the firmware's port")?;
-        self.writer.flush().context("cannot write to the firmware's port")?;
+        self.writer
+            .flush()
+            .context("cannot write to the firmware's port")?;
         self.bytes_out += bytes.len() as u64;
         Ok(())
     }
@@ -75,8 +83,14 @@ impl FirmwareLink {
         let seq = self.next_seq;
         self.next_seq = firmware_next_seq(seq);
         let mut frame = [0u8; MAX_FRAME];
-        let n = encode_frame(&Numbered { seq, message: *request }, &mut frame)
-            .map_err(|e| anyhow::anyhow!("cannot encode {request:?}: {e:?}"))?;
+        let n = encode_frame(
+            &Numbered {
+                seq,
+                message: *request,
+            },
+            &mut frame,
+        )
+        .map_err(|e| anyhow::anyhow!("cannot encode {request:?}: {e:?}"))?;
         self.send_raw(&frame[..n])?;
         Ok(seq)
     }
@@ -86,13 +100,18 @@ impl FirmwareLink {
     pub fn receive_numbered(&mut self) -> anyhow::Result<Numbered<Response>> {
         match self.answers.recv_timeout(self.timeout) {
             Ok(answer) => answer,
-            Err(RecvTimeoutError::Timeout) => bail!("no response from the firmware (read timed out)"),
+            Err(RecvTimeoutError::Timeout) => {
+                bail!("no response from the firmware (read timed out)")
+            }
             Err(RecvTimeoutError::Disconnected) => bail!("the firmware's port closed"),
         }
     }
 
     /// The next response that arrives before `deadline`, if one does.
-    pub fn receive_until(&mut self, deadline: Instant) -> anyhow::Result<Option<Numbered<Response>>> {
+    pub fn receive_until(
+        &mut self,
+        deadline: Instant,
+    ) -> anyhow::Result<Option<Numbered<Response>>> {
         let wait = deadline.saturating_duration_since(Instant::now());
         match self.answers.recv_timeout(wait) {
             Ok(answer) => answer.map(Some),
@@ -158,7 +177,9 @@ fn read_responses(
                 continue;
             }
             Err(e) => {
-                let _ = answers.send(Err(anyhow::Error::new(e).context("cannot read from the firmware's port")));
+                let _ = answers.send(Err(
+                    anyhow::Error::new(e).context("cannot read from the firmware's port")
+                ));
                 return;
             }
         };

@@ -59,7 +59,10 @@ struct Push {
 
 impl Push {
     fn samples_in_flight(&self) -> usize {
-        self.in_flight.iter().filter(|(_, s)| matches!(s, Sent::Sample { .. })).count()
+        self.in_flight
+            .iter()
+            .filter(|(_, s)| matches!(s, Sent::Sample { .. }))
+            .count()
     }
 
     fn send(&mut self, target: &mut Target, request: &Request, sent: Sent) -> anyhow::Result<()> {
@@ -93,12 +96,19 @@ impl Push {
         };
         if let Response::Ready { .. } = answer.message {
             self.link.restarts += 1;
-            writeln!(info, "the firmware restarted (it announced Ready): asking for its status")?;
+            writeln!(
+                info,
+                "the firmware restarted (it announced Ready): asking for its status"
+            )?;
             self.send(target, &Request::ReadStatus, Sent::RestartStatus)?;
             return Ok(true);
         }
         if !self.in_flight.iter().any(|(seq, _)| *seq == answer.seq) {
-            bail!("an answer numbered {} to no request in flight: {:?}", answer.seq, answer.message);
+            bail!(
+                "an answer numbered {} to no request in flight: {:?}",
+                answer.seq,
+                answer.message
+            );
         }
         while let Some((seq, sent)) = self.in_flight.pop_front() {
             if seq != answer.seq {
@@ -109,7 +119,8 @@ impl Push {
             }
             match (sent, answer.message) {
                 (Sent::Sample { line, msg }, response) => {
-                    let a = answer_of(&msg, response).with_context(|| format!("log line {}", line.line))?;
+                    let a = answer_of(&msg, response)
+                        .with_context(|| format!("log line {}", line.line))?;
                     self.cost.add(a.step_cost_ticks);
                     writer.write_step(line.row.time_s, &a.result)?;
                     each(&line, &a.result);
@@ -119,8 +130,13 @@ impl Push {
                     let cause = ResetCause::try_from(s.reset_cause).map_or("unknown", |c| c.name());
                     let checkpoint = s
                         .checkpoint_time_s
-                        .map_or("no checkpoint".to_string(), |t| format!("the checkpoint of {t} s"));
-                    writeln!(info, "  reset cause {cause}; the firmware restored {checkpoint}")?;
+                        .map_or("no checkpoint".to_string(), |t| {
+                            format!("the checkpoint of {t} s")
+                        });
+                    writeln!(
+                        info,
+                        "  reset cause {cause}; the firmware restored {checkpoint}"
+                    )?;
                     self.restart_status.push(s);
                 }
                 (Sent::FinalStatus, Response::Status(s)) => self.final_status = Some(s),
@@ -164,7 +180,9 @@ pub fn stream_log_push<R: Read, W: Write>(
     let window = options.window.max(1);
     while let Some(item) = lines.next() {
         let Some(line) = filter.admit(item, &mut |e| {
-            progress.bar.suspend(|| eprintln!("warning: {e} (row skipped)"));
+            progress
+                .bar
+                .suspend(|| eprintln!("warning: {e} (row skipped)"));
         })?
         else {
             continue;
@@ -214,7 +232,6 @@ pub fn stream_log_push<R: Read, W: Write>(
     })
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -223,8 +240,8 @@ mod tests {
     use estimator_core::SampleError;
     use link_protocol::frame::MAX_FRAME;
     use link_protocol::{
-        encode_frame, Counters, FrameAccumulator, LinkCounters, Numbered, RejectedReply, MAX_REQUEST_ENCODED,
-        UNNUMBERED,
+        encode_frame, Counters, FrameAccumulator, LinkCounters, Numbered, RejectedReply,
+        MAX_REQUEST_ENCODED, UNNUMBERED,
     };
     use std::os::unix::net::UnixStream;
     use std::path::Path;
@@ -272,7 +289,9 @@ mod tests {
                 Ok(n) => n,
             };
             for &b in &buf[..n] {
-                let Some(Ok(request)) = rx.push_decode::<Numbered<Request>>(b) else { continue };
+                let Some(Ok(request)) = rx.push_decode::<Numbered<Request>>(b) else {
+                    continue;
+                };
                 match request.message {
                     Request::Sample(msg) if !drop.contains(&request.seq) => {
                         let error = SampleError::IrregularTimeStep;
@@ -281,14 +300,24 @@ mod tests {
                     }
                     Request::Sample(_) => {}
                     Request::ReadStatus => {
-                        let cause = if restarted { ResetCause::Watchdog } else { ResetCause::PowerOn };
+                        let cause = if restarted {
+                            ResetCause::Watchdog
+                        } else {
+                            ResetCause::PowerOn
+                        };
                         send(&mut port, request.seq, Response::Status(status(cause)));
                     }
                     _ => {}
                 }
                 if Some(request.seq) == restart_after {
                     restarted = true;
-                    send(&mut port, UNNUMBERED, Response::Ready { protocol_version: link_protocol::PROTOCOL_VERSION });
+                    send(
+                        &mut port,
+                        UNNUMBERED,
+                        Response::Ready {
+                            protocol_version: link_protocol::PROTOCOL_VERSION,
+                        },
+                    );
                 }
             }
         }
@@ -296,7 +325,12 @@ mod tests {
 
     /// Pushes `rows` rows at 1 s through the fake firmware; returns the summary, the estimates
     /// CSV and what the stream said.
-    fn push(rows: u32, drop: Vec<u32>, restart_after: Option<u32>, window: usize) -> (StreamSummary, String, String) {
+    fn push(
+        rows: u32,
+        drop: Vec<u32>,
+        restart_after: Option<u32>,
+        window: usize,
+    ) -> (StreamSummary, String, String) {
         push_at(rows, 1.0, false, drop, restart_after, window)
     }
 
@@ -312,37 +346,63 @@ mod tests {
         let (host_end, firmware_end) = UnixStream::pair().unwrap();
         std::thread::spawn(move || fake_firmware(firmware_end, drop, restart_after));
         let reader = host_end.try_clone().unwrap();
-        reader.set_read_timeout(Some(Duration::from_millis(100))).unwrap();
+        reader
+            .set_read_timeout(Some(Duration::from_millis(100)))
+            .unwrap();
         let mut target = Target {
             link: FirmwareLink::new(Box::new(reader), Box::new(host_end), Duration::from_secs(5)),
             qemu: None,
             unit: CostUnit::BoardCycles { counter_hz: 1 },
             boot_status: status(ResetCause::PowerOn),
         };
-        let mut csv = String::from("time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n");
+        let mut csv = String::from(
+            "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n",
+        );
         for k in 0..rows {
             csv.push_str(&format!("{},10,20,30,40,1,2\n", f64::from(k) * interval_s));
         }
-        let mut lines = LogReader::new(Path::new("test.csv"), std::io::Cursor::new(csv.into_bytes()));
+        let mut lines = LogReader::new(
+            Path::new("test.csv"),
+            std::io::Cursor::new(csv.into_bytes()),
+        );
         let mut writer = EstimatesWriter::new(Vec::new()).unwrap();
         let mut info = Vec::new();
-        let options = PushOptions { realtime, window, inject: None };
-        let summary =
-            stream_log_push(&mut target, &mut lines, RowFilter::new(true), None, &mut writer, None, &options, &mut info, &mut |_, _| {})
-                .unwrap();
+        let options = PushOptions {
+            realtime,
+            window,
+            inject: None,
+        };
+        let summary = stream_log_push(
+            &mut target,
+            &mut lines,
+            RowFilter::new(true),
+            None,
+            &mut writer,
+            None,
+            &options,
+            &mut info,
+            &mut |_, _| {},
+        )
+        .unwrap();
         let out = String::from_utf8(writer.finish().unwrap()).unwrap();
         (summary, out, String::from_utf8(info).unwrap())
     }
 
     fn times(csv: &str) -> Vec<u32> {
-        csv.lines().skip(1).map(|l| l.split(',').next().unwrap().parse::<f64>().unwrap() as u32).collect()
+        csv.lines()
+            .skip(1)
+            .map(|l| l.split(',').next().unwrap().parse::<f64>().unwrap() as u32)
+            .collect()
     }
 
     #[test]
     fn every_answer_is_matched_to_its_row_and_unanswered_rows_are_counted_lost() {
         // Samples are numbered from 1 (row 0 is sample 1): drop the answers to rows 4, 5 and 20.
         let (summary, csv, _) = push(40, vec![5, 6, 21], None, 4);
-        assert_eq!((summary.link.sent, summary.link.answered, summary.link.lost), (40, 37, 3));
+        assert_eq!(
+            (summary.link.sent, summary.link.answered, summary.link.lost),
+            (40, 37, 3)
+        );
         let want: Vec<u32> = (0..40).filter(|t| ![4, 5, 20].contains(t)).collect();
         assert_eq!(times(&csv), want);
         assert_eq!(summary.cost.steps, 37);
@@ -360,9 +420,15 @@ mod tests {
         // The firmware announces Ready after sample 12 (row 11) and loses nothing else.
         let (summary, csv, info) = push(30, vec![], Some(12), 5);
         assert_eq!(summary.link.restarts, 1);
-        assert_eq!((summary.link.sent, summary.link.answered, summary.link.lost), (30, 30, 0));
+        assert_eq!(
+            (summary.link.sent, summary.link.answered, summary.link.lost),
+            (30, 30, 0)
+        );
         assert_eq!(times(&csv), (0..30).collect::<Vec<_>>());
-        assert!(info.contains("reset cause watchdog; the firmware restored the checkpoint of 5 s"), "{info}");
+        assert!(
+            info.contains("reset cause watchdog; the firmware restored the checkpoint of 5 s"),
+            "{info}"
+        );
         assert_eq!(summary.restart_status.len(), 1);
     }
 
@@ -379,7 +445,10 @@ mod tests {
         let start = Instant::now();
         push_at(11, 10.0, false, vec![], None, 50);
         let wall = start.elapsed().as_secs_f64();
-        assert!(wall < 10.0, "without --realtime as fast as the link takes them: {wall} s");
+        assert!(
+            wall < 10.0,
+            "without --realtime as fast as the link takes them: {wall} s"
+        );
     }
 
     #[test]

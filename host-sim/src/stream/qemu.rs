@@ -113,11 +113,14 @@ impl Qemu {
             std::process::id(),
             RUNS.fetch_add(1, Ordering::Relaxed)
         ));
-        std::fs::create_dir_all(&dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("{}: cannot create", dir.display()))?;
         let socket = dir.join("link.sock");
         let stderr_path = dir.join("qemu.stderr");
         let stdout = match defmt_log {
-            Some(p) => Stdio::from(File::create(p).with_context(|| format!("{}: cannot create", p.display()))?),
+            Some(p) => Stdio::from(
+                File::create(p).with_context(|| format!("{}: cannot create", p.display()))?,
+            ),
             None => Stdio::null(),
         };
         let binary = qemu_binary();
@@ -128,7 +131,10 @@ impl Qemu {
             .args(["-display", "none", "-monitor", "none"])
             .args(["-semihosting-config", "enable=on,target=native"])
             .arg("-chardev")
-            .arg(format!("socket,id=link,path={},server=on,wait=on", socket.display()))
+            .arg(format!(
+                "socket,id=link,path={},server=on,wait=on",
+                socket.display()
+            ))
             .args(["-serial", "chardev:link", "-kernel"])
             .arg(elf)
             .args(extra_args())

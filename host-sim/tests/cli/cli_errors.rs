@@ -16,11 +16,22 @@ fn expect_error(name: &str, text: &str, line: usize, needle: &str, extra: &[&str
     let out = host_sim(&args);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{name}: should fail");
-    assert_eq!(out.status.code(), Some(1), "{name}: exit code (a panic gives 101)");
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{name}: exit code (a panic gives 101)"
+    );
     assert!(!stderr.contains("panicked"), "{name}: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "{name}: one line: {stderr}");
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "{name}: one line: {stderr}"
+    );
     let prefix = format!("error: {}:{line}: ", log.display());
-    assert!(stderr.starts_with(&prefix), "{name}: {stderr:?} should start with {prefix:?}");
+    assert!(
+        stderr.starts_with(&prefix),
+        "{name}: {stderr:?} should start with {prefix:?}"
+    );
     assert!(stderr.contains(needle), "{name}: {stderr}");
 }
 
@@ -31,12 +42,24 @@ fn bad_header_is_reported_with_its_line() {
 
 #[test]
 fn strict_refuses_a_non_number_with_its_line() {
-    expect_error("nonnum", &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n1,1.75,2,40,4,abc,0.1\n"), 3, "roll_deg: not a number", &["--strict"]);
+    expect_error(
+        "nonnum",
+        &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n1,1.75,2,40,4,abc,0.1\n"),
+        3,
+        "roll_deg: not a number",
+        &["--strict"],
+    );
 }
 
 #[test]
 fn strict_refuses_a_short_row_with_its_line() {
-    expect_error("short", &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n\n1,1.75,2,40,4,0.5\n"), 4, "short row", &["--strict"]);
+    expect_error(
+        "short",
+        &format!("{HEADER}\n0,1,2,40,4,0.5,0.1\n\n1,1.75,2,40,4,0.5\n"),
+        4,
+        "short row",
+        &["--strict"],
+    );
 }
 
 /// Without --strict, a blank cell and a truncated last line are rejected rows, reported with their
@@ -45,7 +68,15 @@ fn strict_refuses_a_short_row_with_its_line() {
 fn unreadable_rows_are_skipped_counted_and_reported_with_their_lines() {
     let dir = temp_dir("cli-unreadable");
     let log = dir.join("p.csv");
-    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "1200", "--out", path_str(&log)]);
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        "1200",
+        "--out",
+        path_str(&log),
+    ]);
     let text = std::fs::read_to_string(&log).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     // Line numbers are 1-based with the header on line 1: row t is on line t + 2.
@@ -59,12 +90,27 @@ fn unreadable_rows_are_skipped_counted_and_reported_with_their_lines() {
     std::fs::write(&log, lines.join("\n")).unwrap();
     let est = dir.join("e.csv");
     let out = host_sim(&["estimate", path_str(&log), "--out", path_str(&est)]);
-    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
     assert_eq!(out.status.code(), Some(0), "{stdout}\n{stderr}");
-    assert!(stderr.contains(&format!("{}:502: roll_deg: blank cell (row skipped)", log.display())), "{stderr}");
-    assert!(stderr.contains(&format!("{}:1201: short row", log.display())), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "{}:502: roll_deg: blank cell (row skipped)",
+            log.display()
+        )),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains(&format!("{}:1201: short row", log.display())),
+        "{stderr}"
+    );
     assert!(stdout.contains("1198 rows, 1198 accepted"), "{stdout}");
-    assert!(stdout.contains("unreadable rows skipped: 2 (lines 502, 1201;"), "{stdout}");
+    assert!(
+        stdout.contains("unreadable rows skipped: 2 (lines 502, 1201;"),
+        "{stdout}"
+    );
     let rows = read_estimates(&est).unwrap();
     assert_eq!(rows.len(), 1198);
     assert!(rows.iter().all(|r| r.time_s != 500.0 && r.time_s != 1199.0));
@@ -81,7 +127,15 @@ fn missing_file_is_an_error_not_a_panic() {
 fn nan_rows_are_rejected_and_short_gaps_filled_the_rest_processed() {
     let dir = temp_dir("cli-nan-gap");
     let log = dir.join("p.csv");
-    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "4000", "--out", path_str(&log)]);
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        "4000",
+        "--out",
+        path_str(&log),
+    ]);
     let text = std::fs::read_to_string(&log).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     // Line index = 1 + time. NaN roll at t = 1000, inf pitch at t = 1001 (counted as non-finite);
@@ -106,24 +160,48 @@ fn nan_rows_are_rejected_and_short_gaps_filled_the_rest_processed() {
     // are interpolated, the long gap restarts the moving average.
     let est = dir.join("e.csv");
     let stdout = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&est)]);
-    assert!(stdout.contains("3988 rows, 3986 accepted, 4 filled"), "{stdout}");
+    assert!(
+        stdout.contains("3988 rows, 3986 accepted, 4 filled"),
+        "{stdout}"
+    );
     assert!(stdout.contains("1 window restarts"), "{stdout}");
-    assert!(stdout.contains("rejected rows: 2 (non_finite 2,"), "{stdout}");
-    assert!(stdout.contains("rotation: one-way, period 480 s; sample interval 1 s"), "{stdout}");
+    assert!(
+        stdout.contains("rejected rows: 2 (non_finite 2,"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("rotation: one-way, period 480 s; sample interval 1 s"),
+        "{stdout}"
+    );
     // No filling: the NaN pair and both gaps restart the moving average.
-    let unfilled = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("b.csv")), "--max-filled-gap-samples", "0"]);
-    assert!(unfilled.contains("3988 rows, 3986 accepted, 0 filled"), "{unfilled}");
+    let unfilled = host_sim_ok(&[
+        "estimate",
+        path_str(&log),
+        "--out",
+        path_str(&dir.join("b.csv")),
+        "--max-filled-gap-samples",
+        "0",
+    ]);
+    assert!(
+        unfilled.contains("3988 rows, 3986 accepted, 0 filled"),
+        "{unfilled}"
+    );
     assert!(unfilled.contains("3 window restarts"), "{unfilled}");
     let rows = read_estimates(&est).unwrap();
     assert_eq!(rows.len(), 3988, "one estimates row per input row");
     let r1000 = rows.iter().find(|r| r.time_s == 1000.0).unwrap();
     assert_eq!(r1000.status, "rejected_non_finite");
     let r999 = rows.iter().find(|r| r.time_s == 999.0).unwrap();
-    assert_eq!(r1000.x_arcsec, r999.x_arcsec, "a rejected row carries the held estimate");
+    assert_eq!(
+        r1000.x_arcsec, r999.x_arcsec,
+        "a rejected row carries the held estimate"
+    );
     // After the long gap the window refills (holding), then estimation resumes.
     let r3010 = rows.iter().find(|r| r.time_s == 3010.0).unwrap();
     assert_eq!(r3010.status, "holding");
-    assert!(rows.last().unwrap().status == "estimating" || rows.last().unwrap().status == "converged");
+    assert!(
+        rows.last().unwrap().status == "estimating" || rows.last().unwrap().status == "converged"
+    );
     // The truth file is still there: the accuracy table is printed and the estimate is good.
     let x = [200.0, -150.0, 300.0, -250.0];
     let e = rows.last().unwrap().x_arcsec.unwrap();

@@ -7,7 +7,10 @@ use std::path::Path;
 /// CRC-64 (ECMA-182) and length of a file.
 fn checksum(path: &Path) -> (u64, usize) {
     let bytes = std::fs::read(path).unwrap();
-    (crc::Crc::<u64>::new(&crc::CRC_64_ECMA_182).checksum(&bytes), bytes.len())
+    (
+        crc::Crc::<u64>::new(&crc::CRC_64_ECMA_182).checksum(&bytes),
+        bytes.len(),
+    )
 }
 
 /// The three scenarios' logs, without any of the rotation-scheme or recorder options, are
@@ -23,7 +26,17 @@ fn default_scenarios_unchanged() {
     ];
     for (scenario, duration, crc, len) in expected {
         let log = dir.join(format!("{scenario}.csv"));
-        host_sim_ok(&["generate", "--scenario", scenario, "--seed", "3", "--duration", duration, "--out", path_str(&log)]);
+        host_sim_ok(&[
+            "generate",
+            "--scenario",
+            scenario,
+            "--seed",
+            "3",
+            "--duration",
+            duration,
+            "--out",
+            path_str(&log),
+        ]);
         assert_eq!(checksum(&log), (crc, len), "{scenario}");
     }
 }
@@ -61,17 +74,34 @@ struct Truth {
 /// Generates a paper-scenario log with `extra` options; returns its rows and truth.
 fn generate(dir: &Path, name: &str, extra: &[&str]) -> (Vec<Row>, Truth) {
     let log = dir.join(format!("{name}.csv"));
-    let mut args = vec!["generate", "--scenario", "paper", "--seed", "5", "--out", path_str(&log)];
+    let mut args = vec![
+        "generate",
+        "--scenario",
+        "paper",
+        "--seed",
+        "5",
+        "--out",
+        path_str(&log),
+    ];
     args.extend_from_slice(extra);
     host_sim_ok(&args);
     let rows = read_log(&log).unwrap().into_iter().map(|l| l.row).collect();
     let truth = read_truth(&truth_path(&log)).unwrap().expect("truth file");
-    (rows, Truth { params: truth.params.expect("generate records the scenario's parameters") })
+    (
+        rows,
+        Truth {
+            params: truth
+                .params
+                .expect("generate records the scenario's parameters"),
+        },
+    )
 }
 
 /// Change of the logged rotation angle from one row to the next, deg, in (-180, 180].
 fn angle_steps_deg(rows: &[Row]) -> Vec<f64> {
-    rows.windows(2).map(|w| -(w[0].rotation_deg - w[1].rotation_deg + 180.0).rem_euclid(360.0) + 180.0).collect()
+    rows.windows(2)
+        .map(|w| -(w[0].rotation_deg - w[1].rotation_deg + 180.0).rem_euclid(360.0) + 180.0)
+        .collect()
 }
 
 /// Runs of rows where the angle stands still: (first time, duration s, angle from the start deg).
@@ -83,7 +113,11 @@ fn dwells(rows: &[Row], phase_deg: f64) -> Vec<(f64, f64, f64)> {
         }
         match runs.last_mut() {
             Some(r) if r.0 + r.1 == w[0].time_s => r.1 += w[1].time_s - w[0].time_s,
-            _ => runs.push((w[0].time_s, w[1].time_s - w[0].time_s, (w[0].rotation_deg - phase_deg).rem_euclid(360.0))),
+            _ => runs.push((
+                w[0].time_s,
+                w[1].time_s - w[0].time_s,
+                (w[0].rotation_deg - phase_deg).rem_euclid(360.0),
+            )),
         }
     }
     runs
@@ -93,12 +127,29 @@ fn dwells(rows: &[Row], phase_deg: f64) -> Vec<(f64, f64, f64)> {
 fn one_way_and_reciprocating_schemes_turn_as_stated() {
     let dir = temp_dir("gen-schemes-rate");
     // (scheme, period s, rate deg/s in the first half of a period, in the second half)
-    for (scheme, period, first, second) in
-        [("continuous", 480.0, 0.75, 0.75), ("reversed", 480.0, -0.75, -0.75), ("reciprocating", 480.0, 1.5, -1.5), ("reciprocating", 720.0, 1.0, -1.0)]
-    {
-        let (rows, truth) = generate(&dir, scheme, &["--scheme", scheme, "--rotation-period", &period.to_string(), "--duration", "1500"]);
+    for (scheme, period, first, second) in [
+        ("continuous", 480.0, 0.75, 0.75),
+        ("reversed", 480.0, -0.75, -0.75),
+        ("reciprocating", 480.0, 1.5, -1.5),
+        ("reciprocating", 720.0, 1.0, -1.0),
+    ] {
+        let (rows, truth) = generate(
+            &dir,
+            scheme,
+            &[
+                "--scheme",
+                scheme,
+                "--rotation-period",
+                &period.to_string(),
+                "--duration",
+                "1500",
+            ],
+        );
         assert_eq!(rows.len(), 1500);
-        assert_eq!((truth.params.scheme.name(), truth.params.rotation_period_s), (scheme, period));
+        assert_eq!(
+            (truth.params.scheme.name(), truth.params.rotation_period_s),
+            (scheme, period)
+        );
         assert!((rows[0].rotation_deg - truth.params.rotation_phase_deg).abs() < 1e-9);
         for (k, d) in angle_steps_deg(&rows).into_iter().enumerate() {
             let u = (k as f64).rem_euclid(period);
@@ -107,7 +158,10 @@ fn one_way_and_reciprocating_schemes_turn_as_stated() {
                 continue;
             }
             let expected = if u < period / 2.0 { first } else { second };
-            assert!((d - expected).abs() < 1e-9, "{scheme} {period} s: step after {k} s is {d} deg, expected {expected}");
+            assert!(
+                (d - expected).abs() < 1e-9,
+                "{scheme} {period} s: step after {k} s is {d} deg, expected {expected}"
+            );
         }
     }
 }
@@ -119,19 +173,46 @@ fn stop_and_go_schemes_dwell_at_their_positions() {
     let cases: [(&str, f64, f64, &[f64]); 3] = [
         ("four-position", 480.0, 105.0, &[90.0, 180.0, 270.0, 0.0]),
         ("four-position", 360.0, 75.0, &[90.0, 180.0, 270.0, 0.0]),
-        ("eight-position", 480.0, 45.0, &[90.0, 180.0, 270.0, 0.0, 270.0, 180.0, 90.0, 0.0]),
+        (
+            "eight-position",
+            480.0,
+            45.0,
+            &[90.0, 180.0, 270.0, 0.0, 270.0, 180.0, 90.0, 0.0],
+        ),
     ];
     for (scheme, period, dwell, positions) in cases {
-        let (rows, truth) = generate(&dir, scheme, &["--scheme", scheme, "--rotation-period", &period.to_string(), "--duration", &(2.0 * period + 1.0).to_string()]);
+        let (rows, truth) = generate(
+            &dir,
+            scheme,
+            &[
+                "--scheme",
+                scheme,
+                "--rotation-period",
+                &period.to_string(),
+                "--duration",
+                &(2.0 * period + 1.0).to_string(),
+            ],
+        );
         let runs = dwells(&rows, truth.params.rotation_phase_deg);
-        assert_eq!(runs.len(), 2 * positions.len(), "{scheme} {period}: {runs:?}");
+        assert_eq!(
+            runs.len(),
+            2 * positions.len(),
+            "{scheme} {period}: {runs:?}"
+        );
         let step = period / positions.len() as f64;
         for (i, (start, len, angle)) in runs.iter().enumerate() {
-            assert_eq!(*start, i as f64 * step + 15.0, "{scheme} {period}: move of 15 s before dwell {i}: {runs:?}");
+            assert_eq!(
+                *start,
+                i as f64 * step + 15.0,
+                "{scheme} {period}: move of 15 s before dwell {i}: {runs:?}"
+            );
             assert_eq!(*len, dwell, "{scheme} {period}: dwell {i}: {runs:?}");
             let expected = positions[i % positions.len()];
             let off = (angle - expected + 180.0).rem_euclid(360.0) - 180.0;
-            assert!(off.abs() < 1e-9, "{scheme} {period}: dwell {i} at {angle} deg, expected {expected}");
+            assert!(
+                off.abs() < 1e-9,
+                "{scheme} {period}: dwell {i} at {angle} deg, expected {expected}"
+            );
         }
         // Moves go forward (+) or back (-) by up to 12 deg/s in the middle, never more.
         let steps = angle_steps_deg(&rows);
@@ -149,18 +230,44 @@ fn scheme_needs_room_for_its_moves_and_ranges_are_checked() {
     let dir = temp_dir("gen-ranges");
     let log = dir.join("x.csv");
     for (args, message) in [
-        (&["--scheme", "eight-position", "--rotation-period", "100"][..], "at least 120 s"),
-        (&["--rotation-period", "4000"][..], "--rotation-period must be between 60 and 3600"),
-        (&["--sample-interval", "0.05"][..], "--sample-interval must be between 0.1 and 10"),
-        (&["--drop-fraction", "1"][..], "--drop-fraction must be in [0, 1)"),
-        (&["--time-jitter", "0.5"][..], "below half the sample interval"),
+        (
+            &["--scheme", "eight-position", "--rotation-period", "100"][..],
+            "at least 120 s",
+        ),
+        (
+            &["--rotation-period", "4000"][..],
+            "--rotation-period must be between 60 and 3600",
+        ),
+        (
+            &["--sample-interval", "0.05"][..],
+            "--sample-interval must be between 0.1 and 10",
+        ),
+        (
+            &["--drop-fraction", "1"][..],
+            "--drop-fraction must be in [0, 1)",
+        ),
+        (
+            &["--time-jitter", "0.5"][..],
+            "below half the sample interval",
+        ),
         (&["--outages", "17"][..], "do not fit"),
     ] {
-        let mut a = vec!["generate", "--scenario", "paper", "--duration", "1000", "--out", path_str(&log)];
+        let mut a = vec![
+            "generate",
+            "--scenario",
+            "paper",
+            "--duration",
+            "1000",
+            "--out",
+            path_str(&log),
+        ];
         a.extend_from_slice(args);
         let out = crate::common::host_sim(&a);
         let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success() && stderr.contains(message), "{args:?}: {stderr}");
+        assert!(
+            !out.status.success() && stderr.contains(message),
+            "{args:?}: {stderr}"
+        );
     }
 }
 
@@ -168,7 +275,11 @@ fn scheme_needs_room_for_its_moves_and_ranges_are_checked() {
 fn dropped_rows_follow_the_drop_fraction_and_leave_the_rest_unchanged() {
     let dir = temp_dir("gen-drop");
     let (all, _) = generate(&dir, "all", &["--duration", "4000"]);
-    let (kept, truth) = generate(&dir, "kept", &["--duration", "4000", "--drop-fraction", "0.05"]);
+    let (kept, truth) = generate(
+        &dir,
+        "kept",
+        &["--duration", "4000", "--drop-fraction", "0.05"],
+    );
     assert_eq!(truth.params.recording.drop_fraction, 0.05);
     // Binomial(4000, 0.05): mean 200, sigma 13.8; 4.5 sigma either side.
     let dropped = all.len() - kept.len();
@@ -179,7 +290,11 @@ fn dropped_rows_follow_the_drop_fraction_and_leave_the_rest_unchanged() {
     }
     // Spread over the log, not bunched: each quarter loses between 20 and 80 rows.
     for q in 0..4 {
-        let lost = 1000 - kept.iter().filter(|r| (r.time_s / 1000.0).floor() as usize == q).count();
+        let lost = 1000
+            - kept
+                .iter()
+                .filter(|r| (r.time_s / 1000.0).floor() as usize == q)
+                .count();
         assert!((20..=80).contains(&lost), "quarter {q}: {lost}");
     }
 }
@@ -191,14 +306,28 @@ fn outages_are_60_s_of_missing_rows_at_the_recorded_times() {
     let starts = &truth.params.recording.outage_starts_s;
     assert_eq!(starts.len(), 3);
     assert_eq!(truth.params.recording.outage_duration_s, 60.0);
-    assert_eq!(rows.len(), 3000 - 3 * 60, "each outage removes 60 one-second rows");
+    assert_eq!(
+        rows.len(),
+        3000 - 3 * 60,
+        "each outage removes 60 one-second rows"
+    );
     let present: std::collections::HashSet<u64> = rows.iter().map(|r| r.time_s as u64).collect();
     for t in 0..3000u64 {
-        let inside = starts.iter().any(|s| (t as f64) >= *s && (t as f64) < s + 60.0);
-        assert_eq!(present.contains(&t), !inside, "row at {t} s (outages from {starts:?})");
+        let inside = starts
+            .iter()
+            .any(|s| (t as f64) >= *s && (t as f64) < s + 60.0);
+        assert_eq!(
+            present.contains(&t),
+            !inside,
+            "row at {t} s (outages from {starts:?})"
+        );
     }
     // Seen from the log: three jumps of 61 s, every other step 1 s.
-    let mut gaps: Vec<f64> = rows.windows(2).map(|w| w[1].time_s - w[0].time_s).filter(|d| *d != 1.0).collect();
+    let mut gaps: Vec<f64> = rows
+        .windows(2)
+        .map(|w| w[1].time_s - w[0].time_s)
+        .filter(|d| *d != 1.0)
+        .collect();
     gaps.sort_by(f64::total_cmp);
     assert_eq!(gaps, vec![61.0; 3], "{starts:?}");
 }
@@ -206,13 +335,40 @@ fn outages_are_60_s_of_missing_rows_at_the_recorded_times() {
 #[test]
 fn stamps_carry_the_offset_and_jitter_within_bounds_and_full_precision() {
     let dir = temp_dir("gen-stamps");
-    let (rows, truth) = generate(&dir, "stamps", &["--duration", "3000", "--time-offset", "1.7e9", "--time-jitter", "0.02"]);
-    assert_eq!((truth.params.recording.time_offset_s, truth.params.recording.time_jitter_s), (1.7e9, 0.02));
+    let (rows, truth) = generate(
+        &dir,
+        "stamps",
+        &[
+            "--duration",
+            "3000",
+            "--time-offset",
+            "1.7e9",
+            "--time-jitter",
+            "0.02",
+        ],
+    );
+    assert_eq!(
+        (
+            truth.params.recording.time_offset_s,
+            truth.params.recording.time_jitter_s
+        ),
+        (1.7e9, 0.02)
+    );
     assert_eq!(rows.len(), 3000);
-    let jitter: Vec<f64> = rows.iter().enumerate().map(|(k, r)| r.time_s - 1.7e9 - k as f64).collect();
-    assert!(jitter.iter().all(|j| j.abs() <= 0.02 + 1e-6), "{:?}", jitter.iter().fold(0.0f64, |m, j| m.max(j.abs())));
+    let jitter: Vec<f64> = rows
+        .iter()
+        .enumerate()
+        .map(|(k, r)| r.time_s - 1.7e9 - k as f64)
+        .collect();
+    assert!(
+        jitter.iter().all(|j| j.abs() <= 0.02 + 1e-6),
+        "{:?}",
+        jitter.iter().fold(0.0f64, |m, j| m.max(j.abs()))
+    );
     // Uniform in [-0.02, 0.02]: spans the range, mean near 0 (sigma of the mean 0.0002).
-    let (lo, hi) = jitter.iter().fold((0.0f64, 0.0f64), |(lo, hi), j| (lo.min(*j), hi.max(*j)));
+    let (lo, hi) = jitter
+        .iter()
+        .fold((0.0f64, 0.0f64), |(lo, hi), j| (lo.min(*j), hi.max(*j)));
     assert!(lo < -0.019 && hi > 0.019, "{lo} {hi}");
     assert!((jitter.iter().sum::<f64>() / 3000.0).abs() < 0.001);
     // Written as decimals to the microsecond, which read back as the stamps.
@@ -222,28 +378,51 @@ fn stamps_carry_the_offset_and_jitter_within_bounds_and_full_precision() {
         let decimals = field.split('.').nth(1).map_or(0, str::len);
         assert!(decimals <= 6 && !field.contains('e'), "{field}");
         let whole: i64 = field.split('.').next().unwrap().parse().unwrap();
-        assert!((whole - 1_700_000_000 - k as i64).abs() <= 1, "{field} at row {k}");
+        assert!(
+            (whole - 1_700_000_000 - k as i64).abs() <= 1,
+            "{field} at row {k}"
+        );
     }
     // The data are those of the true instants: the exact-stamp log's rows.
     let (exact, _) = generate(&dir, "exact", &["--duration", "3000"]);
     for (a, b) in rows.iter().zip(&exact) {
-        assert_eq!(Row { time_s: b.time_s, ..*a }, *b);
+        assert_eq!(
+            Row {
+                time_s: b.time_s,
+                ..*a
+            },
+            *b
+        );
     }
 }
 
 #[test]
 fn sample_interval_sets_the_row_spacing() {
     let dir = temp_dir("gen-interval");
-    let (rows, truth) = generate(&dir, "fast", &["--duration", "200", "--sample-interval", "0.1"]);
+    let (rows, truth) = generate(
+        &dir,
+        "fast",
+        &["--duration", "200", "--sample-interval", "0.1"],
+    );
     assert_eq!(truth.params.sample_interval_s, 0.1);
     assert_eq!(rows.len(), 2000);
-    assert!(rows.windows(2).all(|w| (w[1].time_s - w[0].time_s - 0.1).abs() < 1e-9));
+    assert!(rows
+        .windows(2)
+        .all(|w| (w[1].time_s - w[0].time_s - 0.1).abs() < 1e-9));
     let text = std::fs::read_to_string(dir.join("fast.csv")).unwrap();
-    assert!(text.lines().nth(4).unwrap().starts_with("0.3,"), "{}", text.lines().nth(4).unwrap());
+    assert!(
+        text.lines().nth(4).unwrap().starts_with("0.3,"),
+        "{}",
+        text.lines().nth(4).unwrap()
+    );
     // The rotation at 0.1 s: 0.075 deg per row (480 s period).
     let d = angle_steps_deg(&rows);
     assert!(d.iter().all(|x| (x - 0.075).abs() < 1e-9));
-    let (slow, _) = generate(&dir, "slow", &["--duration", "200", "--sample-interval", "2"]);
+    let (slow, _) = generate(
+        &dir,
+        "slow",
+        &["--duration", "200", "--sample-interval", "2"],
+    );
     assert_eq!(slow.len(), 100);
     assert_eq!(slow[99].time_s, 198.0);
 }
@@ -252,38 +431,103 @@ fn sample_interval_sets_the_row_spacing() {
 fn estimator_learns_the_period_and_interval_or_takes_them_from_the_command_line() {
     let dir = temp_dir("gen-pin");
     let log = dir.join("two.csv");
-    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "6000", "--sample-interval", "2", "--out", path_str(&log)]);
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        "6000",
+        "--sample-interval",
+        "2",
+        "--out",
+        path_str(&log),
+    ]);
     let x = read_truth(&truth_path(&log)).unwrap().unwrap().x_arcsec;
     // Nothing pinned: the 2 s interval and the 480 s period are learned from the log.
-    let learned = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("u.csv"))]);
-    assert!(learned.contains("rotation: one-way, period 480 s; sample interval 2 s"), "{learned}");
+    let learned = host_sim_ok(&[
+        "estimate",
+        path_str(&log),
+        "--out",
+        path_str(&dir.join("u.csv")),
+    ]);
+    assert!(
+        learned.contains("rotation: one-way, period 480 s; sample interval 2 s"),
+        "{learned}"
+    );
     // Pinned to 2 s and 480 s: said so, and estimating from the first window.
-    let pinned = host_sim_ok(&["estimate", path_str(&log), "--sample-interval", "2", "--rotation-period", "480", "--out", path_str(&dir.join("p.csv"))]);
+    let pinned = host_sim_ok(&[
+        "estimate",
+        path_str(&log),
+        "--sample-interval",
+        "2",
+        "--rotation-period",
+        "480",
+        "--out",
+        path_str(&dir.join("p.csv")),
+    ]);
     assert!(pinned.contains("period 480 s (pinned)"), "{pinned}");
     for name in ["u.csv", "p.csv"] {
         let rows = read_estimates(&dir.join(name)).unwrap();
         let e = rows.last().unwrap().x_arcsec.expect("an estimate");
         for i in 0..4 {
-            assert!((e[i] - x[i]).abs() < 2.0, "{name}: x{}: {} vs {}", i + 1, e[i], x[i]);
+            assert!(
+                (e[i] - x[i]).abs() < 2.0,
+                "{name}: x{}: {} vs {}",
+                i + 1,
+                e[i],
+                x[i]
+            );
         }
     }
-    let first = |name: &str| read_estimates(&dir.join(name)).unwrap().iter().find(|r| r.x_arcsec.is_some()).map(|r| r.time_s);
-    assert!(first("p.csv") < first("u.csv"), "pinned {:?}, learned {:?}", first("p.csv"), first("u.csv"));
+    let first = |name: &str| {
+        read_estimates(&dir.join(name))
+            .unwrap()
+            .iter()
+            .find(|r| r.x_arcsec.is_some())
+            .map(|r| r.time_s)
+    };
+    assert!(
+        first("p.csv") < first("u.csv"),
+        "pinned {:?}, learned {:?}",
+        first("p.csv"),
+        first("u.csv")
+    );
 }
 
 #[test]
 fn an_offset_log_estimates_and_reports_as_the_plain_one() {
     let dir = temp_dir("gen-offset");
     let (plain, offset) = (dir.join("plain.csv"), dir.join("offset.csv"));
-    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "3000", "--out", path_str(&plain)]);
-    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "3000", "--time-offset", "1.7e9", "--out", path_str(&offset)]);
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        "3000",
+        "--out",
+        path_str(&plain),
+    ]);
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        "3000",
+        "--time-offset",
+        "1.7e9",
+        "--out",
+        path_str(&offset),
+    ]);
     let report = |log: &Path, est: &str| {
         let out = host_sim_ok(&["estimate", path_str(log), "--out", path_str(&dir.join(est))]);
         out[out.find("accuracy against the truth").expect("report")..].to_string()
     };
     // The accuracy table maps the stamps back to the sample instants: same settling times.
     assert_eq!(report(&offset, "o.csv"), report(&plain, "p.csv"));
-    let (a, b) = (read_estimates(&dir.join("o.csv")).unwrap(), read_estimates(&dir.join("p.csv")).unwrap());
+    let (a, b) = (
+        read_estimates(&dir.join("o.csv")).unwrap(),
+        read_estimates(&dir.join("p.csv")).unwrap(),
+    );
     assert_eq!(a.len(), b.len());
     for (x, y) in a.iter().zip(&b) {
         assert_eq!(x.time_s, y.time_s + 1.7e9);

@@ -8,13 +8,24 @@ use std::path::{Path, PathBuf};
 
 fn paper(dir: &Path, duration: u32) -> PathBuf {
     let log = dir.join("paper.csv");
-    host_sim_ok(&["generate", "--scenario", "paper", "--duration", &duration.to_string(), "--out", path_str(&log)]);
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        &duration.to_string(),
+        "--out",
+        path_str(&log),
+    ]);
     log
 }
 
 /// The names of the files in `dir`, sorted.
 fn listing(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
     names.sort();
     names
 }
@@ -23,35 +34,70 @@ fn listing(dir: &Path) -> Vec<String> {
 fn exit_codes_tell_an_estimate_no_readable_row_and_no_estimate_apart() {
     let dir = temp_dir("cli-exit-codes");
     let log = paper(&dir, 3000);
-    let out = host_sim(&["estimate", path_str(&log), "--out", path_str(&dir.join("good.csv"))]);
-    assert_eq!(out.status.code(), Some(0), "an estimate: {}", String::from_utf8_lossy(&out.stderr));
+    let out = host_sim(&[
+        "estimate",
+        path_str(&log),
+        "--out",
+        path_str(&dir.join("good.csv")),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "an estimate: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 
     // Every row unreadable: 3, the reason on standard error, no estimates file.
     let text = std::fs::read_to_string(&log).unwrap();
-    let unreadable: String = text.lines().enumerate().map(|(i, l)| if i == 0 { format!("{l}\n") } else { format!("{},x\n", l.rsplit_once(',').unwrap().0) }).collect();
+    let unreadable: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 0 {
+                format!("{l}\n")
+            } else {
+                format!("{},x\n", l.rsplit_once(',').unwrap().0)
+            }
+        })
+        .collect();
     let bad = dir.join("unreadable.csv");
     std::fs::write(&bad, unreadable).unwrap();
     let est = dir.join("unreadable.est.csv");
     let out = host_sim(&["estimate", path_str(&bad), "--out", path_str(&est)]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{stderr}");
-    assert!(stderr.contains("no row of the log could be read") && stderr.contains("pitch_deg: not a number: \"x\""), "{stderr}");
+    assert!(
+        stderr.contains("no row of the log could be read")
+            && stderr.contains("pitch_deg: not a number: \"x\""),
+        "{stderr}"
+    );
     assert!(!est.exists(), "nothing to write");
 
     // 300 s: rows read, no estimate yet: 4, the reason on standard error, the estimates written.
     let short = dir.join("short.csv");
-    std::fs::write(&short, text.lines().take(301).collect::<Vec<_>>().join("\n") + "\n").unwrap();
+    std::fs::write(
+        &short,
+        text.lines().take(301).collect::<Vec<_>>().join("\n") + "\n",
+    )
+    .unwrap();
     let est = dir.join("short.est.csv");
     let out = host_sim(&["estimate", path_str(&short), "--out", path_str(&est)]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(4), "{stderr}");
     assert!(stderr.contains("no estimate: "), "{stderr}");
-    assert_eq!(std::fs::read_to_string(&est).unwrap().lines().count(), 301, "header and 300 rows");
+    assert_eq!(
+        std::fs::read_to_string(&est).unwrap().lines().count(),
+        301,
+        "header and 300 rows"
+    );
 
     // The codes are documented in the help.
     let help = host_sim_ok(&["estimate", "--help"]);
     for code in ["0 ", "1 ", "2 ", "3 ", "4 "] {
-        assert!(help.contains(&format!("  {code}")), "exit status {code}in --help: {help}");
+        assert!(
+            help.contains(&format!("  {code}")),
+            "exit status {code}in --help: {help}"
+        );
     }
 }
 
@@ -59,13 +105,25 @@ fn exit_codes_tell_an_estimate_no_readable_row_and_no_estimate_apart() {
 fn an_error_is_printed_once() {
     let dir = temp_dir("cli-error-once");
     let log = paper(&dir, 100);
-    let text = std::fs::read_to_string(&log).unwrap().replacen("\n10,", "\nten,", 1);
+    let text = std::fs::read_to_string(&log)
+        .unwrap()
+        .replacen("\n10,", "\nten,", 1);
     std::fs::write(&log, text).unwrap();
-    let out = host_sim(&["estimate", path_str(&log), "--strict", "--out", path_str(&dir.join("e.csv"))]);
+    let out = host_sim(&[
+        "estimate",
+        path_str(&log),
+        "--strict",
+        "--out",
+        path_str(&dir.join("e.csv")),
+    ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert_eq!(stderr.matches("not a number").count(), 1, "once: {stderr}");
-    assert_eq!(stderr.matches(&format!("{}:12:", log.display())).count(), 1, "once: {stderr}");
+    assert_eq!(
+        stderr.matches(&format!("{}:12:", log.display())).count(),
+        1,
+        "once: {stderr}"
+    );
 }
 
 #[test]
@@ -77,11 +135,21 @@ fn a_failed_run_keeps_the_earlier_estimates_and_leaves_no_temporary_file() {
     let good = std::fs::read(&est).unwrap();
     let files = listing(&dir);
     // The same log with an unreadable row near its end, refused by --strict after most rows are written.
-    let text = std::fs::read_to_string(&log).unwrap().replacen("\n1990,", "\n1990x,", 1);
+    let text = std::fs::read_to_string(&log)
+        .unwrap()
+        .replacen("\n1990,", "\n1990x,", 1);
     std::fs::write(&log, text).unwrap();
     let out = host_sim(&["estimate", path_str(&log), "--strict"]);
-    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(std::fs::read(&est).unwrap() == good, "the earlier estimates are kept");
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        std::fs::read(&est).unwrap() == good,
+        "the earlier estimates are kept"
+    );
     assert_eq!(listing(&dir), files, "no temporary file left");
 }
 
@@ -91,13 +159,24 @@ fn no_input_is_ever_an_output() {
     let log = paper(&dir, 600);
     let truth = dir.join("paper.truth.json");
     let (log_before, truth_before) = (std::fs::read(&log).unwrap(), std::fs::read(&truth).unwrap());
-    for out in [log.clone(), truth.clone(), dir.join(".").join("paper.truth.json")] {
+    for out in [
+        log.clone(),
+        truth.clone(),
+        dir.join(".").join("paper.truth.json"),
+    ] {
         let result = host_sim(&["estimate", path_str(&log), "--out", path_str(&out)]);
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert_eq!(result.status.code(), Some(1), "{}: {stderr}", out.display());
-        assert!(stderr.contains("--out names the log") || stderr.contains("--out names the log's truth file"), "{stderr}");
+        assert!(
+            stderr.contains("--out names the log")
+                || stderr.contains("--out names the log's truth file"),
+            "{stderr}"
+        );
     }
-    assert!(std::fs::read(&log).unwrap() == log_before && std::fs::read(&truth).unwrap() == truth_before);
+    assert!(
+        std::fs::read(&log).unwrap() == log_before
+            && std::fs::read(&truth).unwrap() == truth_before
+    );
 }
 
 #[test]
@@ -105,17 +184,62 @@ fn negative_values_of_numeric_options_get_the_options_own_message() {
     let dir = temp_dir("cli-negative-values");
     let log = paper(&dir, 100);
     let cases: [(&[&str], &str); 6] = [
-        (&["generate", "--scenario", "paper", "--duration", "-100", "--out", "x.csv"], "--duration must be between"),
-        (&["generate", "--scenario", "paper", "--noise-arcsec", "-1", "--out", "x.csv"], "--noise-arcsec must be >= 0"),
-        (&["estimate", path_str(&log), "--rotation-period", "-480"], "--rotation-period must be between"),
-        (&["estimate", path_str(&log), "--sample-interval", "-1"], "--sample-interval must be between"),
-        (&["estimate", path_str(&log), "--traditional-sigma-deg", "-2"], "traditional_sigma_rad"),
-        (&["monte-carlo", "--scenario", "paper", "--runs", "1", "--max-roll-deg", "-3"], "--max-roll-deg must be inside"),
+        (
+            &[
+                "generate",
+                "--scenario",
+                "paper",
+                "--duration",
+                "-100",
+                "--out",
+                "x.csv",
+            ],
+            "--duration must be between",
+        ),
+        (
+            &[
+                "generate",
+                "--scenario",
+                "paper",
+                "--noise-arcsec",
+                "-1",
+                "--out",
+                "x.csv",
+            ],
+            "--noise-arcsec must be >= 0",
+        ),
+        (
+            &["estimate", path_str(&log), "--rotation-period", "-480"],
+            "--rotation-period must be between",
+        ),
+        (
+            &["estimate", path_str(&log), "--sample-interval", "-1"],
+            "--sample-interval must be between",
+        ),
+        (
+            &["estimate", path_str(&log), "--traditional-sigma-deg", "-2"],
+            "traditional_sigma_rad",
+        ),
+        (
+            &[
+                "monte-carlo",
+                "--scenario",
+                "paper",
+                "--runs",
+                "1",
+                "--max-roll-deg",
+                "-3",
+            ],
+            "--max-roll-deg must be inside",
+        ),
     ];
     for (args, needle) in cases {
         let out = host_sim(args);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
-        assert!(stderr.contains(needle) && !stderr.contains("unexpected argument"), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(needle) && !stderr.contains("unexpected argument"),
+            "{args:?}: {stderr}"
+        );
     }
 }

@@ -10,14 +10,25 @@ use crate::common::{host_sim_ok, path_str, temp_dir};
 /// x1..x4, sigma1..4 (arcsec) and status of an estimates row.
 fn fields(line: &str) -> ([Option<f64>; 8], String) {
     let f: Vec<&str> = line.split(',').collect();
-    (std::array::from_fn(|i| f[1 + i].parse().ok()), f[9].to_string())
+    (
+        std::array::from_fn(|i| f[1 + i].parse().ok()),
+        f[9].to_string(),
+    )
 }
 
 #[test]
 fn a_restart_continues_from_the_checkpoint() {
     let dir = temp_dir("cli-restart");
     let log = dir.join("sea.csv");
-    host_sim_ok(&["generate", "--scenario", "sea", "--duration", "6000", "--out", path_str(&log)]);
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "sea",
+        "--duration",
+        "6000",
+        "--out",
+        path_str(&log),
+    ]);
     // A NaN row and a gap, so restarts also land in the held/refilling states.
     let text = std::fs::read_to_string(&log).unwrap();
     let lines: Vec<String> = text
@@ -37,9 +48,23 @@ fn a_restart_continues_from_the_checkpoint() {
     for method in ["windowed", "paper", "traditional"] {
         let plain = dir.join(format!("plain.{method}.csv"));
         let restarted = dir.join(format!("restarted.{method}.csv"));
-        host_sim_ok(&["estimate", path_str(&log), "--method", method, "--out", path_str(&plain)]);
+        host_sim_ok(&[
+            "estimate",
+            path_str(&log),
+            "--method",
+            method,
+            "--out",
+            path_str(&plain),
+        ]);
         let stdout = host_sim_ok(&[
-            "estimate", path_str(&log), "--method", method, "--out", path_str(&restarted), "--restart-at", "1199,2502,3000.5",
+            "estimate",
+            path_str(&log),
+            "--method",
+            method,
+            "--out",
+            path_str(&restarted),
+            "--restart-at",
+            "1199,2502,3000.5",
         ]);
         assert!(stdout.contains("restarted from a checkpoint"), "{stdout}");
         let a = std::fs::read_to_string(&plain).unwrap();
@@ -48,9 +73,17 @@ fn a_restart_continues_from_the_checkpoint() {
         assert_eq!(a.len(), b.len());
         let time = |l: &str| l.split(',').next().unwrap().parse::<f64>().unwrap();
         // The restart comes after the first row at or after each time.
-        let at = |t: f64| b.iter().position(|l| !l.starts_with("time_s") && time(l) >= t).unwrap();
+        let at = |t: f64| {
+            b.iter()
+                .position(|l| !l.starts_with("time_s") && time(l) >= t)
+                .unwrap()
+        };
         let first = at(restarts[0]);
-        assert_eq!(a[..=first], b[..=first], "{method}: rows up to the first restart differ");
+        assert_eq!(
+            a[..=first],
+            b[..=first],
+            "{method}: rows up to the first restart differ"
+        );
         for t in restarts {
             let k = at(t);
             let (held, _) = fields(b[k]);
@@ -67,7 +100,11 @@ fn a_restart_continues_from_the_checkpoint() {
             let (end_b, _) = fields(b.last().unwrap());
             for i in 0..4 {
                 let d = (end_b[i].unwrap() - end_a[i].unwrap()).abs();
-                assert!(d <= end_a[4 + i].unwrap(), "x{}: {d} arcsec from the uninterrupted run", i + 1);
+                assert!(
+                    d <= end_a[4 + i].unwrap(),
+                    "x{}: {d} arcsec from the uninterrupted run",
+                    i + 1
+                );
             }
         }
     }

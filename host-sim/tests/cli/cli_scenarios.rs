@@ -6,19 +6,28 @@ use host_sim::log_csv::{read_truth, truth_path};
 use std::path::Path;
 
 /// Generates a log, replays it, returns (rows of the estimates CSV, truth x, estimate stdout).
-fn generate_and_estimate(dir: &Path, scenario: &str, extra: &[&str]) -> (Vec<EstimateRow>, [f64; 4], String) {
+fn generate_and_estimate(
+    dir: &Path,
+    scenario: &str,
+    extra: &[&str],
+) -> (Vec<EstimateRow>, [f64; 4], String) {
     let log = dir.join(format!("{scenario}.csv"));
     let est = dir.join(format!("{scenario}.est.csv"));
     let mut args = vec!["generate", "--scenario", scenario, "--out", path_str(&log)];
     args.extend_from_slice(extra);
     host_sim_ok(&args);
     let stdout = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&est)]);
-    let truth = read_truth(&truth_path(&log)).unwrap().expect("truth file written");
+    let truth = read_truth(&truth_path(&log))
+        .unwrap()
+        .expect("truth file written");
     (read_estimates(&est).unwrap(), truth.x_arcsec, stdout)
 }
 
 fn estimate_at(rows: &[EstimateRow], time_s: f64) -> [f64; 4] {
-    let row = rows.iter().find(|r| r.time_s == time_s).expect("row at time");
+    let row = rows
+        .iter()
+        .find(|r| r.time_s == time_s)
+        .expect("row at time");
     row.x_arcsec.expect("an estimate")
 }
 
@@ -34,19 +43,32 @@ fn paper_scenario_within_half_percent_at_45000_s() {
     }
     // The accuracy table is printed when the truth file is there.
     assert!(stdout.contains("accuracy against the truth"), "{stdout}");
-    assert!(stdout.contains("| x1 |") && stdout.contains("45000 s: % / arcsec"), "{stdout}");
-    assert!(stdout.contains("before compensation") && stdout.contains("after compensation"), "{stdout}");
+    assert!(
+        stdout.contains("| x1 |") && stdout.contains("45000 s: % / arcsec"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("before compensation") && stdout.contains("after compensation"),
+        "{stdout}"
+    );
     assert!(stdout.contains("rejected rows: 0"), "{stdout}");
 }
 
 #[test]
 fn turntable_scenario_within_10_arcsec_at_45000_s() {
     let dir = temp_dir("cli-turntable");
-    let (rows, x, _) = generate_and_estimate(&dir, "turntable", &["--errors-arcsec", "-320,180,240,-410"]);
+    let (rows, x, _) =
+        generate_and_estimate(&dir, "turntable", &["--errors-arcsec", "-320,180,240,-410"]);
     assert_eq!(x, [-320.0, 180.0, 240.0, -410.0]);
     let e = estimate_at(&rows, 45000.0);
     for i in 0..4 {
-        assert!((e[i] - x[i]).abs() < 10.0, "x{}: {} vs {}", i + 1, e[i], x[i]);
+        assert!(
+            (e[i] - x[i]).abs() < 10.0,
+            "x{}: {} vs {}",
+            i + 1,
+            e[i],
+            x[i]
+        );
     }
 }
 
@@ -58,23 +80,47 @@ fn sea_scenario_within_10_arcsec_at_end() {
     assert_eq!(last.time_s, 47339.0);
     let e = last.x_arcsec.unwrap();
     for i in 0..4 {
-        assert!((e[i] - x[i]).abs() < 10.0, "x{}: {} vs {}", i + 1, e[i], x[i]);
+        assert!(
+            (e[i] - x[i]).abs() < 10.0,
+            "x{}: {} vs {}",
+            i + 1,
+            e[i],
+            x[i]
+        );
     }
 }
 
 #[test]
 fn run_writes_log_estimates_and_pngs() {
     let dir = temp_dir("cli-run");
-    let stdout = host_sim_ok(&["run", "--scenario", "turntable", "--duration", "3000", "--out-dir", path_str(&dir)]);
+    let stdout = host_sim_ok(&[
+        "run",
+        "--scenario",
+        "turntable",
+        "--duration",
+        "3000",
+        "--out-dir",
+        path_str(&dir),
+    ]);
     for method in ["windowed", "paper", "traditional"] {
         let est = read_estimates(&dir.join(format!("turntable.estimates.{method}.csv"))).unwrap();
         assert_eq!(est.len(), 3000);
     }
-    for f in ["fig2_percent_error_traditional.png", "fig4_percent_error_windowed.png", "fig3_correlation.png", "fig7_attitude_error_before.png", "fig8_attitude_error_after_windowed.png"] {
+    for f in [
+        "fig2_percent_error_traditional.png",
+        "fig4_percent_error_windowed.png",
+        "fig3_correlation.png",
+        "fig7_attitude_error_before.png",
+        "fig8_attitude_error_after_windowed.png",
+    ] {
         let bytes = std::fs::read(dir.join(f)).unwrap();
         assert_eq!(&bytes[1..4], b"PNG", "{f}");
     }
-    assert_eq!(stdout.matches("accuracy against the truth").count(), 3, "{stdout}");
+    assert_eq!(
+        stdout.matches("accuracy against the truth").count(),
+        3,
+        "{stdout}"
+    );
 }
 
 #[test]
@@ -82,41 +128,92 @@ fn monte_carlo_writes_summary() {
     let dir = temp_dir("cli-mc");
     let out = dir.join("summary.json");
     let stdout = host_sim_ok(&[
-        "monte-carlo", "--scenario", "sea", "--runs", "3", "--duration", "5001", "--lat-range", "-30,30", "--max-roll-deg", "8",
-        "--coloured-noise-arcsec", "2", "--out", path_str(&out),
+        "monte-carlo",
+        "--scenario",
+        "sea",
+        "--runs",
+        "3",
+        "--duration",
+        "5001",
+        "--lat-range",
+        "-30,30",
+        "--max-roll-deg",
+        "8",
+        "--coloured-noise-arcsec",
+        "2",
+        "--out",
+        path_str(&out),
     ]);
     assert!(stdout.contains("3 runs"), "{stdout}");
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(v["runs"], 3);
     assert_eq!(v["times_s"], serde_json::json!([2000.0, 5000.0]));
-    for key in ["median_abs_error_arcsec", "p95_abs_error_arcsec", "max_abs_error_arcsec"] {
+    for key in [
+        "median_abs_error_arcsec",
+        "p95_abs_error_arcsec",
+        "max_abs_error_arcsec",
+    ] {
         let per_time = v[key].as_array().unwrap();
         assert_eq!(per_time.len(), 2, "{key}");
         assert_eq!(per_time[1].as_array().unwrap().len(), 4, "{key}");
     }
     // Our method is within 10 arcsec by 5000 s on this rough sea.
-    let max5000: Vec<f64> = v["max_abs_error_arcsec"][1].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let max5000: Vec<f64> = v["max_abs_error_arcsec"][1]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
     assert!(max5000.iter().all(|e| *e < 10.0), "{max5000:?}");
 }
 
 #[test]
 fn compare_prints_a_markdown_line_per_scenario_and_method() {
-    let stdout = host_sim_ok(&["compare", "--seeds", "2", "--duration", "3000", "--scenarios", "turntable,sea"]);
+    let stdout = host_sim_ok(&[
+        "compare",
+        "--seeds",
+        "2",
+        "--duration",
+        "3000",
+        "--scenarios",
+        "turntable,sea",
+    ]);
     let lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("| ")).collect();
     assert_eq!(lines.len(), 1 + 6, "{stdout}");
     assert!(lines[0].contains("time to 0.5 %") && lines[0].contains("at 45000 s"));
-    let ours = lines.iter().find(|l| l.starts_with("| sea | ours (windowed) | 2 |")).expect("sea/ours line");
+    let ours = lines
+        .iter()
+        .find(|l| l.starts_with("| sea | ours (windowed) | 2 |"))
+        .expect("sea/ours line");
     // Outside the 3000 s run, the 20000 s and 45000 s columns are "-"; then the final statuses of
     // both runs.
     assert!(ours.contains("| - / - | - / - |"), "{ours}");
     let statuses = ours.rsplit('|').nth(1).unwrap().trim();
-    let counted: usize = statuses.split(", ").map(|s| s.rsplit('(').next().unwrap().trim_end_matches(')').parse::<usize>().unwrap()).sum();
+    let counted: usize = statuses
+        .split(", ")
+        .map(|s| {
+            s.rsplit('(')
+                .next()
+                .unwrap()
+                .trim_end_matches(')')
+                .parse::<usize>()
+                .unwrap()
+        })
+        .sum();
     assert_eq!(counted, 2, "{ours}");
 }
 
 #[test]
 fn every_subcommand_has_help() {
-    for cmd in ["generate", "estimate", "run", "monte-carlo", "compare", "stream"] {
+    for cmd in [
+        "generate",
+        "estimate",
+        "run",
+        "monte-carlo",
+        "compare",
+        "stream",
+    ] {
         let out = host_sim_ok(&[cmd, "--help"]);
         assert!(out.contains("Usage: host-sim"), "{cmd}: {out}");
     }

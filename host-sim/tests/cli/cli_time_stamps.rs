@@ -9,13 +9,29 @@ use std::path::{Path, PathBuf};
 /// A paper log of `duration` s stamped in Unix seconds from 1700000000 (2023-11-14T22:13:20Z).
 fn unix_log(dir: &Path, duration: u32) -> PathBuf {
     let log = dir.join("unix.csv");
-    host_sim_ok(&["generate", "--scenario", "paper", "--duration", &duration.to_string(), "--time-offset", "1700000000", "--out", path_str(&log)]);
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        &duration.to_string(),
+        "--time-offset",
+        "1700000000",
+        "--out",
+        path_str(&log),
+    ]);
     log
 }
 
 /// Rewrites a log: `header` replaces the header line, `time` each row's time, and the cells are
 /// joined with `separator`.
-fn rewrite(log: &Path, name: &str, header: &str, separator: &str, time: impl Fn(f64) -> String) -> PathBuf {
+fn rewrite(
+    log: &Path,
+    name: &str,
+    header: &str,
+    separator: &str,
+    time: impl Fn(f64) -> String,
+) -> PathBuf {
     let text = std::fs::read_to_string(log).unwrap();
     let mut out = format!("{header}\n");
     for line in text.lines().skip(1) {
@@ -40,7 +56,12 @@ fn iso(t: f64, separator: char, zone: &str) -> String {
     // Seconds after 2023-11-14T00:00:00Z.
     let s = 22 * 3600 + 13 * 60 + 20 + (t - 1_700_000_000.0) as i64;
     let (day, of_day) = (14 + s / 86_400, s % 86_400);
-    format!("2023-11-{day:02}{separator}{:02}:{:02}:{:02}{zone}", of_day / 3600, of_day / 60 % 60, of_day % 60)
+    format!(
+        "2023-11-{day:02}{separator}{:02}:{:02}:{:02}{zone}",
+        of_day / 3600,
+        of_day / 60 % 60,
+        of_day % 60
+    )
 }
 
 #[test]
@@ -54,12 +75,22 @@ fn iso_8601_and_millisecond_stamps_give_the_estimates_of_unix_seconds() {
     let cases = [
         // ISO stamps in the time_s column (what made every row unreadable before).
         rewrite(&log, "iso_in_time_s.csv", header, ",", |t| iso(t, 'T', "Z")),
-        rewrite(&log, "iso_space_no_zone.csv", &utc_header, ",", |t| iso(t, ' ', "")),
-        rewrite(&log, "iso_utc.csv", &utc_header, ",", |t| iso(t, 'T', "+00:00")),
-        rewrite(&log, "ms.csv", &ms_header, ",", |t| format!("{}", t * 1000.0)),
+        rewrite(&log, "iso_space_no_zone.csv", &utc_header, ",", |t| {
+            iso(t, ' ', "")
+        }),
+        rewrite(&log, "iso_utc.csv", &utc_header, ",", |t| {
+            iso(t, 'T', "+00:00")
+        }),
+        rewrite(&log, "ms.csv", &ms_header, ",", |t| {
+            format!("{}", t * 1000.0)
+        }),
     ];
     for case in cases {
-        assert!(estimates(&case) == expected, "{}: estimates differ", case.display());
+        assert!(
+            estimates(&case) == expected,
+            "{}: estimates differ",
+            case.display()
+        );
     }
 }
 
@@ -69,9 +100,17 @@ fn headers_in_any_case_with_spaces_and_semicolon_or_tab_separators_give_the_same
     let log = unix_log(&dir, 3000);
     let expected = estimates(&log);
     let spaced = "Time S;Rotation Deg;Platform Deg;Latitude Deg;Heading Deg;Roll Deg;Pitch Deg";
-    let upper = "TIME_S\tROTATION_DEG\tPLATFORM_DEG\tLATITUDE_DEG\tHEADING_DEG\tROLL_DEG\tPITCH_DEG";
-    for case in [rewrite(&log, "semicolon.csv", spaced, ";", |t| t.to_string()), rewrite(&log, "tab.csv", upper, "\t", |t| t.to_string())] {
-        assert!(estimates(&case) == expected, "{}: estimates differ", case.display());
+    let upper =
+        "TIME_S\tROTATION_DEG\tPLATFORM_DEG\tLATITUDE_DEG\tHEADING_DEG\tROLL_DEG\tPITCH_DEG";
+    for case in [
+        rewrite(&log, "semicolon.csv", spaced, ";", |t| t.to_string()),
+        rewrite(&log, "tab.csv", upper, "\t", |t| t.to_string()),
+    ] {
+        assert!(
+            estimates(&case) == expected,
+            "{}: estimates differ",
+            case.display()
+        );
     }
 }
 
@@ -81,9 +120,16 @@ fn refused(args: &[&str], out: &Path, needles: &[&str]) {
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert_eq!(result.status.code(), Some(1), "{args:?}: {stderr}");
     for needle in needles {
-        assert!(stderr.contains(needle), "{args:?}: {needle:?} not in {stderr}");
+        assert!(
+            stderr.contains(needle),
+            "{args:?}: {needle:?} not in {stderr}"
+        );
     }
-    assert_eq!(stderr.lines().filter(|l| l.starts_with("error:")).count(), 1, "{stderr}");
+    assert_eq!(
+        stderr.lines().filter(|l| l.starts_with("error:")).count(),
+        1,
+        "{stderr}"
+    );
     assert!(!out.exists(), "no estimates written: {}", out.display());
 }
 
@@ -92,9 +138,15 @@ fn milliseconds_in_a_seconds_column_are_refused_naming_the_likely_cause() {
     let dir = temp_dir("cli-stamps-ms");
     let log = unix_log(&dir, 600);
     let header = "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg";
-    let ms = rewrite(&log, "ms_in_s.csv", header, ",", |t| format!("{}", t * 1000.0));
+    let ms = rewrite(&log, "ms_in_s.csv", header, ",", |t| {
+        format!("{}", t * 1000.0)
+    });
     let out = dir.join("ms.est.csv");
-    refused(&["estimate", path_str(&ms), "--out", path_str(&out)], &out, &["step by 1000 s", "milliseconds", "time_ms"]);
+    refused(
+        &["estimate", path_str(&ms), "--out", path_str(&out)],
+        &out,
+        &["step by 1000 s", "milliseconds", "time_ms"],
+    );
 }
 
 #[test]
@@ -103,7 +155,14 @@ fn a_sample_interval_that_contradicts_the_stamps_is_refused() {
     let log = unix_log(&dir, 600);
     let out = dir.join("pinned.est.csv");
     refused(
-        &["estimate", path_str(&log), "--sample-interval", "2", "--out", path_str(&out)],
+        &[
+            "estimate",
+            path_str(&log),
+            "--sample-interval",
+            "2",
+            "--out",
+            path_str(&out),
+        ],
         &out,
         &["--sample-interval 2 s contradicts the log's time stamps, which step by 1 s"],
     );
@@ -113,7 +172,15 @@ fn a_sample_interval_that_contradicts_the_stamps_is_refused() {
 fn a_clock_step_back_of_5_s_is_counted() {
     let dir = temp_dir("cli-stamps-clock-step");
     let log = dir.join("p.csv");
-    host_sim_ok(&["generate", "--scenario", "paper", "--duration", "3000", "--out", path_str(&log)]);
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        "3000",
+        "--out",
+        path_str(&log),
+    ]);
     // From t = 2000 on, the recorder's clock is 5 s late.
     let text = std::fs::read_to_string(&log).unwrap();
     let mut out = String::new();
@@ -125,6 +192,11 @@ fn a_clock_step_back_of_5_s_is_counted() {
         }
     }
     std::fs::write(&log, out).unwrap();
-    let stdout = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("e.csv"))]);
+    let stdout = host_sim_ok(&[
+        "estimate",
+        path_str(&log),
+        "--out",
+        path_str(&dir.join("e.csv")),
+    ]);
     assert!(stdout.contains("1 clock steps"), "{stdout}");
 }

@@ -41,8 +41,12 @@ fn run(p: &ScenarioParams, config: Config) -> Run {
     let from_s = step.unwrap_or(0.0);
     let mut r = Run::default();
     for (row, truth) in Samples::new(p) {
-        let Some(logged) = recorder.record(&row) else { continue };
-        let Ok(out) = est.step(&sample_of(&logged)) else { continue };
+        let Some(logged) = recorder.record(&row) else {
+            continue;
+        };
+        let Ok(out) = est.step(&sample_of(&logged)) else {
+            continue;
+        };
         if let Some(c) = est.error_change().filter(|c| c.detected_s == out.time_s) {
             r.changes.push(c);
         }
@@ -50,7 +54,8 @@ fn run(p: &ScenarioParams, config: Config) -> Run {
             r.statuses.push(out.status);
         }
         let Some(e) = out.estimate else { continue };
-        let error: [f64; 4] = core::array::from_fn(|i| rad_to_arcsec(e.x_rad[i] as f64) - truth.errors_arcsec[i]);
+        let error: [f64; 4] =
+            core::array::from_fn(|i| rad_to_arcsec(e.x_rad[i] as f64) - truth.errors_arcsec[i]);
         let worst = error.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         r.final_error_arcsec = worst;
         let Some(t0) = step else { continue };
@@ -58,7 +63,11 @@ fn run(p: &ScenarioParams, config: Config) -> Run {
         if after < 0.0 {
             continue;
         }
-        r.within_10_from_s = if worst <= 10.0 { r.within_10_from_s.or(Some(after)) } else { None };
+        r.within_10_from_s = if worst <= 10.0 {
+            r.within_10_from_s.or(Some(after))
+        } else {
+            None
+        };
         if after >= 2000.0 {
             r.worst_after_2000_s = r.worst_after_2000_s.max(worst);
         }
@@ -76,12 +85,22 @@ fn run(p: &ScenarioParams, config: Config) -> Run {
 
 /// A sea log of run `i` of `draw`, `after_s` long after a step at `at_s` of error `which` by
 /// `step_arcsec`.
-fn stepped(draw: &Draw, i: usize, which: usize, step_arcsec: f64, at_s: f64, after_s: f64) -> ScenarioParams {
+fn stepped(
+    draw: &Draw,
+    i: usize,
+    which: usize,
+    step_arcsec: f64,
+    at_s: f64,
+    after_s: f64,
+) -> ScenarioParams {
     let mut p = draw.params(i);
     p.duration_s = at_s + after_s;
     let mut after = p.errors_arcsec;
     after[which] += step_arcsec;
-    p.errors_step = Some(ErrorsStep { at_s, errors_after_arcsec: after });
+    p.errors_step = Some(ErrorsStep {
+        at_s,
+        errors_after_arcsec: after,
+    });
     p
 }
 
@@ -102,7 +121,10 @@ struct StepLine {
 }
 
 fn step_line(params: &[ScenarioParams], config: Config) -> StepLine {
-    let runs: Vec<(f64, Run)> = params.par_iter().map(|p| (p.errors_step.unwrap().at_s, run(p, config))).collect();
+    let runs: Vec<(f64, Run)> = params
+        .par_iter()
+        .map(|p| (p.errors_step.unwrap().at_s, run(p, config)))
+        .collect();
     let mut line = StepLine {
         detected: 0,
         runs: runs.len(),
@@ -122,7 +144,9 @@ fn step_line(params: &[ScenarioParams], config: Config) -> StepLine {
             line.detected += 1;
             line.worst_delay_s = line.worst_delay_s.max(c.detected_s - at_s);
         }
-        line.worst_within_10_s = line.worst_within_10_s.max(r.within_10_from_s.unwrap_or(f64::INFINITY));
+        line.worst_within_10_s = line
+            .worst_within_10_s
+            .max(r.within_10_from_s.unwrap_or(f64::INFINITY));
         line.worst_after_2000_s = line.worst_after_2000_s.max(r.worst_after_2000_s);
         line.worst_final_arcsec = line.worst_final_arcsec.max(r.final_error_arcsec);
         pairs += r.pairs;
@@ -164,14 +188,24 @@ fn print_step_line(which: usize, step: f64, scheme: RotationScheme, period_s: f6
 /// as often as on the same logs without a step: the clean sea's coverage is 95-97 %, and a few
 /// runs of 6,000 s swing by several points; at 3 sigma all but a few rows).
 fn check_step_line(name: &str, period_s: f64, l: &StepLine) {
-    assert_eq!((l.detected, l.false_or_repeated), (l.runs, 0), "{name}: {l:?}");
+    assert_eq!(
+        (l.detected, l.false_or_repeated),
+        (l.runs, 0),
+        "{name}: {l:?}"
+    );
     assert!(l.worst_delay_s <= 3.5 * period_s, "{name}: {l:?}");
     if period_s <= 480.0 {
-        assert!(l.worst_within_10_s <= 2000.0 && l.worst_after_2000_s <= 10.0, "{name}: {l:?}");
+        assert!(
+            l.worst_within_10_s <= 2000.0 && l.worst_after_2000_s <= 10.0,
+            "{name}: {l:?}"
+        );
     } else {
         assert!(l.worst_within_10_s <= 3.0 * period_s, "{name}: {l:?}");
     }
-    assert!(l.coverage_2_sigma >= 0.85 && l.coverage_3_sigma >= 0.985, "{name}: {l:?}");
+    assert!(
+        l.coverage_2_sigma >= 0.85 && l.coverage_3_sigma >= 0.985,
+        "{name}: {l:?}"
+    );
     assert!(l.worst_final_arcsec <= 2.0, "{name}: {l:?}");
 }
 
@@ -187,11 +221,24 @@ fn steps(seeds: usize, sizes: &[f64], schemes: &[RotationScheme], periods_s: &[f
             for which in 0..4 {
                 for &size in sizes {
                     let params: Vec<ScenarioParams> = (0..seeds)
-                        .map(|i| stepped(&draw, i, which, if i % 2 == 0 { size } else { -size }, 20_000.0, 6_000.0))
+                        .map(|i| {
+                            stepped(
+                                &draw,
+                                i,
+                                which,
+                                if i % 2 == 0 { size } else { -size },
+                                20_000.0,
+                                6_000.0,
+                            )
+                        })
                         .collect();
                     let line = step_line(&params, Config::default());
                     print_step_line(which, size, scheme, period_s, &line);
-                    check_step_line(&format!("x{} {size} {} {period_s}", which + 1, scheme.name()), period_s, &line);
+                    check_step_line(
+                        &format!("x{} {size} {} {period_s}", which + 1, scheme.name()),
+                        period_s,
+                        &line,
+                    );
                 }
             }
         }
@@ -204,13 +251,20 @@ fn steps_of_20_and_150_arcsec_of_each_error_are_detected_and_learned_again_withi
 }
 
 #[test]
-fn a_step_is_detected_and_learned_again_on_a_reciprocating_720_s_and_a_four_position_360_s_rotation() {
+fn a_step_is_detected_and_learned_again_on_a_reciprocating_720_s_and_a_four_position_360_s_rotation(
+) {
     print_step_header();
-    for (scheme, period_s, which) in [(RotationScheme::Reciprocating, 720.0, 1), (RotationScheme::FourPosition, 360.0, 3)] {
+    for (scheme, period_s, which) in [
+        (RotationScheme::Reciprocating, 720.0, 1),
+        (RotationScheme::FourPosition, 360.0, 3),
+    ] {
         let mut draw = Draw::new(ScenarioKind::Sea, 22);
         draw.scheme = scheme;
         draw.rotation_period_s = Some(period_s);
-        let line = step_line(&[stepped(&draw, 0, which, 30.0, 20_000.0, 6_000.0)], Config::default());
+        let line = step_line(
+            &[stepped(&draw, 0, which, 30.0, 20_000.0, 6_000.0)],
+            Config::default(),
+        );
         print_step_line(which, 30.0, scheme, period_s, &line);
         check_step_line(scheme.name(), period_s, &line);
     }
@@ -218,7 +272,12 @@ fn a_step_is_detected_and_learned_again_on_a_reciprocating_720_s_and_a_four_posi
 
 /// `runs` logs of `draw`, each of `duration_s` (`course_deg` overrides the course, so that a
 /// month-long voyage keeps its latitude): the changes declared in all of them.
-fn declared(draw: &Draw, runs: usize, duration_s: f64, course_deg: Option<f64>) -> Vec<(usize, ErrorChange)> {
+fn declared(
+    draw: &Draw,
+    runs: usize,
+    duration_s: f64,
+    course_deg: Option<f64>,
+) -> Vec<(usize, ErrorChange)> {
     (0..runs)
         .into_par_iter()
         .flat_map_iter(|i| {
@@ -227,7 +286,10 @@ fn declared(draw: &Draw, runs: usize, duration_s: f64, course_deg: Option<f64>) 
             if let Some(c) = course_deg {
                 p.course_deg = c;
             }
-            run(&p, Config::default()).changes.into_iter().map(move |c| (i, c))
+            run(&p, Config::default())
+                .changes
+                .into_iter()
+                .map(move |c| (i, c))
         })
         .collect()
 }
@@ -246,10 +308,34 @@ fn no_change_draws() -> Vec<(&'static str, Draw)> {
     rough.max_roll_deg = Some(10.0);
     vec![
         ("rough sea, latitudes 0-70 deg, roll up to 10 deg", rough),
-        ("coloured noise 20 arcsec, 60 s", sea(Mismatch { coloured_noise_arcsec: 20.0, ..Mismatch::default() })),
-        ("errors drifting 20 arcsec a day", sea(Mismatch { error_drift_arcsec_per_day: 20.0, ..Mismatch::default() })),
-        ("heel in turns, 3 deg", sea(Mismatch { heel_in_turns_deg: 3.0, ..Mismatch::default() })),
-        ("heel in turns, 0.5 deg", sea(Mismatch { heel_in_turns_deg: 0.5, ..Mismatch::default() })),
+        (
+            "coloured noise 20 arcsec, 60 s",
+            sea(Mismatch {
+                coloured_noise_arcsec: 20.0,
+                ..Mismatch::default()
+            }),
+        ),
+        (
+            "errors drifting 20 arcsec a day",
+            sea(Mismatch {
+                error_drift_arcsec_per_day: 20.0,
+                ..Mismatch::default()
+            }),
+        ),
+        (
+            "heel in turns, 3 deg",
+            sea(Mismatch {
+                heel_in_turns_deg: 3.0,
+                ..Mismatch::default()
+            }),
+        ),
+        (
+            "heel in turns, 0.5 deg",
+            sea(Mismatch {
+                heel_in_turns_deg: 0.5,
+                ..Mismatch::default()
+            }),
+        ),
     ]
 }
 
@@ -258,12 +344,25 @@ fn no_false_detection(runs: [usize; 5], thirty_day_runs: usize) {
     println!("|---|---|---|---|");
     for ((name, draw), n) in no_change_draws().into_iter().zip(runs) {
         let changes = declared(&draw, n, 45_000.0, None);
-        println!("| {name} | {n} | {:.2} | {} |", 45_000.0 / 86_400.0, changes.len());
+        println!(
+            "| {name} | {n} | {:.2} | {} |",
+            45_000.0 / 86_400.0,
+            changes.len()
+        );
         assert!(changes.is_empty(), "{name}: {changes:?}");
     }
     // A month at sea on a steady course east (the sea scenario's 5 m/s north-east would take the
     // ship over the pole in a month), clean and with drifting errors.
-    for (name, mismatch) in [("30 days, clean", Mismatch::default()), ("30 days, errors drifting 20 arcsec a day", Mismatch { error_drift_arcsec_per_day: 20.0, ..Mismatch::default() })] {
+    for (name, mismatch) in [
+        ("30 days, clean", Mismatch::default()),
+        (
+            "30 days, errors drifting 20 arcsec a day",
+            Mismatch {
+                error_drift_arcsec_per_day: 20.0,
+                ..Mismatch::default()
+            },
+        ),
+    ] {
         let mut draw = Draw::new(ScenarioKind::Sea, 41);
         draw.mismatch = mismatch;
         let changes = declared(&draw, thirty_day_runs, 30.0 * 86_400.0, Some(90.0));
@@ -294,25 +393,72 @@ fn generate_estimate_and_the_summary_say_when_the_errors_changed() {
         "--out",
         path_str(&log),
     ]);
-    let truth = host_sim::log_csv::read_truth(&host_sim::log_csv::truth_path(&log)).unwrap().unwrap();
-    let step = truth.params.unwrap().errors_step.expect("the step in the truth file");
-    assert_eq!((step.at_s, step.errors_after_arcsec), (8000.0, [230.0, -150.0, 300.0, -250.0]));
+    let truth = host_sim::log_csv::read_truth(&host_sim::log_csv::truth_path(&log))
+        .unwrap()
+        .unwrap();
+    let step = truth
+        .params
+        .unwrap()
+        .errors_step
+        .expect("the step in the truth file");
+    assert_eq!(
+        (step.at_s, step.errors_after_arcsec),
+        (8000.0, [230.0, -150.0, 300.0, -250.0])
+    );
 
-    let out = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("est.csv"))]);
-    let line = out.lines().find(|l| l.contains("change of the installation errors detected at")).unwrap_or_else(|| panic!("{out}"));
-    let detected_s: f64 = line.split("detected at ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
-    assert!((8000.0..=8000.0 + 3.5 * 480.0).contains(&detected_s), "{line}");
+    let out = host_sim_ok(&[
+        "estimate",
+        path_str(&log),
+        "--out",
+        path_str(&dir.join("est.csv")),
+    ]);
+    let line = out
+        .lines()
+        .find(|l| l.contains("change of the installation errors detected at"))
+        .unwrap_or_else(|| panic!("{out}"));
+    let detected_s: f64 = line
+        .split("detected at ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        (8000.0..=8000.0 + 3.5 * 480.0).contains(&detected_s),
+        "{line}"
+    );
     assert!(line.contains("x1"), "{line}");
     let estimates = std::fs::read_to_string(dir.join("est.csv")).unwrap();
-    assert!(estimates.contains(",errors_changed,"), "no errors_changed status in the estimates");
+    assert!(
+        estimates.contains(",errors_changed,"),
+        "no errors_changed status in the estimates"
+    );
     // Against the truth: x1 within 10 arcsec of its new value from before 2,000 s after the step.
-    let x1 = out.lines().find(|l| l.starts_with("| x1 |")).unwrap_or_else(|| panic!("{out}"));
-    let from_s: f64 = x1.trim_end_matches(" s |").rsplit("| ").next().unwrap().parse().unwrap_or_else(|_| panic!("{x1}"));
+    let x1 = out
+        .lines()
+        .find(|l| l.starts_with("| x1 |"))
+        .unwrap_or_else(|| panic!("{out}"));
+    let from_s: f64 = x1
+        .trim_end_matches(" s |")
+        .rsplit("| ")
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap_or_else(|_| panic!("{x1}"));
     assert!(from_s <= 10_000.0, "{x1}");
 
     // Detection off: no change said (that the filter then lags the step by hours is the core's
     // `a_step_of_the_errors_is_declared_reported_and_learned_again`).
-    let out = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&dir.join("off.csv")), "--change-detection-arcsec", "0"]);
+    let out = host_sim_ok(&[
+        "estimate",
+        path_str(&log),
+        "--out",
+        path_str(&dir.join("off.csv")),
+        "--change-detection-arcsec",
+        "0",
+    ]);
     assert!(!out.contains("change of the installation errors"), "{out}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -324,7 +470,11 @@ fn study_steps() {
     steps(
         4,
         &[20.0, 30.0, 50.0, 150.0],
-        &[RotationScheme::Continuous, RotationScheme::Reciprocating, RotationScheme::FourPosition],
+        &[
+            RotationScheme::Continuous,
+            RotationScheme::Reciprocating,
+            RotationScheme::FourPosition,
+        ],
         &[360.0, 480.0, 720.0],
     );
 }

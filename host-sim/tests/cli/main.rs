@@ -4,7 +4,6 @@
 //! One test program of modules, one per area, linked once; `cargo test --release -p host-sim --test
 //! cli MODULE` runs one module.
 
-mod common;
 mod cli_errors;
 mod cli_flash_life;
 mod cli_generate;
@@ -15,4 +14,5 @@ mod cli_restart;
 mod cli_scenarios;
 mod cli_scheme_tables;
 mod cli_time_stamps;
+mod common;
 mod error_changes;

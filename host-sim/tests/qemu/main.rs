@@ -4,7 +4,6 @@
 //! One test program of modules, one per area, linked once; `cargo test --release -p host-sim --test
 //! qemu MODULE` runs one module.
 
-mod qemu_support;
 mod qemu_budgets;
 mod qemu_checkpoint_interval;
 mod qemu_e2e;
@@ -14,4 +13,5 @@ mod qemu_power_cut;
 mod qemu_report;
 mod qemu_restart;
 mod qemu_stale_state;
+mod qemu_support;
 mod qemu_watchdog;

@@ -111,7 +111,11 @@ fn step_cost_is_within_5000_instructions_and_the_stack_is_measured(board: Board)
     ]);
     println!("{out}");
     let (boot, _, _) = stack_peaks(&out);
-    assert!(boot <= START_UP_STACK_BUDGET_BYTES, "{}: start-up stack {boot} bytes", board.name());
+    assert!(
+        boot <= START_UP_STACK_BUDGET_BYTES,
+        "{}: start-up stack {boot} bytes",
+        board.name()
+    );
     let (max, mean) = step_cost(&out);
     assert!(
         max <= STEP_BUDGET_INSTRUCTIONS,

@@ -4,16 +4,16 @@
 //! and answer every valid sample exactly as the host's own estimator does on the clean stream.
 //! Then a burst of random bytes: the firmware must still be up and answering. On both boards.
 
+use crate::qemu_support::*;
 use estimator_core::{Config, Field, Output, RejectReason, SampleError};
 use host_sim::log_csv::read_log;
 use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::frame::MAX_FRAME;
 use link_protocol::{
-    crc, encode_frame, FrameAccumulator, FrameError, Numbered, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
-    UNNUMBERED,
+    crc, encode_frame, FrameAccumulator, FrameError, Numbered, Request, Response, SampleMsg,
+    MAX_REQUEST_ENCODED, UNNUMBERED,
 };
-use crate::qemu_support::*;
 use std::time::Duration;
 
 /// xorshift32: the faults are the same on every run.
@@ -34,7 +34,14 @@ impl Rng {
 /// the faults must not look like lost frames).
 fn frame(request: &Request) -> Vec<u8> {
     let mut out = [0u8; MAX_FRAME];
-    let n = encode_frame(&Numbered { seq: UNNUMBERED, message: *request }, &mut out).unwrap();
+    let n = encode_frame(
+        &Numbered {
+            seq: UNNUMBERED,
+            message: *request,
+        },
+        &mut out,
+    )
+    .unwrap();
     out[..n].to_vec()
 }
 
@@ -110,7 +117,10 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
 
     // The clean answers, from the host's own estimator.
     let mut host = HostEstimator::new(Config::default()).unwrap();
-    let expected: Vec<String> = lines.iter().map(|l| key(&host.step(&sample_of(&l.row)))).collect();
+    let expected: Vec<String> = lines
+        .iter()
+        .map(|l| key(&host.step(&sample_of(&l.row))))
+        .collect();
 
     let mut target = Target::boot_qemu(
         &elf,
@@ -148,7 +158,9 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
             let fault = FAULTS[(i / 23) % FAULTS.len()];
             injected[FAULTS.iter().position(|f| *f == fault).unwrap()] += 1;
             let bytes: Vec<u8> = match fault {
-                Fault::Garbage => (0..1 + rng.next() % 40).map(|_| rng.nonzero_byte()).collect(),
+                Fault::Garbage => (0..1 + rng.next() % 40)
+                    .map(|_| rng.nonzero_byte())
+                    .collect(),
                 Fault::Truncated => {
                     let f = frame(&Request::Sample(msg));
                     let cut = 2 + (rng.next() as usize) % (f.len() - 3);
@@ -157,7 +169,10 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
                 Fault::BadCrc => frame_with_bad_crc(&Request::Sample(msg)),
                 Fault::Oversize => {
                     let mut f = vec![0u8];
-                    f.extend((0..MAX_REQUEST_ENCODED + 1 + (rng.next() % 200) as usize).map(|_| rng.nonzero_byte()));
+                    f.extend(
+                        (0..MAX_REQUEST_ENCODED + 1 + (rng.next() % 200) as usize)
+                            .map(|_| rng.nonzero_byte()),
+                    );
                     f
                 }
                 Fault::UnknownMessage => frame_of_unknown_message(),
@@ -167,7 +182,9 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
                     roll_rad: f32::NAN,
                     ..msg
                 })),
-                Fault::DuplicateTime => frame(&Request::Sample(previous.expect("not the first row"))),
+                Fault::DuplicateTime => {
+                    frame(&Request::Sample(previous.expect("not the first row")))
+                }
             };
             // Faults without a closing 0x00 are closed by the next frame's leading 0x00.
             let (bad, good) = shadow_feed(&bytes, &mut predicted);
@@ -211,7 +228,10 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
         previous = Some(msg);
     }
     let status = target.status().unwrap();
-    println!("injected {injected:?}; firmware counters {:?}", status.counters);
+    println!(
+        "injected {injected:?}; firmware counters {:?}",
+        status.counters
+    );
     assert_eq!(
         status.counters.bad_frames, predicted,
         "bad frames by kind (oversize, cobs, too_short, crc, message)"
@@ -231,20 +251,33 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
     assert_eq!(bad[FrameError::Message as usize], injected[4]);
     assert!(bad[FrameError::TooShort as usize] >= injected[5]);
     let rejected = status.counters.rejected_samples;
+    assert_eq!(rejected[RejectReason::NonFinite as usize], injected[6]);
     assert_eq!(
-        rejected[RejectReason::NonFinite as usize],
-        injected[6]
+        rejected[RejectReason::TimeNotIncreasing as usize],
+        injected[7]
     );
-    assert_eq!(rejected[RejectReason::TimeNotIncreasing as usize], injected[7]);
-    assert_eq!(status.counters.rejected_samples_total(), injected[6] + injected[7]);
+    assert_eq!(
+        status.counters.rejected_samples_total(),
+        injected[6] + injected[7]
+    );
     assert_eq!(status.accepted as usize, lines.len());
     // The numbered frames all arrived: the faults cost no frame but their own.
-    assert_eq!(status.link.lost_frames, 0, "no numbered frame lost: {:?}", status.link);
+    assert_eq!(
+        status.link.lost_frames, 0,
+        "no numbered frame lost: {:?}",
+        status.link
+    );
     assert_eq!(status.link.errors_total(), 0, "{:?}", status.link);
 
     // Random bytes, zeros included: nothing may stop the firmware.
     let noise: Vec<u8> = (0..20_000)
-        .map(|_| if rng.next() % 29 == 0 { 0 } else { rng.nonzero_byte() })
+        .map(|_| {
+            if rng.next().is_multiple_of(29) {
+                0
+            } else {
+                rng.nonzero_byte()
+            }
+        })
         .collect();
     target.link.send_raw(&noise).unwrap();
     let mut answered = false;
@@ -256,6 +289,12 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
             break;
         }
     }
-    assert!(answered, "the firmware answers ReadStatus after 20000 random bytes");
-    assert!(target.qemu.as_mut().unwrap().exited().is_none(), "QEMU still running");
+    assert!(
+        answered,
+        "the firmware answers ReadStatus after 20000 random bytes"
+    );
+    assert!(
+        target.qemu.as_mut().unwrap().exited().is_none(),
+        "QEMU still running"
+    );
 }

@@ -22,7 +22,12 @@ fn stream_over_a_serial_port_matches_estimate() {
     let dir = scratch("port");
     let log = paper_log(&dir, 1200);
     let (est, streamed) = (dir.join("estimate.csv"), dir.join("stream.csv"));
-    host_sim(&["estimate", log.to_str().unwrap(), "--out", est.to_str().unwrap()]);
+    host_sim(&[
+        "estimate",
+        log.to_str().unwrap(),
+        "--out",
+        est.to_str().unwrap(),
+    ]);
 
     // QEMU names the pseudo-terminal on its stdout (which also carries the defmt log):
     // "char device redirected to /dev/pts/N (label serial0)".
@@ -59,14 +64,21 @@ fn stream_over_a_serial_port_matches_estimate() {
     let _guard = Guard(qemu);
     let deadline = Instant::now() + Duration::from_secs(20);
     let pts = loop {
-        let text = String::from_utf8_lossy(&std::fs::read(&stdout_path).unwrap_or_default()).into_owned();
+        let text =
+            String::from_utf8_lossy(&std::fs::read(&stdout_path).unwrap_or_default()).into_owned();
         if let Some(at) = text.find("/dev/pts/") {
-            let digits: String = text[at + 9..].chars().take_while(|c| c.is_ascii_digit()).collect();
+            let digits: String = text[at + 9..]
+                .chars()
+                .take_while(|c| c.is_ascii_digit())
+                .collect();
             if !digits.is_empty() {
                 break format!("/dev/pts/{digits}");
             }
         }
-        assert!(Instant::now() < deadline, "QEMU did not report its pty: {text}");
+        assert!(
+            Instant::now() < deadline,
+            "QEMU did not report its pty: {text}"
+        );
         std::thread::sleep(Duration::from_millis(50));
     };
     let out = host_sim(&[
@@ -93,14 +105,39 @@ fn stream_over_a_serial_port_matches_estimate() {
 
     // The board still runs and holds the first stream's state.
     let again = Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args(["stream", "--port", &pts, log.to_str().unwrap(), "--out", dir.join("again.csv").to_str().unwrap()])
+        .args([
+            "stream",
+            "--port",
+            &pts,
+            log.to_str().unwrap(),
+            "--out",
+            dir.join("again.csv").to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&again.stderr);
     assert_eq!(again.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("already holds an estimator state (1200 samples accepted"), "{stderr}");
+    assert!(
+        stderr.contains("already holds an estimator state (1200 samples accepted"),
+        "{stderr}"
+    );
     let reset = dir.join("reset.csv");
-    let out = host_sim(&["stream", "--port", &pts, "--reset", log.to_str().unwrap(), "--out", reset.to_str().unwrap()]);
-    assert!(out.contains("reset the firmware: it forgot 1200 samples accepted"), "{out}");
-    assert_eq!(std::fs::read(&est).unwrap(), std::fs::read(&reset).unwrap(), "estimates after --reset differ");
+    let out = host_sim(&[
+        "stream",
+        "--port",
+        &pts,
+        "--reset",
+        log.to_str().unwrap(),
+        "--out",
+        reset.to_str().unwrap(),
+    ]);
+    assert!(
+        out.contains("reset the firmware: it forgot 1200 samples accepted"),
+        "{out}"
+    );
+    assert_eq!(
+        std::fs::read(&est).unwrap(),
+        std::fs::read(&reset).unwrap(),
+        "estimates after --reset differ"
+    );
 }

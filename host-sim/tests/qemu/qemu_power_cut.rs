@@ -7,6 +7,7 @@
 //! firmware reports. At the end the firmware's estimate equals the mirror's bit for bit, and is
 //! within 1 arcsec of the uninterrupted run's.
 
+use crate::qemu_support::*;
 use estimator_core::checkpoint::CHECKPOINT_LEN;
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, Estimate};
@@ -15,7 +16,6 @@ use host_sim::log_csv::read_log;
 use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::{Request, SampleMsg};
-use crate::qemu_support::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -53,7 +53,9 @@ impl Mirror {
 
     /// Steps a sample; true if the firmware saves a checkpoint after it.
     fn step(&mut self, msg: &SampleMsg) -> bool {
-        let Ok(output) = self.estimator.step(&msg.into()) else { return false };
+        let Ok(output) = self.estimator.step(&msg.into()) else {
+            return false;
+        };
         let saves = self.schedule.due(output.time_s);
         if saves {
             let mut image = vec![0u8; CHECKPOINT_LEN];
@@ -67,7 +69,9 @@ impl Mirror {
     fn boot(&mut self, time_s: Option<f64>) {
         self.estimator = HostEstimator::new(Config::default()).unwrap();
         if let Some(t) = time_s {
-            let image = self.images.get(&t.to_bits()).unwrap_or_else(|| panic!("the firmware restored a checkpoint of {t} s it never saved"));
+            let image = self.images.get(&t.to_bits()).unwrap_or_else(|| {
+                panic!("the firmware restored a checkpoint of {t} s it never saved")
+            });
             self.estimator.restore(image).unwrap();
         }
         self.schedule = SaveSchedule::new(f64::from(CHECKPOINT_INTERVAL_S), time_s);
@@ -89,7 +93,10 @@ fn power_cuts(board: Board) {
     let dir = scratch(&format!("power-cut-{}", board.name()));
     let log = paper_log(&dir, 6000);
     let lines = read_log(&log).unwrap();
-    let msgs: Vec<SampleMsg> = lines.iter().map(|l| SampleMsg::from(&sample_of(&l.row))).collect();
+    let msgs: Vec<SampleMsg> = lines
+        .iter()
+        .map(|l| SampleMsg::from(&sample_of(&l.row)))
+        .collect();
     let mut uncut = HostEstimator::new(Config::default()).unwrap();
     for m in &msgs {
         uncut.step(&m.into()).unwrap();
@@ -102,10 +109,20 @@ fn power_cuts(board: Board) {
     let mut mirror = Mirror::new();
     let (mut cuts, mut mid_save_cuts, mut attempts) = (0u32, 0u32, 0u32);
     let final_estimate: Estimate = loop {
-        let mut target = Target::boot_qemu(&elf, board.machine(), None, Some(&flash_dir), Duration::from_secs(10)).unwrap();
+        let mut target = Target::boot_qemu(
+            &elf,
+            board.machine(),
+            None,
+            Some(&flash_dir),
+            Duration::from_secs(10),
+        )
+        .unwrap();
         let resume = target.boot_status.checkpoint_time_s;
         mirror.boot(resume);
-        let start = msgs.iter().position(|m| resume.is_none_or(|t| m.time_s > t)).unwrap();
+        let start = msgs
+            .iter()
+            .position(|m| resume.is_none_or(|t| m.time_s > t))
+            .unwrap();
         // Four cuts after 100..700 random rows; then cuts at saves (sent, not waited for) until
         // one lands inside a save; then one more random cut; then the rest of the log.
         let want_mid_save = mid_save_cuts == 0 && cuts >= 4;
@@ -138,7 +155,10 @@ fn power_cuts(board: Board) {
                     // A whole item is the image, the key and the log's item header, padded.
                     if grown > 0 && (grown as usize) < CHECKPOINT_LEN {
                         mid_save_cuts += 1;
-                        println!("cut {}: in the middle of a save ({grown} of its bytes written)", cuts + 1);
+                        println!(
+                            "cut {}: in the middle of a save ({grown} of its bytes written)",
+                            cuts + 1
+                        );
                     } else {
                         println!("cut {}: at a save, {grown} bytes written", cuts + 1);
                     }
@@ -153,19 +173,35 @@ fn power_cuts(board: Board) {
         }
         if cut {
             cuts += 1;
-            assert!(attempts < 8, "no cut landed inside a save in {attempts} attempts");
+            assert!(
+                attempts < 8,
+                "no cut landed inside a save in {attempts} attempts"
+            );
             continue;
         }
         let output = answer.expect("rows were streamed").result.unwrap();
         break output.estimate.unwrap();
     };
-    assert!(mid_save_cuts == 1 && cuts >= 6, "{cuts} cuts, {mid_save_cuts} in a save");
+    assert!(
+        mid_save_cuts == 1 && cuts >= 6,
+        "{cuts} cuts, {mid_save_cuts} in a save"
+    );
     let mirrored = mirror.estimator.estimate().unwrap();
     let reference = uncut.estimate().unwrap();
-    assert_eq!(final_estimate, mirrored, "the firmware's estimate differs from the host's mirror of its restarts");
+    assert_eq!(
+        final_estimate, mirrored,
+        "the firmware's estimate differs from the host's mirror of its restarts"
+    );
     for i in 0..4 {
         let diff = rad_to_arcsec(f64::from(final_estimate.x_rad[i] - reference.x_rad[i])).abs();
-        println!("x{}: {diff:.3} arcsec from the uninterrupted run after {cuts} power cuts", i + 1);
-        assert!(diff <= 1.0, "x{} differs by {diff} arcsec from the uninterrupted run", i + 1);
+        println!(
+            "x{}: {diff:.3} arcsec from the uninterrupted run after {cuts} power cuts",
+            i + 1
+        );
+        assert!(
+            diff <= 1.0,
+            "x{} differs by {diff} arcsec from the uninterrupted run",
+            i + 1
+        );
     }
 }

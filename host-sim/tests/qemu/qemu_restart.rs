@@ -12,11 +12,19 @@ use std::path::Path;
 /// The estimates (x1..x4 arcsec, empty while none) and status of an estimates CSV's data row.
 fn row(line: &str) -> ([Option<f64>; 4], String) {
     let f: Vec<&str> = line.split(',').collect();
-    (std::array::from_fn(|i| f[1 + i].parse().ok()), f[9].to_string())
+    (
+        std::array::from_fn(|i| f[1 + i].parse().ok()),
+        f[9].to_string(),
+    )
 }
 
 fn data_rows(path: &Path) -> Vec<String> {
-    std::fs::read_to_string(path).unwrap().lines().skip(1).map(str::to_string).collect()
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(str::to_string)
+        .collect()
 }
 
 #[test]
@@ -32,7 +40,11 @@ fn stm32f405_restart_after_a_power_cut_and_200_s_of_lost_rows() {
 fn restart(board: Board) {
     let elf = firmware_elf(board);
     let dir = scratch(&format!("restart-{}", board.name()));
-    let whole = generated_log(&dir, "sea.csv", &["--scenario", "sea", "--duration", "21500"]);
+    let whole = generated_log(
+        &dir,
+        "sea.csv",
+        &["--scenario", "sea", "--duration", "21500"],
+    );
     let text = std::fs::read_to_string(&whole).unwrap();
     let mut lines = text.lines();
     let header = lines.next().unwrap();
@@ -56,28 +68,66 @@ fn restart(board: Board) {
     let uncut = dir.join("uncut.csv");
     host_sim(&["estimate", &s(&whole), "--out", &s(&uncut)]);
     let est_before = dir.join("before.estimates.csv");
-    host_sim(&["stream", "--qemu", &s(&elf), "--machine", &machine, &s(&first), "--flash-dir", &s(&flash), "--out", &s(&est_before)]);
+    host_sim(&[
+        "stream",
+        "--qemu",
+        &s(&elf),
+        "--machine",
+        &machine,
+        &s(&first),
+        "--flash-dir",
+        &s(&flash),
+        "--out",
+        &s(&est_before),
+    ]);
     let est_after = dir.join("after.estimates.csv");
     let stdout = host_sim(&[
-        "stream", "--qemu", &s(&elf), "--machine", &machine, &s(&second), "--flash-dir", &s(&flash), "--resume", "--out", &s(&est_after),
+        "stream",
+        "--qemu",
+        &s(&elf),
+        "--machine",
+        &machine,
+        &s(&second),
+        "--flash-dir",
+        &s(&flash),
+        "--resume",
+        "--out",
+        &s(&est_after),
     ]);
-    assert!(stdout.contains("resuming after the firmware's checkpoint"), "{stdout}");
+    assert!(
+        stdout.contains("resuming after the firmware's checkpoint"),
+        "{stdout}"
+    );
     // Making the estimator and restoring the checkpoint in place keeps the start-up stack small.
     let (boot, _, _) = stack_peaks(&stdout);
-    println!("{}: start-up stack {boot} bytes with a checkpoint restored", board.name());
-    assert!(boot <= START_UP_STACK_BUDGET_BYTES, "start-up stack {boot} bytes with a restore");
+    println!(
+        "{}: start-up stack {boot} bytes with a checkpoint restored",
+        board.name()
+    );
+    assert!(
+        boot <= START_UP_STACK_BUDGET_BYTES,
+        "start-up stack {boot} bytes with a restore"
+    );
 
     // The first answer after the restart carries the estimates, while the window refills.
     let after_rows = data_rows(&est_after);
     let (x, status) = row(&after_rows[0]);
-    assert!(x.iter().all(Option::is_some), "the first answer after the restart has no estimate: {}", after_rows[0]);
+    assert!(
+        x.iter().all(Option::is_some),
+        "the first answer after the restart has no estimate: {}",
+        after_rows[0]
+    );
     assert_eq!(status, "holding", "{}", after_rows[0]);
     // At the end: within 0.1 arcsec of the uncut run.
     let (cut, _) = row(after_rows.last().unwrap());
     let (reference, _) = row(data_rows(&uncut).last().unwrap());
     for i in 0..4 {
         let d = cut[i].unwrap() - reference[i].unwrap();
-        println!("{}: x{} {d:+.4} arcsec from the uncut run at the end", board.name(), i + 1);
+        println!(
+            "{}: x{} {d:+.4} arcsec from the uncut run at the end",
+            board.name(),
+            i + 1
+        );
         assert!(d.abs() <= 0.1, "x{}: {d} arcsec from the uncut run", i + 1);
     }
 }

@@ -60,22 +60,39 @@ fn build_firmware(board: Board, env: &[(&str, &str)], features: &[&str], name: &
     let root = workspace_root();
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
     let mut command = Command::new(&cargo);
-    command
-        .current_dir(&root)
-        .args(["build", "-p", "firmware", "--target", "thumbv7em-none-eabihf", "--profile", "firmware"]);
+    command.current_dir(&root).args([
+        "build",
+        "-p",
+        "firmware",
+        "--target",
+        "thumbv7em-none-eabihf",
+        "--profile",
+        "firmware",
+    ]);
     command.args(board.cargo_features());
     for feature in features {
         command.args(["--features", feature]);
     }
     command.envs(env.iter().copied());
-    let status = command.status().expect("cannot run cargo to build the firmware");
+    let status = command
+        .status()
+        .expect("cannot run cargo to build the firmware");
     assert!(
         status.success(),
         "building the firmware for {board:?} failed ({status}): see cargo's output above (a missing target needs `rustup target add thumbv7em-none-eabihf`)"
     );
-    let target_dir = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| root.join("target"));
-    let target_dir = if target_dir.is_absolute() { target_dir } else { root.join(target_dir) };
-    let elf = target_dir.join("thumbv7em-none-eabihf").join("firmware").join("firmware");
+    let target_dir = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("target"));
+    let target_dir = if target_dir.is_absolute() {
+        target_dir
+    } else {
+        root.join(target_dir)
+    };
+    let elf = target_dir
+        .join("thumbv7em-none-eabihf")
+        .join("firmware")
+        .join("firmware");
     assert!(elf.is_file(), "{} missing after the build", elf.display());
     let copy = target_dir.join("qemu-tests").join(format!("{name}.elf"));
     std::fs::create_dir_all(copy.parent().expect("a parent")).expect("create target/qemu-tests");
@@ -105,7 +122,11 @@ pub fn firmware_elf_with_features(name: &str, features: &[&str]) -> PathBuf {
 /// Generates the paper scenario (default seed) for `duration_s` into `dir/paper.csv` and its truth
 /// file; returns the log's path.
 pub fn paper_log(dir: &Path, duration_s: u32) -> PathBuf {
-    generated_log(dir, "paper.csv", &["--scenario", "paper", "--duration", &duration_s.to_string()])
+    generated_log(
+        dir,
+        "paper.csv",
+        &["--scenario", "paper", "--duration", &duration_s.to_string()],
+    )
 }
 
 /// `host-sim generate ARGS --out DIR/NAME` (and its truth file beside it).
@@ -204,9 +225,15 @@ pub fn stack_peaks(stdout: &str) -> (u64, u64, u64) {
         .lines()
         .find(|l| l.contains("stack (painted)"))
         .unwrap_or_else(|| panic!("no stack line in:\n{stdout}"));
-    let numbers: Vec<u64> = line.split_whitespace().filter_map(|w| w.parse().ok()).collect();
+    let numbers: Vec<u64> = line
+        .split_whitespace()
+        .filter_map(|w| w.parse().ok())
+        .collect();
     assert_eq!(numbers.len(), 3, "{line}");
     let (boot, service, size) = (numbers[0], numbers[1], numbers[2]);
-    assert!(boot > 0 && service > 0 && boot < size && service < size, "painting measured nothing: {line}");
+    assert!(
+        boot > 0 && service > 0 && boot < size && service < size,
+        "painting measured nothing: {line}"
+    );
     (boot, service, size)
 }

@@ -7,13 +7,13 @@
 //! nothing lost but the samples sent while the firmware was down, one contiguous block right after
 //! the `Hang`, and every sample after the restart answered.
 
+use crate::qemu_support::*;
 use host_sim::estimates_csv::EstimatesWriter;
 use host_sim::log_csv::{LogReader, RowFilter};
-use host_sim::stream::qemu::Machine;
 use host_sim::stream::push::{stream_log_push, PushOptions};
+use host_sim::stream::qemu::Machine;
 use host_sim::stream::Target;
 use link_protocol::{Request, ResetCause};
-use crate::qemu_support::*;
 use std::time::{Duration, Instant};
 
 /// The row before which the host sends `Hang`: after the first checkpoint (300 s of samples, the
@@ -30,7 +30,12 @@ fn a_hung_main_loop_is_reset_by_the_watchdog_and_the_stream_carries_on() {
     let flash_dir = dir.join("flash");
     std::fs::create_dir_all(&flash_dir).unwrap();
     let host_estimates = dir.join("estimate.csv");
-    host_sim(&["estimate", log.to_str().unwrap(), "--out", host_estimates.to_str().unwrap()]);
+    host_sim(&[
+        "estimate",
+        log.to_str().unwrap(),
+        "--out",
+        host_estimates.to_str().unwrap(),
+    ]);
 
     let start = Instant::now();
     // The reset takes the watchdog's 2 s and a boot: a generous answer timeout.
@@ -51,17 +56,45 @@ fn a_hung_main_loop_is_reset_by_the_watchdog_and_the_stream_carries_on() {
     let mut lines = LogReader::open(&log).unwrap();
     let mut writer = EstimatesWriter::new(Vec::new()).unwrap();
     let mut info = Vec::new();
-    let summary = stream_log_push(&mut target, &mut lines, RowFilter::new(true), None, &mut writer, None, &options, &mut info, &mut |_, _| {})
-        .unwrap_or_else(|e| panic!("{e:#}\n{}", String::from_utf8_lossy(&info)));
+    let summary = stream_log_push(
+        &mut target,
+        &mut lines,
+        RowFilter::new(true),
+        None,
+        &mut writer,
+        None,
+        &options,
+        &mut info,
+        &mut |_, _| {},
+    )
+    .unwrap_or_else(|e| panic!("{e:#}\n{}", String::from_utf8_lossy(&info)));
     let info = String::from_utf8_lossy(&info).into_owned();
-    println!("{info}{:?}\nwall {:.1} s, window {window}", summary.link, start.elapsed().as_secs_f64());
+    println!(
+        "{info}{:?}\nwall {:.1} s, window {window}",
+        summary.link,
+        start.elapsed().as_secs_f64()
+    );
 
     // A reset, not an exit: QEMU still runs the firmware.
-    assert!(target.qemu.as_mut().unwrap().exited().is_none(), "QEMU exited instead of resetting");
-    assert_eq!(summary.link.restarts, 1, "one Ready in the middle of the stream");
-    let after = summary.restart_status.first().expect("the status after the restart");
-    assert_eq!(ResetCause::try_from(after.reset_cause), Ok(ResetCause::Watchdog));
-    let restored_s = after.checkpoint_time_s.expect("the restart restored a checkpoint");
+    assert!(
+        target.qemu.as_mut().unwrap().exited().is_none(),
+        "QEMU exited instead of resetting"
+    );
+    assert_eq!(
+        summary.link.restarts, 1,
+        "one Ready in the middle of the stream"
+    );
+    let after = summary
+        .restart_status
+        .first()
+        .expect("the status after the restart");
+    assert_eq!(
+        ResetCause::try_from(after.reset_cause),
+        Ok(ResetCause::Watchdog)
+    );
+    let restored_s = after
+        .checkpoint_time_s
+        .expect("the restart restored a checkpoint");
     assert!(
         restored_s > 0.0 && restored_s < HANG_AT_ROW as f64 + 1.0,
         "restored the checkpoint of {restored_s} s, before the hang"
@@ -73,7 +106,11 @@ fn a_hung_main_loop_is_reset_by_the_watchdog_and_the_stream_carries_on() {
     let link = summary.link;
     assert_eq!(link.sent, u64::from(LOG_S));
     assert_eq!(link.answered + link.lost, link.sent);
-    assert!(link.lost >= 1 && link.lost <= window as u64, "lost {} of a window of {window}", link.lost);
+    assert!(
+        link.lost >= 1 && link.lost <= window as u64,
+        "lost {} of a window of {window}",
+        link.lost
+    );
     let streamed = String::from_utf8(writer.finish().unwrap()).unwrap();
     let expected = std::fs::read_to_string(&host_estimates).unwrap();
     let streamed_rows: Vec<&str> = streamed.lines().skip(1).collect();
@@ -88,10 +125,19 @@ fn a_hung_main_loop_is_reset_by_the_watchdog_and_the_stream_carries_on() {
         .filter(|(i, _)| !lost_block.contains(i))
         .map(|(_, r)| time_of(r))
         .collect();
-    assert_eq!(answered_times, want_times, "the rows lost are exactly the block after the Hang");
+    assert_eq!(
+        answered_times, want_times,
+        "the rows lost are exactly the block after the Hang"
+    );
     // Before the hang the firmware's answers are the host's own, byte for byte.
-    assert_eq!(streamed_rows[..HANG_AT_ROW as usize], expected_rows[..HANG_AT_ROW as usize]);
+    assert_eq!(
+        streamed_rows[..HANG_AT_ROW as usize],
+        expected_rows[..HANG_AT_ROW as usize]
+    );
     // After the restart the firmware carries on from its checkpoint: the stream ends answered.
     assert_eq!(summary.final_status.reset_cause, ResetCause::Watchdog as u8);
-    assert_eq!(summary.final_status.link.lost_frames, 0, "after the restart no frame was lost");
+    assert_eq!(
+        summary.final_status.link.lost_frames, 0,
+        "after the restart no frame was lost"
+    );
 }

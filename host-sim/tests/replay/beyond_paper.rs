@@ -24,7 +24,9 @@ fn errors_at(params: &ScenarioParams, method: Method, at_s: &[f64]) -> Vec<[f64;
         let o = est.step(&s).unwrap();
         if at_s.contains(&row.time_s) {
             let e = o.estimate.expect("an estimate by then");
-            out.push(core::array::from_fn(|i| (rad_to_arcsec(e.x_rad[i] as f64) - truth.errors_arcsec[i]).abs()));
+            out.push(core::array::from_fn(|i| {
+                (rad_to_arcsec(e.x_rad[i] as f64) - truth.errors_arcsec[i]).abs()
+            }));
         }
     }
     assert_eq!(out.len(), at_s.len());
@@ -38,16 +40,30 @@ fn paper_scenario_half_percent_by_5000_s_and_10_arcsec_by_2000_s_for_seeds_1_to_
         p.duration_s = 5001.0;
         let e = errors_at(&p, Method::Windowed, &[2000.0, 5000.0]);
         for i in 0..4 {
-            assert!(e[0][i] < 10.0, "seed {seed}: x{} off by {:.3} arcsec at 2000 s", i + 1, e[0][i]);
+            assert!(
+                e[0][i] < 10.0,
+                "seed {seed}: x{} off by {:.3} arcsec at 2000 s",
+                i + 1,
+                e[0][i]
+            );
             let limit = 0.005 * p.errors_arcsec[i].abs();
-            assert!(e[1][i] < limit, "seed {seed}: x{} off by {:.3} arcsec at 5000 s (0.5 % = {limit})", i + 1, e[1][i]);
+            assert!(
+                e[1][i] < limit,
+                "seed {seed}: x{} off by {:.3} arcsec at 5000 s (0.5 % = {limit})",
+                i + 1,
+                e[1][i]
+            );
         }
     }
 }
 
 #[test]
 fn no_worse_than_the_papers_method_on_any_scenario() {
-    for kind in [ScenarioKind::Paper, ScenarioKind::Turntable, ScenarioKind::Sea] {
+    for kind in [
+        ScenarioKind::Paper,
+        ScenarioKind::Turntable,
+        ScenarioKind::Sea,
+    ] {
         for seed in 1..=3 {
             let mut p = ScenarioParams::new(kind, seed);
             p.duration_s = 45_001.0;
@@ -61,7 +77,10 @@ fn no_worse_than_the_papers_method_on_any_scenario() {
                     worst_ours <= worst_paper,
                     "{kind:?} seed {seed} at {t} s: ours {worst_ours:.3} arcsec, paper's {worst_paper:.3}"
                 );
-                assert!(worst_ours < 1.0, "{kind:?} seed {seed} at {t} s: ours {worst_ours:.3} arcsec");
+                assert!(
+                    worst_ours < 1.0,
+                    "{kind:?} seed {seed} at {t} s: ours {worst_ours:.3} arcsec"
+                );
             }
         }
     }

@@ -15,7 +15,11 @@ use rayon::prelude::*;
 const TIMES_S: [f64; 2] = [20_000.0, 45_000.0];
 
 fn worst(a: &Accuracy) -> [f64; 2] {
-    core::array::from_fn(|k| a.points[k].error_arcsec.map_or(f64::INFINITY, |e| e.iter().fold(0.0, |m, v| m.max(v.abs()))))
+    core::array::from_fn(|k| {
+        a.points[k]
+            .error_arcsec
+            .map_or(f64::INFINITY, |e| e.iter().fold(0.0, |m, v| m.max(v.abs())))
+    })
 }
 
 fn params(seed: u64, scheme: RotationScheme, period_s: f64, interval_s: f64) -> ScenarioParams {
@@ -31,7 +35,12 @@ fn params(seed: u64, scheme: RotationScheme, period_s: f64, interval_s: f64) -> 
 fn binning_a_10_hz_log_or_a_long_period_costs_at_most_half_an_arcsec() {
     // (scheme, period, interval, a capacity that holds the whole period)
     let cases: Vec<(u64, RotationScheme, f64, f64)> = (1..=3)
-        .flat_map(|seed| [(seed, RotationScheme::Continuous, 480.0, 0.1), (seed, RotationScheme::FourPosition, 1440.0, 1.0)])
+        .flat_map(|seed| {
+            [
+                (seed, RotationScheme::Continuous, 480.0, 0.1),
+                (seed, RotationScheme::FourPosition, 1440.0, 1.0),
+            ]
+        })
         .collect();
     let results: Vec<_> = cases
         .par_iter()
@@ -58,7 +67,13 @@ fn binning_a_10_hz_log_or_a_long_period_costs_at_most_half_an_arcsec() {
     }
     for (seed, scheme, period, interval, binned, whole) in &results {
         for k in 0..2 {
-            assert!(binned[k] - whole[k] < 0.5, "seed {seed} {} {period} s every {interval} s: binned {:.3}, whole {:.3}", scheme.name(), binned[k], whole[k]);
+            assert!(
+                binned[k] - whole[k] < 0.5,
+                "seed {seed} {} {period} s every {interval} s: binned {:.3}, whole {:.3}",
+                scheme.name(),
+                binned[k],
+                whole[k]
+            );
         }
     }
 }

@@ -36,7 +36,9 @@ fn check(kind: ScenarioKind, method: Method, jitter_deg: f64, cuts: usize) {
     let mut cut_points: Vec<usize> = vec![0, n - 2];
     cut_points.extend((1..cuts / 2).map(|i| i * n / (cuts / 2)));
     for _ in 0..cuts / 2 {
-        lcg = lcg.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        lcg = lcg
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         cut_points.push((lcg >> 33) as usize % (n - 1));
     }
     cut_points.sort_unstable();
@@ -48,27 +50,51 @@ fn check(kind: ScenarioKind, method: Method, jitter_deg: f64, cuts: usize) {
             next_cut.next();
         }
     }
-    let faults = outputs.iter().filter(|o| matches!(o, Ok(o) if matches!(o.status, estimator_core::Status::RotationFault(_)))).count();
+    let faults = outputs
+        .iter()
+        .filter(
+            |o| matches!(o, Ok(o) if matches!(o.status, estimator_core::Status::RotationFault(_))),
+        )
+        .count();
     let reference_end = reference.estimate().unwrap();
-    let other = if method == Method::Traditional { Method::Windowed } else { Method::Traditional };
+    let other = if method == Method::Traditional {
+        Method::Windowed
+    } else {
+        Method::Traditional
+    };
     let mut worst = 0.0f64;
     for (cut, img) in &images {
         let mut resumed = Estimator::new(Config::with_method(other)).unwrap();
         resumed.restore(img).unwrap();
-        assert_eq!(image(&resumed), *img, "{kind:?} {method:?}: cut {cut}: restored, it writes another image");
+        assert_eq!(
+            image(&resumed),
+            *img,
+            "{kind:?} {method:?}: cut {cut}: restored, it writes another image"
+        );
         let at_cut = match &outputs[*cut] {
             Ok(o) => o.estimate,
             Err(_) => resumed.estimate(),
         };
-        assert_eq!(resumed.estimate().map(|e| e.x_rad), at_cut.map(|e| e.x_rad), "{kind:?} {method:?}: cut {cut}");
+        assert_eq!(
+            resumed.estimate().map(|e| e.x_rad),
+            at_cut.map(|e| e.x_rad),
+            "{kind:?} {method:?}: cut {cut}"
+        );
         let mut had = at_cut.is_some();
         for k in cut + 1..n {
             match (resumed.step(&samples[k]), &outputs[k]) {
                 (Ok(o), Ok(_)) => {
-                    assert!(!had || o.estimate.is_some(), "{kind:?} {method:?}: cut {cut}: row {k} lost the estimate");
+                    assert!(
+                        !had || o.estimate.is_some(),
+                        "{kind:?} {method:?}: cut {cut}: row {k} lost the estimate"
+                    );
                     had |= o.estimate.is_some();
                 }
-                (Err(a), Err(b)) => assert_eq!(a.reason(), b.reason(), "{kind:?} {method:?}: cut {cut}: row {k}"),
+                (Err(a), Err(b)) => assert_eq!(
+                    a.reason(),
+                    b.reason(),
+                    "{kind:?} {method:?}: cut {cut}: row {k}"
+                ),
                 (a, b) => panic!("{kind:?} {method:?}: cut {cut}: row {k}: {a:?}, uncut {b:?}"),
             }
         }

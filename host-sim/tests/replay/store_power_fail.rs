@@ -12,7 +12,7 @@ use estimator_core::{Config, Estimator};
 use firmware::checkpoint_store::{CheckpointStore, Restored, StoreBuffers};
 use host_sim::flash_model::FlashModel;
 use host_sim::replay::sample_of;
-use host_sim::scenario::{ScenarioKind, ScenarioParams, Samples};
+use host_sim::scenario::{Samples, ScenarioKind, ScenarioParams};
 
 /// Images of a running estimator, all different (one every 10 samples of the paper scenario).
 fn images(n: usize) -> Vec<Vec<u8>> {
@@ -42,9 +42,15 @@ fn restored<const S: usize, const W: usize>(flash: &mut FlashModel<S, W>) -> Opt
     let mut est: Estimator = Estimator::new(Config::default()).unwrap();
     let mut buffers = StoreBuffers::new();
     let mut store = CheckpointStore::new(flash, &mut buffers).unwrap();
-    match store.restore(&mut est).expect("the store restores after a power cut") {
+    match store
+        .restore(&mut est)
+        .expect("the store restores after a power cut")
+    {
         Restored::Image { time_s } => {
-            assert!(time_s.is_some_and(f64::is_finite), "restored time {time_s:?}");
+            assert!(
+                time_s.is_some_and(f64::is_finite),
+                "restored time {time_s:?}"
+            );
             let mut image = vec![0u8; CHECKPOINT_LEN];
             est.checkpoint(&mut image).unwrap();
             Some(image)
@@ -61,7 +67,10 @@ enum Op<'a> {
     Invalidate,
 }
 
-fn apply<const S: usize, const W: usize>(flash: &mut FlashModel<S, W>, op: Op<'_>) -> Result<(), firmware::checkpoint_store::StoreError> {
+fn apply<const S: usize, const W: usize>(
+    flash: &mut FlashModel<S, W>,
+    op: Op<'_>,
+) -> Result<(), firmware::checkpoint_store::StoreError> {
     let mut buffers = StoreBuffers::new();
     let mut store = CheckpointStore::new(flash, &mut buffers)?;
     match op {
@@ -82,12 +91,18 @@ struct Cuts {
 
 /// Cuts the power at every operation of `op` on `flash` (whose newest image is `before`), and
 /// checks what restores and that the log goes on.
-fn cut_everywhere<const S: usize, const W: usize>(flash: &FlashModel<S, W>, op: Op<'_>, before: &[u8], next: &[u8]) -> Cuts {
+fn cut_everywhere<const S: usize, const W: usize>(
+    flash: &FlashModel<S, W>,
+    op: Op<'_>,
+    before: &[u8],
+    next: &[u8],
+) -> Cuts {
     let mut whole = flash.clone();
     apply(&mut whole, op).unwrap();
     let start = flash.counts().operations;
     let ops = whole.counts().operations - start;
-    let erases = whole.counts().erases.iter().sum::<u64>() - flash.counts().erases.iter().sum::<u64>();
+    let erases =
+        whole.counts().erases.iter().sum::<u64>() - flash.counts().erases.iter().sum::<u64>();
     let after = match op {
         Op::Save(image) => Some(image.to_vec()),
         Op::Invalidate => None,
@@ -96,11 +111,16 @@ fn cut_everywhere<const S: usize, const W: usize>(flash: &FlashModel<S, W>, op: 
     for k in 0..ops {
         let mut cut = flash.clone();
         cut.cut_power_at(Some(start + k), k);
-        assert!(apply(&mut cut, op).is_err(), "operation {k} of {ops}: the cut did not stop the operation");
+        assert!(
+            apply(&mut cut, op).is_err(),
+            "operation {k} of {ops}: the cut did not stop the operation"
+        );
         assert!(cut.was_cut());
         cut.power_on();
         // What the firmware does at start-up: the store is made (torn erases erased again).
-        re_erased += CheckpointStore::new(&mut cut, &mut StoreBuffers::new()).unwrap().re_erased();
+        re_erased += CheckpointStore::new(&mut cut, &mut StoreBuffers::new())
+            .unwrap()
+            .re_erased();
         let got = restored(&mut cut);
         assert!(
             got.as_deref() == Some(before) || got == after,
@@ -111,16 +131,32 @@ fn cut_everywhere<const S: usize, const W: usize>(flash: &FlashModel<S, W>, op: 
             }
         );
         // The log repairs itself and takes the next save.
-        apply(&mut cut, Op::Save(next)).unwrap_or_else(|e| panic!("cut at {k}: the next save failed: {e}"));
-        assert_eq!(restored(&mut cut).as_deref(), Some(next), "cut at {k}: the next save does not restore");
-        assert_eq!(cut.counts().impossible_writes, 0, "cut at {k}: the store asked for bits NOR flash cannot set");
+        apply(&mut cut, Op::Save(next))
+            .unwrap_or_else(|e| panic!("cut at {k}: the next save failed: {e}"));
+        assert_eq!(
+            restored(&mut cut).as_deref(),
+            Some(next),
+            "cut at {k}: the next save does not restore"
+        );
+        assert_eq!(
+            cut.counts().impossible_writes,
+            0,
+            "cut at {k}: the store asked for bits NOR flash cannot set"
+        );
     }
-    Cuts { operations: ops, erases, re_erased }
+    Cuts {
+        operations: ops,
+        erases,
+        re_erased,
+    }
 }
 
 /// Fills `flash` with `images` until the next save erases a sector; returns the index of the
 /// newest image saved.
-fn fill_until_the_next_save_erases<const S: usize, const W: usize>(flash: &mut FlashModel<S, W>, images: &[Vec<u8>]) -> usize {
+fn fill_until_the_next_save_erases<const S: usize, const W: usize>(
+    flash: &mut FlashModel<S, W>,
+    images: &[Vec<u8>],
+) -> usize {
     for (i, image) in images.iter().enumerate() {
         let mut trial = flash.clone();
         let erases = trial.counts().erases.iter().sum::<u64>();
@@ -133,23 +169,46 @@ fn fill_until_the_next_save_erases<const S: usize, const W: usize>(flash: &mut F
     panic!("{} saves never erased a sector", images.len());
 }
 
-fn every_cut_of_every_kind_of_save<const S: usize, const W: usize>(mut flash: FlashModel<S, W>, images: &[Vec<u8>]) {
+fn every_cut_of_every_kind_of_save<const S: usize, const W: usize>(
+    mut flash: FlashModel<S, W>,
+    images: &[Vec<u8>],
+) {
     // A save that only programs: the log holds a few images.
     for image in &images[..3] {
         apply(&mut flash, Op::Save(image)).unwrap();
     }
     let cuts = cut_everywhere(&flash, Op::Save(&images[3]), &images[2], &images[4]);
     assert_eq!(cuts.erases, 0);
-    assert!(cuts.operations as usize >= CHECKPOINT_LEN / W, "{} operations in a save", cuts.operations);
-    println!("program-only save: power cut at each of its {} operations", cuts.operations);
+    assert!(
+        cuts.operations as usize >= CHECKPOINT_LEN / W,
+        "{} operations in a save",
+        cuts.operations
+    );
+    println!(
+        "program-only save: power cut at each of its {} operations",
+        cuts.operations
+    );
     // An invalidation.
     let cuts = cut_everywhere(&flash, Op::Invalidate, &images[2], &images[4]);
-    println!("invalidation: power cut at each of its {} operations", cuts.operations);
+    println!(
+        "invalidation: power cut at each of its {} operations",
+        cuts.operations
+    );
     // A save that erases: the log has gone round its sectors. A cut in its erase leaves the sector
     // torn, which the store erases again at start-up.
     let newest = fill_until_the_next_save_erases(&mut flash, &images[5..]) + 5;
-    let cuts = cut_everywhere(&flash, Op::Save(&images[newest + 1]), &images[newest], &images[newest + 2]);
-    assert!(cuts.erases >= 1 && cuts.re_erased >= 1, "{} erases, {} re-erased", cuts.erases, cuts.re_erased);
+    let cuts = cut_everywhere(
+        &flash,
+        Op::Save(&images[newest + 1]),
+        &images[newest],
+        &images[newest + 2],
+    );
+    assert!(
+        cuts.erases >= 1 && cuts.re_erased >= 1,
+        "{} erases, {} re-erased",
+        cuts.erases,
+        cuts.re_erased
+    );
     println!(
         "erasing save (after {} saves): power cut at each of its {} operations, {} erase(s), torn erases re-erased at start-up",
         newest + 1,

@@ -65,16 +65,29 @@ impl Stored for Learned {
         let updates = r.u32();
         let samples = r.u32();
         let start_time_s = r.f64();
-        ensure(start_time_s.is_finite(), CheckpointError::InvalidValue(Part::PaperStartTime))?;
+        ensure(
+            start_time_s.is_finite(),
+            CheckpointError::InvalidValue(Part::PaperStartTime),
+        )?;
         // The ring capacity does not matter to the quantization.
         let bound = i64::from(WindowAverage::<4, 1>::quantize(MAX_MAGNITUDE)) * i64::from(samples);
         let integrals: [i64; 4] = core::array::from_fn(|_| r.i64());
-        ensure(integrals.iter().all(|v| (-bound..=bound).contains(v)), CheckpointError::InvalidValue(Part::PaperIntegrals))?;
-        let mut kf: [ConstantStateKalman<f64, 3>; 4] = core::array::from_fn(|_| ConstantStateKalman::new([0.0; 3]));
+        ensure(
+            integrals.iter().all(|v| (-bound..=bound).contains(v)),
+            CheckpointError::InvalidValue(Part::PaperIntegrals),
+        )?;
+        let mut kf: [ConstantStateKalman<f64, 3>; 4] =
+            core::array::from_fn(|_| ConstantStateKalman::new([0.0; 3]));
         for k in kf.iter_mut() {
             *k = ConstantStateKalman::read(r, max_variance)?;
         }
-        Ok(Learned { updates, samples, start_time_s, integrals, kf })
+        Ok(Learned {
+            updates,
+            samples,
+            start_time_s,
+            integrals,
+            kf,
+        })
     }
 }
 
@@ -89,7 +102,9 @@ mod tests {
     #[test]
     fn a_tampered_paper_state_is_refused_with_a_typed_error() {
         let est = running(Method::Paper);
-        let MethodState::Paper(m) = est.method_for_test() else { unreachable!() };
+        let MethodState::Paper(m) = est.method_for_test() else {
+            unreachable!()
+        };
         let base = m.learned();
         let with = |edit: &dyn Fn(&mut Learned)| {
             let mut t = base.clone();
@@ -97,12 +112,24 @@ mod tests {
             written_and_read(&t, 1e12)
         };
         assert_eq!(with(&|_| {}), Ok(base.clone()));
-        assert_eq!(with(&|m| m.start_time_s = f64::NAN), Err(InvalidValue(Part::PaperStartTime)));
-        assert_eq!(with(&|m| m.integrals[1] = i64::MAX), Err(InvalidValue(Part::PaperIntegrals)));
+        assert_eq!(
+            with(&|m| m.start_time_s = f64::NAN),
+            Err(InvalidValue(Part::PaperStartTime))
+        );
+        assert_eq!(
+            with(&|m| m.integrals[1] = i64::MAX),
+            Err(InvalidValue(Part::PaperIntegrals))
+        );
         // Regression, fuzz target `checkpoint_restore`: the first filter's b2 state with its top
         // byte flipped (finite, ~1e300 in f64) was accepted, and the next update moved x1 beyond
         // f32 range. The Kalman filter's checks (see `kalman/checkpoint.rs`) refuse it.
-        let kf = ConstantStateKalman::from_parts([0.0, 0.0, 1e300], [[1e-6, 0.0, 0.0], [0.0, 1e-6, 0.0], [0.0, 0.0, 1e-6]]);
-        assert_eq!(with(&|m| m.kf[0] = kf.clone()), Err(InvalidValue(Part::KalmanState)));
+        let kf = ConstantStateKalman::from_parts(
+            [0.0, 0.0, 1e300],
+            [[1e-6, 0.0, 0.0], [0.0, 1e-6, 0.0], [0.0, 0.0, 1e-6]],
+        );
+        assert_eq!(
+            with(&|m| m.kf[0] = kf.clone()),
+            Err(InvalidValue(Part::KalmanState))
+        );
     }
 }

@@ -131,7 +131,11 @@ pub fn persistence_blocks(window_entries: u32, entry_s: Real) -> u32 {
     // ceil without libm: the ratio is positive and small.
     let ratio = passing / half;
     let whole = ratio as u32;
-    3 + if (whole as Real) < ratio { whole + 1 } else { whole }
+    3 + if (whole as Real) < ratio {
+        whole + 1
+    } else {
+        whole
+    }
 }
 
 /// What a block is tested against, from the method's state at the block's end.
@@ -225,7 +229,13 @@ impl ChangeDetector {
 
     /// The learned lag-one correlation of each channel's block means (see "Correlated blocks").
     pub fn block_correlation(&self) -> [Real; 4] {
-        core::array::from_fn(|ch| if self.mean_square_rad2[ch] > 0.0 { self.lag_product_rad2[ch] / self.mean_square_rad2[ch] } else { 0.0 })
+        core::array::from_fn(|ch| {
+            if self.mean_square_rad2[ch] > 0.0 {
+                self.lag_product_rad2[ch] / self.mean_square_rad2[ch]
+            } else {
+                0.0
+            }
+        })
     }
 
     /// Whether some channel is in a run (its last block beyond half the smallest step's shift).
@@ -247,7 +257,12 @@ impl ChangeDetector {
 
     /// Adds one update of `pair` (0 pitch, 1 roll): its two channels' post-fit residuals, rad.
     /// At the end of a block of `updates_per_block` updates, returns the block's means.
-    pub fn accumulate(&mut self, pair: usize, residual_rad: [Real; 2], updates_per_block: u32) -> Option<[Real; 2]> {
+    pub fn accumulate(
+        &mut self,
+        pair: usize,
+        residual_rad: [Real; 2],
+        updates_per_block: u32,
+    ) -> Option<[Real; 2]> {
         let pair = pair.min(1);
         self.block_sum[2 * pair] += residual_rad[0];
         self.block_sum[2 * pair + 1] += residual_rad[1];
@@ -257,7 +272,10 @@ impl ChangeDetector {
         }
         let inv_n = 1.0 / self.block_updates[pair] as Real;
         self.block_updates[pair] = 0;
-        let means = [self.block_sum[2 * pair] * inv_n, self.block_sum[2 * pair + 1] * inv_n];
+        let means = [
+            self.block_sum[2 * pair] * inv_n,
+            self.block_sum[2 * pair + 1] * inv_n,
+        ];
         self.block_sum[2 * pair] = 0.0;
         self.block_sum[2 * pair + 1] = 0.0;
         Some(means)
@@ -271,7 +289,13 @@ impl ChangeDetector {
 
     /// Tests a block of `pair` whose means are `block_rad` and learns from it (see the module doc);
     /// `gains` are the pair's channel gains. Returns the change declared, if any.
-    pub fn test(&mut self, pair: usize, block_rad: [Real; 2], gains: [Real; 2], ctx: &BlockContext) -> Option<Alarm> {
+    pub fn test(
+        &mut self,
+        pair: usize,
+        block_rad: [Real; 2],
+        gains: [Real; 2],
+        ctx: &BlockContext,
+    ) -> Option<Alarm> {
         let pair = pair.min(1);
         let learned = self.learned_blocks[pair];
         let testing = ctx.armed && learned >= MIN_VARIANCE_BLOCKS;
@@ -295,7 +319,8 @@ impl ChangeDetector {
                 if llr > 0.0 {
                     self.llr[ch][dir] += llr;
                     self.run[ch][dir] = self.run[ch][dir].saturating_add(1);
-                    declared |= self.llr[ch][dir] >= LLR_THRESHOLD && self.run[ch][dir] >= ctx.persistence_blocks;
+                    declared |= self.llr[ch][dir] >= LLR_THRESHOLD
+                        && self.run[ch][dir] >= ctx.persistence_blocks;
                 } else {
                     self.llr[ch][dir] = 0.0;
                     self.run[ch][dir] = 0;
@@ -303,7 +328,9 @@ impl ChangeDetector {
                 // Held while the run is shorter than a passing disturbance can make it; a longer
                 // one is a change (declared) or an inconsistency the filter must work through.
                 let run = self.run[ch][0].max(self.run[ch][1]);
-                self.holding[ch] = run > 0 && run < ctx.persistence_blocks && b * b > HOLD_SIGMAS * HOLD_SIGMAS * var;
+                self.holding[ch] = run > 0
+                    && run < ctx.persistence_blocks
+                    && b * b > HOLD_SIGMAS * HOLD_SIGMAS * var;
                 self.widening_rad[ch] = if b * b > 4.0 * var && gains[k] > 1e-6 {
                     ((b.abs() - 2.0 * sqrt(var)) / gains[k]).min(ctx.max_widening_rad)
                 } else {
@@ -313,7 +340,11 @@ impl ChangeDetector {
             // A block that holds the filter is a disturbance or a change, not the blocks' noise.
             if ctx.settled && !self.holding[ch] {
                 // The first block has no variance to be clipped against yet.
-                let b2 = if learned == 0 { b * b } else { (b * b).min(WINSOR_SIGMAS * WINSOR_SIGMAS * var) };
+                let b2 = if learned == 0 {
+                    b * b
+                } else {
+                    (b * b).min(WINSOR_SIGMAS * WINSOR_SIGMAS * var)
+                };
                 self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) * weight;
                 // The product with the previous block, both clipped alike: the lag-one covariance.
                 if learned > 0 {
@@ -333,7 +364,10 @@ impl ChangeDetector {
         if !declared {
             return None;
         }
-        let mut alarm = Alarm { changed: [false; 4], run_blocks: 0 };
+        let mut alarm = Alarm {
+            changed: [false; 4],
+            run_blocks: 0,
+        };
         for ch in 0..4 {
             let run = self.run[ch][0].max(self.run[ch][1]);
             alarm.changed[ch] = run > 0;
@@ -352,7 +386,10 @@ mod tests {
 
     impl Noise {
         fn uniform(&mut self) -> f64 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
         }
 
@@ -380,9 +417,18 @@ mod tests {
 
     /// Feeds `blocks` block means of channel 0 (`shift(k) + noise`, channel 1 noise only), one
     /// block per call of `test`; returns the block at which a change was declared, if any.
-    fn run(d: &mut ChangeDetector, blocks: usize, shift: impl Fn(usize) -> Real, noise: &mut Noise, ctx: &BlockContext) -> Option<(usize, Alarm)> {
+    fn run(
+        d: &mut ChangeDetector,
+        blocks: usize,
+        shift: impl Fn(usize) -> Real,
+        noise: &mut Noise,
+        ctx: &BlockContext,
+    ) -> Option<(usize, Alarm)> {
         for k in 0..blocks {
-            let b = [shift(k) + SIGMA * noise.gaussian() as Real, SIGMA * noise.gaussian() as Real];
+            let b = [
+                shift(k) + SIGMA * noise.gaussian() as Real,
+                SIGMA * noise.gaussian() as Real,
+            ];
             if let Some(alarm) = d.test(0, b, [GAIN, GAIN], ctx) {
                 return Some((k, alarm));
             }
@@ -414,9 +460,12 @@ mod tests {
         let mut d = learned(&mut noise, &ctx);
         // 20,000 more blocks (the blocks of four years at a 480 s period, per channel): nothing.
         assert_eq!(run(&mut d, 20_000, |_| 0.0, &mut noise, &ctx), None);
-        let learned_sigma = libm::sqrtf(d.block_variance(0, 0.0) as f32) as Real;
+        let learned_sigma = libm::sqrtf(d.block_variance(0, 0.0)) as Real;
         // A mean square of 64 blocks (clipped at 3 sigma: 97 % of the variance): within 25 %.
-        assert!((learned_sigma / SIGMA - 1.0).abs() < 0.25, "{learned_sigma}");
+        assert!(
+            (learned_sigma / SIGMA - 1.0).abs() < 0.25,
+            "{learned_sigma}"
+        );
         assert!(!d.holding() && !d.in_run());
     }
 
@@ -431,7 +480,10 @@ mod tests {
         let mut held = 0;
         let mut declared = None;
         for k in 0..10 {
-            let b = [shift + SIGMA * noise.gaussian() as Real, SIGMA * noise.gaussian() as Real];
+            let b = [
+                shift + SIGMA * noise.gaussian() as Real,
+                SIGMA * noise.gaussian() as Real,
+            ];
             if let Some(alarm) = d.test(0, b, [GAIN, GAIN], &ctx) {
                 declared = Some((k, alarm));
                 break;
@@ -439,12 +491,22 @@ mod tests {
             held += usize::from(d.holding());
             // While it builds up, the 1-sigma of x1 is widened to more than half the step: the
             // error is within 2 sigma.
-            assert!(d.widening_rad()[0] > 0.5 * ctx.step_rad, "{}", d.widening_rad()[0]);
+            assert!(
+                d.widening_rad()[0] > 0.5 * ctx.step_rad,
+                "{}",
+                d.widening_rad()[0]
+            );
         }
         let (k, alarm) = declared.expect("declared");
         assert_eq!(k, 4);
         assert_eq!(held, 4);
-        assert_eq!(alarm, Alarm { changed: [true, false, false, false], run_blocks: 5 });
+        assert_eq!(
+            alarm,
+            Alarm {
+                changed: [true, false, false, false],
+                run_blocks: 5
+            }
+        );
     }
 
     #[test]
@@ -458,10 +520,16 @@ mod tests {
         // A disturbance of 4 blocks, 100 times the step's shift, every 20 blocks: held while it
         // lasts, never declared.
         let mut d = learned(&mut noise, &ctx);
-        let pulse = |k: usize| if k % 20 < 4 { 100.0 * GAIN * ctx.step_rad } else { 0.0 };
+        let pulse = |k: usize| {
+            if k % 20 < 4 {
+                100.0 * GAIN * ctx.step_rad
+            } else {
+                0.0
+            }
+        };
         assert_eq!(run(&mut d, 2_000, pulse, &mut noise, &ctx), None);
         // The block variance stayed that of the noise: the blocks that held are left out.
-        let learned_sigma = libm::sqrtf(d.block_variance(0, 0.0) as f32) as Real;
+        let learned_sigma = libm::sqrtf(d.block_variance(0, 0.0)) as Real;
         assert!(learned_sigma < 2.0 * SIGMA, "{learned_sigma}");
     }
 

@@ -24,7 +24,9 @@
 use super::change::checkpoint::BlockVariance;
 use super::Windowed;
 use crate::checkpoint::wire::{Reader, Writer};
-use crate::checkpoint::{ensure, within, within_non_negative, CheckpointError, Part, Stored, MAX_RESIDUAL, MAX_STATE, R};
+use crate::checkpoint::{
+    ensure, within, within_non_negative, CheckpointError, Part, Stored, MAX_RESIDUAL, MAX_STATE, R,
+};
 use crate::kalman::ConstantStateKalman;
 use crate::Real;
 
@@ -154,10 +156,20 @@ impl Stored for Learned {
         for c in m.long_count {
             w.u32(c);
         }
-        for v in m.noise_scale.into_iter().chain(m.drift_share).chain(m.reported_sigma_rad) {
+        for v in m
+            .noise_scale
+            .into_iter()
+            .chain(m.drift_share)
+            .chain(m.reported_sigma_rad)
+        {
             w.real(v);
         }
-        let bits = m.channel_mismatch.iter().chain(&m.relearning).enumerate().fold(0u8, |b, (i, f)| b | (u8::from(*f) << i));
+        let bits = m
+            .channel_mismatch
+            .iter()
+            .chain(&m.relearning)
+            .enumerate()
+            .fold(0u8, |b, (i, f)| b | (u8::from(*f) << i));
         w.u8(bits);
         for v in m.held_x_rad.into_iter().chain(m.spread_rad2) {
             w.real(v);
@@ -173,7 +185,10 @@ impl Stored for Learned {
         let kf = ConstantStateKalman::read(r, max_variance)?;
         let residual_mean: [Real; 4] = core::array::from_fn(|_| r.real());
         let next_pair = r.u8();
-        ensure(next_pair <= 1, CheckpointError::InvalidValue(Part::Residuals))?;
+        ensure(
+            next_pair <= 1,
+            CheckpointError::InvalidValue(Part::Residuals),
+        )?;
         // One value built in place, then its later fields read into it: a second `Learned`
         // made from this one (`..m`) took its size again on the restore's stack.
         let mut m = Learned {
@@ -205,18 +220,38 @@ impl Stored for Learned {
         }
         m.spread_count = [r.u32(), r.u32()];
         m.change = BlockVariance::read(r, ())?;
-        ensure(bits & 0xC0 == 0, CheckpointError::InvalidValue(Part::Residuals))?;
-        let in_range = m.residual_mean.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
+        ensure(
+            bits & 0xC0 == 0,
+            CheckpointError::InvalidValue(Part::Residuals),
+        )?;
+        let in_range = m
+            .residual_mean
+            .iter()
+            .all(|v| within(*v, MAX_RESIDUAL as Real))
             && m.gains.iter().all(|g| within_non_negative(*g, 4.0))
-            && m.product_variance_rad2.iter().all(|v| within_non_negative(*v, MAX_PRODUCT_VARIANCE_RAD2))
-            && m.residual_mean_long.iter().all(|v| within(*v, MAX_RESIDUAL as Real))
-            && m.residual_power.iter().chain(&m.noise_scale).all(|v| within_non_negative(*v, MAX_NOISE_SCALE))
+            && m.product_variance_rad2
+                .iter()
+                .all(|v| within_non_negative(*v, MAX_PRODUCT_VARIANCE_RAD2))
+            && m.residual_mean_long
+                .iter()
+                .all(|v| within(*v, MAX_RESIDUAL as Real))
+            && m.residual_power
+                .iter()
+                .chain(&m.noise_scale)
+                .all(|v| within_non_negative(*v, MAX_NOISE_SCALE))
             && m.drift_share.iter().all(|v| within_non_negative(*v, 1.0))
-            && m.reported_sigma_rad.iter().all(|v| within_non_negative(*v, Real::MAX))
-            && m.spread_rad2.iter().all(|v| within_non_negative(*v, (MAX_RESIDUAL * MAX_RESIDUAL) as Real));
+            && m.reported_sigma_rad
+                .iter()
+                .all(|v| within_non_negative(*v, Real::MAX))
+            && m.spread_rad2
+                .iter()
+                .all(|v| within_non_negative(*v, (MAX_RESIDUAL * MAX_RESIDUAL) as Real));
         ensure(in_range, CheckpointError::InvalidValue(Part::Residuals))?;
         let held_in_range = m.held_x_rad.iter().all(|v| within(*v, MAX_STATE as Real));
-        ensure(held_in_range, CheckpointError::InvalidValue(Part::ChangeDetector))?;
+        ensure(
+            held_in_range,
+            CheckpointError::InvalidValue(Part::ChangeDetector),
+        )?;
         Ok(m)
     }
 }
@@ -232,7 +267,9 @@ mod tests {
     #[test]
     fn a_tampered_windowed_state_is_refused_with_a_typed_error() {
         let est = running(Method::Windowed);
-        let MethodState::Windowed(m) = est.method_for_test() else { unreachable!() };
+        let MethodState::Windowed(m) = est.method_for_test() else {
+            unreachable!()
+        };
         let base = m.learned();
         let with = |edit: &dyn Fn(&mut Learned)| {
             let mut t = base.clone();
@@ -240,23 +277,56 @@ mod tests {
             written_and_read(&t, 1e12)
         };
         assert_eq!(with(&|_| {}), Ok(base.clone()));
-        assert_eq!(with(&|m| m.gains[3] = -0.5), Err(InvalidValue(Part::Residuals)));
-        assert_eq!(with(&|m| m.gains[1] = Real::NAN), Err(InvalidValue(Part::Residuals)));
-        assert_eq!(with(&|m| m.next_pair = 2), Err(InvalidValue(Part::Residuals)));
-        assert_eq!(with(&|m| m.drift_share[0] = 1.5), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(
+            with(&|m| m.gains[3] = -0.5),
+            Err(InvalidValue(Part::Residuals))
+        );
+        assert_eq!(
+            with(&|m| m.gains[1] = Real::NAN),
+            Err(InvalidValue(Part::Residuals))
+        );
+        assert_eq!(
+            with(&|m| m.next_pair = 2),
+            Err(InvalidValue(Part::Residuals))
+        );
+        assert_eq!(
+            with(&|m| m.drift_share[0] = 1.5),
+            Err(InvalidValue(Part::Residuals))
+        );
         // Regression, fuzz target `checkpoint_restore`: finite but absurd residuals and gains
         // (a flipped top byte) were accepted and overflowed the outputs.
-        assert_eq!(with(&|m| m.residual_mean[2] = 1e30), Err(InvalidValue(Part::Residuals)));
-        assert_eq!(with(&|m| m.gains[0] = 1e30), Err(InvalidValue(Part::Residuals)));
+        assert_eq!(
+            with(&|m| m.residual_mean[2] = 1e30),
+            Err(InvalidValue(Part::Residuals))
+        );
+        assert_eq!(
+            with(&|m| m.gains[0] = 1e30),
+            Err(InvalidValue(Part::Residuals))
+        );
         // A zero gain (a window whose reference does not move) is a state the estimator can be in.
         assert!(with(&|m| m.gains[3] = 0.0).is_ok());
         // What the report and the change detector keep.
-        assert_eq!(with(&|m| m.reported_sigma_rad[1] = -1e-6), Err(InvalidValue(Part::Residuals)));
-        assert_eq!(with(&|m| m.reported_sigma_rad[2] = Real::INFINITY), Err(InvalidValue(Part::Residuals)));
-        assert_eq!(with(&|m| m.spread_rad2[0] = -1e-9), Err(InvalidValue(Part::Residuals)));
-        assert_eq!(with(&|m| m.held_x_rad[3] = 1e9), Err(InvalidValue(Part::ChangeDetector)));
+        assert_eq!(
+            with(&|m| m.reported_sigma_rad[1] = -1e-6),
+            Err(InvalidValue(Part::Residuals))
+        );
+        assert_eq!(
+            with(&|m| m.reported_sigma_rad[2] = Real::INFINITY),
+            Err(InvalidValue(Part::Residuals))
+        );
+        assert_eq!(
+            with(&|m| m.spread_rad2[0] = -1e-9),
+            Err(InvalidValue(Part::Residuals))
+        );
+        assert_eq!(
+            with(&|m| m.held_x_rad[3] = 1e9),
+            Err(InvalidValue(Part::ChangeDetector))
+        );
         assert!(with(&|m| m.relearning = [true, false]).is_ok());
         // The Kalman filter's checks (see `kalman/checkpoint.rs`) apply to the method's.
-        assert_eq!(with(&|m| m.kf = ConstantStateKalman::new([Real::NAN; 4])), Err(InvalidValue(Part::KalmanCovariance)));
+        assert_eq!(
+            with(&|m| m.kf = ConstantStateKalman::new([Real::NAN; 4])),
+            Err(InvalidValue(Part::KalmanCovariance))
+        );
     }
 }

@@ -43,7 +43,9 @@ impl Flash {
     pub fn open(environment: Environment, flash: pac::FLASH) -> Option<Flash> {
         match environment {
             Environment::Silicon => InternalFlash::new(flash).map(Flash::Internal),
-            Environment::Qemu => SemihostedFlash::open(super::QEMU_CPU_CLOCK_HZ).map(Flash::Semihosted),
+            Environment::Qemu => {
+                SemihostedFlash::open(super::QEMU_CPU_CLOCK_HZ).map(Flash::Semihosted)
+            }
         }
     }
 }

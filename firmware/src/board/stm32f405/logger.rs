@@ -94,7 +94,9 @@ unsafe impl defmt::Logger for Logger {
             if matches!(sink, Sink::Unopened) {
                 *sink = match super::environment() {
                     Environment::Silicon => Sink::Rtt(open_rtt()),
-                    Environment::Qemu => semihosting::io::stdout().map_or(Sink::Nowhere, Sink::Semihosting),
+                    Environment::Qemu => {
+                        semihosting::io::stdout().map_or(Sink::Nowhere, Sink::Semihosting)
+                    }
                 };
             }
             let encoder = &mut *STATE.encoder.get();

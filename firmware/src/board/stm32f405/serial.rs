@@ -67,9 +67,14 @@ pub fn init(
     let (tx, mut rx) = serial.split();
     let ends = match environment {
         Environment::Qemu => {
-            let Some(ring) = interrupt_rx::init() else { return Ok(None) };
+            let Some(ring) = interrupt_rx::init() else {
+                return Ok(None);
+            };
             rx.listen();
-            (Transmitter::Blocking(BlockingWriter::new(tx)), Receiver::Interrupt(ring))
+            (
+                Transmitter::Blocking(BlockingWriter::new(tx)),
+                Receiver::Interrupt(ring),
+            )
         }
         Environment::Silicon => {
             let streams = StreamsTuple::new(dma2, rcc);
@@ -176,7 +181,13 @@ impl DmaReceiver {
     fn byte_at(i: usize) -> u8 {
         // SAFETY: a volatile read of a byte the DMA has written (`DmaRing` only asks for those);
         // the index is below the buffer's length (the ring's positions are modulo it).
-        unsafe { read_volatile(addr_of!(DMA_RX_BUFFER).cast::<u8>().add(i % DMA_RX_BUFFER_BYTES)) }
+        unsafe {
+            read_volatile(
+                addr_of!(DMA_RX_BUFFER)
+                    .cast::<u8>()
+                    .add(i % DMA_RX_BUFFER_BYTES),
+            )
+        }
     }
 
     fn update(&mut self) {
@@ -309,7 +320,8 @@ pub fn usart1_interrupt(environment: Environment) {
         }
         Environment::Silicon => {
             DMA_STATS.count_line_errors(errors);
-            let flagged = errors.overrun || errors.framing || errors.noise || sr.idle().bit_is_set();
+            let flagged =
+                errors.overrun || errors.framing || errors.noise || sr.idle().bit_is_set();
             if flagged && sr.rxne().bit_is_clear() {
                 let _ = usart.dr().read();
             }

@@ -9,7 +9,9 @@
 
 use super::{ChangeDetector, VARIANCE_BLOCKS};
 use crate::checkpoint::wire::{Reader, Writer};
-use crate::checkpoint::{ensure, within, within_non_negative, CheckpointError, Part, Stored, MAX_RESIDUAL, R};
+use crate::checkpoint::{
+    ensure, within, within_non_negative, CheckpointError, Part, Stored, MAX_RESIDUAL, R,
+};
 use crate::Real;
 
 /// What a restart keeps of the change detector (its fields of the same names).
@@ -23,7 +25,11 @@ pub(crate) struct BlockVariance {
 impl ChangeDetector {
     /// What a restart keeps.
     pub(crate) fn learned(&self) -> BlockVariance {
-        BlockVariance { mean_square_rad2: self.mean_square_rad2, lag_product_rad2: self.lag_product_rad2, learned_blocks: self.learned_blocks }
+        BlockVariance {
+            mean_square_rad2: self.mean_square_rad2,
+            lag_product_rad2: self.lag_product_rad2,
+            learned_blocks: self.learned_blocks,
+        }
     }
 
     /// Takes over what a restart keeps; the blocks start again.
@@ -40,7 +46,11 @@ impl Stored for BlockVariance {
     type Context<'a> = ();
 
     fn write(&self, w: &mut Writer<'_>) {
-        for v in self.mean_square_rad2.into_iter().chain(self.lag_product_rad2) {
+        for v in self
+            .mean_square_rad2
+            .into_iter()
+            .chain(self.lag_product_rad2)
+        {
             w.real(v);
         }
         for c in self.learned_blocks {
@@ -55,7 +65,10 @@ impl Stored for BlockVariance {
             learned_blocks: [r.u32(), r.u32()],
         };
         let bound = (MAX_RESIDUAL * MAX_RESIDUAL) as Real;
-        let ok = l.mean_square_rad2.iter().all(|v| within_non_negative(*v, bound))
+        let ok = l
+            .mean_square_rad2
+            .iter()
+            .all(|v| within_non_negative(*v, bound))
             && l.lag_product_rad2.iter().all(|v| within(*v, bound))
             && l.learned_blocks.iter().all(|c| *c <= VARIANCE_BLOCKS);
         ensure(ok, CheckpointError::InvalidValue(Part::ChangeDetector))?;
@@ -86,6 +99,9 @@ mod tests {
         assert_eq!(with(&|l| l.mean_square_rad2[0] = Real::NAN), refused);
         assert_eq!(with(&|l| l.mean_square_rad2[3] = 1e30), refused);
         assert_eq!(with(&|l| l.lag_product_rad2[1] = Real::INFINITY), refused);
-        assert_eq!(with(&|l| l.learned_blocks[1] = VARIANCE_BLOCKS + 1), refused);
+        assert_eq!(
+            with(&|l| l.learned_blocks[1] = VARIANCE_BLOCKS + 1),
+            refused
+        );
     }
 }
