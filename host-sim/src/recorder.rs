@@ -87,43 +87,26 @@ impl Recording {
 }
 
 /// Why recorder settings cannot make a log; each names the command-line option to change.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum RecorderError {
     /// The fraction of rows dropped is not in `[0, 1)`.
+    #[error("--drop-fraction must be in [0, 1), got {0}")]
     DropFraction(f64),
     /// The time offset is beyond [`MAX_TIME_OFFSET_S`].
+    #[error("--time-offset must be within +-{MAX_TIME_OFFSET_S} s, got {value_s}")]
     TimeOffset { value_s: f64 },
     /// The jitter is negative, or not below half the sample interval (`limit_s`), so that stamps
     /// could leave their order.
+    #[error("--time-jitter must be >= 0 and below half the sample interval ({limit_s} s) so stamps stay in order, got {value_s}")]
     TimeJitter { value_s: f64, limit_s: f64 },
     /// The outages (each [`OUTAGE_S`], `gap_s` apart) do not fit in the log.
+    #[error("--outages: {count} outages of {OUTAGE_S} s (and {gap_s} s between them) do not fit in {duration_s} s")]
     OutagesDoNotFit {
         count: usize,
         gap_s: f64,
         duration_s: f64,
     },
 }
-
-impl std::fmt::Display for RecorderError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match *self {
-            RecorderError::DropFraction(v) => write!(f, "--drop-fraction must be in [0, 1), got {v}"),
-            RecorderError::TimeOffset { value_s } => {
-                write!(f, "--time-offset must be within +-{MAX_TIME_OFFSET_S} s, got {value_s}")
-            }
-            RecorderError::TimeJitter { value_s, limit_s } => write!(
-                f,
-                "--time-jitter must be >= 0 and below half the sample interval ({limit_s} s) so stamps stay in order, got {value_s}"
-            ),
-            RecorderError::OutagesDoNotFit { count, gap_s, duration_s } => write!(
-                f,
-                "--outages: {count} outages of {OUTAGE_S} s (and {gap_s} s between them) do not fit in {duration_s} s"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for RecorderError {}
 
 /// What the recorder is asked to do, before the outages are placed.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
