@@ -12,8 +12,9 @@
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
 #   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
 #      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
-#   5. clippy on the firmware (each board), the link code and the C library, which deny every
-#      panicking construct;
+#   5. the gates: `cargo fmt --all --check`; clippy with -D warnings on the host (every crate, all
+#      targets) and on the firmware (each board), the link code and the C library, which deny every
+#      panicking construct (the workspace's lints, `[workspace.lints]`, apply to every crate);
 #   5b. the C examples: examples/c/replay.c on a short log with every kind of bad row, built with
 #      the host's cc and with arm-none-eabi-gcc for a Cortex-M4F run in QEMU, both estimates
 #      CSVs byte-identical to `host-sim estimate`'s (scripts/c-example.sh); the 1 Hz navigation
@@ -36,6 +37,9 @@ if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
 fi
 if ! cargo clippy --version >/dev/null 2>&1; then
     rustup component add clippy
+fi
+if ! cargo fmt --version >/dev/null 2>&1; then
+    rustup component add rustfmt
 fi
 # The firmware's linker (.cargo/config.toml): puts the stack below the statics.
 if ! command -v flip-link >/dev/null 2>&1; then
@@ -69,12 +73,15 @@ cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-d
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
 
-log "no panicking path on the link or through the C API: clippy's deny(unwrap_used, expect_used, indexing_slicing, panic)"
-# The firmware, link-protocol, estimator-ffi and estimator-core deny these lints in their sources; only clippy
-# enforces them, so it runs here (warnings of other lints do not fail the run).
-cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware
-cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405
-cargo clippy -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware
+log "gates: rustfmt, and clippy with every warning an error (host, all targets; the firmware for each board, the link and the C library for the target)"
+# Clippy also enforces what the firmware, link-protocol, estimator-ffi and estimator-core deny in
+# their sources: unwrap_used, expect_used, indexing_slicing, panic (no panicking path on the link or
+# through the C API); the workspace's [workspace.lints] apply to every crate.
+cargo fmt --all --check
+cargo clippy --workspace --all-targets -- -D warnings
+cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware -- -D warnings
+cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405 -- -D warnings
+cargo clippy -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware -- -D warnings
 
 log "the C library: examples/c/replay.c on the host and on a Cortex-M4F in QEMU, byte-identical to host-sim estimate"
 # A 1500 s sea log with Unix stamps, jitter and lost rows, then everything a trial's export may

@@ -512,6 +512,8 @@ mod tests {
         let heel = (3.0f64).to_radians() as Real;
         let mut sums = CorrelationSums::default();
         for k in 0..480 {
+            // The positions to four decimals, as an encoder reads them (not the exact constants).
+            #[allow(clippy::approx_constant)]
             let rho = [0.0, 1.5708, 3.1416, 4.7124][(k * 7 / 480) % 4];
             sums.add(
                 &quantized(heel, -heel, &angles(rho, 0.4, 0.6)),

@@ -487,7 +487,7 @@ impl GapFiller {
     /// squared prediction error. Every [`FILL_ERROR_EVERY`]th index only: the mean square of a sea
     /// state needs no more, and the step's cost stays low.
     fn measure_fill_error(&mut self, s: &GridSample, pos: usize) {
-        if s.index % FILL_ERROR_EVERY != 0 || pos < NEIGHBOURS {
+        if !s.index.is_multiple_of(FILL_ERROR_EVERY) || pos < NEIGHBOURS {
             return;
         }
         // The eleven held samples centred on `s`, in one pass over the ring's (at most two) runs

@@ -14,8 +14,8 @@
 //! rank-one change of the identity, so the products are formed without building `A`:
 //! `D = A P = P - K b'` (with `b = P h`), then `A P A' = D - (D h) K'`, each `O(N^2)` instead of
 //! the `O(N^3)` of dense products. Together with the Newton square root of [`crate::math`], this
-//! took the whole step on the Cortex-M4F from 6,680 to 4,720 instructions (maximum over a 6000 s
-//! stream, `host-sim/tests/qemu/qemu_budgets.rs`). Only the upper triangle is computed; the lower one
+//! is what brought the step on the Cortex-M4F within its instruction budget (measured by
+//! `host-sim/tests/qemu/qemu_budgets.rs`; the figures in docs/firmware.md). Only the upper triangle is computed; the lower one
 //! is its mirror, so the result is symmetric by construction. A measurement whose innovation variance is not positive and
 //! finite, or whose value is not finite, is refused and leaves the filter untouched.
 //!

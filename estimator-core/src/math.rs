@@ -9,7 +9,7 @@
 //! # Sine and cosine
 //!
 //! The `libm` crate's `sinf`/`cosf` compute in `f64`, which the Cortex-M4F runs in software
-//! (about 2,350 instructions a pair, measured under QEMU). The `f32` build therefore uses
+//! (a pair costs about half the whole step's budget, measured under QEMU). The `f32` build therefore uses
 //! its own [`sin_cos`]: Cody-Waite reduction by pi/2 with a two-part constant, then the Cephes
 //! single-precision minimax polynomials on [-pi/4, pi/4]. It uses only `+`, `-`, `*` and a
 //! round-to-nearest, so it gives bit-identical results on the host and on the target. Its error is

@@ -345,7 +345,7 @@ impl WindowLayout {
         }
         let smallest = period.div_ceil(capacity);
         for bin in smallest..=2 * smallest {
-            if period % bin == 0 && period / bin <= capacity {
+            if period.is_multiple_of(bin) && period / bin <= capacity {
                 return WindowLayout {
                     samples_per_entry: bin,
                     entries: (period / bin) as usize,

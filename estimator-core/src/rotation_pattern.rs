@@ -368,13 +368,13 @@ impl RotationMonitor {
                         event = PatternEvent::PeriodKnown(period);
                     }
                 }
-                (Some(period), Some(k)) if self.timing_pass == Some((m as u8, dir as u8)) => {
-                    if self.features.is_some()
-                        && !pass_on_time(pass.wrapping_sub(k), period, limits)
-                    {
-                        self.forget();
-                        return Err(RotationFault::RateMismatch);
-                    }
+                (Some(period), Some(k))
+                    if self.timing_pass == Some((m as u8, dir as u8))
+                        && self.features.is_some()
+                        && !pass_on_time(pass.wrapping_sub(k), period, limits) =>
+                {
+                    self.forget();
+                    return Err(RotationFault::RateMismatch);
                 }
                 (Some(_), _) if self.timing_pass.is_none() => {
                     self.timing_pass = Some((m as u8, dir as u8))

@@ -539,7 +539,7 @@ fn an_image_of_the_previous_format_version_is_refused_as_such() {
 
 #[test]
 fn an_image_is_at_most_2_kib_and_a_longer_buffer_is_fine() {
-    assert!(CHECKPOINT_LEN <= 2048);
+    const { assert!(CHECKPOINT_LEN <= 2048) };
     let est: Estimator = Estimator::new(Config::default()).unwrap();
     let mut big = vec![0xAAu8; CHECKPOINT_LEN + 100];
     assert_eq!(est.checkpoint(&mut big), Ok(CHECKPOINT_LEN));

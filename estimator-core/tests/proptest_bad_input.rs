@@ -10,6 +10,7 @@
 //!   counted under that reason and changes nothing else in the state (the whole state compared,
 //!   the rejection counters aside);
 //! - every number in an accepted step's output is finite.
+//!
 //! After every sequence: accepted + rejected = samples fed, the window's running sums equal the
 //! sums of its entries, and the covariance is symmetric positive definite.
 
@@ -134,7 +135,7 @@ fn expected(
         if dt < -2.0 * interval_s {
             return Ok(());
         }
-        if !(dt > 0.0) {
+        if dt.is_nan() || dt <= 0.0 {
             return Err(SampleError::TimeNotIncreasing);
         }
         if (dt / interval_s).round() < 1.0 {

@@ -109,7 +109,7 @@ fn positive_definite(p: &[[f64; 4]; 4]) -> bool {
         for j in 0..=i {
             let s: f64 = p[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
             if i == j {
-                if !(s > 0.0) {
+                if s.is_nan() || s <= 0.0 {
                     return false;
                 }
                 l[i][i] = s.sqrt();

@@ -60,3 +60,12 @@ pub const MPS2_AN386: FlashLayout = FlashLayout {
     sector_erase_s: None,
     byte_program_s: None,
 };
+
+/// Under QEMU, the host file (in QEMU's working directory, beside the emulated flash
+/// `rins-flash.bin`) that orders the emulated flash to cut the power: it holds a decimal number N,
+/// and the flash programs N more 256-byte pages and then stops the board. How a test cuts a save
+/// at an exact point; a board with real flash never looks for it.
+pub const EMULATED_FLASH_CUT_ORDER_FILE: &core::ffi::CStr = c"rins-flash.cut";
+
+/// QEMU's exit code when the emulated flash cuts the power on order.
+pub const EMULATED_FLASH_POWER_CUT_EXIT_CODE: i32 = 75;

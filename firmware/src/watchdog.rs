@@ -140,7 +140,7 @@ mod tests {
         const WRITE_SIZE: usize = 1;
         const ERASE_SIZE: usize = 1024;
         fn erase(&mut self, from: u32, to: u32) -> Result<(), NorFlashErrorKind> {
-            if from % 1024 != 0 || to % 1024 != 0 || to > 4096 {
+            if !from.is_multiple_of(1024) || !to.is_multiple_of(1024) || to > 4096 {
                 return Err(NorFlashErrorKind::NotAligned);
             }
             self.0.borrow_mut().push(Event::Erase(from, to));

@@ -92,7 +92,7 @@ fn line(frames: &[Vec<u8>]) -> Vec<(u64, u8)> {
 /// the save's interval.
 fn serve(t: u64, seq: u32, stalls: &mut Vec<(u64, u64)>) -> u64 {
     let mut t = t + STEP_NS + ANSWER_NS;
-    if seq % SAVE_EVERY_FRAMES == 0 {
+    if seq.is_multiple_of(SAVE_EVERY_FRAMES) {
         stalls.push((t, t + ERASE_MAX_NS + PROGRAM_MAX_NS));
         t += ERASE_MAX_NS + PROGRAM_MAX_NS;
     }
@@ -258,7 +258,7 @@ fn run_interrupt(count: u32) -> Outcome {
             }
         }
         let mut served = None;
-        while let Some(item) = reader.next() {
+        for item in reader.by_ref() {
             match receiver.push(item) {
                 Some(Ok(request)) => {
                     seqs.push(request.seq);

@@ -116,7 +116,7 @@ impl<const SECTOR: usize, const WORD: usize> FlashModel<SECTOR, WORD> {
 
     fn check(&self, offset: u32, len: usize, align: usize) -> Result<usize, NorFlashErrorKind> {
         let at = offset as usize;
-        if at % align != 0 || len % align != 0 {
+        if !at.is_multiple_of(align) || !len.is_multiple_of(align) {
             return Err(NorFlashErrorKind::NotAligned);
         }
         if at + len > self.bytes.len() {

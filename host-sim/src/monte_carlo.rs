@@ -67,58 +67,20 @@ impl Draw {
 }
 
 /// Why a Monte Carlo draw cannot make its scenarios.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum ScenarioError {
     /// The rotation scheme needs a longer period (its stops and turns do not fit).
+    #[error("the {scheme} scheme needs a rotation period of at least {min_period_s} s")]
     PeriodTooShortForScheme {
         scheme: &'static str,
         min_period_s: f64,
     },
     /// The log is shorter than one sample interval.
+    #[error("the log ({duration_s} s) is shorter than one sample interval ({interval_s} s)")]
     ShorterThanOneSample { duration_s: f64, interval_s: f64 },
     /// The recorder's settings.
-    Recorder(RecorderError),
-}
-
-impl From<RecorderError> for ScenarioError {
-    fn from(e: RecorderError) -> Self {
-        ScenarioError::Recorder(e)
-    }
-}
-
-impl std::fmt::Display for ScenarioError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ScenarioError::PeriodTooShortForScheme {
-                scheme,
-                min_period_s,
-            } => {
-                write!(
-                    f,
-                    "the {scheme} scheme needs a rotation period of at least {min_period_s} s"
-                )
-            }
-            ScenarioError::ShorterThanOneSample {
-                duration_s,
-                interval_s,
-            } => {
-                write!(
-                    f,
-                    "the log ({duration_s} s) is shorter than one sample interval ({interval_s} s)"
-                )
-            }
-            ScenarioError::Recorder(e) => e.fmt(f),
-        }
-    }
-}
-
-impl std::error::Error for ScenarioError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            ScenarioError::Recorder(e) => Some(e),
-            _ => None,
-        }
-    }
+    #[error(transparent)]
+    Recorder(#[from] RecorderError),
 }
 
 /// How the runs are drawn.

@@ -75,7 +75,7 @@ impl Recording {
         }
         let gap_s = f64::from(self.gap_rows) * interval_s;
         if !(self.gap_every_s.is_finite() && self.gap_every_s >= 0.0)
-            || (self.gap_every_s > 0.0 && !(gap_s < self.gap_every_s))
+            || (self.gap_every_s > 0.0 && gap_s >= self.gap_every_s)
         {
             return Err(RecorderError::RegularGaps {
                 every_s: self.gap_every_s,
@@ -95,7 +95,7 @@ impl Recording {
 
     /// Whether the row of sample `k` (instant `k * interval_s`) falls in a regular gap.
     pub fn in_regular_gap(&self, k: u64, interval_s: f64) -> bool {
-        if !(self.gap_every_s > 0.0) || self.gap_rows == 0 {
+        if self.gap_every_s.is_nan() || self.gap_every_s <= 0.0 || self.gap_rows == 0 {
             return false;
         }
         // Whole rows from the start of the gap period the instant is in (no drift from summing).
@@ -117,16 +117,20 @@ impl Recording {
 }
 
 /// Why recorder settings cannot make a log; each names the command-line option to change.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum RecorderError {
     /// The fraction of rows dropped is not in `[0, 1)`.
+    #[error("--drop-fraction must be in [0, 1), got {0}")]
     DropFraction(f64),
     /// The time offset is beyond [`MAX_TIME_OFFSET_S`].
+    #[error("--time-offset must be within +-{MAX_TIME_OFFSET_S} s, got {value_s}")]
     TimeOffset { value_s: f64 },
     /// The jitter is negative, or not below half the sample interval (`limit_s`), so that stamps
     /// could leave their order.
+    #[error("--time-jitter must be >= 0 and below half the sample interval ({limit_s} s) so stamps stay in order, got {value_s}")]
     TimeJitter { value_s: f64, limit_s: f64 },
     /// The outages (each [`OUTAGE_S`], `gap_s` apart) do not fit in the log.
+    #[error("--outages: {count} outages of {OUTAGE_S} s (and {gap_s} s between them) do not fit in {duration_s} s")]
     OutagesDoNotFit {
         count: usize,
         gap_s: f64,
@@ -134,37 +138,13 @@ pub enum RecorderError {
     },
     /// The regular gaps' period is negative or not finite, or their rows do not leave a row
     /// between two gaps.
+    #[error("--gap-every must be >= 0 s and longer than --gap-rows rows ({rows} x {interval_s} s), got {every_s}")]
     RegularGaps {
         every_s: f64,
         rows: u32,
         interval_s: f64,
     },
 }
-
-impl std::fmt::Display for RecorderError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match *self {
-            RecorderError::DropFraction(v) => write!(f, "--drop-fraction must be in [0, 1), got {v}"),
-            RecorderError::TimeOffset { value_s } => {
-                write!(f, "--time-offset must be within +-{MAX_TIME_OFFSET_S} s, got {value_s}")
-            }
-            RecorderError::TimeJitter { value_s, limit_s } => write!(
-                f,
-                "--time-jitter must be >= 0 and below half the sample interval ({limit_s} s) so stamps stay in order, got {value_s}"
-            ),
-            RecorderError::OutagesDoNotFit { count, gap_s, duration_s } => write!(
-                f,
-                "--outages: {count} outages of {OUTAGE_S} s (and {gap_s} s between them) do not fit in {duration_s} s"
-            ),
-            RecorderError::RegularGaps { every_s, rows, interval_s } => write!(
-                f,
-                "--gap-every must be >= 0 s and longer than --gap-rows rows ({rows} x {interval_s} s), got {every_s}"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for RecorderError {}
 
 /// What the recorder is asked to do, before the outages are placed.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -272,7 +272,7 @@ impl ScenarioParams {
     /// The scenario's defaults for `seed`. Phases (and for `sea` the spectrum components) are drawn
     /// from the seed; everything else is fixed.
     pub fn new(kind: ScenarioKind, seed: u64) -> ScenarioParams {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_0f_5ea);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0005_eed0_f5ea);
         let rotation_phase_deg = rng.gen_range(0.0..360.0);
         let platform_phase_deg = rng.gen_range(0.0..360.0);
         let base = ScenarioParams {

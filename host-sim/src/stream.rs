@@ -435,7 +435,7 @@ impl Progress {
     }
 
     pub(crate) fn update(&self, rows: u64, bytes: u64) {
-        if rows % 256 == 0 && !self.bar.is_hidden() {
+        if rows.is_multiple_of(256) && !self.bar.is_hidden() {
             let rate = rows as f64 / self.start.elapsed().as_secs_f64().max(1e-9);
             self.bar.set_position(bytes);
             self.bar

@@ -196,7 +196,7 @@ mod tests {
     fn oversized_frame_is_reported_once_and_resyncs() {
         let mut rx = Rx::new();
         let mut stream = std::vec![0u8];
-        stream.extend(std::iter::repeat(0x5A).take(1000));
+        stream.extend(core::iter::repeat_n(0x5A, 1000));
         stream.extend(frame(&sample(4.0)));
         let got = feed(&mut rx, &stream);
         assert_eq!(got, std::vec![Err(FrameError::Oversize), Ok(sample(4.0))]);
@@ -273,7 +273,11 @@ mod tests {
             x ^= x << 13;
             x ^= x >> 17;
             x ^= x << 5;
-            let b = if x % 17 == 0 { 0 } else { (x >> 8) as u8 };
+            let b = if x.is_multiple_of(17) {
+                0
+            } else {
+                (x >> 8) as u8
+            };
             let _ = rx.push_decode::<Request>(b);
         }
     }

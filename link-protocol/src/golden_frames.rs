@@ -44,32 +44,33 @@ fn counting(from: u8, to: u8) -> Vec<u8> {
 
 #[test]
 fn cobs_matches_the_published_examples_both_ways() {
-    let mut long_runs: Vec<(Vec<u8>, Vec<u8>)> = Vec::new();
-    // 01..FE: one full group, no empty group after it.
-    long_runs.push((
-        counting(0x01, 0xFE),
-        [std::vec![0xFF], counting(0x01, 0xFE)].concat(),
-    ));
-    // 00 01..FE
-    long_runs.push((
-        [std::vec![0x00], counting(0x01, 0xFE)].concat(),
-        [std::vec![0x01, 0xFF], counting(0x01, 0xFE)].concat(),
-    ));
-    // 01..FF: the full group, then a group for the last byte.
-    long_runs.push((
-        counting(0x01, 0xFF),
-        [std::vec![0xFF], counting(0x01, 0xFE), std::vec![0x02, 0xFF]].concat(),
-    ));
-    // 02..FF 00
-    long_runs.push((
-        [counting(0x02, 0xFF), std::vec![0x00]].concat(),
-        [std::vec![0xFF], counting(0x02, 0xFF), std::vec![0x01, 0x01]].concat(),
-    ));
-    // 03..FF 00 01
-    long_runs.push((
-        [counting(0x03, 0xFF), std::vec![0x00, 0x01]].concat(),
-        [std::vec![0xFE], counting(0x03, 0xFF), std::vec![0x02, 0x01]].concat(),
-    ));
+    let long_runs: Vec<(Vec<u8>, Vec<u8>)> = std::vec![
+        // 01..FE: one full group, no empty group after it.
+        (
+            counting(0x01, 0xFE),
+            [std::vec![0xFF], counting(0x01, 0xFE)].concat(),
+        ),
+        // 00 01..FE
+        (
+            [std::vec![0x00], counting(0x01, 0xFE)].concat(),
+            [std::vec![0x01, 0xFF], counting(0x01, 0xFE)].concat(),
+        ),
+        // 01..FF: the full group, then a group for the last byte.
+        (
+            counting(0x01, 0xFF),
+            [std::vec![0xFF], counting(0x01, 0xFE), std::vec![0x02, 0xFF]].concat(),
+        ),
+        // 02..FF 00
+        (
+            [counting(0x02, 0xFF), std::vec![0x00]].concat(),
+            [std::vec![0xFF], counting(0x02, 0xFF), std::vec![0x01, 0x01]].concat(),
+        ),
+        // 03..FF 00 01
+        (
+            [counting(0x03, 0xFF), std::vec![0x00, 0x01]].concat(),
+            [std::vec![0xFE], counting(0x03, 0xFF), std::vec![0x02, 0x01]].concat(),
+        ),
+    ];
     let short: [(&[u8], &[u8]); 5] = [
         (&[0x00], &[0x01, 0x01]),
         (&[0x00, 0x00], &[0x01, 0x01, 0x01]),

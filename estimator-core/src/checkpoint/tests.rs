@@ -110,7 +110,7 @@ fn image_length() {
     assert_eq!(CHECKPOINT_LEN, 860);
     #[cfg(feature = "f64")]
     assert_eq!(CHECKPOINT_LEN, 1032);
-    assert!(CHECKPOINT_LEN <= 2048);
+    const { assert!(CHECKPOINT_LEN <= 2048) };
     assert_eq!(Estimator::<720>::CHECKPOINT_LEN, CHECKPOINT_LEN);
     assert_eq!(Est::CHECKPOINT_LEN, CHECKPOINT_LEN);
     assert_eq!(CHECKPOINT_LEN % 4, 0);

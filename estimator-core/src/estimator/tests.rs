@@ -391,13 +391,13 @@ fn covariance_stays_symmetric_positive_definite_over_two_days() {
     }
 }
 
+/// One row of [`stepped_run`]: time, status, and the estimate's errors against the truth.
+type SteppedRow = (f64, Status, Option<[f64; 4]>);
+
 /// A 16,000 s log of the paper's sway with 5 arcsec of noise, whose errors step at 12,000 s by
 /// `step_arcsec`; per row the estimator's status and, once there is one, the estimate's errors
 /// against the errors in force. Returns the rows and the estimator at the end.
-fn stepped_run(
-    config: Config,
-    step_arcsec: [f64; 4],
-) -> (Vec<(f64, Status, Option<[f64; 4]>)>, Estimator) {
+fn stepped_run(config: Config, step_arcsec: [f64; 4]) -> (Vec<SteppedRow>, Estimator) {
     let after: [f64; 4] = core::array::from_fn(|i| X_ARCSEC[i] + step_arcsec[i]);
     let mut signal = Signal::new(X_ARCSEC, 40.0).with_seed(11);
     signal.noise_arcsec = 5.0;

@@ -102,13 +102,11 @@
 //!   it; clean coverage unchanged at 95-97.5 %).
 //!
 //! Why this and not a bank of filters with several random-walk levels: a bank multiplies the
-//! Kalman updates, the bulk of the step, by its size, and the step on the Cortex-M4F is within
-//! about 300 instructions of its budget. This costs per update a dozen multiply-adds on residual
+//! Kalman updates, the bulk of the step, by its size, and the step on the Cortex-M4F has little
+//! room under its budget. This costs per update a dozen multiply-adds on residual
 //! means already formed and four divisions (the running-mean weight, the configured `r` per bin,
-//! `n / r` and the share), plus a division per error in every estimate (the lag): the step's
-//! maximum on the Cortex-M4F (MPS2-AN386) went from about 4,720 to 4,760 instructions with the
-//! noise scale and drift share, and to 4,960 with the lag term, 40 below the budget of 5,000
-//! (`host-sim/tests/qemu/qemu_budgets.rs`). The reported 1-sigma (the lag included) is now computed
+//! `n / r` and the share), plus a division per error in every estimate (the lag); what each added to the step's maximum
+//! on the Cortex-M4F is in docs/uncertainty.md (`host-sim/tests/qemu/qemu_budgets.rs`). The reported 1-sigma (the lag included) is now computed
 //! once per update of a pair, for that pair's two errors, not every step for all four (the other
 //! pair's is at most one update old; four values more in the checkpoint): what made room for the
 //! change detector below. Before the first full horizon both stay at their defaults (scale 1,

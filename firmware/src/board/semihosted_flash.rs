@@ -5,12 +5,21 @@
 //! erase blocks, 4-byte writes; bytes past the end of the file read as erased (0xFF). Writes
 //! replace the bytes (the store writes only erased flash). Not modelled: a torn write (a write
 //! reaches the file whole, page by page) and any stall.
+//!
+//! **A power cut on order**, for tests: when the file `rins-flash.cut` in the same directory
+//! (`firmware::flash_layout::EMULATED_FLASH_CUT_ORDER_FILE`) holds a decimal number N, the flash
+//! reads and removes it at its next write or erase, programs N more 256-byte pages and then cuts
+//! the power: QEMU exits with `EMULATED_FLASH_POWER_CUT_EXIT_CODE` before the next page reaches
+//! the file. A test thereby cuts a save after exactly N of its pages, on a loaded machine as on
+//! an idle one.
 
 use embedded_storage::nor_flash::{NorFlash, NorFlashErrorKind, ReadNorFlash};
 
 pub struct SemihostedFlash<const CAPACITY: usize> {
     file: semihosting::fs::File,
     page_program_cycles: u32,
+    /// Pages still to program before a power cut on order; `None` when none is ordered.
+    pages_before_cut: Option<u32>,
 }
 
 impl<const CAPACITY: usize> SemihostedFlash<CAPACITY> {
@@ -40,6 +49,27 @@ impl<const CAPACITY: usize> SemihostedFlash<CAPACITY> {
         Some(SemihostedFlash {
             file,
             page_program_cycles,
+            pages_before_cut: None,
+        })
+    }
+
+    /// The number of pages in `rins-flash.cut`, which is removed once read; `None` when there is
+    /// no such file or it holds no decimal number.
+    fn take_cut_order() -> Option<u32> {
+        use semihosting::io::Read;
+        let mut file =
+            semihosting::fs::File::open(firmware::flash_layout::EMULATED_FLASH_CUT_ORDER_FILE)
+                .ok()?;
+        let mut text = [0u8; 12];
+        let len = file.read(&mut text).ok()?;
+        drop(file);
+        let _ = semihosting::fs::remove_file(firmware::flash_layout::EMULATED_FLASH_CUT_ORDER_FILE);
+        let digits = text.get(..len)?.trim_ascii();
+        if digits.is_empty() || !digits.iter().all(u8::is_ascii_digit) {
+            return None;
+        }
+        digits.iter().try_fold(0u32, |n, d| {
+            n.checked_mul(10)?.checked_add(u32::from(d - b'0'))
         })
     }
 
@@ -57,10 +87,21 @@ impl<const CAPACITY: usize> SemihostedFlash<CAPACITY> {
     /// Writes page by page (256 bytes, a NOR flash's program page), each taking the page time.
     fn write_at(&mut self, offset: u32, bytes: &[u8]) -> Result<(), NorFlashErrorKind> {
         use semihosting::io::{Seek, SeekFrom, Write};
+        if self.pages_before_cut.is_none() {
+            self.pages_before_cut = Self::take_cut_order();
+        }
         self.file
             .seek(SeekFrom::Start(offset as u64))
             .map_err(|_| NorFlashErrorKind::Other)?;
         for page in bytes.chunks(256) {
+            if let Some(left) = self.pages_before_cut.as_mut() {
+                if *left == 0 {
+                    semihosting::process::exit(
+                        firmware::flash_layout::EMULATED_FLASH_POWER_CUT_EXIT_CODE,
+                    );
+                }
+                *left -= 1;
+            }
             self.file
                 .write_all(page)
                 .map_err(|_| NorFlashErrorKind::Other)?;

@@ -2,25 +2,10 @@
 //! and output, a closed pipe, an output naming the log, a minimal or broken truth file, logs
 //! starting at other times, negative option values, configuration errors.
 
-use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim, host_sim_ok, paper, path_str, temp_dir};
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
-
-/// A generated paper log of `duration` s in `dir` (with its truth file).
-fn paper(dir: &Path, duration: u32) -> PathBuf {
-    let log = dir.join("paper.csv");
-    host_sim_ok(&[
-        "generate",
-        "--scenario",
-        "paper",
-        "--duration",
-        &duration.to_string(),
-        "--out",
-        path_str(&log),
-    ]);
-    log
-}
 
 fn estimate_bytes(log: &Path, out: &Path) -> Vec<u8> {
     host_sim_ok(&["estimate", path_str(log), "--out", path_str(out)]);

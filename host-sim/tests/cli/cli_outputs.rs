@@ -3,22 +3,8 @@
 //! earlier good file is kept when a run fails, no temporary file is left, no input is ever an
 //! output) and negative values accepted by every numeric option.
 
-use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
-use std::path::{Path, PathBuf};
-
-fn paper(dir: &Path, duration: u32) -> PathBuf {
-    let log = dir.join("paper.csv");
-    host_sim_ok(&[
-        "generate",
-        "--scenario",
-        "paper",
-        "--duration",
-        &duration.to_string(),
-        "--out",
-        path_str(&log),
-    ]);
-    log
-}
+use crate::common::{host_sim, host_sim_ok, paper, path_str, temp_dir};
+use std::path::Path;
 
 /// The names of the files in `dir`, sorted.
 fn listing(dir: &Path) -> Vec<String> {

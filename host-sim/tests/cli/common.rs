@@ -1,5 +1,4 @@
 //! Helpers shared by the CLI tests.
-#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -35,4 +34,19 @@ pub fn host_sim_ok(args: &[&str]) -> String {
 
 pub fn path_str(p: &Path) -> &str {
     p.to_str().unwrap()
+}
+
+/// A generated paper log of `duration` s in `dir` (with its truth file).
+pub fn paper(dir: &Path, duration: u32) -> PathBuf {
+    let log = dir.join("paper.csv");
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--duration",
+        &duration.to_string(),
+        "--out",
+        path_str(&log),
+    ]);
+    log
 }

@@ -272,7 +272,7 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
     // Random bytes, zeros included: nothing may stop the firmware.
     let noise: Vec<u8> = (0..20_000)
         .map(|_| {
-            if rng.next() % 29 == 0 {
+            if rng.next().is_multiple_of(29) {
                 0
             } else {
                 rng.nonzero_byte()

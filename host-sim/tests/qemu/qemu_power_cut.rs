@@ -1,8 +1,10 @@
 //! Power cuts, on both boards: the firmware (each board's build) saves a checkpoint every 300 s of
 //! sample time into its checkpoint log (a host file under QEMU). QEMU is killed at random points,
-//! once provably in the middle of a save (the flash file has grown by part of an item); each time
-//! it is restarted on the same flash, restores a checkpoint, and the host resumes streaming after
-//! it. The host mirrors the firmware: the same core, the same save schedule
+//! and once in the middle of a save: the emulated flash is ordered to cut the power after 1-3 of
+//! the save's 256-byte pages (`firmware::flash_layout::EMULATED_FLASH_CUT_ORDER_FILE`), so the cut
+//! lands inside the save however loaded the machine is. Each time QEMU is restarted on the same
+//! flash, restores a checkpoint (after the cut inside a save, the one before it), and the host
+//! resumes streaming after it. The host mirrors the firmware: the same core, the same save schedule
 //! (`firmware::checkpoint_store::SaveSchedule`), restored from its own image of the checkpoint the
 //! firmware reports. At the end the firmware's estimate equals the mirror's bit for bit, and is
 //! within 1 arcsec of the uninterrupted run's.
@@ -12,23 +14,16 @@ use estimator_core::checkpoint::CHECKPOINT_LEN;
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, Estimate};
 use firmware::checkpoint_store::{SaveSchedule, CHECKPOINT_INTERVAL_S};
+use firmware::flash_layout::{EMULATED_FLASH_CUT_ORDER_FILE, EMULATED_FLASH_POWER_CUT_EXIT_CODE};
 use host_sim::log_csv::read_log;
 use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::{Request, SampleMsg};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::{Duration, Instant};
-
-struct Rng(u32);
-impl Rng {
-    fn below(&mut self, n: u32) -> u32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        self.0 % n
-    }
-}
 
 fn file_len(path: &Path) -> u64 {
     std::fs::metadata(path).map_or(0, |m| m.len())
@@ -105,9 +100,12 @@ fn power_cuts(board: Board) {
     std::fs::create_dir_all(&flash_dir).unwrap();
     let flash = flash_dir.join("rins-flash.bin");
 
-    let mut rng = Rng(0x9E37_79B9);
+    let cut_order = flash_dir.join(EMULATED_FLASH_CUT_ORDER_FILE.to_str().unwrap());
+    let mut rng = ChaCha8Rng::seed_from_u64(0x9E37_79B9);
     let mut mirror = Mirror::new();
-    let (mut cuts, mut mid_save_cuts, mut attempts) = (0u32, 0u32, 0u32);
+    let (mut cuts, mut mid_save_cuts) = (0u32, 0u32);
+    // The time of the save cut in its middle: the restart after it must restore an older one.
+    let mut cut_save_time_s: Option<f64> = None;
     let final_estimate: Estimate = loop {
         let mut target = Target::boot_qemu(
             &elf,
@@ -118,18 +116,24 @@ fn power_cuts(board: Board) {
         )
         .unwrap();
         let resume = target.boot_status.checkpoint_time_s;
+        if let Some(t) = cut_save_time_s.take() {
+            assert!(
+                resume.is_some_and(|r| r < t),
+                "after a cut inside the save of {t} s the firmware restored {resume:?}"
+            );
+        }
         mirror.boot(resume);
         let start = msgs
             .iter()
             .position(|m| resume.is_none_or(|t| m.time_s > t))
             .unwrap();
-        // Four cuts after 100..700 random rows; then cuts at saves (sent, not waited for) until
-        // one lands inside a save; then one more random cut; then the rest of the log.
+        // Four cuts after 100..700 random rows; then one inside a save; then one more random cut;
+        // then the rest of the log.
         let want_mid_save = mid_save_cuts == 0 && cuts >= 4;
         let stop_after = if want_mid_save {
             Some(1)
         } else if cuts < 5 + mid_save_cuts && msgs.len() - start > 1000 {
-            Some(100 + rng.below(600) as usize)
+            Some(rng.gen_range(100..700))
         } else {
             None
         };
@@ -139,29 +143,41 @@ fn power_cuts(board: Board) {
             let saves = mirror.step(msg);
             if stop_after.is_some_and(|n| sent >= n) && (!want_mid_save || saves) {
                 if want_mid_save {
-                    // Send the sample whose step saves, and cut the power while the save writes.
-                    attempts += 1;
+                    // Order the cut, then send the sample whose step saves: the save's first
+                    // `pages` pages reach the flash, then QEMU exits as a board whose power fails.
+                    let pages: u32 = rng.gen_range(1..=3);
+                    std::fs::write(&cut_order, pages.to_string()).unwrap();
                     let before = file_len(&flash);
                     target.link.send(&Request::Sample(*msg)).unwrap();
-                    // Once the file grows the save is under way (its item is appended, 256 bytes
-                    // at a time, each 4.1 ms of the board's clock); cut 0..1 ms after that.
-                    let deadline = Instant::now() + Duration::from_millis(500);
-                    while file_len(&flash) == before && Instant::now() < deadline {}
-                    std::thread::sleep(Duration::from_micros(u64::from(rng.below(1000))));
-                    let grown = {
-                        drop(target);
-                        file_len(&flash) - before
-                    };
-                    // A whole item is the image, the key and the log's item header, padded.
-                    if grown > 0 && (grown as usize) < CHECKPOINT_LEN {
-                        mid_save_cuts += 1;
-                        println!(
-                            "cut {}: in the middle of a save ({grown} of its bytes written)",
-                            cuts + 1
+                    let qemu = target.qemu.as_mut().unwrap();
+                    let deadline = Instant::now() + Duration::from_secs(60);
+                    let status = loop {
+                        if let Some(status) = qemu.exited() {
+                            break status;
+                        }
+                        assert!(
+                            Instant::now() < deadline,
+                            "the ordered power cut never came"
                         );
-                    } else {
-                        println!("cut {}: at a save, {grown} bytes written", cuts + 1);
-                    }
+                        std::thread::sleep(Duration::from_millis(5));
+                    };
+                    assert_eq!(
+                        status.code(),
+                        Some(EMULATED_FLASH_POWER_CUT_EXIT_CODE),
+                        "QEMU did not stop at the ordered power cut: {}",
+                        qemu.stderr_tail()
+                    );
+                    assert!(!cut_order.exists(), "the flash never took the cut order");
+                    drop(target);
+                    mid_save_cuts += 1;
+                    cut_save_time_s = Some(msg.time_s);
+                    println!(
+                        "cut {}: inside the save of {} s, after {pages} of its pages ({} bytes \
+                         written)",
+                        cuts + 1,
+                        msg.time_s,
+                        file_len(&flash).saturating_sub(before)
+                    );
                 } else {
                     println!("cut {}: after {sent} rows from {resume:?} s", cuts + 1);
                     drop(target);
@@ -173,10 +189,6 @@ fn power_cuts(board: Board) {
         }
         if cut {
             cuts += 1;
-            assert!(
-                attempts < 8,
-                "no cut landed inside a save in {attempts} attempts"
-            );
             continue;
         }
         let output = answer.expect("rows were streamed").result.unwrap();

@@ -460,7 +460,7 @@ mod tests {
         let mut d = learned(&mut noise, &ctx);
         // 20,000 more blocks (the blocks of four years at a 480 s period, per channel): nothing.
         assert_eq!(run(&mut d, 20_000, |_| 0.0, &mut noise, &ctx), None);
-        let learned_sigma = libm::sqrtf(d.block_variance(0, 0.0) as f32) as Real;
+        let learned_sigma = libm::sqrt(f64::from(d.block_variance(0, 0.0))) as Real;
         // A mean square of 64 blocks (clipped at 3 sigma: 97 % of the variance): within 25 %.
         assert!(
             (learned_sigma / SIGMA - 1.0).abs() < 0.25,
@@ -529,7 +529,7 @@ mod tests {
         };
         assert_eq!(run(&mut d, 2_000, pulse, &mut noise, &ctx), None);
         // The block variance stayed that of the noise: the blocks that held are left out.
-        let learned_sigma = libm::sqrtf(d.block_variance(0, 0.0) as f32) as Real;
+        let learned_sigma = libm::sqrt(f64::from(d.block_variance(0, 0.0))) as Real;
         assert!(learned_sigma < 2.0 * SIGMA, "{learned_sigma}");
     }
 
