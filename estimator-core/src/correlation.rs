@@ -391,6 +391,7 @@ impl CorrelationSums {
     /// pair's channels are left zero), from only the sums it needs: the filter takes one pair a
     /// step, and the conversion of the sums is most of the measurement's cost. The same values as
     /// [`CorrelationSums::measurement`], bit for bit.
+    #[inline(always)]
     pub fn measurement_of(&self, pair: usize) -> Option<Measurement> {
         if self.count == 0 || self.weight == 0 {
             return None;

@@ -1,4 +1,5 @@
-//! The step's elementary functions: sine and cosine, square root, rounding, angle wrapping.
+//! The step's elementary functions: sine and cosine, square root, rounding, angle wrapping, the
+//! larger and smaller of two numbers.
 //!
 //! # Square root
 //! `libm` has no ARM implementation of `sqrtf`: on the Cortex-M4F it runs a software loop of a few
@@ -17,6 +18,39 @@
 //! unit signal; every angle the core passes it is within 4 pi.
 
 use crate::Real;
+
+/// The larger and the smaller of two numbers by one comparison. On the Cortex-M4F `f32::max` and
+/// `f32::min` are calls to `fmaxf` and `fminf` (IEEE 754 maxNum and minNum, whose rule that a NaN
+/// operand gives the other costs about 11 instructions a call), and the step's bookkeeping of
+/// noise, spread and change takes tens of them; these are inline compares. Every value they are
+/// given in the step is finite (no NaN reaches the filter), where they give what `max` and `min`
+/// give; a NaN `self` would be passed on, not dropped.
+pub trait Compare: Sized {
+    /// `self` or `other`, whichever is larger (`self` when they are equal).
+    fn larger(self, other: Self) -> Self;
+    /// `self` or `other`, whichever is smaller (`self` when they are equal).
+    fn smaller(self, other: Self) -> Self;
+}
+
+impl Compare for Real {
+    #[inline(always)]
+    fn larger(self, other: Real) -> Real {
+        if self < other {
+            other
+        } else {
+            self
+        }
+    }
+
+    #[inline(always)]
+    fn smaller(self, other: Real) -> Real {
+        if other < self {
+            other
+        } else {
+            self
+        }
+    }
+}
 
 /// Wraps an angle to [-pi, pi] in constant time (any finite input; exact for |x| < a few turns).
 pub fn wrap_pi(angle_rad: Real) -> Real {

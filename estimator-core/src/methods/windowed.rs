@@ -159,7 +159,7 @@ use crate::config::Config;
 use crate::correlation::{ReferenceFilter, FULL_WEIGHT};
 use crate::gap_fill::{FillVariance, GridSample};
 use crate::kalman::{ConstantStateKalman, KalmanError};
-use crate::math::sqrt;
+use crate::math::{sqrt, Compare};
 use crate::moving_average::CorrelationWindow;
 use crate::Real;
 use change::{persistence_blocks, Alarm, BlockContext, ChangeDetector};
@@ -596,7 +596,7 @@ impl<const CAP: usize> Windowed<CAP> {
             let e2 = if learned == 0 {
                 e2
             } else {
-                e2.min(SPREAD_CLIP_SIGMAS * SPREAD_CLIP_SIGMAS * self.spread_rad2[ch])
+                e2.smaller(SPREAD_CLIP_SIGMAS * SPREAD_CLIP_SIGMAS * self.spread_rad2[ch])
             };
             self.spread_rad2[ch] += weight * (e2 - self.spread_rad2[ch]);
         }
@@ -805,7 +805,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let sigma2 =
             config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
         let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
-        let inv_s_e2 = n / self.product_variance_rad2[pair].max(sigma2);
+        let inv_s_e2 = n / self.product_variance_rad2[pair].larger(sigma2);
         let (mut power, mut bias) = (0.0, 0.0);
         for ch in 2 * pair..2 * pair + 2 {
             let mean = self.residual_mean[ch];
@@ -814,7 +814,7 @@ impl<const CAP: usize> Windowed<CAP> {
             power += self.residual_power[ch];
             bias += self.residual_mean_long[ch] * self.residual_mean_long[ch] * inv_s_e2;
         }
-        self.noise_scale[pair] = power.max(MIN_NOISE_SCALE);
+        self.noise_scale[pair] = power.larger(MIN_NOISE_SCALE);
         let share = if power > 0.0 { bias / power } else { 0.0 };
         self.drift_share[pair] = ((share - BIAS_SHARE_NOISE)
             * (1.0 / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE)))
@@ -858,7 +858,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let sigma2 =
             config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
         let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
-        let s_e2 = self.product_variance_rad2[pair].max(sigma2) / n;
+        let s_e2 = self.product_variance_rad2[pair].larger(sigma2) / n;
         for ch in 2 * pair..2 * pair + 2 {
             let mean = self.residual_mean[ch];
             let mut model = 0.0;
@@ -866,7 +866,7 @@ impl<const CAP: usize> Windowed<CAP> {
             // Within 2 sigma: nothing to add, no mismatch (the usual case, without a root).
             if mean * mean > 4.0 * s_e2 {
                 let s_e = sqrt(s_e2);
-                let excess = (mean.abs() - 2.0 * s_e).max(0.0);
+                let excess = (mean.abs() - 2.0 * s_e).larger(0.0);
                 // A bias b on a channel of gain g means an error of about b/g, but never more than
                 // the prior says we could not know anyway: near the pole the gain of x3, x4 is
                 // cos L / 2, about 0, and they are unobservable (their filter 1-sigma stays at the
@@ -874,7 +874,7 @@ impl<const CAP: usize> Windowed<CAP> {
                 model = if excess <= 0.0 {
                     0.0
                 } else if self.gains[ch] > 1e-6 {
-                    (excess / self.gains[ch]).min(config.prior_sigma_rad)
+                    (excess / self.gains[ch]).smaller(config.prior_sigma_rad)
                 } else {
                     config.prior_sigma_rad
                 };
@@ -884,13 +884,13 @@ impl<const CAP: usize> Windowed<CAP> {
             let lag = if self.drift_share[pair] > 0.0 && self.gains[ch] > 1e-6 {
                 (self.residual_mean_long[ch] / self.gains[ch])
                     .abs()
-                    .min(config.prior_sigma_rad)
+                    .smaller(config.prior_sigma_rad)
             } else {
                 0.0
             };
-            let m = model.max(lag).max(self.change.widening_rad()[ch]);
+            let m = model.larger(lag).larger(self.change.widening_rad()[ch]);
             self.reported_sigma_rad[ch] =
-                sqrt(self.noise_scale[pair] * self.kf.covariance()[(ch, ch)].max(0.0) + m * m);
+                sqrt(self.noise_scale[pair] * self.kf.covariance()[(ch, ch)].larger(0.0) + m * m);
             self.channel_mismatch[ch] = mismatch;
         }
     }
