@@ -292,7 +292,9 @@ impl RotationMonitor {
         *self = RotationMonitor::new(pinned);
     }
 
-    /// Watches one sample (index on the sample grid, rotation angle).
+    /// Watches one sample (index on the sample grid, rotation angle): the rotation's rate, the
+    /// passes of the reference angles (which time the period), and, once the pattern is known,
+    /// its health; while it is being learned, the learning.
     pub fn observe(
         &mut self,
         index: u32,
@@ -303,8 +305,40 @@ impl RotationMonitor {
             .levels_rad
             .get_or_insert(wrap_pi(rotation_rad + 0.5 * LEVEL_STEP_RAD));
         let previous = self.previous.replace((index, rotation_rad));
-        // Samples since the previous one (more than 1 across lost rows) and the rotation over them:
-        // the angle is continuous between the rows that are there.
+        let (steps, increment) = self.track_rate(previous, index, rotation_rad);
+        let event = self.watch_passes(previous, steps, index, rotation_rad, base, limits)?;
+        if let PatternEvent::PeriodKnown(_) = event {
+            self.learn_start = None;
+        }
+        let Some(period) = self.period_samples else {
+            return Ok(event);
+        };
+        // In the step's float type: no software f64 division a sample.
+        let nominal = 2.0 * PI / period as Real;
+        let still = self.short_steps > 0 && self.short_increment_rad.abs() < 0.25 * nominal;
+        self.dwell_run = if still {
+            self.dwell_run.saturating_add(steps)
+        } else {
+            0
+        };
+        let Some(features) = self.features else {
+            self.learn(index, increment, nominal, period);
+            return Ok(event);
+        };
+        self.check_health(&features, index, period, nominal, limits)?;
+        Ok(event)
+    }
+
+    /// The samples since the previous one (more than 1 across lost rows) and the rotation over
+    /// them, wrapped (`None` for the first sample): the angle is continuous between the rows that
+    /// are there. Updates the short mean of the rotation per sample.
+    #[inline(always)]
+    fn track_rate(
+        &mut self,
+        previous: Option<(u32, Real)>,
+        index: u32,
+        rotation_rad: Real,
+    ) -> (u32, Option<Real>) {
         let (steps, increment) = match previous {
             Some((k, rho)) if index.wrapping_sub(k) >= 1 => {
                 (index.wrapping_sub(k), Some(wrap_pi(rotation_rad - rho)))
@@ -317,12 +351,27 @@ impl RotationMonitor {
             self.short_increment_rad +=
                 (per_step - self.short_increment_rad) / self.short_steps as Real;
         }
+        (steps, increment)
+    }
+
+    /// The passes of the reference angles (45 deg apart from `base`): the first two passes of one
+    /// reference the same way give the period; once it is known, only the reference that times
+    /// it is watched, and a pass off time forgets the pattern. A pass inside a run of lost rows is
+    /// placed by interpolation across it.
+    #[inline(always)]
+    fn watch_passes(
+        &mut self,
+        previous: Option<(u32, Real)>,
+        steps: u32,
+        index: u32,
+        rotation_rad: Real,
+        base: Real,
+        limits: &Limits,
+    ) -> Result<PatternEvent, RotationFault> {
         let mut event = PatternEvent::None;
-        // Passes of the reference angles.
         // The angle from the first reference, once wrapped; from the others by subtracting 45 deg
         // steps and wrapping with one comparison (no division on the step's path).
         let d0 = wrap_pi(rotation_rad - base);
-        // Once the period is known, only the reference that times it needs watching.
         let watched = match (self.period_samples, self.timing_pass) {
             (Some(_), Some((level, _))) => usize::from(level)..usize::from(level) + 1,
             _ => 0..LEVELS,
@@ -382,25 +431,22 @@ impl RotationMonitor {
                 _ => {}
             }
         }
-        if let PatternEvent::PeriodKnown(_) = event {
-            self.learn_start = None;
-        }
-        let Some(period) = self.period_samples else {
-            return Ok(event);
-        };
-        // In the step's float type: no software f64 division a sample.
-        let nominal = 2.0 * PI / period as Real;
-        let still = self.short_steps > 0 && self.short_increment_rad.abs() < 0.25 * nominal;
-        self.dwell_run = if still {
-            self.dwell_run.saturating_add(steps)
-        } else {
-            0
-        };
-        let Some(features) = self.features else {
-            self.learn(index, increment, nominal, period);
-            return Ok(event);
-        };
-        // Health against the learned pattern.
+        Ok(event)
+    }
+
+    /// The rotation against its learned pattern: the timing pass overdue (a stop if the rotation
+    /// dwells, else another rate: the pattern is forgotten), a dwell longer than the pattern's
+    /// longest, or a turn the other way in a pattern that never reverses (for a whole period: a
+    /// new pattern).
+    #[inline(always)]
+    fn check_health(
+        &mut self,
+        features: &Features,
+        index: u32,
+        period: u32,
+        nominal: Real,
+        limits: &Limits,
+    ) -> Result<(), RotationFault> {
         if let Some((m, dir)) = self.timing_pass {
             if let Some(k) = self.last_pass[m as usize][dir as usize] {
                 if index.wrapping_sub(k) > period
@@ -435,7 +481,7 @@ impl RotationMonitor {
             }
             return Err(RotationFault::Reversed);
         }
-        Ok(event)
+        Ok(())
     }
 
     /// Learns the features over one whole cycle of consecutive samples.
