@@ -87,9 +87,10 @@ pub struct Config {
     /// Start gate: estimation starts once the roll sway amplitude exceeds this (the paper's sea test
     /// used 3 deg). Default 0: off.
     pub sway_gate_rad: Real,
-    /// Gaps of up to this many lost samples in a row are filled from their neighbours (see
-    /// [`crate::gap_fill`]); longer gaps restart the moving average. Default 3, at most
-    /// [`crate::gap_fill::MAX_FILLABLE_GAP`]; 0 restarts it at every gap.
+    /// Gaps of up to this many lost samples in a row are filled from their neighbours; longer ones
+    /// are left out of the window's sums, the samples around them weighted down, and gaps of an
+    /// eighth of a rotation period or more restart the moving average (see [`crate::gap_fill`]).
+    /// Default 2, at most [`crate::gap_fill::MAX_FILLABLE_GAP`]; 0 fills none.
     pub max_filled_gap_samples: u32,
     /// An error counts as converged once its 1-sigma is below this. Default 1 arcsec.
     pub converged_sigma_rad: Real,
@@ -116,7 +117,7 @@ impl Default for Config {
             traditional_sigma_rad: (3.0 * RAD_PER_DEG / core::f64::consts::SQRT_2) as Real,
             traditional_drift_rad_per_sqrt_s: 0.0,
             sway_gate_rad: 0.0,
-            max_filled_gap_samples: 3,
+            max_filled_gap_samples: 2,
             converged_sigma_rad: arcsec_to_rad(1.0) as Real,
             rotation_period_tolerance: 0.01,
             change_detection_step_rad: arcsec_to_rad(20.0) as Real,

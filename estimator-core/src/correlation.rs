@@ -176,44 +176,49 @@ pub struct QuantizedSample {
     pub reference: [i16; 4],
 }
 
-/// Largest attitude magnitude stored, rad (roll and pitch are checked to within 90 deg).
-const MAX_ATTITUDE_RAD: Real = 1.999;
+/// A sine, cosine or reference in fixed point ([`TRIG_COUNTS`] per unit), clamped to +-1; NaN
+/// gives 0.
+pub fn trig_count(v: Real) -> i16 {
+    round_to_i32(v * TRIG_COUNTS as Real).clamp(-MAX_TRIG_COUNT, MAX_TRIG_COUNT) as i16
+}
+
+/// Largest count of a quantized sine, cosine or reference (1 in [`TRIG_COUNTS`]).
+const MAX_TRIG_COUNT: i32 = 1 << 14;
 
 impl QuantizedSample {
     /// Rounds a sample's roll, pitch, trigonometry and references to fixed point.
+    ///
+    /// No floating-point clamp: the conversion to `i32` saturates and takes NaN to 0, so an
+    /// attitude beyond +-2 rad (impossible: roll and pitch are checked to within 90 deg) stays at
+    /// +-2^31 counts, and a sine, cosine or reference is clamped to +-1 in integers (one `ssat`
+    /// on the Cortex-M4F, where a float clamp is two library calls or four compares a value).
     pub fn new(
         roll_rad: Real,
         pitch_rad: Real,
         angles: &Angles,
         reference: &[Real; 4],
     ) -> QuantizedSample {
-        let att = |v: Real| {
-            let v = if v.is_nan() {
-                0.0
-            } else {
-                v.clamp(-MAX_ATTITUDE_RAD, MAX_ATTITUDE_RAD)
-            };
-            round_to_i32(v * ATTITUDE_COUNTS as Real)
-        };
-        let trig = |v: Real| {
-            let v = if v.is_nan() { 0.0 } else { v.clamp(-1.0, 1.0) };
-            round_to_i32(v * TRIG_COUNTS as Real) as i16
-        };
+        let att = |v: Real| round_to_i32(v * ATTITUDE_COUNTS as Real);
         QuantizedSample {
             roll: att(roll_rad),
             pitch: att(pitch_rad),
-            sin_rho: trig(angles.sin_rho),
-            cos_rho: trig(angles.cos_rho),
-            sin_rho_s: trig(angles.sin_rho_s),
-            cos_rho_s: trig(angles.cos_rho_s),
-            sin_lat: trig(angles.sin_lat),
-            cos_lat: trig(angles.cos_lat),
-            reference: reference.map(trig),
+            sin_rho: trig_count(angles.sin_rho),
+            cos_rho: trig_count(angles.cos_rho),
+            sin_rho_s: trig_count(angles.sin_rho_s),
+            cos_rho_s: trig_count(angles.cos_rho_s),
+            sin_lat: trig_count(angles.sin_lat),
+            cos_lat: trig_count(angles.cos_lat),
+            reference: reference.map(trig_count),
         }
     }
 
-    /// The products summed by the window, in the order of [`CorrelationSums::sums`] (see there).
-    pub fn terms(&self) -> [i64; SUMS] {
+    /// The products summed by the window, in the order of [`CorrelationSums::sums`] (see there),
+    /// each times the weight `w` (0 to [`FULL_WEIGHT`]). The weight is folded into the factors
+    /// before the products are formed (into the references, and into the terms without a
+    /// reference), so that weighting costs a dozen small integer products rather than one 64-bit
+    /// product a term.
+    pub fn terms(&self, w: u8) -> [i64; SUMS] {
+        let w = i32::from(w.min(FULL_WEIGHT));
         let (sr, cr, ss, cs) = (
             i32::from(self.sin_rho),
             i32::from(self.cos_rho),
@@ -221,40 +226,42 @@ impl QuantizedSample {
             i32::from(self.cos_rho_s),
         );
         let (sl, cl) = (i32::from(self.sin_lat), i32::from(self.cos_lat));
-        let [c0, c1, c2, c3] = self.reference.map(i32::from);
+        // The references times the weight: within 2^14 x 2^6.
+        let [c0, c1, c2, c3] = self.reference.map(|c| i32::from(c) * w);
         let (r, p) = (i64::from(self.roll), i64::from(self.pitch));
+        let w64 = i64::from(w);
         // eq (2)'s roll row without its signs: sinL cos(rho-s), sinL sin(rho-s), cosL sin rho, cosL cos rho.
         let (h0, h1, h2, h3) = (sl * cs, sl * ss, cl * sr, cl * cr);
-        let w = |a: i32, b: i32| i64::from(a) * i64::from(b);
+        let m = |a: i32, b: i32| i64::from(a) * i64::from(b);
         [
             i64::from(c0),
             i64::from(c1),
             i64::from(c2),
             i64::from(c3),
-            i64::from(ss),
-            i64::from(cs),
-            r,
-            p,
+            i64::from(ss * w),
+            i64::from(cs * w),
+            r * w64,
+            p * w64,
             p * i64::from(c0),
             p * i64::from(c1),
             r * i64::from(c2),
             r * i64::from(c3),
-            w(c0, ss),
-            w(c0, cs),
-            w(c1, ss),
-            w(c1, cs),
-            i64::from(h0),
-            i64::from(h1),
-            i64::from(h2),
-            i64::from(h3),
-            w(c2, h0),
-            w(c2, h1),
-            w(c2, h2),
-            w(c2, h3),
-            w(c3, h0),
-            w(c3, h1),
-            w(c3, h2),
-            w(c3, h3),
+            m(c0, ss),
+            m(c0, cs),
+            m(c1, ss),
+            m(c1, cs),
+            i64::from(h0) * w64,
+            i64::from(h1) * w64,
+            i64::from(h2) * w64,
+            i64::from(h3) * w64,
+            m(c2, h0),
+            m(c2, h1),
+            m(c2, h2),
+            m(c2, h3),
+            m(c3, h0),
+            m(c3, h1),
+            m(c3, h2),
+            m(c3, h3),
         ]
     }
 }
@@ -262,7 +269,16 @@ impl QuantizedSample {
 /// Number of running sums.
 pub const SUMS: usize = 28;
 
+/// The weight of an entry that counts in full (see [`CorrelationSums`]); a sample next to a run of
+/// lost rows counts less ([`crate::gap_fill`]).
+pub const FULL_WEIGHT: u8 = 64;
+
 /// The window's exact running sums.
+///
+/// Each entry is added with its weight `w` (0 to [`FULL_WEIGHT`]): the sums are of `w` times the
+/// products, and the means divide by the sum of the weights, so a weighted mean of every product
+/// and `z = row . x` holds for any weights. With `w` at most 64 (2^6) and at most 2^46 per product,
+/// a window of up to 2^11 entries stays within `i64`.
 ///
 /// `sums`, in fixed-point counts (T = 2^14 per unit of a sine or cosine, A = 2^30 per rad), with
 /// `c0..c3` the channels' low-passed references (of `sin(rho-s)`, `cos(rho-s)`, `sin rho`,
@@ -279,6 +295,8 @@ pub struct CorrelationSums {
     pub sums: [i64; SUMS],
     /// Sum of the entries' fill weights (see [`crate::gap_fill`]).
     pub fill_weight: u32,
+    /// Sum of the entries' weights (a full-weight entry counts [`FULL_WEIGHT`]).
+    pub weight: u32,
 }
 
 impl CorrelationSums {
@@ -287,6 +305,7 @@ impl CorrelationSums {
         count: 0,
         sums: [0; SUMS],
         fill_weight: 0,
+        weight: 0,
     };
 }
 
@@ -307,24 +326,55 @@ pub struct Measurement {
 }
 
 impl CorrelationSums {
-    /// Adds one entry.
-    pub fn add(&mut self, q: &QuantizedSample, fill_weight: u16) {
-        let t = q.terms();
+    /// Adds one entry of weight `weight` (at most [`FULL_WEIGHT`]) and fill weight `fill_weight`.
+    pub fn add(&mut self, q: &QuantizedSample, fill_weight: u32, weight: u8) {
+        let t = q.terms(weight);
         for i in 0..SUMS {
             self.sums[i] += t[i];
         }
         self.count += 1;
-        self.fill_weight += u32::from(fill_weight);
+        self.fill_weight = self.fill_weight.saturating_add(fill_weight);
+        self.weight += u32::from(weight.min(FULL_WEIGHT));
     }
 
     /// Subtracts an entry added before: exactly undoes [`CorrelationSums::add`].
-    pub fn subtract(&mut self, q: &QuantizedSample, fill_weight: u16) {
-        let t = q.terms();
+    pub fn subtract(&mut self, q: &QuantizedSample, fill_weight: u32, weight: u8) {
+        let t = q.terms(weight);
         for i in 0..SUMS {
             self.sums[i] -= t[i];
         }
         self.count = self.count.saturating_sub(1);
-        self.fill_weight = self.fill_weight.saturating_sub(u32::from(fill_weight));
+        self.fill_weight = self.fill_weight.saturating_sub(fill_weight);
+        self.weight = self
+            .weight
+            .saturating_sub(u32::from(weight.min(FULL_WEIGHT)));
+    }
+
+    /// Subtracts the entry `old` and adds `new` in one pass over the sums: the same sums as
+    /// [`CorrelationSums::subtract`] then [`CorrelationSums::add`] (integers: exact in any order),
+    /// with one load and store of each sum instead of two (what a window does every sample once
+    /// it is full).
+    pub fn replace(
+        &mut self,
+        old: &QuantizedSample,
+        old_fill_weight: u32,
+        old_weight: u8,
+        new: &QuantizedSample,
+        fill_weight: u32,
+        weight: u8,
+    ) {
+        let (to, tn) = (old.terms(old_weight), new.terms(weight));
+        for i in 0..SUMS {
+            self.sums[i] += tn[i] - to[i];
+        }
+        self.fill_weight = self
+            .fill_weight
+            .saturating_sub(old_fill_weight)
+            .saturating_add(fill_weight);
+        self.weight = self
+            .weight
+            .saturating_sub(u32::from(old_weight.min(FULL_WEIGHT)))
+            + u32::from(weight.min(FULL_WEIGHT));
     }
 
     /// The centred measurement of the module doc, or `None` for an empty window.
@@ -341,12 +391,14 @@ impl CorrelationSums {
     /// pair's channels are left zero), from only the sums it needs: the filter takes one pair a
     /// step, and the conversion of the sums is most of the measurement's cost. The same values as
     /// [`CorrelationSums::measurement`], bit for bit.
+    #[inline(always)]
     pub fn measurement_of(&self, pair: usize) -> Option<Measurement> {
-        if self.count == 0 {
+        if self.count == 0 || self.weight == 0 {
             return None;
         }
-        // Powers of two: exact in f32, and no software f64 on the Cortex-M4F.
-        let inv_n = 1.0 / self.count as Real;
+        // The sums are of weighted products: their means divide by the sum of the weights. The
+        // scales are powers of two: exact in f32, and no software f64 on the Cortex-M4F.
+        let inv_n = 1.0 / self.weight as Real;
         let t = inv_n / TRIG_COUNTS as Real;
         let tt = t / TRIG_COUNTS as Real;
         let ttt = tt / TRIG_COUNTS as Real;
@@ -411,7 +463,7 @@ mod tests {
         let mut sums = CorrelationSums::default();
         for k in 0..480 {
             let rho = 0.2 + 2.0 * core::f64::consts::PI * k as f64 / 480.0;
-            sums.add(&quantized(0.0, 0.0, &angles(rho, s, lat)), 0);
+            sums.add(&quantized(0.0, 0.0, &angles(rho, s, lat)), 0, FULL_WEIGHT);
         }
         let rows = sums.measurement().unwrap().rows;
         let (sl, cl) = (lat.sin() as Real, lat.cos() as Real);
@@ -446,11 +498,11 @@ mod tests {
                 )
             })
             .collect();
-        for q in &qs {
-            sums.add(q, 1);
+        for (k, q) in qs.iter().enumerate() {
+            sums.add(q, 1, (k % 65) as u8);
         }
-        for q in &qs {
-            sums.subtract(q, 1);
+        for (k, q) in qs.iter().enumerate() {
+            sums.subtract(q, 1, (k % 65) as u8);
         }
         assert_eq!(sums, CorrelationSums::default());
     }
@@ -464,7 +516,11 @@ mod tests {
             // The positions to four decimals, as an encoder reads them (not the exact constants).
             #[allow(clippy::approx_constant)]
             let rho = [0.0, 1.5708, 3.1416, 4.7124][(k * 7 / 480) % 4];
-            sums.add(&quantized(heel, -heel, &angles(rho, 0.4, 0.6)), 0);
+            sums.add(
+                &quantized(heel, -heel, &angles(rho, 0.4, 0.6)),
+                0,
+                [FULL_WEIGHT, 17, 0, 40][k % 4],
+            );
         }
         let z = sums.measurement().unwrap().z;
         for (ch, v) in z.iter().enumerate() {

@@ -33,7 +33,7 @@ use core::ptr::addr_of_mut;
 
 use crate::config::{Config, ConfigError, ROTATION_PERIOD_RANGE_S};
 use crate::correlation::ReferenceFilter;
-use crate::gap_fill::{GapFiller, GridSample, SLOTS};
+use crate::gap_fill::{GapFiller, GridSample, Passed};
 use crate::installation::Angles;
 use crate::math::{sin_cos, wrap_pi};
 use crate::methods::MethodState;
@@ -46,9 +46,16 @@ use crate::sway_gate::SwayMonitor;
 use crate::time_grid::{Placement, TimeGrid};
 use crate::Real;
 
+/// Most samples the window takes in one step (see `Estimator::take`).
+pub const MAX_SAMPLES_PER_STEP: u32 = 2;
+/// Most window operations (a sample taken, an old entry removed) in one step.
+pub const MAX_WORK_PER_STEP: u32 = 4;
+
 /// The ring capacity of the default estimator, in window entries: one period of up to 720 samples
-/// without bins (720 s at 1 Hz); longer periods are binned. 30 bytes an entry (the inputs and a
-/// fill weight): the estimator's state stays within 24 KiB.
+/// without bins (720 s at 1 Hz); longer periods are binned. 32 bytes an entry (the inputs, the
+/// entry's number, its weight and its fill weight coded in a byte): with the gap filler's delay
+/// line, the estimator's state stays within 29 KiB (28,824 bytes), under half the firmware's static
+/// RAM budget.
 pub const DEFAULT_CAPACITY: usize = 720;
 
 /// The constants of the sample grid, fixed when samples start to be fed (from the interval known
@@ -279,10 +286,12 @@ impl<const CAP: usize> Estimator<CAP> {
             return Some(Holdup::RotationFault { fault, since_s });
         }
         match &self.method {
-            MethodState::Windowed(m) if !m.window().is_full() => Some(Holdup::WindowFilling {
-                filled: m.window().filled() as u32,
-                len: m.window().len() as u32,
-            }),
+            MethodState::Windowed(m) if !m.window().has_spanned_a_period() => {
+                Some(Holdup::WindowFilling {
+                    filled: m.window().filled() as u32,
+                    len: m.window().len() as u32,
+                })
+            }
             _ => None,
         }
     }
@@ -351,6 +360,9 @@ impl<const CAP: usize> Estimator<CAP> {
                 Status::Converged
             }
             (Status::WarmingUp, Some(_)) => Status::Holding,
+            // A window just full, its first measurement not yet taken (the step that filled it
+            // also removed the first window's last extra entries: its update waits a step).
+            (Status::Estimating, None) => Status::WarmingUp,
             (s, _) => s,
         };
         let estimate = estimate.map(|e| Estimate {
@@ -386,28 +398,18 @@ impl<const CAP: usize> Estimator<CAP> {
         interval_s: f64,
         stamp_s: f64,
     ) -> Status {
-        let mut out: heapless::Vec<GridSample, SLOTS> = heapless::Vec::new();
-        let feed = match self.feed {
-            None => self.start_feeding(interval_s),
+        let (feed, restart) = match self.feed {
+            None => (self.start_feeding(interval_s), false),
             Some(feed) => {
                 let (step, restart) = match placement {
                     Placement::OnGrid { intervals } => (
                         intervals,
-                        intervals.saturating_sub(1) > self.config.max_filled_gap_samples,
+                        intervals.saturating_sub(1) >= self.restart_gap_samples(&feed),
                     ),
                     Placement::Learning | Placement::ClockStep => (1, true),
                 };
                 self.index = self.index.wrapping_add(step);
-                if restart {
-                    self.filler.flush(&mut |s| {
-                        let _ = out.push(*s);
-                    });
-                    self.take(&out, &feed, stamp_s);
-                    out.clear();
-                    self.restart_window();
-                    self.rotation.restart();
-                }
-                feed
+                (feed, restart)
             }
         };
         let grid_sample = GridSample {
@@ -420,11 +422,22 @@ impl<const CAP: usize> Estimator<CAP> {
             angles: *angles,
             fill_weight: 0,
         };
-        self.filler.push(grid_sample, &mut |s| {
-            let _ = out.push(*s);
-        });
-        self.take(&out, &feed, stamp_s);
+        self.filler
+            .push(&grid_sample, restart, self.config.max_filled_gap_samples);
+        self.take(&feed, stamp_s);
         self.window_status
+    }
+
+    /// Lost rows in a row from which the window restarts rather than leaving them out: an eighth
+    /// of the rotation period once known (a gap of an eighth of a period or more is not bridged);
+    /// half the shortest period while it is being learned (the samples since the first row are kept
+    /// for the first window, and gaps must not restart the period's detection).
+    fn restart_gap_samples(&self, feed: &Feed) -> u32 {
+        let fill = self.config.max_filled_gap_samples + 1;
+        match self.rotation.period_samples() {
+            Some(p) => (p / 8).max(fill),
+            None => (feed.limits.min_period_samples / 2).max(fill),
+        }
     }
 
     /// The first sample on a known grid: the grid's constants are fixed, the rotation monitor
@@ -445,56 +458,103 @@ impl<const CAP: usize> Estimator<CAP> {
         feed
     }
 
-    /// The window takes the samples the filler passed on, then the filter updates once. `stamp_s`
-    /// is the time stamp of the newest sample received (at grid index `self.index`).
-    fn take(&mut self, samples: &[GridSample], feed: &Feed, stamp_s: f64) {
-        if samples.is_empty() {
-            return;
-        }
-        for s in samples {
-            if s.fill_weight > 0 {
-                self.counters.filled = self.counters.filled.saturating_add(1);
+    /// The window takes what the filler passes on, then the filter updates once. `stamp_s` is the
+    /// time stamp of the newest sample received (at grid index `self.index`).
+    ///
+    /// # Bounded work a step
+    /// Normally one sample comes out of the filler a step and the window takes it, removing the
+    /// entry that leaves it; the filter then updates. A run of lost rows left out makes the
+    /// samples before it ready at once, but needs no catching up: the window takes one a step, and
+    /// steps over the run at once when it reaches it. A filled row, though, is a sample more for
+    /// the window than the log gave a step for: the filler's `backlog`, made up by a second sample
+    /// in a later step. And the window must drop the entries of a run's grid numbers a period
+    /// later, a few a push. A step takes a second sample only while samples are waiting and when the first was
+    /// not filled (a fill is the costliest sample; the second is never one), and does not update
+    /// the filter when it took two, when it filled one, or when the window removed more than one
+    /// entry (its work was then a second sample's); the window takes no measurement while it
+    /// holds more than one period.
+    fn take(&mut self, feed: &Feed, stamp_s: f64) {
+        let mut work = 0;
+        let mut took = 0;
+        let mut filled = false;
+        while took < MAX_SAMPLES_PER_STEP && work < MAX_WORK_PER_STEP {
+            if took > 0 && (filled || self.filler.backlog() == 0) {
+                break;
             }
-            match self.rotation.observe(s.index, s.rotation_rad, &feed.limits) {
-                Err(fault) => {
-                    if !matches!(self.window_status, Status::RotationFault(_)) {
-                        let behind = f64::from(self.index.wrapping_sub(s.index));
-                        self.fault = Some((fault, stamp_s - behind * feed.interval_s));
-                    }
-                    self.restart_window();
-                    if fault != RotationFault::RateMismatch {
-                        self.rotation.after_fault();
-                    }
-                    self.window_status = Status::RotationFault(fault);
-                    continue;
-                }
-                Ok(PatternEvent::PeriodKnown(period)) => self.method.configure(period),
-                Ok(PatternEvent::None) => {}
-            }
-            if self.rotation.period_samples().is_none() {
-                self.window_status = Status::DetectingPattern;
-                continue;
-            }
-            self.method.push(&self.config, feed, s);
-            self.window_status = if self.method.window_full() {
-                Status::Estimating
-            } else {
-                Status::WarmingUp
+            // A second sample is never a filled one (a fill is the costliest sample).
+            let Some(passed) = self.filler.pass_on(took == 0) else {
+                break;
             };
+            filled = passed.sample.fill_weight > 0;
+            took += 1;
+            work += 1 + self.take_one(&passed, feed, stamp_s);
         }
-        if let Some(alarm) =
-            self.method
-                .update(&self.config, feed, self.filler.single_fill_variance())
-        {
-            // The run's first block began `run_blocks` blocks of half a window before this update.
-            let entry_s = feed.interval_s * f64::from(self.rotation().samples_per_entry);
-            let window_s = entry_s * self.method.window_len() as f64;
-            self.error_change = Some(ErrorChange {
-                detected_s: stamp_s,
-                seen_since_s: stamp_s - f64::from(alarm.run_blocks) * 0.5 * window_s,
-                relearned: alarm.changed,
-            });
+        // A filled sample is a sample's work and a fill's: the filter waits for the next step.
+        if took > 0 && work <= 2 && !filled {
+            if let Some(alarm) =
+                self.method
+                    .update(&self.config, feed, self.filler.single_fill_variance())
+            {
+                // The run's first block began `run_blocks` blocks of half a window before this update.
+                let entry_s = feed.interval_s * f64::from(self.rotation().samples_per_entry);
+                let window_s = entry_s * self.method.window_len() as f64;
+                self.error_change = Some(ErrorChange {
+                    detected_s: stamp_s,
+                    seen_since_s: stamp_s - f64::from(alarm.run_blocks) * 0.5 * window_s,
+                    relearned: alarm.changed,
+                });
+            }
         }
+    }
+
+    /// The window takes one sample; returns how many old entries it removed.
+    fn take_one(&mut self, passed: &Passed, feed: &Feed, stamp_s: f64) -> u32 {
+        let s = &passed.sample;
+        if passed.restart {
+            self.restart_window();
+            self.rotation.restart();
+        }
+        if s.fill_weight > 0 {
+            self.counters.filled = self.counters.filled.saturating_add(1);
+        }
+        let observed = self.rotation.observe(s.index, s.rotation_rad, &feed.limits);
+        if self.rotation.period_samples().is_none() {
+            // The pattern is being learned anew: no window of the old period goes on filling.
+            self.method.forget_period();
+        }
+        match observed {
+            Err(fault) => {
+                if !matches!(self.window_status, Status::RotationFault(_)) {
+                    let behind = f64::from(self.index.wrapping_sub(s.index));
+                    self.fault = Some((fault, stamp_s - behind * feed.interval_s));
+                }
+                self.restart_window();
+                if fault != RotationFault::RateMismatch {
+                    self.rotation.after_fault();
+                }
+                self.window_status = Status::RotationFault(fault);
+                return 0;
+            }
+            Ok(PatternEvent::PeriodKnown(period)) => self.method.configure(period),
+            Ok(PatternEvent::None) => {}
+        }
+        // The window keeps the samples from the first row on while the period is being learned,
+        // so that it holds a whole period as soon as the period is known.
+        let removed = self.method.push(
+            &self.config,
+            feed,
+            s,
+            passed.weight,
+            self.rotation.period_samples().is_some(),
+        );
+        self.window_status = if self.rotation.period_samples().is_none() {
+            Status::DetectingPattern
+        } else if self.method.window_full() {
+            Status::Estimating
+        } else {
+            Status::WarmingUp
+        };
+        removed
     }
 
     fn restart_window(&mut self) {

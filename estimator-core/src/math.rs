@@ -1,4 +1,5 @@
-//! The step's elementary functions: sine and cosine, square root, rounding, angle wrapping.
+//! The step's elementary functions: sine and cosine, square root, rounding, angle wrapping, the
+//! larger and smaller of two numbers.
 //!
 //! # Square root
 //! `libm` has no ARM implementation of `sqrtf`: on the Cortex-M4F it runs a software loop of a few
@@ -18,6 +19,39 @@
 
 use crate::Real;
 
+/// The larger and the smaller of two numbers by one comparison. On the Cortex-M4F `f32::max` and
+/// `f32::min` are calls to `fmaxf` and `fminf` (IEEE 754 maxNum and minNum, whose rule that a NaN
+/// operand gives the other costs about 11 instructions a call), and the step's bookkeeping of
+/// noise, spread and change takes tens of them; these are inline compares. Every value they are
+/// given in the step is finite (no NaN reaches the filter), where they give what `max` and `min`
+/// give; a NaN `self` would be passed on, not dropped.
+pub trait Compare: Sized {
+    /// `self` or `other`, whichever is larger (`self` when they are equal).
+    fn larger(self, other: Self) -> Self;
+    /// `self` or `other`, whichever is smaller (`self` when they are equal).
+    fn smaller(self, other: Self) -> Self;
+}
+
+impl Compare for Real {
+    #[inline(always)]
+    fn larger(self, other: Real) -> Real {
+        if self < other {
+            other
+        } else {
+            self
+        }
+    }
+
+    #[inline(always)]
+    fn smaller(self, other: Real) -> Real {
+        if other < self {
+            other
+        } else {
+            self
+        }
+    }
+}
+
 /// Wraps an angle to [-pi, pi] in constant time (any finite input; exact for |x| < a few turns).
 pub fn wrap_pi(angle_rad: Real) -> Real {
     let two_pi = 2.0 * core::f64::consts::PI as Real;
@@ -32,10 +66,21 @@ pub fn round_to_i32(x: Real) -> i32 {
     (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i32
 }
 
-/// Round to nearest, ties to even.
+/// Round to nearest, ties to even: `libm::rintf`, bit for bit, in a few FPU instructions and no
+/// library code. For |x| < 2^23, adding 2^23 to |x| leaves no bits below the units, so the FPU's
+/// addition rounds |x| to an integer (ties to even, which is symmetric: rounding |x| and giving
+/// it x's sign is rounding x), and subtracting 2^23 again is exact; the sign is put back, as
+/// `rintf` gives -0 for -0.3. From 2^23 on every float is an integer (or infinite, or NaN) and is
+/// its own rounding.
 #[cfg(not(feature = "f64"))]
 pub fn round(x: f32) -> f32 {
-    libm::rintf(x)
+    const TWO_23: f32 = 8_388_608.0;
+    let magnitude = x.abs();
+    if magnitude < TWO_23 {
+        ((magnitude + TWO_23) - TWO_23).copysign(x)
+    } else {
+        x
+    }
 }
 /// Round to nearest, ties to even.
 #[cfg(feature = "f64")]
@@ -83,7 +128,7 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
     const PIO2_HI: f32 = 1.570_312_5;
     const PIO2_MID: f32 = 4.837_513e-4;
     const PIO2_LO: f32 = 7.549_79e-8;
-    let k = libm::rintf(x * FRAC_2_PI);
+    let k = round(x * FRAC_2_PI);
     let r = ((x - k * PIO2_HI) - k * PIO2_MID) - k * PIO2_LO;
     let z = r * r;
     let s = r + r * z * (-1.666_665_5e-1 + z * (8.332_161e-3 + z * -1.951_529_6e-4));
@@ -139,6 +184,36 @@ mod tests {
         assert_eq!(sqrt(0.0), 0.0);
         assert!(sqrt(-1.0).is_nan() && sqrt(Real::NAN).is_nan());
         assert_eq!(sqrt(Real::INFINITY), Real::INFINITY);
+    }
+
+    #[test]
+    #[cfg(not(feature = "f64"))]
+    fn round_is_rintf_bit_for_bit() {
+        let mut bits: u32 = 0;
+        loop {
+            for x in [f32::from_bits(bits), -f32::from_bits(bits)] {
+                assert_eq!(round(x).to_bits(), libm::rintf(x).to_bits(), "{x:e}");
+            }
+            // Every 331st float of either sign from 0 to infinity (below: every half-integer
+            // near 0).
+            if bits >= 0x7F80_0000 {
+                break;
+            }
+            bits = (bits + 331).min(0x7F80_0000);
+        }
+        // Every half-integer near 0, and ties where a float has one bit below the units
+        // (2^22 to 2^23) and where it has none (2^23 on).
+        for k in -4000..4000 {
+            for x in [
+                k as f32 * 0.5,
+                4_194_304.0 + k as f32 * 0.5,
+                -4_194_304.0 + k as f32 * 0.5,
+                8_388_608.0 + k as f32,
+            ] {
+                assert_eq!(round(x).to_bits(), libm::rintf(x).to_bits(), "{x}");
+            }
+        }
+        assert!(round(f32::NAN).is_nan());
     }
 
     #[test]

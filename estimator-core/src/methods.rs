@@ -76,17 +76,34 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
-    /// Feeds one sample (received or filled); true if the filter was updated (the windowed method
-    /// updates in [`MethodState::update`], once per step).
-    pub fn push(&mut self, config: &Config, feed: &Feed, sample: &GridSample) -> bool {
+    /// Feeds one sample (received or filled) of weight `weight` ([`crate::gap_fill`]); returns how
+    /// many old window entries it removed. The windowed method takes samples from the first row on
+    /// (its window keeps them while the period is learned) and updates in
+    /// [`MethodState::update`], once per step; the others take samples once the period is known
+    /// (`period_known`) and update here, and leave the weights aside.
+    pub fn push(
+        &mut self,
+        config: &Config,
+        feed: &Feed,
+        sample: &GridSample,
+        weight: u8,
+        period_known: bool,
+    ) -> u32 {
         match self {
-            MethodState::Windowed(m) => {
-                m.push(sample, feed.reference_alpha);
-                false
-            }
+            MethodState::Windowed(m) => m.push(sample, feed.reference_alpha, weight),
             #[cfg(feature = "paper-method")]
-            MethodState::Paper(m) => m.step(config, feed.interval_s, sample),
-            MethodState::Traditional(m) => m.step(config, feed.interval, sample),
+            MethodState::Paper(m) => {
+                if period_known {
+                    m.step(config, feed.interval_s, sample);
+                }
+                0
+            }
+            MethodState::Traditional(m) => {
+                if period_known {
+                    m.step(config, feed.interval, sample);
+                }
+                0
+            }
         }
     }
 
@@ -117,6 +134,15 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
+    /// The rotation pattern was forgotten: the windowed method's window lets go of its period
+    /// ([`crate::methods::Windowed::forget_period`]); the others restart their window when the
+    /// fault is reported and take no sample until the period is known again.
+    pub fn forget_period(&mut self) {
+        if let MethodState::Windowed(m) = self {
+            m.forget_period();
+        }
+    }
+
     /// Whether the method needs a full window of one period before it can update.
     pub fn needs_window(&self) -> bool {
         !matches!(self, MethodState::Traditional(_))
@@ -132,10 +158,11 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
-    /// Whether the method's window is full (always, for a method without one).
+    /// Whether the method's window has spanned a whole period since it started (always, for a
+    /// method without one).
     pub fn window_full(&self) -> bool {
         match self {
-            MethodState::Windowed(m) => m.window().is_full(),
+            MethodState::Windowed(m) => m.window().has_spanned_a_period(),
             #[cfg(feature = "paper-method")]
             MethodState::Paper(m) => m.window().is_full(),
             MethodState::Traditional(_) => true,

@@ -19,7 +19,7 @@
 
 use heapless::Deque;
 
-use crate::correlation::{CorrelationSums, QuantizedSample};
+use crate::correlation::{CorrelationSums, QuantizedSample, FULL_WEIGHT};
 use crate::gap_fill::GridSample;
 use crate::installation::Angles;
 use crate::math::{round, sin_cos, wrap_pi};
@@ -131,48 +131,165 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
     }
 }
 
-/// The moving average of the windowed method: the last `len` entries of exactly one rotation
-/// period, as the exact [`CorrelationSums`] of their fixed-point inputs.
+/// The moving average of the windowed method: the entries of exactly one rotation period, as the
+/// exact [`CorrelationSums`] of their fixed-point inputs.
 ///
 /// The ring holds each entry's inputs ([`QuantizedSample`], 28 bytes: roll, pitch, the sines and
-/// cosines, and the low-passed references) rather than its 28 products; the products of the entry that leaves the window are
-/// formed again from them, exactly as they were when it came in, and subtracted.
+/// cosines, and the low-passed references; 32 with its number and weights, [`Entry`]) rather than
+/// its 28 products; the products of the entry
+/// that leaves the window are formed again from them, exactly as they were when it came in, and
+/// subtracted.
+///
+/// # One period of time, not of entries
+/// Each entry carries its number on the sample grid (the grid index, or the bin's number with
+/// bins), and the window holds the entries of the last `len` numbers: rows lost in a run too
+/// long to fill ([`crate::gap_fill`]) are simply absent, and the measurement is built from the
+/// entries that are there (`z = row . x` holds for any subset, see [`crate::correlation`]). An
+/// entry near such a run comes with a weight below [`FULL_WEIGHT`] (the taper that keeps the
+/// sway out of the sums, [`crate::gap_fill`]), and the sums are weighted.
+///
+/// # Bounded work a push
+/// After a run of lost rows the next entry's number jumps, and the entries of as many numbers
+/// leave at once; before the period is known the window holds more than a period (see
+/// [`Self::configure`]). Neither is done in one step: a push removes at most
+/// [`MAX_REMOVALS_PER_PUSH`] old entries, and until the window is back to one period
+/// ([`Self::is_full`] false meanwhile) the filter takes no measurement from it. So no step does
+/// more than a few entries' work, whatever the gap.
 ///
 /// # Bins
 /// When one period holds more samples than the ring's capacity (a 10 Hz log, a long period),
 /// consecutive samples are averaged into bins of `bin` samples (roll, pitch, latitude, the
-/// references, and the angles as offsets from the bin's first sample), and each bin is one entry: the window still
+/// references, and the angles as offsets from the bin's first sample, each weighted by the
+/// sample's weight), and each bin is one entry, of the mean weight of its samples: the window still
 /// spans one period (exactly, when `bin` divides the period; the nearest whole number of bins
 /// otherwise). Averaging within a bin slightly low-passes the sway (it helps) and the oscillation
 /// of eq (2) (a relative error of about `(w_r b dt)^2 / 24`, 1e-5 for 5 samples of 0.1 s at 480 s).
 /// Its measured cost is in docs/real-logs.md (Bins).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CorrelationWindow<const CAP: usize> {
-    /// The entries in the window, oldest first (at most `len`).
+    /// The entries in the window, oldest first.
     ring: Deque<Entry, CAP>,
     /// The exact sums of the entries in `ring`.
     sums: CorrelationSums,
-    /// Entries in a full window.
+    /// Entry numbers in a full window (one period).
     len: usize,
     /// Samples per entry.
     bin: u32,
+    /// Whether `len` is one period of the rotation pattern (set by [`Self::configure`]); before,
+    /// the window keeps up to `CAP` entries from the first sample on.
+    configured: bool,
+    /// The grid index of the first sample since the window was emptied (bins count from it).
+    origin: Option<u32>,
+    /// The number of the first entry since the window was emptied, and of the newest.
+    first: u32,
+    newest: Option<u32>,
+    /// Whether the window has held exactly one period since it was emptied.
+    was_full: bool,
     partial: Bin,
 }
 
-/// One entry of the window: a sample's (or a bin's) fixed-point inputs and how many of its samples
-/// were filled. Packed to 30 bytes rather than padded to 32, which keeps the default estimator's
-/// 720 entries, and so its state, within 24 KiB; its fields are read by value, never by reference.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[repr(C, packed(2))]
-pub struct Entry {
-    pub sample: QuantizedSample,
-    pub fill_weight: u16,
+/// What a push did: whether it completed an entry, and how many old entries it removed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pushed {
+    pub completed: bool,
+    pub removed: u32,
 }
 
-/// A bin being filled.
+/// Most old entries a push removes (see [`CorrelationWindow`], "Bounded work a push").
+pub const MAX_REMOVALS_PER_PUSH: usize = 3;
+
+/// One entry of the window: a sample's (or a bin's) fixed-point inputs, its number on the grid
+/// (low 16 bits), its weight and its fill weight in one byte ([`FillCode`]). 32 bytes, aligned
+/// like its `i32`s: an entry is copied in and out of the ring by a few word moves (a packed entry
+/// took a byte-wise library copy each way).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Entry {
+    pub sample: QuantizedSample,
+    /// The entry's number (grid index, or bin number with bins), low 16 bits.
+    pub number: u16,
+    /// Its weight in the sums, 0 to [`FULL_WEIGHT`].
+    pub weight: u8,
+    /// How much of it was filled ([`crate::gap_fill`]): its fill weight, coded.
+    pub fill: FillCode,
+}
+
+impl Entry {
+    /// An entry of weight 0: its products are all 0 (what [`CorrelationSums::replace`] takes for
+    /// the side of a change that has no entry).
+    pub const NONE: Entry = Entry {
+        sample: QuantizedSample {
+            roll: 0,
+            pitch: 0,
+            sin_rho: 0,
+            cos_rho: 0,
+            sin_rho_s: 0,
+            cos_rho_s: 0,
+            sin_lat: 0,
+            cos_lat: 0,
+            reference: [0; 4],
+        },
+        number: 0,
+        weight: 0,
+        fill: FillCode(0),
+    };
+
+    /// The fill weight the sums count for this entry.
+    pub fn fill_weight(&self) -> u32 {
+        self.fill.weight()
+    }
+}
+
+/// A fill weight (a filled sample's error variance in units of a single filled sample's, summed
+/// over a bin; 0 when nothing was filled) in one byte: exact up to 127, above that rounded up to
+/// four significant bits (at most 6.25 % high, never low), saturating at 31,744. Codes 0-127 are
+/// the weight itself; code `128 + 16 e + m` is `(16 + m) 2^(e + 3)`. The window's sums count the
+/// coded weight, in and out alike, so they stay exact.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FillCode(pub u8);
+
+impl FillCode {
+    /// The largest weight a code holds.
+    pub const MAX_WEIGHT: u32 = 31 << 10;
+
+    /// The code of the smallest coded weight at or above `weight` (saturating).
+    pub fn of(weight: u32) -> FillCode {
+        if weight < 128 {
+            return FillCode(weight as u8);
+        }
+        if weight >= Self::MAX_WEIGHT {
+            return FillCode(u8::MAX);
+        }
+        // weight in [2^(b), 2^(b+1)), b >= 7: four significant bits, e = b - 7.
+        let e = 31 - weight.leading_zeros() - 7;
+        let shift = e + 3;
+        let mut m = weight >> shift;
+        if weight & ((1 << shift) - 1) != 0 {
+            m += 1;
+        }
+        let (e, m) = if m == 32 { (e + 1, 16) } else { (e, m) };
+        FillCode((128 + 16 * e + (m - 16)) as u8)
+    }
+
+    /// The weight the code stands for.
+    pub fn weight(self) -> u32 {
+        let c = u32::from(self.0);
+        if c < 128 {
+            c
+        } else {
+            let k = c - 128;
+            (16 + (k & 15)) << ((k >> 4) + 3)
+        }
+    }
+}
+
+/// A bin being filled: the sums of its samples' values times their weights.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Bin {
     pub count: u32,
+    /// The bin's number.
+    pub number: u32,
+    /// Sum of the samples' weights (a full weight counts 1).
+    pub weight: Real,
     pub roll_rad: Real,
     pub pitch_rad: Real,
     pub latitude_rad: Real,
@@ -190,6 +307,8 @@ pub struct Bin {
 impl Bin {
     /// Nothing in it.
     pub const ZERO: Bin = Bin {
+        number: 0,
+        weight: 0.0,
         count: 0,
         roll_rad: 0.0,
         pitch_rad: 0.0,
@@ -242,13 +361,19 @@ impl WindowLayout {
 }
 
 impl<const CAP: usize> CorrelationWindow<CAP> {
-    /// An empty window of one entry per sample over `len` entries (set by [`Self::configure`]).
+    /// An empty window of one entry per sample, not yet set to a period (it keeps up to `CAP`
+    /// entries until [`Self::configure`]).
     pub const fn new() -> Self {
         CorrelationWindow {
             ring: Deque::new(),
             sums: CorrelationSums::ZERO,
             len: if CAP > 1 { CAP } else { 1 },
             bin: 1,
+            configured: false,
+            origin: None,
+            first: 0,
+            newest: None,
+            was_full: false,
             partial: Bin::ZERO,
         }
     }
@@ -257,25 +382,37 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     pub fn reset(&mut self) {
         self.len = CAP.max(1);
         self.bin = 1;
+        self.configured = false;
         self.clear();
     }
 
-    /// Sets the window to one period of `period_samples` and empties it.
+    /// Sets the window to one period of `period_samples`. When a period fits the ring one sample
+    /// an entry, the entries kept so far stay (the samples since the first row, while the period
+    /// was being learned): the window holds one period as soon as the excess has been removed, a
+    /// few entries a push. With bins the window starts empty.
     pub fn configure(&mut self, period_samples: u32) {
         let layout = WindowLayout::for_period(period_samples, CAP);
+        let keep = layout.samples_per_entry == 1 && self.bin == 1;
         self.bin = layout.samples_per_entry;
         self.len = layout.entries.clamp(1, CAP.max(1));
-        self.clear();
+        self.configured = true;
+        if !keep {
+            self.clear();
+        }
     }
 
-    /// Forgets every entry and the bin being filled (after a gap or a rotation fault).
+    /// Forgets every entry and the bin being filled (after a long gap or a rotation fault).
     pub fn clear(&mut self) {
         self.ring.clear();
         self.sums = CorrelationSums::default();
         self.partial = Bin::default();
+        self.origin = None;
+        self.newest = None;
+        self.first = 0;
+        self.was_full = false;
     }
 
-    /// Entries in a full window.
+    /// Entry numbers in a full window.
     pub fn len(&self) -> usize {
         self.len
     }
@@ -285,14 +422,46 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         self.bin
     }
 
-    /// True once the window holds `len` entries.
-    pub fn is_full(&self) -> bool {
-        self.ring.len() >= self.len
+    /// Whether the window is set to one period of the rotation pattern.
+    pub fn is_configured(&self) -> bool {
+        self.configured
     }
 
-    /// Entries in the window.
+    /// The entry numbers the window spans so far, up to `len`.
+    fn span(&self) -> usize {
+        match self.newest {
+            Some(n) => (n.wrapping_sub(self.first) as usize)
+                .saturating_add(1)
+                .min(self.len),
+            None => 0,
+        }
+    }
+
+    /// True when the window is set to one period, has spanned a whole one since it was emptied,
+    /// and holds no entry older than that period: a measurement can be taken.
+    pub fn is_full(&self) -> bool {
+        self.configured && self.span() >= self.len && !self.is_over_long()
+    }
+
+    /// True once the window has held exactly one period since it was emptied (after a run of lost
+    /// rows it may hold a few older entries for a few pushes: still true).
+    pub fn has_spanned_a_period(&self) -> bool {
+        self.was_full
+    }
+
+    /// Whether the window still holds entries older than one period (being removed, a few a push).
+    fn is_over_long(&self) -> bool {
+        match (self.ring.front(), self.newest) {
+            (Some(front), Some(n)) => {
+                usize::from((n as u16).wrapping_sub(front.number)) >= self.len
+            }
+            _ => false,
+        }
+    }
+
+    /// The entry numbers spanned so far, up to a full window (what [`crate::Holdup`] reports).
     pub fn filled(&self) -> usize {
-        self.ring.len()
+        self.span()
     }
 
     /// The running sums.
@@ -305,39 +474,72 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         self.ring.iter().copied()
     }
 
-    /// Adds one sample with its low-passed references; returns true when it completed an entry
-    /// (every sample, without bins).
-    pub fn push(&mut self, s: &GridSample, reference: &[Real; 4]) -> bool {
+    /// Adds one sample with its low-passed references and its weight (0 to [`FULL_WEIGHT`]):
+    /// whether it completed an entry (every sample, without bins) and how many old entries went.
+    /// Samples come in grid order; lost ones are simply not pushed.
+    pub fn push(&mut self, s: &GridSample, reference: &[Real; 4], weight: u8) -> Pushed {
         if self.bin <= 1 {
-            self.push_entry(
-                QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference),
-                s.fill_weight,
-            );
-            return true;
+            let q = QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference);
+            let removed =
+                self.push_entry(s.index, q, FillCode::of(u32::from(s.fill_weight)), weight);
+            return Pushed {
+                completed: true,
+                removed,
+            };
         }
+        let origin = *self.origin.get_or_insert(s.index);
+        let number = s.index.wrapping_sub(origin) / self.bin;
+        let mut out = Pushed {
+            completed: false,
+            removed: 0,
+        };
+        if self.partial.count > 0 && self.partial.number != number {
+            // The rest of the bin was lost: the bin is what it has.
+            out = self.close_bin();
+        }
+        let w = Real::from(weight.min(FULL_WEIGHT)) * (1.0 / FULL_WEIGHT as Real);
         let b = &mut self.partial;
         if b.count == 0 {
             *b = Bin {
+                number,
                 rotation0_rad: s.rotation_rad,
                 rotation_minus_platform0_rad: s.rotation_minus_platform_rad,
                 ..Bin::default()
             };
         }
         b.count += 1;
-        b.roll_rad += s.roll_rad;
-        b.pitch_rad += s.pitch_rad;
-        b.latitude_rad += s.latitude_rad;
+        b.weight += w;
+        b.roll_rad += w * s.roll_rad;
+        b.pitch_rad += w * s.pitch_rad;
+        b.latitude_rad += w * s.latitude_rad;
         for ch in 0..4 {
-            b.reference[ch] += reference[ch];
+            b.reference[ch] += w * reference[ch];
         }
-        b.rotation_offset_rad += wrap_pi(s.rotation_rad - b.rotation0_rad);
+        b.rotation_offset_rad += w * wrap_pi(s.rotation_rad - b.rotation0_rad);
         b.rotation_minus_platform_offset_rad +=
-            wrap_pi(s.rotation_minus_platform_rad - b.rotation_minus_platform0_rad);
+            w * wrap_pi(s.rotation_minus_platform_rad - b.rotation_minus_platform0_rad);
         b.fill_weight += u32::from(s.fill_weight);
-        if b.count < self.bin {
-            return false;
+        if b.count >= self.bin {
+            let closed = self.close_bin();
+            out = Pushed {
+                completed: out.completed || closed.completed,
+                removed: out.removed + closed.removed,
+            };
         }
-        let n = b.count as Real;
+        out
+    }
+
+    /// Turns the bin being filled into an entry (none when all its samples had weight 0).
+    fn close_bin(&mut self) -> Pushed {
+        let b = self.partial;
+        self.partial = Bin::default();
+        if !(b.weight > 0.0) {
+            return Pushed {
+                completed: false,
+                removed: 0,
+            };
+        }
+        let n = b.weight;
         let rotation = wrap_pi(b.rotation0_rad + b.rotation_offset_rad / n);
         let rotation_minus_platform =
             wrap_pi(b.rotation_minus_platform0_rad + b.rotation_minus_platform_offset_rad / n);
@@ -352,32 +554,89 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             &angles,
             &b.reference.map(|r| r / n),
         );
-        let weight = b.fill_weight.min(u32::from(u16::MAX)) as u16;
-        self.partial = Bin::default();
-        self.push_entry(q, weight);
-        true
+        let fill = FillCode::of(b.fill_weight);
+        // The bin's weight: the mean of its samples' (lost samples count 0).
+        let weight =
+            round(n * FULL_WEIGHT as Real / self.bin as Real).clamp(0.0, FULL_WEIGHT as Real) as u8;
+        let removed = self.push_entry(b.number, q, fill, weight);
+        Pushed {
+            completed: true,
+            removed,
+        }
     }
 
-    fn push_entry(&mut self, sample: QuantizedSample, fill_weight: u16) {
-        if self.is_full() {
-            // Read in place, then dropped: one copy of the packed entry fewer than popping it.
-            if let Some(oldest) = self.ring.front() {
-                let (q, w) = (oldest.sample, oldest.fill_weight);
-                self.sums.subtract(&q, w);
+    /// Adds an entry, removing up to [`MAX_REMOVALS_PER_PUSH`] entries older than one period (and
+    /// the oldest when the ring is full); returns how many went. Every change of the sums is one
+    /// pass of [`CorrelationSums::replace`]: the first entry removed with the new one, any further
+    /// one with an entry of weight 0 (whose products are all 0), and the new one alone, when none
+    /// goes, with an entry of weight 0 in its place. One copy of the products' code in the image,
+    /// and the same exact sums as adding and subtracting apart.
+    fn push_entry(
+        &mut self,
+        number: u32,
+        sample: QuantizedSample,
+        fill: FillCode,
+        weight: u8,
+    ) -> u32 {
+        if self.newest.is_none() {
+            self.first = number;
+        }
+        self.newest = Some(number);
+        let mut removed = 0;
+        let mut new = Some(Entry {
+            sample,
+            number: number as u16,
+            weight,
+            fill,
+        });
+        loop {
+            // The oldest goes when it is older than one period (a few a push), or to make room
+            // for the new entry in a full ring (only when more than `CAP` numbers are held, before
+            // the period is known).
+            let old = match self.ring.front() {
+                Some(o)
+                    if (new.is_some() && self.ring.is_full())
+                        || (removed < MAX_REMOVALS_PER_PUSH
+                            && usize::from((number as u16).wrapping_sub(o.number)) >= self.len) =>
+                {
+                    Some(o)
+                }
+                _ => None,
+            };
+            // The new entry goes in on the first pass (the ring has room: it was not full, or its
+            // oldest goes now).
+            let adding = new.take().filter(|_| old.is_some() || !self.ring.is_full());
+            let going = old.is_some();
+            if !going && adding.is_none() {
+                break;
             }
-            self.ring.pop_front();
+            let (o, a) = (
+                old.unwrap_or(&Entry::NONE),
+                adding.as_ref().unwrap_or(&Entry::NONE),
+            );
+            self.sums.replace(
+                &o.sample,
+                o.fill_weight(),
+                o.weight,
+                &a.sample,
+                a.fill_weight(),
+                a.weight,
+            );
+            self.sums.count =
+                (self.sums.count + u32::from(adding.is_some())).saturating_sub(u32::from(going));
+            if going {
+                self.ring.pop_front();
+                removed += 1;
+            }
+            if let Some(e) = adding {
+                // Room was made above: this cannot fail.
+                let _ = self.ring.push_back(e);
+            }
         }
-        // `len <= CAP` and the window is not full: there is room.
-        if self
-            .ring
-            .push_back(Entry {
-                sample,
-                fill_weight,
-            })
-            .is_ok()
-        {
-            self.sums.add(&sample, fill_weight);
+        if !self.was_full && self.is_full() {
+            self.was_full = true;
         }
+        removed as u32
     }
 }
 

@@ -12,7 +12,18 @@
 //! passes every angle it reaches once per period in each direction it turns, so the time between two
 //! passes of the same reference angle in the same direction is the period. A pass is counted with
 //! 1 deg of hysteresis (jitter of the angle reading does not count as passes). The first reference
-//! passed twice in one direction gives the period, within the first one or two cycles.
+//! passed twice in one direction gives the period: a one-way rotation within a period and 1/16 of
+//! the start. (Sixteen references would take a sixteenth of a period off the first estimate; the
+//! measured effect on its accuracy was mixed, and the checkpoint image keeps eight.)
+//!
+//! # Across lost rows
+//! A gap is not a restart: the angle is continuous between the rows that are there. A pass seen
+//! across lost rows is placed where the angle, interpolated linearly between the rows on either
+//! side, crossed the threshold (exact for a steady rate, a few samples off inside a stop-and-go
+//! move, whose effect on the period is checked by the health check below); the rate over the gap
+//! is the angle turned over the samples it spans, and a dwell counts the lost samples too. Only a
+//! gap the window cannot bridge (an eighth of a period, see [`crate::estimator`]) restarts the
+//! pass timings.
 //!
 //! # What the pattern looks like
 //! Over the cycle after the period is known (while the first window fills), with `w_n = 2 pi / T`
@@ -48,7 +59,8 @@ pub const LEVELS: usize = 8;
 /// Samples in the short mean of the rotation increment.
 pub const SHORT_STEPS: u32 = 4;
 const PI: Real = core::f64::consts::PI as Real;
-const QUARTER_PI: Real = core::f64::consts::FRAC_PI_4 as Real;
+/// The spacing of the reference angles, rad (45 deg).
+const LEVEL_STEP_RAD: Real = core::f64::consts::FRAC_PI_4 as Real;
 
 /// Hysteresis of a pass, rad (1 deg).
 pub const PASS_HYSTERESIS_RAD: Real = 0.017_453_292;
@@ -147,6 +159,37 @@ fn pass_on_time(elapsed: u32, period: u32, limits: &Limits) -> bool {
     (elapsed as Real - period as Real).abs() <= limits.period_tolerance * period as Real + 1.0
 }
 
+/// The grid index at which a pass between the sample `k` and the one `steps` later (across lost
+/// rows) happened, by linear interpolation of the angle from the reference: the first index at or
+/// after the moment the angle crossed the hysteresis threshold it crossed (`+` for a pass upwards,
+/// `dir` 0; `-` downwards), which is the index a received row there would have given for a
+/// rotation at a steady rate. `d_prev` and `d` are the angles from the reference at `k` and now.
+fn pass_across_gap(k: u32, steps: u32, d_prev: Real, d: Real, dir: usize) -> u32 {
+    let mut d_prev = d_prev;
+    if d_prev < -PI {
+        d_prev += 2.0 * PI;
+    }
+    let threshold = if dir == 0 {
+        PASS_HYSTERESIS_RAD
+    } else {
+        -PASS_HYSTERESIS_RAD
+    };
+    let span = d - d_prev;
+    let f = if span != 0.0 {
+        ((threshold - d_prev) / span).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let x = f * steps as Real;
+    let whole = x as u32;
+    let after = if (whole as Real) < x {
+        whole + 1
+    } else {
+        whole
+    };
+    k.wrapping_add(after.clamp(1, steps))
+}
+
 /// The rotation monitor.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RotationMonitor {
@@ -237,7 +280,9 @@ impl RotationMonitor {
         self.last_pass = [[None; 2]; LEVELS];
     }
 
-    /// Forgets the pattern (a pinned period stays) and detects it anew.
+    /// Forgets the pattern (a pinned period stays) and detects it anew. Out of line: one copy for
+    /// its three callers.
+    #[inline(never)]
     fn forget(&mut self) {
         let pinned = if self.pinned {
             self.period_samples
@@ -247,7 +292,9 @@ impl RotationMonitor {
         *self = RotationMonitor::new(pinned);
     }
 
-    /// Watches one sample (index on the sample grid, rotation angle).
+    /// Watches one sample (index on the sample grid, rotation angle): the rotation's rate, the
+    /// passes of the reference angles (which time the period), and, once the pattern is known,
+    /// its health; while it is being learned, the learning.
     pub fn observe(
         &mut self,
         index: u32,
@@ -256,28 +303,81 @@ impl RotationMonitor {
     ) -> Result<PatternEvent, RotationFault> {
         let base = *self
             .levels_rad
-            .get_or_insert(wrap_pi(rotation_rad + 0.5 * QUARTER_PI));
+            .get_or_insert(wrap_pi(rotation_rad + 0.5 * LEVEL_STEP_RAD));
         let previous = self.previous.replace((index, rotation_rad));
-        let increment = match previous {
-            Some((k, rho)) if index.wrapping_sub(k) == 1 => Some(wrap_pi(rotation_rad - rho)),
-            _ => None,
+        let (steps, increment) = self.track_rate(previous, index, rotation_rad);
+        let event = self.watch_passes(previous, steps, index, rotation_rad, base, limits)?;
+        if let PatternEvent::PeriodKnown(_) = event {
+            self.learn_start = None;
+        }
+        let Some(period) = self.period_samples else {
+            return Ok(event);
+        };
+        // In the step's float type: no software f64 division a sample.
+        let nominal = 2.0 * PI / period as Real;
+        let still = self.short_steps > 0 && self.short_increment_rad.abs() < 0.25 * nominal;
+        self.dwell_run = if still {
+            self.dwell_run.saturating_add(steps)
+        } else {
+            0
+        };
+        let Some(features) = self.features else {
+            self.learn(index, increment, nominal, period);
+            return Ok(event);
+        };
+        self.check_health(&features, index, period, nominal, limits)?;
+        Ok(event)
+    }
+
+    /// The samples since the previous one (more than 1 across lost rows) and the rotation over
+    /// them, wrapped (`None` for the first sample): the angle is continuous between the rows that
+    /// are there. Updates the short mean of the rotation per sample.
+    #[inline(always)]
+    fn track_rate(
+        &mut self,
+        previous: Option<(u32, Real)>,
+        index: u32,
+        rotation_rad: Real,
+    ) -> (u32, Option<Real>) {
+        let (steps, increment) = match previous {
+            Some((k, rho)) if index.wrapping_sub(k) >= 1 => {
+                (index.wrapping_sub(k), Some(wrap_pi(rotation_rad - rho)))
+            }
+            _ => (1, None),
         };
         if let Some(inc) = increment {
             self.short_steps = (self.short_steps + 1).min(SHORT_STEPS);
-            self.short_increment_rad += (inc - self.short_increment_rad) / self.short_steps as Real;
+            let per_step = if steps == 1 { inc } else { inc / steps as Real };
+            self.short_increment_rad +=
+                (per_step - self.short_increment_rad) / self.short_steps as Real;
         }
+        (steps, increment)
+    }
+
+    /// The passes of the reference angles (45 deg apart from `base`): the first two passes of one
+    /// reference the same way give the period; once it is known, only the reference that times
+    /// it is watched, and a pass off time forgets the pattern. A pass inside a run of lost rows is
+    /// placed by interpolation across it.
+    #[inline(always)]
+    fn watch_passes(
+        &mut self,
+        previous: Option<(u32, Real)>,
+        steps: u32,
+        index: u32,
+        rotation_rad: Real,
+        base: Real,
+        limits: &Limits,
+    ) -> Result<PatternEvent, RotationFault> {
         let mut event = PatternEvent::None;
-        // Passes of the reference angles.
         // The angle from the first reference, once wrapped; from the others by subtracting 45 deg
         // steps and wrapping with one comparison (no division on the step's path).
         let d0 = wrap_pi(rotation_rad - base);
-        // Once the period is known, only the reference that times it needs watching.
         let watched = match (self.period_samples, self.timing_pass) {
             (Some(_), Some((level, _))) => usize::from(level)..usize::from(level) + 1,
             _ => 0..LEVELS,
         };
         for m in watched {
-            let mut d = d0 - m as Real * QUARTER_PI;
+            let mut d = d0 - m as Real * LEVEL_STEP_RAD;
             if d < -PI {
                 d += 2.0 * PI;
             }
@@ -297,10 +397,20 @@ impl RotationMonitor {
                 (1, -1) => 1usize,
                 _ => continue,
             };
-            let last = self.last_pass[m][dir].replace(index);
+            let pass = match previous {
+                Some((k, rho)) if steps > 1 => pass_across_gap(
+                    k,
+                    steps,
+                    wrap_pi(rho - base) - m as Real * LEVEL_STEP_RAD,
+                    d,
+                    dir,
+                ),
+                _ => index,
+            };
+            let last = self.last_pass[m][dir].replace(pass);
             match (self.period_samples, last) {
                 (None, Some(k)) => {
-                    let period = index.wrapping_sub(k);
+                    let period = pass.wrapping_sub(k);
                     if period >= limits.min_period_samples && period <= limits.max_period_samples {
                         self.period_samples = Some(period);
                         self.timing_pass = Some((m as u8, dir as u8));
@@ -310,7 +420,7 @@ impl RotationMonitor {
                 (Some(period), Some(k))
                     if self.timing_pass == Some((m as u8, dir as u8))
                         && self.features.is_some()
-                        && !pass_on_time(index.wrapping_sub(k), period, limits) =>
+                        && !pass_on_time(pass.wrapping_sub(k), period, limits) =>
                 {
                     self.forget();
                     return Err(RotationFault::RateMismatch);
@@ -321,24 +431,22 @@ impl RotationMonitor {
                 _ => {}
             }
         }
-        if let PatternEvent::PeriodKnown(_) = event {
-            self.learn_start = None;
-        }
-        let Some(period) = self.period_samples else {
-            return Ok(event);
-        };
-        let nominal = (2.0 * core::f64::consts::PI / period as f64) as Real;
-        let still = self.short_steps > 0 && self.short_increment_rad.abs() < 0.25 * nominal;
-        self.dwell_run = if still {
-            self.dwell_run.saturating_add(1)
-        } else {
-            0
-        };
-        let Some(features) = self.features else {
-            self.learn(index, increment, nominal, period);
-            return Ok(event);
-        };
-        // Health against the learned pattern.
+        Ok(event)
+    }
+
+    /// The rotation against its learned pattern: the timing pass overdue (a stop if the rotation
+    /// dwells, else another rate: the pattern is forgotten), a dwell longer than the pattern's
+    /// longest, or a turn the other way in a pattern that never reverses (for a whole period: a
+    /// new pattern).
+    #[inline(always)]
+    fn check_health(
+        &mut self,
+        features: &Features,
+        index: u32,
+        period: u32,
+        nominal: Real,
+        limits: &Limits,
+    ) -> Result<(), RotationFault> {
         if let Some((m, dir)) = self.timing_pass {
             if let Some(k) = self.last_pass[m as usize][dir as usize] {
                 if index.wrapping_sub(k) > period
@@ -373,7 +481,7 @@ impl RotationMonitor {
             }
             return Err(RotationFault::Reversed);
         }
-        Ok(event)
+        Ok(())
     }
 
     /// Learns the features over one whole cycle of consecutive samples.
@@ -387,7 +495,7 @@ impl RotationMonitor {
             return;
         };
         let Some(inc) = increment else {
-            // A gap inside the cycle: start it again.
+            // After a gap the window cannot bridge: start the cycle again.
             self.learn_start = None;
             return;
         };

@@ -389,13 +389,15 @@ fn every_phase_is_cut_and_restored() {
             }
         }
         for (phase, rows) in PHASES.iter().zip(&cuts) {
-            // What a configuration pins is not learned; only the windowed method bins. Every
-            // method holds after a gap it cannot fill (the traditional one only until the gap
-            // filler passes it the next sample).
+            // What a configuration pins is not learned; only the windowed method bins. The
+            // methods with a window hold after a gap that restarts it; the traditional one has no
+            // window to refill and goes on with the first sample the gap filler passes after the
+            // gap.
             let expected = match phase {
                 Phase::LearningInterval => config.sample_interval_s.is_none(),
                 Phase::DetectingPeriod => config.rotation_period_s.is_none(),
                 Phase::BinFilling => config.method == Method::Windowed,
+                Phase::Holding => config.method != Method::Traditional,
                 _ => true,
             };
             assert_eq!(

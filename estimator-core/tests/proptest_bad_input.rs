@@ -173,7 +173,7 @@ fn consistent(est: &Estimator<CAP>) -> bool {
     let Some(w) = est.windowed() else { return true };
     let mut direct = CorrelationSums::default();
     for e in w.window().entries() {
-        direct.add(&{ e.sample }, e.fill_weight);
+        direct.add(&e.sample, e.fill_weight(), e.weight);
     }
     direct == *w.window().sums() && w.filter().covariance_is_spd()
 }
@@ -322,9 +322,11 @@ fn healthy_stream_reaches_estimation_in_a_few_periods() {
                 updating += 1;
             }
         }
-        // One period to learn the pattern's shape while the window fills, and the filler's delay.
+        // One period to learn the pattern's shape while the window fills, and the filler's delay
+        // (5 steps of margin beyond it).
+        let delay = estimator_core::gap_fill::DELAY as usize;
         assert!(
-            updating >= 200 - PERIOD - 10,
+            updating >= 200 - PERIOD - delay - 5,
             "method {method}: estimate on {updating} of 200 steps"
         );
     }

@@ -90,7 +90,7 @@ fn internals(est: &Estimator) -> Internals {
         std::array::from_fn(|i| std::array::from_fn(|j| w.filter().covariance()[(i, j)] as f64));
     let mut direct_sums = CorrelationSums::default();
     for e in w.window().entries() {
-        direct_sums.add(&{ e.sample }, e.fill_weight);
+        direct_sums.add(&e.sample, e.fill_weight(), e.weight);
     }
     Internals {
         updates: w.updates(),
@@ -492,7 +492,7 @@ fn stop_settle() -> u64 {
     let alpha = 1.0 / SHORT_STEPS as f64;
     (0.25f64.ln() / (1.0 - alpha).ln()).ceil() as u64
         + 2
-        + estimator_core::gap_fill::NEIGHBOURS as u64
+        + u64::from(estimator_core::gap_fill::DELAY)
 }
 
 /// What the status did during the fault.

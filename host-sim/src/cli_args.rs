@@ -350,6 +350,12 @@ pub struct RecorderArgs {
     /// the sample interval); the data stay those of the true instant.
     #[arg(long, value_name = "S", default_value_t = 0.0)]
     pub time_jitter: f64,
+    /// Recorder: lose `--gap-rows` rows in a row every S seconds (the first gap S into the log).
+    #[arg(long, value_name = "S", default_value_t = 0.0)]
+    pub gap_every: f64,
+    /// Recorder: rows lost at each regular gap (with `--gap-every`).
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub gap_rows: u32,
 }
 
 impl RecorderArgs {
@@ -359,6 +365,8 @@ impl RecorderArgs {
             outages: self.outages,
             time_offset_s: self.time_offset,
             time_jitter_s: self.time_jitter,
+            gap_every_s: self.gap_every,
+            gap_rows: self.gap_rows,
         }
     }
 }

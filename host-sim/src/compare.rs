@@ -209,6 +209,12 @@ pub fn describe(draw: &Draw) -> String {
             crate::recorder::OUTAGE_S
         ));
     }
+    if r.gap_every_s > 0.0 && r.gap_rows > 0 {
+        rec.push(format!(
+            "{} rows lost every {} s",
+            r.gap_rows, r.gap_every_s
+        ));
+    }
     if r.time_offset_s != 0.0 {
         rec.push(format!("time stamps offset by {} s", r.time_offset_s));
     }

@@ -344,7 +344,7 @@ fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
     let mut params = a.overrides.params(a.scenario.into(), a.seed)?;
     a.shape.apply(&mut params)?;
     // Row by row from the generator through the recorder into the file: nothing held in memory.
-    let mut recorder = Recorder::new(&params.recording, params.seed);
+    let mut recorder = Recorder::new(&params.recording, params.seed, params.sample_interval_s);
     let mut written = 0usize;
     let rows = Samples::new(&params)
         .filter_map(|(row, _)| recorder.record(&row))
@@ -549,7 +549,12 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
         host_sim::trial_report::check_dir(report_dir, &inputs_of(&log))?;
     }
     let generated = generate(&params);
-    let logged = recorded_rows(&params.recording, params.seed, &generated.rows);
+    let logged = recorded_rows(
+        &params.recording,
+        params.seed,
+        params.sample_interval_s,
+        &generated.rows,
+    );
     log_csv::write_log(&log, &logged)?;
     let truth = Truth::new(&params);
     log_csv::write_truth(&log_csv::truth_path(&log), &truth)?;

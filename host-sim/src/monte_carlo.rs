@@ -237,7 +237,7 @@ pub fn track_run_with_capacity<const CAP: usize>(
 ) -> anyhow::Result<Accuracy> {
     let mut est = estimator_core::Estimator::<CAP>::new(config)
         .map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
-    let mut recorder = Recorder::new(&params.recording, params.seed);
+    let mut recorder = Recorder::new(&params.recording, params.seed, params.sample_interval_s);
     let mut tracker = Tracker::new(times_s);
     let mut held = None;
     let mut status = None;

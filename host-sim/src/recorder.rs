@@ -5,6 +5,10 @@
 //!
 //! - each row is dropped independently with probability `drop_fraction`;
 //! - rows whose instant falls inside an outage `[start, start + outage_duration_s)` are missing;
+//! - with `gap_every_s > 0`, `gap_rows` rows in a row are missing every `gap_every_s` seconds: the
+//!   rows of instants `t` with `t mod gap_every_s` (measured from the log's start) below
+//!   `gap_rows` sample intervals, the first gap starting one `gap_every_s` into the log (a
+//!   recorder that loses a block of rows at a fixed cadence, e.g. while it writes a file);
 //! - the stamp is `t_k + time_offset_s + j_k`, `j_k` uniform in `[-time_jitter_s,
 //!   time_jitter_s]`: the data are those of the true instant `t_k`, only the stamp is loose. The
 //!   stamp is rounded to the microsecond (a recorder's resolution), so it is written as a short
@@ -43,6 +47,10 @@ pub struct Recording {
     pub time_offset_s: f64,
     /// Half-width of the uniform time-stamp jitter, s.
     pub time_jitter_s: f64,
+    /// Period of the regular gaps, s (0: none).
+    pub gap_every_s: f64,
+    /// Rows lost in a row at each regular gap.
+    pub gap_rows: u32,
 }
 
 impl Recording {
@@ -65,6 +73,16 @@ impl Recording {
                 limit_s: interval_s / 2.0,
             });
         }
+        let gap_s = f64::from(self.gap_rows) * interval_s;
+        if !(self.gap_every_s.is_finite() && self.gap_every_s >= 0.0)
+            || (self.gap_every_s > 0.0 && gap_s >= self.gap_every_s)
+        {
+            return Err(RecorderError::RegularGaps {
+                every_s: self.gap_every_s,
+                rows: self.gap_rows,
+                interval_s,
+            });
+        }
         Ok(())
     }
 
@@ -73,6 +91,18 @@ impl Recording {
         self.outage_starts_s
             .iter()
             .any(|&s| t_s >= s && t_s < s + self.outage_duration_s)
+    }
+
+    /// Whether the row of sample `k` (instant `k * interval_s`) falls in a regular gap.
+    pub fn in_regular_gap(&self, k: u64, interval_s: f64) -> bool {
+        if self.gap_every_s.is_nan() || self.gap_every_s <= 0.0 || self.gap_rows == 0 {
+            return false;
+        }
+        // Whole rows from the start of the gap period the instant is in (no drift from summing).
+        let t_s = k as f64 * interval_s;
+        let periods = (t_s / self.gap_every_s).floor();
+        let row_in_period = ((t_s - periods * self.gap_every_s) / interval_s + 1e-6).floor();
+        periods >= 1.0 && row_in_period < f64::from(self.gap_rows)
     }
 
     /// The sample instant a recorded stamp belongs to, s from the log's start (exactly the
@@ -106,6 +136,14 @@ pub enum RecorderError {
         gap_s: f64,
         duration_s: f64,
     },
+    /// The regular gaps' period is negative or not finite, or their rows do not leave a row
+    /// between two gaps.
+    #[error("--gap-every must be >= 0 s and longer than --gap-rows rows ({rows} x {interval_s} s), got {every_s}")]
+    RegularGaps {
+        every_s: f64,
+        rows: u32,
+        interval_s: f64,
+    },
 }
 
 /// What the recorder is asked to do, before the outages are placed.
@@ -116,6 +154,9 @@ pub struct RecorderSettings {
     pub outages: usize,
     pub time_offset_s: f64,
     pub time_jitter_s: f64,
+    /// Regular gaps: every this many seconds (0: none), this many rows in a row.
+    pub gap_every_s: f64,
+    pub gap_rows: u32,
 }
 
 impl RecorderSettings {
@@ -133,6 +174,8 @@ impl RecorderSettings {
             outage_duration_s: if self.outages > 0 { OUTAGE_S } else { 0.0 },
             time_offset_s: self.time_offset_s,
             time_jitter_s: self.time_jitter_s,
+            gap_every_s: self.gap_every_s,
+            gap_rows: self.gap_rows,
         };
         r.check(interval_s)?;
         Ok(r)
@@ -148,23 +191,35 @@ fn round_to_us(t_s: f64) -> f64 {
 pub struct Recorder<'a> {
     recording: &'a Recording,
     rng: ChaCha8Rng,
+    /// The sample interval of the rows, s.
+    interval_s: f64,
+    /// The number of the next row (rows come one per sample instant, in order).
+    row: u64,
 }
 
 impl<'a> Recorder<'a> {
-    /// The recorder of a scenario with `seed`.
-    pub fn new(recording: &'a Recording, seed: u64) -> Recorder<'a> {
+    /// The recorder of a scenario with `seed` and rows every `interval_s`.
+    pub fn new(recording: &'a Recording, seed: u64, interval_s: f64) -> Recorder<'a> {
         Recorder {
             recording,
             rng: ChaCha8Rng::seed_from_u64(seed.wrapping_mul(0xD6E8_FEB8_6659_FD93) ^ 0x2EC0_2DE2),
+            interval_s,
+            row: 0,
         }
     }
 
-    /// The row as logged (`row.time_s` is its sample instant), or `None` when it is lost.
+    /// The row as logged (`row.time_s` is its sample instant; rows come one per instant, in
+    /// order, from the first), or `None` when it is lost.
     pub fn record(&mut self, row: &Row) -> Option<Row> {
         let r = self.recording;
         let drop_draw: f64 = self.rng.gen();
         let jitter_draw: f64 = self.rng.gen();
-        if drop_draw < r.drop_fraction || r.in_outage(row.time_s) {
+        let k = self.row;
+        self.row += 1;
+        if drop_draw < r.drop_fraction
+            || r.in_outage(row.time_s)
+            || r.in_regular_gap(k, self.interval_s)
+        {
             return None;
         }
         let jitter_s = r.time_jitter_s * (2.0 * jitter_draw - 1.0);
@@ -175,9 +230,9 @@ impl<'a> Recorder<'a> {
     }
 }
 
-/// The rows of a generated log as the recorder logs them.
-pub fn recorded_rows(recording: &Recording, seed: u64, rows: &[Row]) -> Vec<Row> {
-    let mut rec = Recorder::new(recording, seed);
+/// The rows of a generated log (one every `interval_s`, from the first) as the recorder logs them.
+pub fn recorded_rows(recording: &Recording, seed: u64, interval_s: f64, rows: &[Row]) -> Vec<Row> {
+    let mut rec = Recorder::new(recording, seed, interval_s);
     rows.iter().filter_map(|r| rec.record(r)).collect()
 }
 
@@ -234,10 +289,10 @@ mod tests {
     fn default_recording_keeps_every_row_at_its_instant() {
         let rec = Recording::default();
         let rows: Vec<Row> = (0..100).map(|k| row(k as f64)).collect();
-        assert_eq!(recorded_rows(&rec, 5, &rows), rows);
+        assert_eq!(recorded_rows(&rec, 5, 1.0, &rows), rows);
         // At 0.1 s, stamps are short decimals that name their instant exactly.
         let rows: Vec<Row> = (0..100).map(|k| row(k as f64 * 0.1)).collect();
-        let out = recorded_rows(&rec, 5, &rows);
+        let out = recorded_rows(&rec, 5, 0.1, &rows);
         assert_eq!(out[3].time_s.to_string(), "0.3");
         for (a, b) in out.iter().zip(&rows) {
             assert!((a.time_s - b.time_s).abs() < 1e-12);
@@ -260,7 +315,7 @@ mod tests {
             ..Recording::default()
         };
         let rows: Vec<Row> = (0..2000).map(|k| row(k as f64 * 0.1)).collect();
-        let out = recorded_rows(&rec, 1, &rows);
+        let out = recorded_rows(&rec, 1, 0.1, &rows);
         assert_eq!(out.len(), rows.len());
         let mut largest = 0.0f64;
         for (a, b) in out.iter().zip(&rows) {
@@ -279,6 +334,59 @@ mod tests {
             round_to_us(1_700_000_123.0 + 0.02).to_string(),
             "1700000123.02"
         );
+    }
+
+    #[test]
+    fn regular_gaps_lose_their_rows_at_their_cadence_and_nothing_else() {
+        // 4 rows every 60 s at 1 s, and 10 rows every 120 s at 0.5 s (5 s of rows).
+        for (every_s, rows_lost, interval_s) in [(60.0, 4u32, 1.0), (120.0, 10, 0.5)] {
+            let rec = Recording {
+                gap_every_s: every_s,
+                gap_rows: rows_lost,
+                ..Recording::default()
+            };
+            assert_eq!(rec.check(interval_s), Ok(()));
+            let n = (1000.0 / interval_s) as usize;
+            let rows: Vec<Row> = (0..n).map(|k| row(k as f64 * interval_s)).collect();
+            let kept: Vec<f64> = recorded_rows(&rec, 3, interval_s, &rows)
+                .iter()
+                .map(|r| r.time_s)
+                .collect();
+            let lost: Vec<f64> = rows
+                .iter()
+                .map(|r| r.time_s)
+                .filter(|t| !kept.contains(t))
+                .collect();
+            let gaps = (1000.0 / every_s).ceil() as usize - 1;
+            assert_eq!(lost.len(), gaps * rows_lost as usize, "{every_s} s");
+            for (g, run) in lost.chunks(rows_lost as usize).enumerate() {
+                let start = (g + 1) as f64 * every_s;
+                let expected: Vec<f64> = (0..rows_lost)
+                    .map(|j| start + f64::from(j) * interval_s)
+                    .collect();
+                assert_eq!(run, &expected[..], "gap {g} of every {every_s} s");
+            }
+        }
+        let bad = Recording {
+            gap_every_s: 10.0,
+            gap_rows: 10,
+            ..Recording::default()
+        };
+        assert_eq!(
+            bad.check(1.0),
+            Err(RecorderError::RegularGaps {
+                every_s: 10.0,
+                rows: 10,
+                interval_s: 1.0
+            })
+        );
+        assert!(Recording {
+            gap_every_s: -1.0,
+            gap_rows: 1,
+            ..Recording::default()
+        }
+        .check(1.0)
+        .is_err());
     }
 
     #[test]

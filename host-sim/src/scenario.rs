@@ -549,6 +549,8 @@ mod tests {
             "outage_duration_s",
             "time_offset_s",
             "time_jitter_s",
+            "gap_every_s",
+            "gap_rows",
         ] {
             assert!(
                 v.as_object_mut().unwrap().remove(key).is_some(),

@@ -156,10 +156,10 @@ pub mod change;
 pub(crate) mod checkpoint;
 
 use crate::config::Config;
-use crate::correlation::ReferenceFilter;
+use crate::correlation::{ReferenceFilter, FULL_WEIGHT};
 use crate::gap_fill::{FillVariance, GridSample};
 use crate::kalman::{ConstantStateKalman, KalmanError};
-use crate::math::sqrt;
+use crate::math::{sqrt, Compare};
 use crate::moving_average::CorrelationWindow;
 use crate::Real;
 use change::{persistence_blocks, Alarm, BlockContext, ChangeDetector};
@@ -469,13 +469,16 @@ impl<const CAP: usize> Windowed<CAP> {
         self.last_block_held = [false; 2];
     }
 
-    /// Adds one sample to the window (its references low-passed on the way, with stage gain
-    /// `reference_alpha`: [`ReferenceFilter::alpha`]).
-    pub fn push(&mut self, sample: &GridSample, reference_alpha: Real) {
+    /// Adds one sample of weight `weight` to the window (its references low-passed on the way,
+    /// with stage gain `reference_alpha`: [`ReferenceFilter::alpha`]); returns how many old
+    /// entries the window removed.
+    pub fn push(&mut self, sample: &GridSample, reference_alpha: Real, weight: u8) -> u32 {
         let reference = self.reference.filter(&sample.angles, reference_alpha);
-        if self.window.push(sample, &reference) {
+        let pushed = self.window.push(sample, &reference, weight);
+        if pushed.completed {
             self.entries_since_update = self.entries_since_update.saturating_add(1);
         }
+        pushed.removed
     }
 
     /// Updates the filter with the window's measurement, if the window is full and has new
@@ -505,7 +508,13 @@ impl<const CAP: usize> Windowed<CAP> {
         self.kf.predict(&[qp, qp, qr, qr]);
         let sums = self.window.sums();
         let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
-        let r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
+        let mut r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
+        // Entries left out or weighted down near lost rows: the window carries their share less
+        // information (its weight over that of a full window of full-weight entries).
+        let full = (self.window.len() as u32).saturating_mul(u32::from(FULL_WEIGHT));
+        if sums.weight < full && sums.weight > 0 {
+            r0 *= full as Real / sums.weight as Real;
+        }
         let r_pitch = r0 + 0.5 * filled * fill_variance.pitch_rad2;
         let r_roll = r0 + 0.5 * filled * fill_variance.roll_rad2;
         self.product_variance_rad2 = [r_pitch, r_roll];
@@ -587,7 +596,7 @@ impl<const CAP: usize> Windowed<CAP> {
             let e2 = if learned == 0 {
                 e2
             } else {
-                e2.min(SPREAD_CLIP_SIGMAS * SPREAD_CLIP_SIGMAS * self.spread_rad2[ch])
+                e2.smaller(SPREAD_CLIP_SIGMAS * SPREAD_CLIP_SIGMAS * self.spread_rad2[ch])
             };
             self.spread_rad2[ch] += weight * (e2 - self.spread_rad2[ch]);
         }
@@ -796,7 +805,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let sigma2 =
             config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
         let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
-        let inv_s_e2 = n / self.product_variance_rad2[pair].max(sigma2);
+        let inv_s_e2 = n / self.product_variance_rad2[pair].larger(sigma2);
         let (mut power, mut bias) = (0.0, 0.0);
         for ch in 2 * pair..2 * pair + 2 {
             let mean = self.residual_mean[ch];
@@ -805,7 +814,7 @@ impl<const CAP: usize> Windowed<CAP> {
             power += self.residual_power[ch];
             bias += self.residual_mean_long[ch] * self.residual_mean_long[ch] * inv_s_e2;
         }
-        self.noise_scale[pair] = power.max(MIN_NOISE_SCALE);
+        self.noise_scale[pair] = power.larger(MIN_NOISE_SCALE);
         let share = if power > 0.0 { bias / power } else { 0.0 };
         self.drift_share[pair] = ((share - BIAS_SHARE_NOISE)
             * (1.0 / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE)))
@@ -849,7 +858,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let sigma2 =
             config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
         let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
-        let s_e2 = self.product_variance_rad2[pair].max(sigma2) / n;
+        let s_e2 = self.product_variance_rad2[pair].larger(sigma2) / n;
         for ch in 2 * pair..2 * pair + 2 {
             let mean = self.residual_mean[ch];
             let mut model = 0.0;
@@ -857,7 +866,7 @@ impl<const CAP: usize> Windowed<CAP> {
             // Within 2 sigma: nothing to add, no mismatch (the usual case, without a root).
             if mean * mean > 4.0 * s_e2 {
                 let s_e = sqrt(s_e2);
-                let excess = (mean.abs() - 2.0 * s_e).max(0.0);
+                let excess = (mean.abs() - 2.0 * s_e).larger(0.0);
                 // A bias b on a channel of gain g means an error of about b/g, but never more than
                 // the prior says we could not know anyway: near the pole the gain of x3, x4 is
                 // cos L / 2, about 0, and they are unobservable (their filter 1-sigma stays at the
@@ -865,7 +874,7 @@ impl<const CAP: usize> Windowed<CAP> {
                 model = if excess <= 0.0 {
                     0.0
                 } else if self.gains[ch] > 1e-6 {
-                    (excess / self.gains[ch]).min(config.prior_sigma_rad)
+                    (excess / self.gains[ch]).smaller(config.prior_sigma_rad)
                 } else {
                     config.prior_sigma_rad
                 };
@@ -875,14 +884,25 @@ impl<const CAP: usize> Windowed<CAP> {
             let lag = if self.drift_share[pair] > 0.0 && self.gains[ch] > 1e-6 {
                 (self.residual_mean_long[ch] / self.gains[ch])
                     .abs()
-                    .min(config.prior_sigma_rad)
+                    .smaller(config.prior_sigma_rad)
             } else {
                 0.0
             };
-            let m = model.max(lag).max(self.change.widening_rad()[ch]);
+            let m = model.larger(lag).larger(self.change.widening_rad()[ch]);
             self.reported_sigma_rad[ch] =
-                sqrt(self.noise_scale[pair] * self.kf.covariance()[(ch, ch)].max(0.0) + m * m);
+                sqrt(self.noise_scale[pair] * self.kf.covariance()[(ch, ch)].larger(0.0) + m * m);
             self.channel_mismatch[ch] = mismatch;
+        }
+    }
+
+    /// The rotation pattern was forgotten (a new one is being learned): the window lets go of the
+    /// old period and of its entries, and keeps the samples from now on, up to its capacity, until
+    /// the new period is known ([`CorrelationWindow::configure`]). Until then it is never full, so
+    /// the filter takes no measurement of a window whose length is not one period.
+    pub fn forget_period(&mut self) {
+        if self.window.is_configured() {
+            self.window.reset();
+            self.entries_since_update = 0;
         }
     }
 

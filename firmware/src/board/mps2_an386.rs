@@ -295,8 +295,8 @@ unsafe fn NonMaskableInt() {
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
     match irqn {
-        UART0_RX_IRQ => uart_rx_interrupt(),
-        UART0_TX_IRQ => uart_tx_interrupt(),
+        UART0_RX_IRQ => super::systick_cost::timed_interrupt(uart_rx_interrupt),
+        UART0_TX_IRQ => super::systick_cost::timed_interrupt(uart_tx_interrupt),
         _ => {}
     }
 }

@@ -271,7 +271,7 @@ unsafe fn NonMaskableInt() {
 #[exception]
 unsafe fn DefaultHandler(irqn: i16) {
     if irqn == USART1_IRQ {
-        serial::usart1_interrupt(environment());
+        super::systick_cost::timed_interrupt(|| serial::usart1_interrupt(environment()));
     }
 }
 

@@ -36,7 +36,7 @@ struct Run {
 /// Replays a generated log through a fresh estimator of `config`, row by row.
 fn run(p: &ScenarioParams, config: Config) -> Run {
     let mut est: Estimator = Estimator::new(config).unwrap();
-    let mut recorder = Recorder::new(&p.recording, p.seed);
+    let mut recorder = Recorder::new(&p.recording, p.seed, p.sample_interval_s);
     let step = p.errors_step.map(|s| s.at_s);
     let from_s = step.unwrap_or(0.0);
     let mut r = Run::default();

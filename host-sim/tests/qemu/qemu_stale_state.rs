@@ -40,7 +40,8 @@ fn host_sim_no_estimate(args: &[&str]) -> String {
 fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
     let elf = firmware_elf(Board::Mps2An386);
     let dir = scratch("stale-state");
-    let first = paper_log(&dir, 600);
+    // Shorter than the rotation period (480 s): no first estimate, one checkpoint (300 s).
+    let first = paper_log(&dir, 450);
     // Another trial: other errors, other seed.
     let second = dir.join("second.csv");
     host_sim(&[
@@ -59,7 +60,7 @@ fn a_second_stream_into_the_same_flash_is_refused_unless_reset_or_resume() {
     let flash = dir.join("flash");
     std::fs::create_dir_all(&flash).unwrap();
 
-    // 600 s: no estimate yet (exit status 4), a checkpoint saved.
+    // 450 s: no estimate yet (exit status 4), a checkpoint saved.
     host_sim_no_estimate(&[
         "stream",
         "--qemu",

@@ -8,5 +8,6 @@ mod beyond_paper;
 mod binning_cost;
 mod checkpoint_roundtrip;
 mod coverage;
+mod gap_logs;
 mod real_logs;
 mod store_power_fail;

@@ -106,6 +106,7 @@ fn lost_rows_outages_and_loose_unix_stamps() {
         outages: 3,
         time_offset_s: 1.7e9,
         time_jitter_s: 0.02,
+        ..RecorderSettings::default()
     };
     let lossier = RecorderSettings {
         drop_fraction: 0.05,

@@ -96,7 +96,7 @@
 
 pub(crate) mod checkpoint;
 
-use crate::math::sqrt;
+use crate::math::{sqrt, Compare};
 use crate::Real;
 
 /// Sum of the log-likelihood ratio over a run at which a change is declared (see the module doc:
@@ -127,7 +127,7 @@ pub const PASSING_S: Real = 300.0;
 /// of `entry_s` seconds each: until a block lies wholly after the longest passing disturbance.
 pub fn persistence_blocks(window_entries: u32, entry_s: Real) -> u32 {
     let half = (window_entries / 2).max(1) as Real;
-    let passing = (PASSING_S / entry_s).max(half);
+    let passing = (PASSING_S / entry_s).larger(half);
     // ceil without libm: the ratio is positive and small.
     let ratio = passing / half;
     let whole = ratio as u32;
@@ -284,7 +284,7 @@ impl ChangeDetector {
     /// The variance of a block mean of channel `ch` that a block is tested and weighed with, rad^2:
     /// the learned one, at least `floor_rad2`.
     pub fn block_variance(&self, ch: usize, floor_rad2: Real) -> Real {
-        self.mean_square_rad2[ch.min(3)].max(floor_rad2)
+        self.mean_square_rad2[ch.min(3)].larger(floor_rad2)
     }
 
     /// Tests a block of `pair` whose means are `block_rad` and learns from it (see the module doc);
@@ -332,7 +332,7 @@ impl ChangeDetector {
                     && run < ctx.persistence_blocks
                     && b * b > HOLD_SIGMAS * HOLD_SIGMAS * var;
                 self.widening_rad[ch] = if b * b > 4.0 * var && gains[k] > 1e-6 {
-                    ((b.abs() - 2.0 * sqrt(var)) / gains[k]).min(ctx.max_widening_rad)
+                    ((b.abs() - 2.0 * sqrt(var)) / gains[k]).smaller(ctx.max_widening_rad)
                 } else {
                     0.0
                 };
@@ -343,7 +343,7 @@ impl ChangeDetector {
                 let b2 = if learned == 0 {
                     b * b
                 } else {
-                    (b * b).min(WINSOR_SIGMAS * WINSOR_SIGMAS * var)
+                    (b * b).smaller(WINSOR_SIGMAS * WINSOR_SIGMAS * var)
                 };
                 self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) * weight;
                 // The product with the previous block, both clipped alike: the lag-one covariance.
@@ -352,7 +352,9 @@ impl ChangeDetector {
                     // check of them (a panic that formats floats) cost 31 KB of flash on the
                     // Cortex-M4F.
                     let bound = WINSOR_SIGMAS * WINSOR_SIGMAS * var;
-                    let product = (b * self.previous_block_rad[ch]).max(-bound).min(bound);
+                    let product = (b * self.previous_block_rad[ch])
+                        .larger(-bound)
+                        .smaller(bound);
                     self.lag_product_rad2[ch] += (product - self.lag_product_rad2[ch]) * weight;
                 }
             }
