@@ -203,6 +203,8 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand_chacha::rand_core::{RngCore, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     /// A known linear system: two constants observed through rotating rows with white noise. The
     /// filter must match batch least squares (what a constant-state Kalman filter with a weak prior is).
@@ -215,12 +217,9 @@ mod tests {
         let mut kf = ConstantStateKalman::<T, 2>::new([c(prior_sigma), c(prior_sigma)]);
         let mut ata = [[0.0f64; 2]; 2];
         let mut atb = [0.0f64; 2];
-        let mut state: u64 = 7;
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
         for k in 0..2000 {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let noise = ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 0.02;
+            let noise = ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.02;
             let h = [libm::cos(k as f64 * 0.1), libm::sin(k as f64 * 0.1) + 0.2];
             let z = h[0] * truth[0] + h[1] * truth[1] + noise;
             kf.update(&[c(h[0]), c(h[1])], c(z), c(1e-4)).unwrap();

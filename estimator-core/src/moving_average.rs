@@ -649,16 +649,15 @@ impl<const CAP: usize> Default for CorrelationWindow<CAP> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand_chacha::rand_core::{RngCore, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn two_days_of_running_sums_equal_the_direct_sum_of_the_window() {
         let mut w: WindowAverage<2, 480> = WindowAverage::new(480);
-        let mut state: u64 = 12345;
+        let mut rng = ChaCha8Rng::seed_from_u64(12345);
         for i in 0..172_800u64 {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let r = ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5) as Real;
+            let r = ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 - 0.5) as Real;
             let sway = 0.05 * libm::sin(i as f64 * 1.047) as Real;
             w.push(&[sway + 1e-3 * r, -0.3 + r]);
         }

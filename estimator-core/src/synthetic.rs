@@ -20,6 +20,8 @@
 use crate::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use crate::Sample;
 use core::f64::consts::PI;
+use rand_chacha::rand_core::{RngCore, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// The noise generator's state when a [`Signal`] is made (see [`Signal::with_seed`]).
 pub const DEFAULT_SEED: u64 = 0x1234_5678;
@@ -64,8 +66,8 @@ pub struct Signal {
     pub rotation_phase_rad: f64,
     /// Platform angle `s` at `t = 0`, rad; it turns at the Earth rate.
     pub platform_phase_rad: f64,
-    /// The noise generator's state.
-    state: u64,
+    /// The noise generator (ChaCha8, seeded from [`DEFAULT_SEED`] or [`Signal::with_seed`]).
+    rng: ChaCha8Rng,
 }
 
 impl Signal {
@@ -92,26 +94,22 @@ impl Signal {
             scheme: Scheme::OneWay(1.0),
             rotation_phase_rad: 0.7,
             platform_phase_rad: 1.9,
-            state: DEFAULT_SEED,
+            rng: ChaCha8Rng::seed_from_u64(DEFAULT_SEED),
         }
     }
 
     /// The same signal with the noise generator started from `seed`.
     pub fn with_seed(mut self, seed: u64) -> Signal {
-        self.state = seed;
+        self.rng = ChaCha8Rng::seed_from_u64(seed);
         self
     }
 
-    /// White noise of unit variance: the sum of four uniforms of the LCG (Knuth's MMIX constants),
-    /// scaled by sqrt(3).
+    /// White noise of unit variance: the sum of four uniforms of the ChaCha8 stream, scaled by
+    /// sqrt(3).
     fn unit_noise(&mut self) -> f64 {
         let mut acc = 0.0;
         for _ in 0..4 {
-            self.state = self
-                .state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            acc += (self.state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            acc += (self.rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
         }
         acc * libm::sqrt(3.0)
     }

@@ -25,6 +25,8 @@ use estimator_core::{
     Config, Estimator, Holdup, Method, Output, Real, Sample, SampleError, Status,
 };
 use proptest::prelude::*;
+use rand_chacha::rand_core::{RngCore, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// The ring of the short tests: a 180 s period at 1 Hz is binned by 3, 90 s at 10 Hz by 15.
 const CAP: usize = 64;
@@ -49,12 +51,12 @@ struct Log {
     filled: Vec<u64>,
 }
 
-/// A deterministic pseudo-random stream in [0, 1).
+/// The `k`th number in [0, 1) of the ChaCha8 stream of `seed` (its `k`th 64-bit word pair:
+/// random access, so a row's draw does not depend on which rows were asked before).
 fn uniform(seed: u64, k: u64) -> f64 {
-    let mut z = seed.wrapping_add(k.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_word_pos(2 * u128::from(k));
+    (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
 }
 
 fn log(plan: Plan) -> Log {

@@ -102,6 +102,8 @@ mod tests {
     use crate::message::{Request, SampleMsg};
     use crate::MAX_REQUEST_ENCODED;
     use estimator_core::Sample;
+    use rand_chacha::rand_core::{RngCore, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
     use std::vec::Vec;
 
     type Rx = FrameAccumulator<MAX_REQUEST_ENCODED>;
@@ -268,11 +270,9 @@ mod tests {
     #[test]
     fn random_bytes_never_panic() {
         let mut rx = Rx::new();
-        let mut x: u32 = 0x1234_5678;
+        let mut rng = ChaCha8Rng::seed_from_u64(0x1234_5678);
         for _ in 0..200_000 {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
+            let x = rng.next_u32();
             let b = if x.is_multiple_of(17) {
                 0
             } else {

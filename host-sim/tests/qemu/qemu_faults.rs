@@ -14,19 +14,21 @@ use link_protocol::{
     crc, encode_frame, FrameAccumulator, FrameError, Numbered, Request, Response, SampleMsg,
     MAX_REQUEST_ENCODED, UNNUMBERED,
 };
+use rand::{Rng as _, RngCore, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use std::time::Duration;
 
-/// xorshift32: the faults are the same on every run.
-struct Rng(u32);
+/// ChaCha8 from a fixed seed: the faults are the same on every run.
+struct Rng(ChaCha8Rng);
 impl Rng {
+    fn new(seed: u64) -> Rng {
+        Rng(ChaCha8Rng::seed_from_u64(seed))
+    }
     fn next(&mut self) -> u32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        self.0
+        self.0.next_u32()
     }
     fn nonzero_byte(&mut self) -> u8 {
-        (self.next() % 255) as u8 + 1
+        self.0.gen_range(1..=255)
     }
 }
 
@@ -148,7 +150,7 @@ fn firmware_resyncs_counts_every_fault_and_answers_valid_frames_unchanged(board:
         (bad, good)
     };
     // The ReadStatus of boot went through the shadow-less path: it was valid.
-    let mut rng = Rng(0x2545_F491);
+    let mut rng = Rng::new(0x2545_F491);
     let mut injected = [0u32; FAULTS.len()];
     let mut pending_closing_zero = false;
     let mut previous: Option<SampleMsg> = None;

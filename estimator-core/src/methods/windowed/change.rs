@@ -382,17 +382,19 @@ impl ChangeDetector {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand_chacha::rand_core::{RngCore, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
-    /// Gaussian numbers from a seeded LCG (Box-Muller), for blocks of noise.
-    struct Noise(u64);
+    /// Gaussian numbers from a seeded ChaCha8 stream (Box-Muller), for blocks of noise.
+    struct Noise(ChaCha8Rng);
 
     impl Noise {
+        fn new(seed: u64) -> Noise {
+            Noise(ChaCha8Rng::seed_from_u64(seed))
+        }
+
         fn uniform(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+            ((self.0.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
         }
 
         fn gaussian(&mut self) -> f64 {
@@ -458,7 +460,7 @@ mod tests {
     #[test]
     fn noise_alone_is_never_declared_and_its_variance_is_learned() {
         let ctx = context(5);
-        let mut noise = Noise(3);
+        let mut noise = Noise::new(3);
         let mut d = learned(&mut noise, &ctx);
         // 20,000 more blocks (the blocks of four years at a 480 s period, per channel): nothing.
         assert_eq!(run(&mut d, 20_000, |_| 0.0, &mut noise, &ctx), None);
@@ -474,7 +476,7 @@ mod tests {
     #[test]
     fn a_step_is_declared_once_its_run_has_lasted_the_persistence() {
         let ctx = context(5);
-        let mut noise = Noise(5);
+        let mut noise = Noise::new(5);
         let mut d = learned(&mut noise, &ctx);
         // A step of the smallest size (a shift of 10 sigma): declared at the 5th block, with the
         // filter held from the first.
@@ -514,7 +516,7 @@ mod tests {
     #[test]
     fn a_change_smaller_than_half_the_step_or_a_passing_one_is_never_declared() {
         let ctx = context(5);
-        let mut noise = Noise(7);
+        let mut noise = Noise::new(7);
         let mut d = learned(&mut noise, &ctx);
         // A drift's lag: a persistent shift of 0.4 of the smallest step's.
         let lag = 0.4 * GAIN * ctx.step_rad;
@@ -541,7 +543,7 @@ mod tests {
         let mut ctx = context(5);
         ctx.armed = false;
         let shift = 10.0 * ctx.step_rad;
-        let mut noise = Noise(9);
+        let mut noise = Noise::new(9);
         assert_eq!(run(&mut d, 50, |_| shift, &mut noise, &ctx), None);
         assert!(!d.in_run() && !d.holding());
     }
