@@ -1,4 +1,4 @@
-//! A realistic restart, on both boards, through `host-sim stream` as a user runs it: 20,000 s of a
+//! A realistic restart, on both boards, through `host-sim stream` as a user runs it: 10,000 s of a
 //! sea log streamed into the firmware with `--flash-dir`; the stream ends and QEMU is killed (the
 //! power cut); 200 s of rows are left out (the navigation computer kept sending while the board
 //! was off); the rest of the log is streamed with `--resume`. The first answer after the restart
@@ -43,7 +43,7 @@ fn restart(board: Board) {
     let whole = generated_log(
         &dir,
         "sea.csv",
-        &["--scenario", "sea", "--duration", "21500"],
+        &["--scenario", "sea", "--duration", "11500"],
     );
     let text = std::fs::read_to_string(&whole).unwrap();
     let mut lines = text.lines();
@@ -51,9 +51,9 @@ fn restart(board: Board) {
     let (mut before, mut after) = (vec![header], vec![header]);
     for line in lines {
         let t: f64 = line.split(',').next().unwrap().parse().unwrap();
-        if t < 20_000.0 {
+        if t < 10_000.0 {
             before.push(line);
-        } else if t >= 20_200.0 {
+        } else if t >= 10_200.0 {
             after.push(line);
         }
     }
