@@ -25,7 +25,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-log() { printf '\n== %s\n' "$*"; }
+log() { printf "\n== %s (at %d s)\n" "$*" "$SECONDS"; }
 
 # Tests leave no trace: what git sees now must be what it sees at the end.
 git_status() { git status --porcelain --untracked-files=all 2>/dev/null || true; }
@@ -63,6 +63,8 @@ arm-none-eabi-gcc --version | head -n 1
 cargo --version
 
 log "every crate's tests (release): estimator-core, estimator-ffi, link-protocol, firmware (its library on the host), host-sim (with the QEMU end-to-end tests)"
+cargo test --workspace --release --no-run
+log "running them"
 cargo test --workspace --release
 
 log "estimator-core with f64"
@@ -125,3 +127,4 @@ if [ "$STATUS_BEFORE" != "$STATUS_AFTER" ]; then
     exit 1
 fi
 echo "git status unchanged"
+echo "every test passed in $SECONDS s"
