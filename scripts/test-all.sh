@@ -6,23 +6,21 @@
 #   2. `cargo test --workspace --release`: estimator-core, estimator-ffi (the C library: its API,
 #      and that the checked-in C header is the one its sources generate), link-protocol, the
 #      firmware's library on the host (the checkpoint store, receive rings, the STM32F405's receive
-#      timeline), host-sim; host-sim's QEMU test program (the end-to-end tests, which build the
-#      firmware for both boards themselves: mps2-an386 and the STM32F405 on QEMU's netduinoplus2,
-#      and the watchdog test's build) runs in the background from here to step 6, its output
-#      printed when it ends;
+#      timeline), host-sim (including the QEMU end-to-end tests, which build the firmware for both
+#      boards themselves: mps2-an386 and the STM32F405 on QEMU's netduinoplus2, and the watchdog
+#      test's build);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side);
-#   4. the gates: `cargo fmt --all --check`; clippy with -D warnings on the host (every crate, all
+#   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
+#      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
+#   5. the gates: `cargo fmt --all --check`; clippy with -D warnings on the host (every crate, all
 #      targets) and on the firmware (each board), the link code and the C library, which deny every
 #      panicking construct (the workspace's lints, `[workspace.lints]`, apply to every crate);
-#   5. the C examples: examples/c/replay.c on a short log with every kind of bad row, built with
+#   5b. the C examples: examples/c/replay.c on a short log with every kind of bad row, built with
 #      the host's cc and with arm-none-eabi-gcc for a Cortex-M4F run in QEMU, both estimates
 #      CSVs byte-identical to `host-sim estimate`'s (scripts/c-example.sh); the 1 Hz navigation
 #      loop examples/c/nav_loop.c in QEMU (scripts/c-nav-loop.sh);
-#   6. the QEMU tests' end; then the firmware build for the target: mps2-an386 with and without
-#      its checkpoint feature, and the STM32F405 (their budgets are checked by host-sim's
-#      qemu_budgets test; built only now, as the QEMU tests copy the ELF the same build writes);
-#   7. the 30-day replay's peak memory (scripts/memory-30day.sh: at most 64 MB, GNU time);
-#   8. that the tests left no trace: `git status --porcelain` at the end equals the one at the start.
+#   6. the 30-day replay's peak memory (scripts/memory-30day.sh: at most 64 MB, GNU time);
+#   7. that the tests left no trace: `git status --porcelain` at the end equals the one at the start.
 # Usage: bash scripts/test-all.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -66,23 +64,16 @@ cargo --version
 
 log "every crate's tests (release): estimator-core, estimator-ffi, link-protocol, firmware (its library on the host), host-sim (with the QEMU end-to-end tests)"
 cargo test --workspace --release --no-run
-# The QEMU tests (host-sim's `qemu` test program, every test of it named `qemu_*`) spend their time
-# in QEMU's link round trips and in building the firmware (fat LTO in one codegen unit: one core),
-# so they run in the background while every other test runs; their output follows, and a failure
-# of theirs fails the command.
-QEMU_LOG="$(mktemp)"
-QEMU_TESTS=""
-# On any exit: the background tests (their own process group: cargo, the test program, QEMU) are
-# stopped and their log removed.
-trap '[ -n "$QEMU_TESTS" ] && kill -- "-$QEMU_TESTS" 2>/dev/null; rm -f "$QEMU_LOG"' EXIT
-log "the QEMU tests, in the background"
-setsid cargo test --release -p host-sim --test qemu >"$QEMU_LOG" 2>&1 &
-QEMU_TESTS=$!
-log "every other test"
-cargo test --workspace --release -- --skip qemu_
+log "running them"
+cargo test --workspace --release
 
 log "estimator-core with f64"
 cargo test --release -p estimator-core --features f64
+
+log "firmware build for thumbv7em-none-eabihf (mps2-an386 default, without its checkpoint feature; STM32F405)"
+cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-mps2-an386
+cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405
+cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
 
 log "gates: rustfmt, and clippy with every warning an error (host, all targets; the firmware for each board, the link and the C library for the target)"
 # Clippy also enforces what the firmware, link-protocol, estimator-ffi and estimator-core deny in
@@ -124,21 +115,6 @@ rm -rf "$C_DIR"
 # The 1 Hz navigation loop of docs/c-api.md on the Cortex-M4F: finds known errors within 1 arcsec
 # through a power cut and a restored checkpoint; prints the library's flash, RAM and stack.
 bash scripts/c-nav-loop.sh
-
-log "waiting for the QEMU tests"
-QEMU_STATUS=0
-wait "$QEMU_TESTS" || QEMU_STATUS=$?
-QEMU_TESTS=""
-cat "$QEMU_LOG"
-if [ "$QEMU_STATUS" != 0 ]; then
-    echo "the QEMU tests failed (exit $QEMU_STATUS; their output is above)" >&2
-    exit 1
-fi
-
-log "firmware build for thumbv7em-none-eabihf (mps2-an386 default, without its checkpoint feature; STM32F405)"
-cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-mps2-an386
-cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405
-cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
 
 log "peak memory of a 30-day replay"
 bash scripts/memory-30day.sh
