@@ -3,7 +3,8 @@
 //! is no worse than the paper's method as published.
 
 use estimator_core::units::rad_to_arcsec;
-use estimator_core::{Config, Estimator, Method, Sample};
+use estimator_core::{Config, Estimator, Method};
+use host_sim::replay::sample_of;
 use host_sim::scenario::{generate, ScenarioKind, ScenarioParams};
 
 /// Absolute errors (arcsec) of x1..x4 at each of `at_s`, for one run.
@@ -12,16 +13,7 @@ fn errors_at(params: &ScenarioParams, method: Method, at_s: &[f64]) -> Vec<[f64;
     let mut est: Estimator = Estimator::new(Config::with_method(method)).unwrap();
     let mut out = Vec::new();
     for (row, truth) in g.rows.iter().zip(&g.truth) {
-        let s = Sample::from_degrees(
-            row.time_s,
-            row.rotation_deg,
-            row.platform_deg,
-            row.latitude_deg,
-            row.heading_deg,
-            row.roll_deg,
-            row.pitch_deg,
-        );
-        let o = est.step(&s).unwrap();
+        let o = est.step(&sample_of(row)).unwrap();
         if at_s.contains(&row.time_s) {
             let e = o.estimate.expect("an estimate by then");
             out.push(core::array::from_fn(|i| {
