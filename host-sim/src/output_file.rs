@@ -22,7 +22,7 @@ pub const STDOUT: &str = "-";
 
 /// A temporary file beside `target` (same directory, hidden name ending like the target's, so
 /// that writers which go by the extension, as the PNG encoder does, see it).
-fn temp_beside(target: &Path) -> anyhow::Result<NamedTempFile> {
+pub(crate) fn temp_beside(target: &Path) -> anyhow::Result<NamedTempFile> {
     let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -51,7 +51,7 @@ fn temp_beside(target: &Path) -> anyhow::Result<NamedTempFile> {
 }
 
 /// Flushes a finished temporary file to disk and renames it over `target`.
-fn persist(temp: NamedTempFile, target: &Path) -> anyhow::Result<()> {
+pub(crate) fn persist(temp: NamedTempFile, target: &Path) -> anyhow::Result<()> {
     temp.as_file()
         .sync_all()
         .with_context(|| format!("{}:0: cannot write", target.display()))?;

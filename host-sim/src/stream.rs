@@ -29,7 +29,7 @@ pub mod qemu;
 use crate::estimates_csv::EstimatesWriter;
 use crate::exit_status::RunEnd;
 use crate::log_csv::{is_stdio, LogLine, LogReader, RowFilter};
-use crate::output_file::{check_not_input, OutputFile};
+use crate::output_file::{check_not_input, Input, OutputFile};
 use crate::pipeline::{default_estimates_path, inputs_of, load_truth, log_name, truth_rows};
 use crate::replay::{sample_of, GridFollower};
 use crate::report::ReportBuilder;
@@ -81,7 +81,9 @@ pub struct StreamArgs {
     /// Seconds to wait for each answer before giving up.
     #[arg(long, value_name = "S", default_value_t = 10.0)]
     pub timeout_s: f64,
-    /// Save the firmware's defmt log (QEMU's semihosting output; decode with `defmt-print -e ELF`).
+    /// Save the firmware's defmt log (QEMU's semihosting output; decode with `defmt-print -e ELF`),
+    /// written through a temporary file renamed over FILE when the stream has run to its end (a
+    /// run that fails leaves an earlier FILE as it was); never an input of the run.
     #[arg(long, value_name = "FILE")]
     pub defmt_log: Option<PathBuf>,
     /// QEMU's working directory, where the firmware keeps its flash (`rins-flash.bin`, the
@@ -516,6 +518,18 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| default_estimates_path(&args.log));
     check_not_input(&out, "--out", &inputs_of(&args.log))?;
+    if let Some(log) = &args.defmt_log {
+        let mut inputs = inputs_of(&args.log);
+        inputs.extend(args.qemu.iter().map(|elf| Input {
+            path: elf.clone(),
+            what: "the firmware ELF",
+        }));
+        inputs.push(Input {
+            path: out.clone(),
+            what: "the estimates file (--out)",
+        });
+        check_not_input(log, "--defmt-log", &inputs)?;
+    }
     if let Some(dir) = &args.report {
         crate::trial_report::create_dir(dir)?;
     }
@@ -622,7 +636,9 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         .finish()
         .with_context(|| format!("{}:0: cannot write", out.display()))?
         .commit()?;
-    drop(target.qemu.take());
+    if let Some(qemu) = target.qemu.take() {
+        qemu.finish()?;
+    }
     print_summary(&mut info, &args.log, &out, &what, &summary, &target)?;
     if let (Some(dir), Some(tl)) = (&args.report, &timeline) {
         let interval_s = grid.interval_s().unwrap_or(1.0);

@@ -13,16 +13,19 @@
 //!
 //! `-icount shift=0` makes every guest instruction take exactly 1 ns of virtual time, so the
 //! firmware's SysTick cost counter (25 MHz on mps2-an386, 168 MHz on netduinoplus2) counts a fixed
-//! number of instructions per tick. QEMU's stdout is the firmware's defmt log (semihosting); its
-//! stderr goes to a file, quoted when QEMU fails.
+//! number of instructions per tick. QEMU's stdout is the firmware's defmt log (semihosting): with
+//! `--defmt-log FILE` it goes to a temporary file beside FILE, renamed over it only when the run
+//! ends well ([`Qemu::finish`]), so a failed run leaves an earlier log as it was. QEMU's stderr
+//! goes to a file in its scratch directory, quoted when QEMU fails; the directory is removed
+//! whatever happens.
 
 use anyhow::{bail, Context};
 use std::fs::File;
 use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
+use tempfile::{NamedTempFile, TempDir};
 
 /// `-icount shift` used; instructions per nanosecond of virtual time = 1 / 2^shift.
 pub const ICOUNT_SHIFT: u32 = 0;
@@ -82,11 +85,13 @@ impl std::fmt::Display for Machine {
 /// A running QEMU.
 pub struct Qemu {
     child: Child,
-    dir: PathBuf,
+    /// The scratch directory (the link's socket, QEMU's stderr, the flash without `--flash-dir`):
+    /// removed when dropped, on every path out.
+    _dir: TempDir,
     stderr_path: PathBuf,
+    /// The defmt log being written, and the file it is renamed to by [`Qemu::finish`].
+    defmt_log: Option<(NamedTempFile, PathBuf)>,
 }
-
-static RUNS: AtomicUsize = AtomicUsize::new(0);
 
 /// The QEMU binary: `$QEMU_SYSTEM_ARM`, else `qemu-system-arm` on the PATH.
 pub fn qemu_binary() -> String {
@@ -108,18 +113,24 @@ impl Qemu {
             bail!("{}: no such firmware ELF", elf.display());
         }
         let elf = &std::fs::canonicalize(elf)?;
-        let dir = std::env::temp_dir().join(format!(
-            "host-sim-qemu-{}-{}",
-            std::process::id(),
-            RUNS.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir_all(&dir)
-            .with_context(|| format!("{}: cannot create", dir.display()))?;
+        let scratch = tempfile::Builder::new()
+            .prefix("host-sim-qemu-")
+            .tempdir()
+            .context("cannot create QEMU's scratch directory")?;
+        let dir = scratch.path().to_path_buf();
         let socket = dir.join("link.sock");
         let stderr_path = dir.join("qemu.stderr");
-        let stdout = match defmt_log {
-            Some(p) => Stdio::from(
-                File::create(p).with_context(|| format!("{}: cannot create", p.display()))?,
+        let defmt_log = match defmt_log {
+            Some(target) => {
+                let temp = crate::output_file::temp_beside(target)?;
+                Some((temp, target.to_path_buf()))
+            }
+            None => None,
+        };
+        let stdout = match &defmt_log {
+            Some((temp, target)) => Stdio::from(
+                temp.reopen()
+                    .with_context(|| format!("{}:0: cannot write", target.display()))?,
             ),
             None => Stdio::null(),
         };
@@ -146,15 +157,15 @@ impl Qemu {
         let child = match command.spawn() {
             Ok(c) => c,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                let _ = std::fs::remove_dir_all(&dir);
                 bail!("{binary} not found: install QEMU (Debian: apt-get install -y qemu-system-arm) or set QEMU_SYSTEM_ARM")
             }
             Err(e) => return Err(e).with_context(|| format!("cannot start {binary}")),
         };
         let mut qemu = Qemu {
             child,
-            dir,
+            _dir: scratch,
             stderr_path,
+            defmt_log,
         };
         let deadline = Instant::now() + Duration::from_secs(20);
         loop {
@@ -175,6 +186,17 @@ impl Qemu {
                 );
             }
             std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// The run ended well: QEMU is stopped and the defmt log, if one was asked for, renamed over
+    /// its file (dropped without this, QEMU is stopped and the log's temporary file deleted).
+    pub fn finish(mut self) -> anyhow::Result<()> {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        match self.defmt_log.take() {
+            Some((temp, target)) => crate::output_file::persist(temp, &target),
+            None => Ok(()),
         }
     }
 
@@ -206,7 +228,6 @@ impl Drop for Qemu {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
-        let _ = std::fs::remove_dir_all(&self.dir);
     }
 }
 

@@ -5,6 +5,7 @@
 
 use crate::common::{host_sim, host_sim_ok, paper, path_str, temp_dir};
 use std::path::Path;
+use std::process::Command;
 
 /// The names of the files in `dir`, sorted.
 fn listing(dir: &Path) -> Vec<String> {
@@ -228,4 +229,63 @@ fn negative_values_of_numeric_options_get_the_options_own_message() {
             "{args:?}: {stderr}"
         );
     }
+}
+
+/// `stream --defmt-log` is an output like the others: it may not name an input of the run (the
+/// log, its truth file, the firmware ELF) or the estimates file, and it is written through a
+/// temporary file that only a run that ends well renames over it. A run whose QEMU fails at once
+/// leaves an earlier log as it was, and neither a temporary file nor QEMU's scratch directory.
+#[test]
+fn the_defmt_log_is_never_an_input_and_a_failed_run_keeps_the_earlier_one() {
+    let dir = temp_dir("cli-defmt-log");
+    let log = paper(&dir, 100);
+    let elf = dir.join("firmware.elf");
+    std::fs::write(&elf, b"an ELF that is never booted").unwrap();
+    let out = dir.join("estimates.csv");
+    let scratch = dir.join("scratch");
+    std::fs::create_dir_all(&scratch).unwrap();
+    let stream = |defmt_log: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_host-sim"))
+            .args(["stream", "--qemu", path_str(&elf), path_str(&log)])
+            .args(["--out", path_str(&out), "--defmt-log", path_str(defmt_log)])
+            .env("QEMU_SYSTEM_ARM", "/bin/false")
+            .env("TMPDIR", &scratch)
+            .output()
+            .unwrap()
+    };
+    let log_before = std::fs::read(&log).unwrap();
+    for (target, what) in [
+        (log.clone(), "the log itself"),
+        (dir.join("paper.truth.json"), "the log's truth file"),
+        (elf.clone(), "the firmware ELF"),
+        (out.clone(), "the estimates file"),
+    ] {
+        let result = stream(&target);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "{what}: {stderr}");
+        assert!(
+            stderr.contains(&format!("--defmt-log names {what}")),
+            "{stderr}"
+        );
+    }
+    assert_eq!(std::fs::read(&log).unwrap(), log_before);
+
+    let defmt_log = dir.join("firmware.defmt");
+    std::fs::write(&defmt_log, b"the log of an earlier run").unwrap();
+    let result = stream(&defmt_log);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_ne!(result.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("QEMU exited"), "{stderr}");
+    assert_eq!(
+        std::fs::read(&defmt_log).unwrap(),
+        b"the log of an earlier run"
+    );
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
+    assert_eq!(std::fs::read_dir(&scratch).unwrap().count(), 0);
+    std::fs::remove_dir_all(&dir).unwrap();
 }
