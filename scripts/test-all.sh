@@ -111,6 +111,19 @@ grep -q ',rejected_non_finite,' "$C_DIR/host-sim.csv" && grep -Eq ',(estimating|
 cmp "$C_DIR/host-sim.csv" "$C_DIR/c-host.csv"
 cmp "$C_DIR/host-sim.csv" "$C_DIR/c-qemu.csv"
 echo "host and Cortex-M4F (QEMU): $(($(wc -l < "$C_DIR/c-qemu.csv") - 1)) rows, byte-identical to host-sim estimate"
+# The same log with its time in milliseconds, ';' separators and header names in capitals with
+# spaces; and in ISO 8601 UTC (some rows with an offset) with tab separators.
+awk -v MODE=ms -f scripts/log-time-variants.awk "$C_DIR/clean.csv" > "$C_DIR/ms.csv"
+awk -v MODE=utc -f scripts/log-time-variants.awk "$C_DIR/clean.csv" > "$C_DIR/utc.csv"
+for variant in ms utc; do
+    target/release/host-sim estimate "$C_DIR/$variant.csv" --out "$C_DIR/$variant.host-sim.csv" > /dev/null
+    bash scripts/c-example.sh "$C_DIR/$variant.csv" "$C_DIR/$variant.c-host.csv"
+    cmp "$C_DIR/$variant.host-sim.csv" "$C_DIR/$variant.c-host.csv"
+done
+bash scripts/c-example.sh --qemu "$C_DIR/utc.csv" "$C_DIR/utc.c-qemu.csv"
+cmp "$C_DIR/utc.host-sim.csv" "$C_DIR/utc.c-qemu.csv"
+grep -Eq ',(estimating|converged),' "$C_DIR/utc.c-qemu.csv"
+echo "time_ms with ';' and time_utc with tabs: host and Cortex-M4F byte-identical to host-sim estimate"
 rm -rf "$C_DIR"
 # The 1 Hz navigation loop of docs/c-api.md on the Cortex-M4F: finds known errors within 1 arcsec
 # through a power cut and a restored checkpoint; prints the library's flash, RAM and stack.

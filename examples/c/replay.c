@@ -8,9 +8,16 @@
  * runs. Warnings and a summary go to standard error.
  *
  * The log as host-sim reads it: columns found by name in a header row (any order, others
- * ignored); spaces around names and cells, a UTF-8 byte-order mark and \r\n or \r line ends
- * tolerated; lines starting with '#' and blank lines skipped; a row with a blank, missing or
- * non-numeric cell skipped with a warning (at most 10 printed). Cells are plain: no CSV quoting.
+ * ignored; names matched in any case, a run of spaces and underscores standing for one underscore:
+ * `Time S` is time_s); the separator the one of ',', ';' and tab that splits the header into the
+ * most cells; the time in seconds (time_s), milliseconds (time_ms) or ISO 8601 / RFC 3339 UTC
+ * (time_utc; the first of the three present is used; a cell of any of them that is a date and
+ * time is read as one); spaces around names and cells, a UTF-8 byte-order mark and \r\n or \r
+ * line ends tolerated; lines starting with '#' and blank lines skipped; a row with a blank,
+ * missing or unreadable cell skipped with a warning (at most 10 printed). Cells are plain: no CSV
+ * quoting. A date and time is read in the form YYYY-MM-DD, 'T' or a space, hh:mm:ss, an optional
+ * fraction of up to 9 digits, then 'Z', an offset +hh:mm / -hh:mm, or nothing (UTC), from 1970
+ * on; host-sim's date parser accepts more forms, which this program skips as unreadable rows.
  * A line longer than LINE_MAX_LEN bytes is an unreadable row.
  *
  * Exit status: 0 when the log was read to its end; 1 for a log without a usable header or a
@@ -28,6 +35,13 @@ enum { LINE_MAX_LEN = 16384, MAX_WARNINGS = 10, COLUMNS = 7 };
 static const char *const COLUMN_NAMES[COLUMNS] = {
     "time_s", "rotation_deg", "platform_deg", "latitude_deg", "heading_deg", "roll_deg", "pitch_deg",
 };
+
+/* The time columns, in the order one is chosen when a log has several. */
+enum TimeUnit { SECONDS, MILLISECONDS, UTC };
+static const char *const TIME_NAMES[3] = {"time_s", "time_ms", "time_utc"};
+
+/* The separators a log may use; the one that splits the header into the most cells is used. */
+static const char SEPARATORS[3] = {',', ';', '\t'};
 
 /* The estimator's memory: static, aligned as the header asks. */
 static _Alignas(RINS_ESTIMATOR_ALIGN) unsigned char estimator_memory[RINS_ESTIMATOR_SIZE];
@@ -67,17 +81,18 @@ static int is_space(char c) {
     return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
 }
 
-/* The cells of a line: start and length of each, split at commas, spaces around them trimmed. */
+/* The cells of a line: start and length of each, split at the separator, spaces around them
+ * trimmed. */
 typedef struct {
     const char *start;
     size_t len;
 } Cell;
 
-static size_t split(char *text, Cell *cells, size_t max_cells) {
+static size_t split(char *text, char separator, Cell *cells, size_t max_cells) {
     size_t n = 0;
     char *p = text;
     for (;;) {
-        char *end = strchr(p, ',');
+        char *end = strchr(p, separator);
         size_t len = end ? (size_t)(end - p) : strlen(p);
         const char *s = p;
         while (len > 0 && is_space(*s)) {
@@ -99,6 +114,149 @@ static size_t split(char *text, Cell *cells, size_t max_cells) {
     }
 }
 
+/* The separator of a header line: the one of SEPARATORS it holds most of (the first on a tie). */
+static char separator_of(const char *text) {
+    size_t counts[3] = {0, 0, 0}, i, best = 0;
+    for (; *text; text++) {
+        for (i = 0; i < 3; i++) {
+            counts[i] += *text == SEPARATORS[i];
+        }
+    }
+    for (i = 1; i < 3; i++) {
+        if (counts[i] > counts[best]) {
+            best = i;
+        }
+    }
+    return SEPARATORS[best];
+}
+
+/* Whether a header cell names `name`: compared in lower case, a run of spaces and underscores
+ * standing for one underscore (`Time S`, `TIME_S` and `time  s` are time_s). */
+static int names(const Cell *cell, const char *name) {
+    size_t i = 0;
+    const char *n = name;
+    while (i < cell->len) {
+        char c = cell->start[i];
+        if (c == ' ' || c == '_') {
+            while (i < cell->len && (cell->start[i] == ' ' || cell->start[i] == '_')) {
+                i++;
+            }
+            c = '_';
+        } else {
+            i++;
+            if (c >= 'A' && c <= 'Z') {
+                c = (char)(c - 'A' + 'a');
+            }
+        }
+        if (*n != c) {
+            return 0;
+        }
+        n++;
+    }
+    return *n == '\0';
+}
+
+/* The digits cell[at..at+count] as a number; -1 if any is not a digit. */
+static long digits(const char *s, size_t count) {
+    long v = 0;
+    size_t i;
+    for (i = 0; i < count; i++) {
+        if (s[i] < '0' || s[i] > '9') {
+            return -1;
+        }
+        v = v * 10 + (s[i] - '0');
+    }
+    return v;
+}
+
+/* Whether a cell is a date (YYYY-MM-DD...) rather than a number, as host-sim judges it. */
+static int looks_like_date(const Cell *cell) {
+    return cell->len >= 10 && digits(cell->start, 4) >= 0 && cell->start[4] == '-' && cell->start[7] == '-';
+}
+
+/* Days from 1970-01-01 to a civil date (proleptic Gregorian). */
+static long long days_from_civil(long y, long m, long d) {
+    long era, yoe, doy, doe;
+    y -= m <= 2;
+    era = (y >= 0 ? y : y - 399) / 400;
+    yoe = y - era * 400;
+    doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+    doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    return (long long)era * 146097 + doe - 719468;
+}
+
+/* A date and time (see the head of this file) as Unix seconds, exactly as host-sim makes them:
+ * whole seconds plus the nanoseconds times 1e-9. Returns 0 when the cell is not one. */
+static int parse_utc(const Cell *cell, double *unix_s) {
+    static const int DAYS_IN_MONTH[12] = {31, 29, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+    const char *s = cell->start;
+    size_t len = cell->len, at = 19;
+    long y, mo, d, h, mi, sec, nanos = 0, scale = 100000000;
+    long long seconds, offset_s = 0;
+    if (len < 19 || s[4] != '-' || s[7] != '-' || (s[10] != 'T' && s[10] != 't' && s[10] != ' ') || s[13] != ':' ||
+        s[16] != ':') {
+        return 0;
+    }
+    y = digits(s, 4);
+    mo = digits(s + 5, 2);
+    d = digits(s + 8, 2);
+    h = digits(s + 11, 2);
+    mi = digits(s + 14, 2);
+    sec = digits(s + 17, 2);
+    if (y < 1970 || mo < 1 || mo > 12 || d < 1 || d > DAYS_IN_MONTH[mo - 1] || h < 0 || h > 23 || mi < 0 || mi > 59 ||
+        sec < 0 || sec > 59 || (mo == 2 && d == 29 && !((y % 4 == 0 && y % 100 != 0) || y % 400 == 0))) {
+        return 0;
+    }
+    if (at < len && (s[at] == '.' || s[at] == ',')) {
+        size_t first = ++at;
+        while (at < len && s[at] >= '0' && s[at] <= '9') {
+            if (at - first >= 9) {
+                return 0;
+            }
+            nanos += (s[at] - '0') * scale;
+            scale /= 10;
+            at++;
+        }
+        if (at == first) {
+            return 0;
+        }
+    }
+    if (at < len && (s[at] == 'Z' || s[at] == 'z')) {
+        at++;
+    } else if (at < len && (s[at] == '+' || s[at] == '-')) {
+        long oh, om;
+        if (len - at != 6 || s[at + 3] != ':' || (oh = digits(s + at + 1, 2)) < 0 || (om = digits(s + at + 4, 2)) < 0 ||
+            oh > 23 || om > 59) {
+            return 0;
+        }
+        offset_s = (oh * 3600 + om * 60) * (s[at] == '-' ? -1 : 1);
+        at = len;
+    }
+    if (at != len) {
+        return 0;
+    }
+    seconds = days_from_civil(y, mo, d) * 86400 + h * 3600 + mi * 60 + sec - offset_s;
+    if (seconds < 0) {
+        return 0;
+    }
+    *unix_s = (double)seconds + (double)nanos * 1e-9;
+    return 1;
+}
+
+/* One time cell as seconds: a date and time, or a number in the column's unit. */
+static int parse_time(const Cell *cell, enum TimeUnit unit, double *time_s) {
+    if (looks_like_date(cell)) {
+        return parse_utc(cell, time_s);
+    }
+    if (rins_parse_number(cell->start, cell->len, time_s) != RINS_ERROR_OK) {
+        return 0;
+    }
+    if (unit == MILLISECONDS) {
+        *time_s = *time_s / 1000.0;
+    }
+    return 1;
+}
+
 static void fail(const char *what, RinsError error) {
     fprintf(stderr, "error: %s: %s\n", what, rins_error_name(error));
     exit(1);
@@ -107,7 +265,9 @@ static void fail(const char *what, RinsError error) {
 int main(void) {
     enum { MAX_CELLS = 256 };
     static Cell cells[MAX_CELLS];
-    size_t column[COLUMNS]; /* the cell index of each column */
+    size_t column[COLUMNS]; /* the cell index of each column (the time's first) */
+    enum TimeUnit time_unit = SECONDS;
+    char separator = ',';
     int have_header = 0;
     unsigned long line_no = 0, rows = 0, rejected = 0, skipped = 0;
     size_t written;
@@ -144,7 +304,10 @@ int main(void) {
         if (line[0] == '#') {
             continue;
         }
-        n = split(line, cells, MAX_CELLS);
+        if (!have_header) {
+            separator = separator_of(line);
+        }
+        n = split(line, separator, cells, MAX_CELLS);
         if (n == 1 && cells[0].len == 0) {
             continue; /* blank */
         }
@@ -160,16 +323,22 @@ int main(void) {
                 cells[0].len -= 3;
             }
             for (k = 0; k < COLUMNS; k++) {
-                size_t found = 0;
-                for (i = 0; i < n; i++) {
-                    if (cells[i].len == strlen(COLUMN_NAMES[k]) && memcmp(cells[i].start, COLUMN_NAMES[k], cells[i].len) == 0) {
-                        column[k] = i;
-                        found++;
+                size_t found = 0, unit;
+                for (unit = 0; unit < (k == 0 ? 3u : 1u) && found == 0; unit++) {
+                    const char *name = k == 0 ? TIME_NAMES[unit] : COLUMN_NAMES[k];
+                    for (i = 0; i < n; i++) {
+                        if (names(&cells[i], name)) {
+                            column[k] = i;
+                            found++;
+                        }
+                    }
+                    if (k == 0 && found > 0) {
+                        time_unit = (enum TimeUnit)unit;
                     }
                 }
                 if (found != 1) {
-                    fprintf(stderr, "error: -:%lu: bad header: column \"%s\" %s\n", line_no, COLUMN_NAMES[k],
-                            found ? "appears twice" : "is missing");
+                    fprintf(stderr, "error: -:%lu: bad header: column \"%s\"%s %s\n", line_no, COLUMN_NAMES[k],
+                            k == 0 ? " (or \"time_ms\", \"time_utc\")" : "", found ? "appears twice" : "is missing");
                     return 1;
                 }
             }
@@ -193,8 +362,9 @@ int main(void) {
                     problem = "short row";
                 } else if (cells[i].len == 0) {
                     problem = "blank cell";
-                } else if (rins_parse_number(cells[i].start, cells[i].len, &value[k]) != RINS_ERROR_OK) {
-                    problem = "not a number";
+                } else if (k == 0 ? !parse_time(&cells[i], time_unit, &value[k])
+                                  : rins_parse_number(cells[i].start, cells[i].len, &value[k]) != RINS_ERROR_OK) {
+                    problem = k == 0 ? "not a time" : "not a number";
                 }
             }
             if (problem) {
