@@ -251,18 +251,22 @@ fn lagrange_at_zero(nodes: &[i32; 2 * NEIGHBOURS], n: usize) -> [Real; 2 * NEIGH
             missing_num *= -y;
         }
     }
-    let num_all = FULL.0.wrapping_div(missing_num);
+    let num_all = FULL.0.checked_div(missing_num).unwrap_or(0);
     let mut w = [0.0; 2 * NEIGHBOURS];
-    for i in 0..n {
-        let x = nodes[i];
+    // Every divisor below is a product of non-zero offsets and differences of distinct ones, never
+    // 0, and every offset within +-SPAN; written with `checked_div` and `get`, the code has no panic
+    // path for the compiler to keep (a weight it cannot form stays 0).
+    for (wi, &x) in w.iter_mut().zip(nodes.iter()).take(n) {
         // The product of x - y over the missing offsets (never 0: x is present).
         let mut missing_den = 1i32;
-        for &y in &missing[..k] {
+        for &y in missing.iter().take(k) {
             missing_den *= x - y;
         }
-        let num = num_all.wrapping_div(-x);
-        let den = FULL.1[(x + SPAN) as usize].wrapping_div(missing_den);
-        w[i] = num as Real / den as Real;
+        let full_den = FULL.1.get((x + SPAN) as usize).copied().unwrap_or(0);
+        if let (Some(num), Some(den)) = (num_all.checked_div(-x), full_den.checked_div(missing_den))
+        {
+            *wi = num as Real / den as Real;
+        }
     }
     w
 }
@@ -579,9 +583,9 @@ impl GapFiller {
             _ => lagrange_at_zero(&nodes, n),
         };
         let (mut roll, mut pitch) = (0.0, 0.0);
-        for i in 0..n {
-            roll += w[i] * values[i].0;
-            pitch += w[i] * values[i].1;
+        for (wi, v) in w.iter().zip(values.iter()).take(n) {
+            roll += wi * v.0;
+            pitch += wi * v.1;
         }
         // Angles linearly, the short way round, between the nearest present samples.
         let f = (-ob) as Real / (oa - ob) as Real;

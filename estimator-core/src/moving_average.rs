@@ -343,7 +343,8 @@ impl WindowLayout {
                 entries: period as usize,
             };
         }
-        let smallest = period.div_ceil(capacity);
+        // At least 1 (the period is over the capacity), said so: no division by zero below.
+        let smallest = period.div_ceil(capacity).max(1);
         for bin in smallest..=2 * smallest {
             if period.is_multiple_of(bin) && period / bin <= capacity {
                 return WindowLayout {

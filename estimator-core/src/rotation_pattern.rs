@@ -373,7 +373,11 @@ impl RotationMonitor {
         // steps and wrapping with one comparison (no division on the step's path).
         let d0 = wrap_pi(rotation_rad - base);
         let watched = match (self.period_samples, self.timing_pass) {
-            (Some(_), Some((level, _))) => usize::from(level)..usize::from(level) + 1,
+            (Some(_), Some((level, _))) => {
+                // Within the references (as it always is), said so: no bounds check below.
+                let level = usize::from(level).min(LEVELS - 1);
+                level..level + 1
+            }
             _ => 0..LEVELS,
         };
         for m in watched {
@@ -448,7 +452,11 @@ impl RotationMonitor {
         limits: &Limits,
     ) -> Result<(), RotationFault> {
         if let Some((m, dir)) = self.timing_pass {
-            if let Some(k) = self.last_pass[m as usize][dir as usize] {
+            let last = self
+                .last_pass
+                .get(usize::from(m))
+                .and_then(|passes| passes.get(usize::from(dir)));
+            if let Some(&Some(k)) = last {
                 if index.wrapping_sub(k) > period
                     && !pass_on_time(index.wrapping_sub(k), period, limits)
                 {

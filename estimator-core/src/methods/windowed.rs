@@ -830,6 +830,8 @@ impl<const CAP: usize> Windowed<CAP> {
         z: &[Real; 4],
         average: bool,
     ) -> [Real; 2] {
+        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
+        let pair = pair.min(1);
         let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
         let count = &mut self.residual_count[pair];
         if average {
@@ -853,6 +855,8 @@ impl<const CAP: usize> Windowed<CAP> {
     /// mean is beyond the check's bound. Once per update of the pair, not every step: the other
     /// pair's report is at most one update old.
     fn refresh_report(&mut self, config: &Config, pair: usize) {
+        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
+        let pair = pair.min(1);
         // The residual mean of a pair averages `count` updates of two entries each, of per-entry
         // variance `r` (filled samples included); without an update yet, the configured sigma.
         let sigma2 =
