@@ -739,9 +739,11 @@ pub fn timeline_figures(
 /// The Monte Carlo statistics over time: the median, 95th percentile and largest absolute error of
 /// each of x1..x4 over the runs (log scale), and the share of errors within twice their reported
 /// 1-sigma (about 95 % when the 1-sigma is honest).
-pub fn monte_carlo_figure(path: &Path, s: &Summary, title: &str) -> anyhow::Result<()> {
+pub fn monte_carlo_figure(path: &Path, s: &Summary) -> anyhow::Result<()> {
     let mut errors = Panel {
-        title: format!("Absolute error over the runs, arcsec: median (thick), 95th percentile, largest (grey); {title}"),
+        title:
+            "Absolute error, arcsec, from the first estimate: median (thick), p95, largest (grey)"
+                .into(),
         x_label: "time, s".into(),
         y_label: "arcsec".into(),
         y_range: (1e-3, 1e4),
@@ -755,26 +757,31 @@ pub fn monte_carlo_figure(path: &Path, s: &Summary, title: &str) -> anyhow::Resu
             .map(|(k, t)| (*t, f(k)))
             .collect()
     };
+    // A statistic over runs of which too many have no estimate yet is infinite: not drawn (the
+    // line starts at the first estimate), rather than marked beyond the axis.
+    let estimated = |points: Vec<(f64, f64)>| -> Vec<(f64, f64)> {
+        points.into_iter().filter(|(_, v)| v.is_finite()).collect()
+    };
     for i in 0..4 {
         errors.series.push(Series {
             label: format!("{} median", X_NAMES[i]),
             color: PALETTE[i],
-            points: over_time(&|k| s.median_abs_error_arcsec[k][i]),
+            points: estimated(over_time(&|k| s.median_abs_error_arcsec[k][i])),
         });
         errors.series.push(Series {
             label: format!("{} p95", X_NAMES[i]),
             color: lighter(PALETTE[i]),
-            points: over_time(&|k| s.p95_abs_error_arcsec[k][i]),
+            points: estimated(over_time(&|k| s.p95_abs_error_arcsec[k][i])),
         });
     }
     errors.series.push(Series {
         label: "largest of the four".into(),
         color: GREY,
-        points: over_time(&|k| {
+        points: estimated(over_time(&|k| {
             s.max_abs_error_arcsec[k]
                 .iter()
                 .fold(0.0f64, |m, v| m.max(*v))
-        }),
+        })),
     });
     let coverage = Panel {
         title: "Errors within twice their reported 1-sigma, % of (run, error) pairs".into(),

@@ -357,7 +357,7 @@ pub struct MonteCarloStudy<'a> {
 pub fn write_monte_carlo_report(dir: &Path, study: &MonteCarloStudy) -> anyhow::Result<PathBuf> {
     create_dir(dir)?;
     let png = dir.join("monte_carlo.png");
-    monte_carlo_figure(&png, study.summary, &study.description)?;
+    monte_carlo_figure(&png, study.summary)?;
     let sections = vec![
         Section::new("Study").with(Block::Facts(study.facts.clone())),
         Section::new("Absolute error over the runs, arcsec").with(Block::Code(study.table.clone())),
