@@ -1,7 +1,7 @@
 //! End to end through QEMU, on both boards: a scenario streamed through the firmware by
 //! `host-sim stream --qemu ELF --machine M` gives an estimates CSV byte-identical to
 //! `host-sim estimate` on the same log, and final estimates within 10 arcsec of the truth:
-//! 20000 s through the mps2-an386 image, one sample per answer; 10000 s through the STM32F405
+//! 10000 s through the mps2-an386 image, one sample per answer; 10000 s through the STM32F405
 //! image on netduinoplus2 in push mode (`--push`: frames sent without waiting for answers, queued
 //! in the firmware's receive ring, matched by their numbers: every frame answered, none lost, no
 //! overrun); and a real log's shape (reciprocating rotation, 2 % of rows lost, jittered Unix time
@@ -14,10 +14,10 @@ use host_sim::log_csv::{read_truth, truth_path};
 use std::time::Instant;
 
 #[test]
-fn stream_of_20000_s_through_mps2_an386_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
+fn stream_of_10000_s_through_mps2_an386_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
 ) {
     let dir = scratch("e2e-mps2-an386");
-    let log = paper_log(&dir, 20_000);
+    let log = paper_log(&dir, 10_000);
     stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
         Board::Mps2An386,
         &log,
