@@ -34,7 +34,7 @@ echo "(flash = text + data, static RAM = data + bss)"
 section "link-protocol unit tests"
 run cargo test -p link-protocol
 
-section "QEMU tests (faults, serial-port path, 20000 s end to end, budgets)"
+section "QEMU tests (faults, serial-port path, 10000 s end to end, budgets)"
 run cargo test -p host-sim --release --no-fail-fast --test qemu qemu_faults --test qemu qemu_port --test qemu qemu_power_cut --test qemu qemu_checkpoint_interval --test qemu qemu_e2e --test qemu qemu_budgets -- --nocapture --test-threads=1
 
 section "exact step instruction count (TCG plugin firmware/tools/stepcount.c)"

@@ -118,7 +118,8 @@
 //! residual check would say `model_mismatch` and widen the 1-sigma by a part of the step. Instead
 //! ([`change`] has the derivation and the thresholds):
 //!
-//! 1. **Detection**: the pair's residuals, averaged again over blocks of half a period, are tested
+//! 1. **Detection**: the pair's residuals, averaged again over blocks of half a period (a quarter
+//!    or less at periods over 480 s, at most 240 s), are tested
 //!    for a shift of at least half the smallest step (`Config::change_detection_step_rad`, 20
 //!    arcsec; 0 turns all of this off) by a log-likelihood ratio summed over a run of blocks, with
 //!    the run's long-run variance; a change is declared when the sum reaches 20 and the run has
@@ -522,7 +523,7 @@ impl<const CAP: usize> Windowed<CAP> {
             self.keep_clean_state();
         }
         if self.relearning[pair] {
-            if self.relearn_from_block(pair, &m.rows, &m.z) {
+            if self.relearn_from_block(pair, &m.rows, &m.z, interval * bin) {
                 self.refresh_report(config, 0);
                 self.refresh_report(config, 1);
             }
@@ -604,14 +605,27 @@ impl<const CAP: usize> Windowed<CAP> {
     }
 
     /// The model's variance of a block mean of the change detector, rad^2: white products of
-    /// variance `r` give `r (1 - 1/6) / W` (see [`change`]).
-    fn block_floor_rad2(&self, pair: usize) -> Real {
-        self.product_variance_rad2[pair] * (5.0 / 6.0) / self.window.len().max(1) as Real
+    /// variance `r` give `r (1 - B / (3 W)) / W` for blocks of `B` entries (the trapezoid's sum of
+    /// squared weights), `r (1 - 1/6) / W` for half a period (see [`change`]).
+    fn block_floor_rad2(&self, pair: usize, entry_s: Real) -> Real {
+        let len = self.window.len().max(1) as u32;
+        let block = self.block_entries(entry_s);
+        let factor = if 2 * block >= len {
+            5.0 / 6.0
+        } else {
+            1.0 - block as Real / (3.0 * len as Real)
+        };
+        self.product_variance_rad2[pair] * factor / len as Real
     }
 
-    /// Updates of a pair in one block of the change detector: half a period of entries.
-    fn updates_per_block(&self) -> u32 {
-        (self.window.len() as u32 / 4).max(1)
+    /// Entries in one block of the change detector ([`change::block_entries`]).
+    fn block_entries(&self, entry_s: Real) -> u32 {
+        change::block_entries(self.window.len() as u32, entry_s)
+    }
+
+    /// Updates of a pair in one block of the change detector: half its entries.
+    fn updates_per_block(&self, entry_s: Real) -> u32 {
+        (self.block_entries(entry_s) / 2).max(1)
     }
 
     /// Passes the pair's residuals to the change detector; when it declares a change, the errors
@@ -627,7 +641,7 @@ impl<const CAP: usize> Windowed<CAP> {
         self.block_held[pair] &= self.change.holding();
         let block = self
             .change
-            .accumulate(pair, residual, self.updates_per_block())?;
+            .accumulate(pair, residual, self.updates_per_block(entry_s))?;
         // Kept for learning the errors again, should a change be declared while the filter holds.
         self.last_block_held[pair] = self.block_held[pair];
         if self.block_held[pair] {
@@ -641,7 +655,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let horizon = (RESIDUAL_PERIODS as u32 * len / 2).max(1);
         let ctx = BlockContext {
             persistence_blocks: persistence_blocks(len, entry_s),
-            floor_rad2: self.block_floor_rad2(pair),
+            floor_rad2: self.block_floor_rad2(pair, entry_s),
             step_rad: config.change_detection_step_rad,
             settled: self.residual_count[pair] >= horizon,
             armed: self.residual_count.iter().all(|c| *c >= horizon),
@@ -747,7 +761,13 @@ impl<const CAP: usize> Windowed<CAP> {
     /// covariance the filter takes the changed errors from it, as from a window at a cold start but
     /// with the block's far smaller sway; the pair updates from windows again from then on.
     /// Returns whether the block was applied (the filter changed).
-    fn relearn_from_block(&mut self, pair: usize, rows: &[[Real; 4]; 4], z: &[Real; 4]) -> bool {
+    fn relearn_from_block(
+        &mut self,
+        pair: usize,
+        rows: &[[Real; 4]; 4],
+        z: &[Real; 4],
+        entry_s: Real,
+    ) -> bool {
         let held = self.held_x_rad;
         let (block, rows) = if self.last_block_held[pair] {
             self.last_block_held[pair] = false;
@@ -764,16 +784,16 @@ impl<const CAP: usize> Windowed<CAP> {
                 z[2 * pair] - fit(2 * pair),
                 z[2 * pair + 1] - fit(2 * pair + 1),
             ];
-            let Some(block) = self
-                .change
-                .accumulate(pair, residual, self.updates_per_block())
+            let Some(block) =
+                self.change
+                    .accumulate(pair, residual, self.updates_per_block(entry_s))
             else {
                 return false;
             };
             (block, *rows)
         };
         let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
-        let floor = self.block_floor_rad2(pair);
+        let floor = self.block_floor_rad2(pair, entry_s);
         let mut applied = false;
         for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
             let target = block[k] + fit(ch);

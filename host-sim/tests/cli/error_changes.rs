@@ -181,9 +181,10 @@ fn print_step_line(which: usize, step: f64, scheme: RotationScheme, period_s: f6
 }
 
 /// What the targets require of every line: detected once, after the step, within 3.5 periods;
-/// every error within 10 arcsec of the new values by 2,000 s after the step for periods up to
-/// 480 s, by 3 periods for longer ones (a 20 arcsec step of a 720 s period is declared after up to
-/// 2.8 periods: the run must outlast a passing disturbance of a period and 300 s); the 1-sigma
+/// every error within 10 arcsec of the new values by 2,000 s after the step (at long periods the
+/// detector's blocks are a quarter of the period or less, so that the run a change must last stays
+/// about a period and a passing disturbance: a 20 arcsec step of a 720 s period is declared within
+/// 1,900 s); the 1-sigma
 /// covering the error from one period after the step on (at 2 sigma, about
 /// as often as on the same logs without a step: the clean sea's coverage is 95-97 %, and a few
 /// runs of 6,000 s swing by several points; at 3 sigma all but a few rows).
@@ -194,14 +195,10 @@ fn check_step_line(name: &str, period_s: f64, l: &StepLine) {
         "{name}: {l:?}"
     );
     assert!(l.worst_delay_s <= 3.5 * period_s, "{name}: {l:?}");
-    if period_s <= 480.0 {
-        assert!(
-            l.worst_within_10_s <= 2000.0 && l.worst_after_2000_s <= 10.0,
-            "{name}: {l:?}"
-        );
-    } else {
-        assert!(l.worst_within_10_s <= 3.0 * period_s, "{name}: {l:?}");
-    }
+    assert!(
+        l.worst_within_10_s <= 2000.0 && l.worst_after_2000_s <= 10.0,
+        "{name}: {l:?}"
+    );
     assert!(
         l.coverage_2_sigma >= 0.85 && l.coverage_3_sigma >= 0.985,
         "{name}: {l:?}"
@@ -297,10 +294,11 @@ fn declared(
 /// The sea scenarios of the no-false-detection checks: the rough-sea Monte Carlo of the README
 /// (latitudes 0-70 deg, roll up to 10 deg), and the sea scenario with coloured noise of 20 arcsec,
 /// errors drifting 20 arcsec a day, heel in turns of 3 deg and of 0.5 deg.
-fn no_change_draws() -> Vec<(&'static str, Draw)> {
+fn no_change_draws(period_s: f64) -> Vec<(&'static str, Draw)> {
     let sea = |mismatch: Mismatch| {
         let mut d = Draw::new(ScenarioKind::Sea, 31);
         d.mismatch = mismatch;
+        d.rotation_period_s = Some(period_s);
         d
     };
     let mut rough = sea(Mismatch::default());
@@ -339,13 +337,15 @@ fn no_change_draws() -> Vec<(&'static str, Draw)> {
     ]
 }
 
-fn no_false_detection(runs: [usize; 5], thirty_day_runs: usize) {
-    println!("| log | runs | days each | changes declared |");
-    println!("|---|---|---|---|");
-    for ((name, draw), n) in no_change_draws().into_iter().zip(runs) {
+/// `runs` 45,000 s logs of each of [`no_change_draws`] at a rotation period of `period_s`, and
+/// `thirty_day_runs` month-long voyages clean and with drifting errors: no change declared.
+fn no_false_detection(runs: [usize; 5], thirty_day_runs: usize, period_s: f64) {
+    println!("| log | rotation period s | runs | days each | changes declared |");
+    println!("|---|---|---|---|---|");
+    for ((name, draw), n) in no_change_draws(period_s).into_iter().zip(runs) {
         let changes = declared(&draw, n, 45_000.0, None);
         println!(
-            "| {name} | {n} | {:.2} | {} |",
+            "| {name} | {period_s} | {n} | {:.2} | {} |",
             45_000.0 / 86_400.0,
             changes.len()
         );
@@ -365,15 +365,21 @@ fn no_false_detection(runs: [usize; 5], thirty_day_runs: usize) {
     ] {
         let mut draw = Draw::new(ScenarioKind::Sea, 41);
         draw.mismatch = mismatch;
+        draw.rotation_period_s = Some(period_s);
         let changes = declared(&draw, thirty_day_runs, 30.0 * 86_400.0, Some(90.0));
-        println!("| {name} | {thirty_day_runs} | 30 | {} |", changes.len());
+        println!(
+            "| {name} | {period_s} | {thirty_day_runs} | 30 | {} |",
+            changes.len()
+        );
         assert!(changes.is_empty(), "{name}: {changes:?}");
     }
 }
 
 #[test]
 fn no_change_is_declared_at_sea_under_coloured_noise_drift_or_turns_nor_in_a_month() {
-    no_false_detection([20, 6, 6, 4, 4], 1);
+    no_false_detection([20, 6, 6, 4, 4], 1, 480.0);
+    // A long period, whose blocks are a quarter of it (240 s at most).
+    no_false_detection([6, 3, 3, 3, 3], 0, 720.0);
 }
 
 #[test]
@@ -483,5 +489,6 @@ fn study_steps() {
 #[test]
 #[ignore = "the full study: bash scripts/change-study.sh"]
 fn study_no_false_detection() {
-    no_false_detection([200; 5], 10);
+    no_false_detection([200; 5], 10, 480.0);
+    no_false_detection([200; 5], 10, 720.0);
 }

@@ -21,7 +21,12 @@
 //! period** of each pair's updates (`W / 4` updates, `W / 2` entries): the block mean `b` weighs the
 //! raw products with a trapezoid `1.5 W` long, whose response to the sway falls like
 //! `1 / (pi f W)(pi f W / 2)`, below an arcsec (measured on the sea scenario: 0.2 to 1.2 arcsec,
-//! against 10 to 50 for a window's residual).
+//! against 10 to 50 for a window's residual). At periods over 480 s a block is a quarter of the
+//! period, or an eighth..., the longest of these within [`MAX_BLOCK_S`] = 240 s
+//! ([`block_entries`]): the trapezoid `W + B` long still takes the sway down as far
+//! (`1 / (pi f W)(pi f B)`, with `W B` at least that of a 480 s period), and the run a change must
+//! last (below) shrinks with the block: at 720 s a 20 arcsec step was declared up to 2,044 s after
+//! it with half-period blocks, 1,864 s with 180 s blocks (docs/uncertainty.md).
 //!
 //! Under the model, `b` is zero-mean with a variance `s^2` learned from the blocks themselves (a
 //! running mean of `b^2` over [`VARIANCE_BLOCKS`] blocks, each `b^2` clipped at
@@ -70,8 +75,11 @@
 //! **Persistence.** A passing disturbance (a turn's heel, a few minutes of roll offset) biases
 //! every window that contains it: the residuals over `W + D` for a disturbance of `D`, up to four
 //! consecutive blocks for `D = W / 2`. A step never passes. A run must therefore last until a block
-//! lies wholly after the longest disturbance the detector is to ignore, `D = max(W / 2,
-//! `[`PASSING_S`]`)`: `3 + ceil(2 D / W)` blocks, 5 for a 480 s period (2.5 periods). A 20 arcsec
+//! lies wholly after the longest disturbance the detector is to ignore, `D = max(B,
+//! `[`PASSING_S`]`)` for blocks of `B`: the residuals over `W + D` overlap at most
+//! `ceil((W + D) / B)` blocks and one more, so a run must last one block longer than that;
+//! `3 + ceil(2 D / W)` blocks for half-period blocks, 5 for a 480 s period (2.5 periods), 7 blocks
+//! of 180 s (1,260 s) for a 720 s period. A 20 arcsec
 //! step on a calm sea is detected within about three periods (the ramp of the first block, then
 //! the run); when it is, the window holds only samples from after the step, so the errors can be
 //! learned again from the next update on.
@@ -123,15 +131,45 @@ pub const HOLD_SIGMAS: Real = 3.0;
 /// course change at 0.5 deg/s takes 180 s); at least half a period.
 pub const PASSING_S: Real = 300.0;
 
+/// The longest block, s: a block is half a period, or a quarter, an eighth... of it, the longest of
+/// these that is at most this long. At long periods the run a change must last (about a period,
+/// plus the longest passing disturbance, plus a block or two) then does not grow with the block
+/// too; at periods up to 480 s a block is half a period.
+pub const MAX_BLOCK_S: Real = 240.0;
+
+/// Entries in a block of the change detector, for a window of `window_entries` entries of
+/// `entry_s` seconds each: half the window, halved again while it is longer than [`MAX_BLOCK_S`]
+/// (and at least 2 entries), and even (a block is whole updates of a pair, each two entries on).
+pub fn block_entries(window_entries: u32, entry_s: Real) -> u32 {
+    let mut block = window_entries / 2;
+    while block > 2 && block as Real * entry_s > MAX_BLOCK_S {
+        block /= 2;
+    }
+    (block & !1).max(2)
+}
+
 /// Blocks a run must last before a change is declared, for a window of `window_entries` entries
 /// of `entry_s` seconds each: until a block lies wholly after the longest passing disturbance.
+/// A disturbance of `D` biases the residuals over `W + D`, which overlaps at most
+/// `ceil((W + D) / B)` blocks of `B` entries and one more: a run one block longer than that is
+/// no disturbance (`3 + ceil(2 D / W)` for half-period blocks).
 pub fn persistence_blocks(window_entries: u32, entry_s: Real) -> u32 {
-    let half = (window_entries / 2).max(1) as Real;
-    let passing = (PASSING_S / entry_s).larger(half);
-    // ceil without libm: the ratio is positive and small.
-    let ratio = passing / half;
+    let block = block_entries(window_entries, entry_s);
+    let passing = (PASSING_S / entry_s).larger(block as Real);
+    if 2 * block >= window_entries {
+        // Half-period blocks: 2 + ceil(D / B) blocks overlap, the run one more.
+        let ratio = passing / block as Real;
+        let whole = ratio as u32;
+        // ceil without libm: the ratio is positive and small.
+        return 3 + if (whole as Real) < ratio {
+            whole + 1
+        } else {
+            whole
+        };
+    }
+    let ratio = (window_entries as Real + passing) / block as Real;
     let whole = ratio as u32;
-    3 + if (whole as Real) < ratio {
+    1 + if (whole as Real) < ratio {
         whole + 1
     } else {
         whole
@@ -450,11 +488,26 @@ mod tests {
     fn persistence_outlasts_a_passing_disturbance() {
         // 480 entries of 1 s: a turn of up to 300 s (more than half a period): 3 + 2 blocks.
         assert_eq!(persistence_blocks(480, 1.0), 5);
-        // Long periods: half a period is the longer; short ones: 300 s is.
-        assert_eq!(persistence_blocks(3600, 1.0), 4);
+        // Short periods: 300 s is the longer (60 s: blocks of 30 s, 3 + 10).
         assert_eq!(persistence_blocks(60, 1.0), 13);
         // Bins of 2 samples: the same time.
         assert_eq!(persistence_blocks(240, 2.0), 5);
+        // Long periods: blocks of a quarter of 720 s, 180 s; W + D = 1020 s overlaps 6 of them,
+        // and one more: 7 (1,260 s, where half-period blocks took 4, 1,440 s). 3600 s: blocks of
+        // 224 s, 18 + 1 (4,256 s; half-period blocks took 4 of 1,800 s, 7,200 s).
+        assert_eq!(persistence_blocks(720, 1.0), 7);
+        assert_eq!(persistence_blocks(3600, 1.0), 19);
+    }
+
+    #[test]
+    fn a_block_is_half_a_period_up_to_240_s_and_a_quarter_or_less_beyond() {
+        assert_eq!(block_entries(360, 1.0), 180);
+        assert_eq!(block_entries(480, 1.0), 240);
+        assert_eq!(block_entries(720, 1.0), 180);
+        assert_eq!(block_entries(3600, 1.0), 224);
+        // Entries of 2 s (bins): 480 s in 240 entries, half of them, 240 s.
+        assert_eq!(block_entries(240, 2.0), 120);
+        assert_eq!(block_entries(4, 1.0), 2);
     }
 
     #[test]
