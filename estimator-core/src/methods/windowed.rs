@@ -163,7 +163,7 @@ use crate::kalman::{ConstantStateKalman, KalmanError};
 use crate::math::{sqrt, Compare};
 use crate::moving_average::CorrelationWindow;
 use crate::Real;
-use change::{persistence_blocks, Alarm, BlockContext, ChangeDetector};
+use change::{persistence_of, Alarm, BlockContext, ChangeDetector};
 
 /// Time constant of the residual average, in rotation periods.
 pub const RESIDUAL_PERIODS: usize = 4;
@@ -607,9 +607,8 @@ impl<const CAP: usize> Windowed<CAP> {
     /// The model's variance of a block mean of the change detector, rad^2: white products of
     /// variance `r` give `r (1 - B / (3 W)) / W` for blocks of `B` entries (the trapezoid's sum of
     /// squared weights), `r (1 - 1/6) / W` for half a period (see [`change`]).
-    fn block_floor_rad2(&self, pair: usize, entry_s: Real) -> Real {
+    fn block_floor_rad2(&self, pair: usize, block: u32) -> Real {
         let len = self.window.len().max(1) as u32;
-        let block = self.block_entries(entry_s);
         let factor = if 2 * block >= len {
             5.0 / 6.0
         } else {
@@ -623,11 +622,6 @@ impl<const CAP: usize> Windowed<CAP> {
         change::block_entries(self.window.len() as u32, entry_s)
     }
 
-    /// Updates of a pair in one block of the change detector: half its entries.
-    fn updates_per_block(&self, entry_s: Real) -> u32 {
-        (self.block_entries(entry_s) / 2).max(1)
-    }
-
     /// Passes the pair's residuals to the change detector; when it declares a change, the errors
     /// that changed are learned again (see "Changes of the errors" in the module doc).
     fn detect_change(
@@ -639,9 +633,11 @@ impl<const CAP: usize> Windowed<CAP> {
         entry_s: Real,
     ) -> Option<Alarm> {
         self.block_held[pair] &= self.change.holding();
+        // A block's updates of a pair: half its entries.
+        let block_entries = self.block_entries(entry_s);
         let block = self
             .change
-            .accumulate(pair, residual, self.updates_per_block(entry_s))?;
+            .accumulate(pair, residual, (block_entries / 2).max(1))?;
         // Kept for learning the errors again, should a change be declared while the filter holds.
         self.last_block_held[pair] = self.block_held[pair];
         if self.block_held[pair] {
@@ -654,12 +650,17 @@ impl<const CAP: usize> Windowed<CAP> {
         let len = self.window.len() as u32;
         let horizon = (RESIDUAL_PERIODS as u32 * len / 2).max(1);
         let ctx = BlockContext {
-            persistence_blocks: persistence_blocks(len, entry_s),
-            floor_rad2: self.block_floor_rad2(pair, entry_s),
+            persistence_blocks: persistence_of(len, block_entries, entry_s),
+            floor_rad2: self.block_floor_rad2(pair, block_entries),
             step_rad: config.change_detection_step_rad,
             settled: self.residual_count[pair] >= horizon,
             armed: self.residual_count.iter().all(|c| *c >= horizon),
             max_widening_rad: config.prior_sigma_rad,
+            blocks_per_half_period: if 2 * block_entries >= len {
+                1
+            } else {
+                len / 2 / block_entries.max(1)
+            },
         };
         let was_holding = self.change.holding();
         let alarm = self.change.test(
@@ -769,6 +770,7 @@ impl<const CAP: usize> Windowed<CAP> {
         entry_s: Real,
     ) -> bool {
         let held = self.held_x_rad;
+        let block_entries = self.block_entries(entry_s);
         let (block, rows) = if self.last_block_held[pair] {
             self.last_block_held[pair] = false;
             (
@@ -784,16 +786,16 @@ impl<const CAP: usize> Windowed<CAP> {
                 z[2 * pair] - fit(2 * pair),
                 z[2 * pair + 1] - fit(2 * pair + 1),
             ];
-            let Some(block) =
-                self.change
-                    .accumulate(pair, residual, self.updates_per_block(entry_s))
+            let Some(block) = self
+                .change
+                .accumulate(pair, residual, (block_entries / 2).max(1))
             else {
                 return false;
             };
             (block, *rows)
         };
         let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
-        let floor = self.block_floor_rad2(pair, entry_s);
+        let floor = self.block_floor_rad2(pair, block_entries);
         let mut applied = false;
         for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
             let target = block[k] + fit(ch);

@@ -38,7 +38,10 @@
 //! 20 arcsec of coloured noise). It is learned once the residual average has a full horizon (the
 //! filter settled), and tested after [`MIN_VARIANCE_BLOCKS`] = 16 blocks (8 periods; with 8,
 //! coloured noise made 5 false declarations in 200 runs within the first two hours, before the
-//! variance and the correlation below were learned; with 16, none in 600).
+//! variance and the correlation below were learned; with 16, none in 600). Both counts are of
+//! half-period blocks: with shorter blocks (periods over 480 s) they are multiplied by the blocks
+//! in half a period, so that the variance is learned from as much time (with 180 s blocks at 720 s
+//! and 16 of them, coloured noise made a false declaration in 200 runs; with 32, none).
 //!
 //! # Correlated blocks
 //! Consecutive blocks are not independent: their trapezoids overlap, and the filter's own error,
@@ -111,11 +114,12 @@ use crate::Real;
 /// at most `exp(-20) = 2.1e-9` false alarms per block, channel and direction).
 pub const LLR_THRESHOLD: Real = 20.0;
 
-/// Blocks whose block means the variance of a block mean is averaged over (time constant of the
-/// running mean, 32 periods).
+/// Half-period blocks whose block means the variance of a block mean is averaged over (time
+/// constant of the running mean, 32 periods; times [`BlockContext::blocks_per_half_period`]).
 pub const VARIANCE_BLOCKS: u32 = 64;
 
-/// Blocks learned before the first test.
+/// Half-period blocks learned before the first test (8 periods; times
+/// [`BlockContext::blocks_per_half_period`]).
 pub const MIN_VARIANCE_BLOCKS: u32 = 16;
 
 /// Largest lag-one correlation of the blocks taken into the run's variance (a factor of 19 at most).
@@ -154,22 +158,26 @@ pub fn block_entries(window_entries: u32, entry_s: Real) -> u32 {
 /// `ceil((W + D) / B)` blocks of `B` entries and one more: a run one block longer than that is
 /// no disturbance (`3 + ceil(2 D / W)` for half-period blocks).
 pub fn persistence_blocks(window_entries: u32, entry_s: Real) -> u32 {
-    let block = block_entries(window_entries, entry_s);
+    persistence_of(
+        window_entries,
+        block_entries(window_entries, entry_s),
+        entry_s,
+    )
+}
+
+/// [`persistence_blocks`] for blocks of `block` entries ([`block_entries`]), known already.
+pub fn persistence_of(window_entries: u32, block: u32, entry_s: Real) -> u32 {
     let passing = (PASSING_S / entry_s).larger(block as Real);
-    if 2 * block >= window_entries {
-        // Half-period blocks: 2 + ceil(D / B) blocks overlap, the run one more.
-        let ratio = passing / block as Real;
-        let whole = ratio as u32;
-        // ceil without libm: the ratio is positive and small.
-        return 3 + if (whole as Real) < ratio {
-            whole + 1
-        } else {
-            whole
-        };
-    }
-    let ratio = (window_entries as Real + passing) / block as Real;
+    // Half-period blocks: 2 + ceil(D / B) blocks overlap, the run one more; shorter ones:
+    // ceil((W + D) / B), the run one more.
+    let (base, ratio) = if 2 * block >= window_entries {
+        (3, passing / block as Real)
+    } else {
+        (1, (window_entries as Real + passing) / block as Real)
+    };
+    // ceil without libm: the ratio is positive and small.
     let whole = ratio as u32;
-    1 + if (whole as Real) < ratio {
+    base + if (whole as Real) < ratio {
         whole + 1
     } else {
         whole
@@ -191,6 +199,10 @@ pub struct BlockContext {
     pub armed: bool,
     /// The largest widening of a 1-sigma, rad (the prior's).
     pub max_widening_rad: Real,
+    /// Blocks in half a period (1 up to 480 s, 2 or more beyond: [`block_entries`]): the blocks
+    /// learned before the first test and the variance's time constant are counted in half
+    /// periods, so that a shorter block does not learn from less time.
+    pub blocks_per_half_period: u32,
 }
 
 /// A change declared: which errors changed, and since how many blocks the residuals showed it.
@@ -336,8 +348,11 @@ impl ChangeDetector {
     ) -> Option<Alarm> {
         let pair = pair.min(1);
         let learned = self.learned_blocks[pair];
-        let testing = ctx.armed && learned >= MIN_VARIANCE_BLOCKS;
-        let count = learned.saturating_add(1).min(VARIANCE_BLOCKS);
+        let per_half_period = ctx.blocks_per_half_period.max(1);
+        let testing = ctx.armed && learned >= MIN_VARIANCE_BLOCKS.saturating_mul(per_half_period);
+        let count = learned
+            .saturating_add(1)
+            .min(VARIANCE_BLOCKS.saturating_mul(per_half_period));
         let weight = 1.0 / count as Real;
         let mut declared = false;
         for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
@@ -454,6 +469,7 @@ mod tests {
             settled: true,
             armed: true,
             max_widening_rad: 1.0,
+            blocks_per_half_period: 1,
         }
     }
 
