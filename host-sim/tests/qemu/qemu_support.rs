@@ -218,6 +218,9 @@ pub fn step_cost(stdout: &str) -> (f64, f64) {
 /// its checkpoint in place.
 pub const START_UP_STACK_BUDGET_BYTES: u64 = 4096;
 
+/// The estimator step's budget on the target, instructions.
+pub const STEP_BUDGET_INSTRUCTIONS: f64 = 5000.0;
+
 /// `(start-up peak, service loop peak, stack size)`, bytes, from `host-sim stream`'s
 /// `stack (painted): ...` line.
 pub fn stack_peaks(stdout: &str) -> (u64, u64, u64) {
