@@ -9,7 +9,9 @@
 #      timeline), host-sim (including the QEMU end-to-end tests, which build the firmware for both
 #      boards themselves: mps2-an386 and the STM32F405 on QEMU's netduinoplus2, and the watchdog
 #      test's build);
-#   3. estimator-core again with the `f64` feature (the precision comparison's other side);
+#   3. estimator-core again with the `f64` feature (the precision comparison's other side): its unit
+#      tests, the identification against known errors and the checkpoints, which the feature
+#      changes (float width, state size, image length);
 #   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
 #      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
 #   5. the gates: `cargo fmt --all --check`; clippy with -D warnings on the host (every crate, all
@@ -67,8 +69,8 @@ cargo test --workspace --release --no-run
 log "running them"
 cargo test --workspace --release
 
-log "estimator-core with f64"
-cargo test --release -p estimator-core --features f64
+log "estimator-core with f64: its unit tests, the identification and the checkpoints (what the feature changes)"
+cargo test --release -p estimator-core --features f64 --lib --test identification --test checkpoint_roundtrip
 
 log "firmware build for thumbv7em-none-eabihf (mps2-an386 default, without its checkpoint feature; STM32F405)"
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-mps2-an386
