@@ -163,7 +163,7 @@ use crate::kalman::{ConstantStateKalman, KalmanError};
 use crate::math::{sqrt, Compare};
 use crate::moving_average::CorrelationWindow;
 use crate::Real;
-use change::{persistence_of, Alarm, BlockContext, ChangeDetector};
+use change::{persistence_blocks, Alarm, BlockContext, ChangeDetector};
 
 /// Time constant of the residual average, in rotation periods.
 pub const RESIDUAL_PERIODS: usize = 4;
@@ -604,22 +604,11 @@ impl<const CAP: usize> Windowed<CAP> {
         self.spread_count[pair] = count;
     }
 
-    /// The model's variance of a block mean of the change detector, rad^2: white products of
-    /// variance `r` give `r (1 - B / (3 W)) / W` for blocks of `B` entries (the trapezoid's sum of
-    /// squared weights), `r (1 - 1/6) / W` for half a period (see [`change`]).
+    /// The model's variance of a block mean of the change detector for blocks of `block` entries,
+    /// rad^2 ([`change::block_variance_factor`]).
     fn block_floor_rad2(&self, pair: usize, block: u32) -> Real {
         let len = self.window.len().max(1) as u32;
-        let factor = if 2 * block >= len {
-            5.0 / 6.0
-        } else {
-            1.0 - block as Real / (3.0 * len as Real)
-        };
-        self.product_variance_rad2[pair] * factor / len as Real
-    }
-
-    /// Entries in one block of the change detector ([`change::block_entries`]).
-    fn block_entries(&self, entry_s: Real) -> u32 {
-        change::block_entries(self.window.len() as u32, entry_s)
+        self.product_variance_rad2[pair] * change::block_variance_factor(len, block) / len as Real
     }
 
     /// Passes the pair's residuals to the change detector; when it declares a change, the errors
@@ -634,7 +623,7 @@ impl<const CAP: usize> Windowed<CAP> {
     ) -> Option<Alarm> {
         self.block_held[pair] &= self.change.holding();
         // A block's updates of a pair: half its entries.
-        let block_entries = self.block_entries(entry_s);
+        let block_entries = change::block_entries(self.window.len() as u32, entry_s);
         let block = self
             .change
             .accumulate(pair, residual, (block_entries / 2).max(1))?;
@@ -650,17 +639,13 @@ impl<const CAP: usize> Windowed<CAP> {
         let len = self.window.len() as u32;
         let horizon = (RESIDUAL_PERIODS as u32 * len / 2).max(1);
         let ctx = BlockContext {
-            persistence_blocks: persistence_of(len, block_entries, entry_s),
+            persistence_blocks: persistence_blocks(len, block_entries, entry_s),
             floor_rad2: self.block_floor_rad2(pair, block_entries),
             step_rad: config.change_detection_step_rad,
             settled: self.residual_count[pair] >= horizon,
             armed: self.residual_count.iter().all(|c| *c >= horizon),
             max_widening_rad: config.prior_sigma_rad,
-            blocks_per_half_period: if 2 * block_entries >= len {
-                1
-            } else {
-                len / 2 / block_entries.max(1)
-            },
+            blocks_per_half_period: change::blocks_per_half_period(len, block_entries),
         };
         let was_holding = self.change.holding();
         let alarm = self.change.test(
@@ -770,7 +755,7 @@ impl<const CAP: usize> Windowed<CAP> {
         entry_s: Real,
     ) -> bool {
         let held = self.held_x_rad;
-        let block_entries = self.block_entries(entry_s);
+        let block_entries = change::block_entries(self.window.len() as u32, entry_s);
         let (block, rows) = if self.last_block_held[pair] {
             self.last_block_held[pair] = false;
             (

@@ -153,24 +153,15 @@ pub fn block_entries(window_entries: u32, entry_s: Real) -> u32 {
 }
 
 /// Blocks a run must last before a change is declared, for a window of `window_entries` entries
-/// of `entry_s` seconds each: until a block lies wholly after the longest passing disturbance.
-/// A disturbance of `D` biases the residuals over `W + D`, which overlaps at most
-/// `ceil((W + D) / B)` blocks of `B` entries and one more: a run one block longer than that is
-/// no disturbance (`3 + ceil(2 D / W)` for half-period blocks).
-pub fn persistence_blocks(window_entries: u32, entry_s: Real) -> u32 {
-    persistence_of(
-        window_entries,
-        block_entries(window_entries, entry_s),
-        entry_s,
-    )
-}
-
-/// [`persistence_blocks`] for blocks of `block` entries ([`block_entries`]), known already.
-pub fn persistence_of(window_entries: u32, block: u32, entry_s: Real) -> u32 {
+/// of `entry_s` seconds each and blocks of `block` entries ([`block_entries`]): until a block lies
+/// wholly after the longest passing disturbance. A disturbance of `D` biases the residuals over
+/// `W + D`, which overlaps at most `ceil((W + D) / B)` blocks of `B` entries and one more: a run
+/// one block longer than that is no disturbance (`3 + ceil(2 D / W)` for half-period blocks).
+pub fn persistence_blocks(window_entries: u32, block: u32, entry_s: Real) -> u32 {
     let passing = (PASSING_S / entry_s).larger(block as Real);
     // Half-period blocks: 2 + ceil(D / B) blocks overlap, the run one more; shorter ones:
     // ceil((W + D) / B), the run one more.
-    let (base, ratio) = if 2 * block >= window_entries {
+    let (base, ratio) = if is_half_period(window_entries, block) {
         (3, passing / block as Real)
     } else {
         (1, (window_entries as Real + passing) / block as Real)
@@ -181,6 +172,33 @@ pub fn persistence_of(window_entries: u32, block: u32, entry_s: Real) -> u32 {
         whole + 1
     } else {
         whole
+    }
+}
+
+/// Whether blocks of `block` entries are half a window of `window_entries` (periods up to 480 s).
+fn is_half_period(window_entries: u32, block: u32) -> bool {
+    2 * block >= window_entries
+}
+
+/// Blocks of `block` entries in half a window of `window_entries`
+/// ([`BlockContext::blocks_per_half_period`]).
+pub fn blocks_per_half_period(window_entries: u32, block: u32) -> u32 {
+    if is_half_period(window_entries, block) {
+        1
+    } else {
+        window_entries / 2 / block.max(1)
+    }
+}
+
+/// The model's variance of a block mean over that of one entry's product, times the window's
+/// entries: white products of variance `r` give a block mean of variance `r (1 - B / (3 W)) / W`
+/// for blocks of `B` entries (the trapezoid `W + B` long's sum of squared weights), `r (1 - 1/6) /
+/// W` for half a period.
+pub fn block_variance_factor(window_entries: u32, block: u32) -> Real {
+    if is_half_period(window_entries, block) {
+        5.0 / 6.0
+    } else {
+        1.0 - block as Real / (3.0 * window_entries.max(1) as Real)
     }
 }
 
@@ -503,16 +521,18 @@ mod tests {
     #[test]
     fn persistence_outlasts_a_passing_disturbance() {
         // 480 entries of 1 s: a turn of up to 300 s (more than half a period): 3 + 2 blocks.
-        assert_eq!(persistence_blocks(480, 1.0), 5);
+        let persistence =
+            |w: u32, entry_s: Real| persistence_blocks(w, block_entries(w, entry_s), entry_s);
+        assert_eq!(persistence(480, 1.0), 5);
         // Short periods: 300 s is the longer (60 s: blocks of 30 s, 3 + 10).
-        assert_eq!(persistence_blocks(60, 1.0), 13);
+        assert_eq!(persistence(60, 1.0), 13);
         // Bins of 2 samples: the same time.
-        assert_eq!(persistence_blocks(240, 2.0), 5);
+        assert_eq!(persistence(240, 2.0), 5);
         // Long periods: blocks of a quarter of 720 s, 180 s; W + D = 1020 s overlaps 6 of them,
         // and one more: 7 (1,260 s, where half-period blocks took 4, 1,440 s). 3600 s: blocks of
         // 224 s, 18 + 1 (4,256 s; half-period blocks took 4 of 1,800 s, 7,200 s).
-        assert_eq!(persistence_blocks(720, 1.0), 7);
-        assert_eq!(persistence_blocks(3600, 1.0), 19);
+        assert_eq!(persistence(720, 1.0), 7);
+        assert_eq!(persistence(3600, 1.0), 19);
     }
 
     #[test]
