@@ -109,22 +109,7 @@ fn stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
     if !push {
         // One sample at a time, the step's cost is the step's alone: the budgets of
         // `qemu_budgets` hold here too (this is mps2-an386's paper stream for them).
-        let (max, mean) = step_cost(&out);
-        println!(
-            "{}: paper, every row: step max {max} instructions, mean {mean}",
-            board.name()
-        );
-        assert!(
-            max <= STEP_BUDGET_INSTRUCTIONS,
-            "{}: estimator step: max {max} instructions (mean {mean}) > {STEP_BUDGET_INSTRUCTIONS}",
-            board.name()
-        );
-        let (boot, _, _) = stack_peaks(&out);
-        assert!(
-            boot <= START_UP_STACK_BUDGET_BYTES,
-            "{}: start-up stack {boot} bytes",
-            board.name()
-        );
+        assert_step_and_start_up_stack_within_budgets(board, "paper, every row", &out);
     }
 
     let expected = std::fs::read(&est_s).unwrap();

@@ -221,6 +221,33 @@ pub const START_UP_STACK_BUDGET_BYTES: u64 = 4096;
 /// The estimator step's budget on the target, instructions.
 pub const STEP_BUDGET_INSTRUCTIONS: f64 = 5000.0;
 
+/// Checks a one-sample-at-a-time stream's output (`stream`'s stdout) against the budgets: the
+/// step at most [`STEP_BUDGET_INSTRUCTIONS`], the start-up stack at most
+/// [`START_UP_STACK_BUDGET_BYTES`]; prints and returns the step's `(max, mean)`.
+pub fn assert_step_and_start_up_stack_within_budgets(
+    board: Board,
+    log: &str,
+    stdout: &str,
+) -> (f64, f64) {
+    let (boot, _, _) = stack_peaks(stdout);
+    assert!(
+        boot <= START_UP_STACK_BUDGET_BYTES,
+        "{}: start-up stack {boot} bytes",
+        board.name()
+    );
+    let (max, mean) = step_cost(stdout);
+    println!(
+        "{}: {log}: step max {max} instructions, mean {mean}",
+        board.name()
+    );
+    assert!(
+        max <= STEP_BUDGET_INSTRUCTIONS,
+        "{}: {log}: estimator step: max {max} instructions (mean {mean}) > {STEP_BUDGET_INSTRUCTIONS}",
+        board.name()
+    );
+    (max, mean)
+}
+
 /// `(start-up peak, service loop peak, stack size)`, bytes, from `host-sim stream`'s
 /// `stack (painted): ...` line.
 pub fn stack_peaks(stdout: &str) -> (u64, u64, u64) {
