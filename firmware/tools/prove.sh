@@ -5,7 +5,7 @@
 #   2. runs link-protocol's unit tests (round trips, every fault kind);
 #   3. runs the QEMU tests: link faults (qemu_faults), `--port` over a QEMU pty (qemu_port), power
 #      cuts with checkpoints in flash (qemu_power_cut), the
-#      20000 s end-to-end runs byte-identical to
+#      10000 s end-to-end runs byte-identical to
 #      `host-sim estimate` and within 10 arcsec of truth (qemu_e2e), flash/RAM/stack/step budgets
 #      (qemu_budgets);
 #   4. cross-checks the step cost with an exact instruction count from a TCG plugin
