@@ -217,6 +217,8 @@ impl QuantizedSample {
     /// before the products are formed (into the references, and into the terms without a
     /// reference), so that weighting costs a dozen small integer products rather than one 64-bit
     /// product a term.
+    // On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
+    #[inline]
     pub fn terms(&self, w: u8) -> [i64; SUMS] {
         let w = i32::from(w.min(FULL_WEIGHT));
         let (sr, cr, ss, cs) = (

@@ -117,6 +117,16 @@ pub struct Estimator<const CAP: usize = DEFAULT_CAPACITY> {
     error_change: Option<ErrorChange>,
 }
 
+impl Estimator<DEFAULT_CAPACITY> {
+    /// [`Estimator::step`] at the default capacity, compiled in this crate at its own optimisation
+    /// level. A firmware built for size calls this one: the step, its hot path, keeps the speed
+    /// its instruction budget is measured at while the rest of the image is optimised for size.
+    #[inline(never)]
+    pub fn step_default_capacity(&mut self, sample: &Sample) -> Result<Output, SampleError> {
+        self.step(sample)
+    }
+}
+
 impl<const CAP: usize> Estimator<CAP> {
     /// A fresh estimator, or why the configuration cannot run.
     pub fn new(config: Config) -> Result<Self, ConfigError> {

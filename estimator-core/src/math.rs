@@ -93,6 +93,8 @@ pub fn round(x: f64) -> f64 {
 /// About 15 instructions on the M4F, against several hundred for `libm::sqrtf`, which has no ARM
 /// implementation and runs a bit-by-bit loop. Only IEEE operations: the same bits on every target.
 #[cfg(not(feature = "f64"))]
+// On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
+#[inline]
 pub fn sqrt(x: f32) -> f32 {
     if !(x > 0.0) || x == f32::INFINITY {
         // 0 -> 0, +inf -> +inf, negative or NaN -> NaN.
@@ -122,6 +124,8 @@ pub fn sqrt(x: f64) -> f64 {
 
 /// `(sin x, cos x)`.
 #[cfg(not(feature = "f64"))]
+// On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
+#[inline]
 pub fn sin_cos(x: f32) -> (f32, f32) {
     const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;
     // pi/2 split so that k * PIO2_HI is exact for |k| < 2^8.

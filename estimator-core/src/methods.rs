@@ -172,6 +172,8 @@ impl<const CAP: usize> MethodState<CAP> {
     /// x1..x4, their 1-sigma and whether the model is inconsistent, in rad, once the filter has
     /// had a measurement. Only the windowed method checks its residuals; the others never report
     /// a mismatch.
+    // On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
+    #[inline]
     pub fn estimate(&self, config: &Config) -> Option<MethodEstimate> {
         let plain = |e: Estimate| MethodEstimate {
             x_rad: e.x_rad,

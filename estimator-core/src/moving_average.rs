@@ -80,6 +80,8 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
     }
 
     /// True once the window holds `len` samples.
+    // On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
+    #[inline]
     pub fn is_full(&self) -> bool {
         self.ring.len() >= self.len
     }
@@ -440,6 +442,8 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
 
     /// True when the window is set to one period, has spanned a whole one since it was emptied,
     /// and holds no entry older than that period: a measurement can be taken.
+    // On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
+    #[inline]
     pub fn is_full(&self) -> bool {
         self.configured && self.span() >= self.len && !self.is_over_long()
     }

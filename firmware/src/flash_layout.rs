@@ -2,7 +2,7 @@
 //! erasing and programming it (what a save costs in stalls, and how long the flash lives).
 //!
 //! STM32F405 (datasheet DS8626, reference manual RM0090): flash sectors 0-3 are 16 KiB, 4 is
-//! 64 KiB, 5-11 are 128 KiB. The code (its budget 112 KiB) lives in sectors 0-4 (128 KiB); the
+//! 64 KiB, 5-11 are 128 KiB. The code (its budget 96 KiB) lives in sectors 0-4 (128 KiB); the
 //! checkpoints get every sector after it, 5-11: 7 sectors of 128 KiB. Endurance: 10,000 erase
 //! cycles per sector (minimum, -40 to 85 C). A 128 KiB sector erases in 2 s typical, 4 s maximum
 //! at x8 parallelism (stm32f4xx-hal's, which the firmware uses); a byte programs in 16 us

@@ -196,5 +196,5 @@ fn reset(estimator: &mut Estimator) {
 /// The timed call, kept out of line so that no work moves across the cost counter's readings.
 #[inline(never)]
 fn step(estimator: &mut Estimator, sample: &Sample) -> Result<Output, SampleError> {
-    estimator.step(sample)
+    estimator.step_default_capacity(sample)
 }
