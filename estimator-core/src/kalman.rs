@@ -163,7 +163,10 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
     /// covariance stays symmetric positive definite: the kept block is a principal submatrix of a
     /// positive definite matrix, and the forgotten states are uncorrelated with it.
     pub fn forget(&mut self, which: &[bool; N], prior_sigma: T) {
-        for i in (0..N).filter(|i| which[*i]) {
+        for i in 0..N {
+            if !which[i] {
+                continue;
+            }
             for j in 0..N {
                 self.p[(i, j)] = T::zero();
                 self.p[(j, i)] = T::zero();

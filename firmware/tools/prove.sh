@@ -5,9 +5,9 @@
 #   2. runs link-protocol's unit tests (round trips, every fault kind);
 #   3. runs the QEMU tests: link faults (qemu_faults), `--port` over a QEMU pty (qemu_port), power
 #      cuts with checkpoints in flash (qemu_power_cut), the
-#      10000 s end-to-end runs byte-identical to
-#      `host-sim estimate` and within 10 arcsec of truth (qemu_e2e), flash/RAM/stack/step budgets
-#      (qemu_budgets);
+#      20,000 s end-to-end runs byte-identical to `host-sim estimate` and within 10 arcsec of
+#      truth, then a power cut, 200 s of lost rows and a resume (qemu_restart), a lossy pushed
+#      log (qemu_e2e), flash/RAM/stack/step budgets (qemu_budgets);
 #   4. cross-checks the step cost with an exact instruction count from a TCG plugin
 #      (firmware/tools/stepcount.c) over a 6000 s stream of the paper's log and a 12000 s lossy
 #      sea log (qemu_e2e's), each sample sent after the last answer.
@@ -34,8 +34,8 @@ echo "(flash = text + data, static RAM = data + bss)"
 section "link-protocol unit tests"
 run cargo test -p link-protocol
 
-section "QEMU tests (faults, serial-port path, 10000 s end to end, budgets)"
-run cargo test -p host-sim --release --no-fail-fast --test qemu qemu_faults --test qemu qemu_port --test qemu qemu_power_cut --test qemu qemu_checkpoint_interval --test qemu qemu_e2e --test qemu qemu_budgets -- --nocapture --test-threads=1
+section "QEMU tests (faults, serial-port path, power cuts, 20,000 s end to end and restart, budgets)"
+run cargo test -p host-sim --release --no-fail-fast --test qemu qemu_faults --test qemu qemu_port --test qemu qemu_power_cut --test qemu qemu_checkpoint_interval --test qemu qemu_e2e --test qemu qemu_restart --test qemu qemu_budgets -- --nocapture --test-threads=1
 
 section "exact step instruction count (TCG plugin firmware/tools/stepcount.c)"
 WORK="$PWD/target/qemu-tests/plugin"   # absolute: host-sim runs QEMU in a scratch directory

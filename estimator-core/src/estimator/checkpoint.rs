@@ -146,17 +146,47 @@ fn read_parts<const CAP: usize>(
     if let Some(e) = target.as_deref_mut() {
         e.grid = grid;
     }
-    let mut rotation = RotationMonitor::read(&mut r, &config)?;
-    rotation.restart();
-    let period = rotation.period_samples();
-    if let Some(e) = target.as_deref_mut() {
-        e.rotation = rotation;
-    }
+    let period = read_rotation(&mut r, &config, target.as_deref_mut())?;
     let fill = FillError::read(&mut r, ())?;
     if let Some(e) = target.as_deref_mut() {
         e.filler.keep_fill_error(fill);
     }
-    let method_part = MethodPart::read(&mut r, &config)?;
+    read_method_part(&mut r, &config, target, period)?;
+    let padding_start = r.pos();
+    r.skip(CHECKPOINT_LEN - CRC_LEN - padding_start);
+    r.zeros_since(padding_start, Part::Padding)?;
+    Ok(config)
+}
+
+/// The rotation monitor's part, handed over to `target` when given; returns the period it knows,
+/// samples. Out of line, as [`read_method_part`].
+#[inline(never)]
+fn read_rotation<const CAP: usize>(
+    r: &mut Reader<'_>,
+    config: &Config,
+    target: Option<&mut Estimator<CAP>>,
+) -> Result<Option<u32>, CheckpointError> {
+    let mut rotation = RotationMonitor::read(r, config)?;
+    rotation.restart();
+    let period = rotation.period_samples();
+    if let Some(e) = target {
+        e.rotation = rotation;
+    }
+    Ok(period)
+}
+
+/// The method's part (the filter and what it learned), handed over to `target` when given, with
+/// the window set to `period` when the interval is known. Out of line: the part (the largest, over
+/// a kilobyte) is on the stack only while it is read, not for the whole of [`read_parts`] (the
+/// start-up's 4 KiB of stack).
+#[inline(never)]
+fn read_method_part<const CAP: usize>(
+    r: &mut Reader<'_>,
+    config: &Config,
+    target: Option<&mut Estimator<CAP>>,
+    period: Option<u32>,
+) -> Result<(), CheckpointError> {
+    let method_part = MethodPart::read(r, config)?;
     if let Some(e) = target {
         e.method.keep_learned(method_part);
         if let (Some(_), Some(p)) = (e.feed, period) {
@@ -168,10 +198,7 @@ fn read_parts<const CAP: usize>(
             Status::DetectingPattern
         };
     }
-    let padding_start = r.pos();
-    r.skip(CHECKPOINT_LEN - CRC_LEN - padding_start);
-    r.zeros_since(padding_start, Part::Padding)?;
-    Ok(config)
+    Ok(())
 }
 
 /// The estimator's own running state (see the module doc).

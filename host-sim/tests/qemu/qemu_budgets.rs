@@ -2,9 +2,9 @@
 //! on): flash and static RAM read from the ELF's section headers (the figures `llvm-size` prints as
 //! text + data and data + bss): at most 96 KiB and 64 KiB on both boards; the painted stack's peaks reported, the start-up's at most 4 KiB (a fresh flash; `qemu_restart` checks it after a restore); and the estimator step at most 5000 instructions
 //! (max over a 6000 s stream of the paper's log and of a lossy sea log, counted in QEMU with `-icount shift=0` and SysTick: 40 instructions
-//! per tick at mps2-an386's 25 MHz, 5.95 at netduinoplus2's 168 MHz). On mps2-an386 the paper's log
-//! is `qemu_e2e`'s 10000 s stream one sample at a time, which asserts the same step and start-up
-//! stack budgets.
+//! per tick at mps2-an386's 25 MHz, 5.95 at netduinoplus2's 168 MHz). On mps2-an386 the clean log
+//! is `qemu_restart`'s 20,000 s sea log one sample at a time, which asserts the same step and
+//! start-up stack budgets.
 
 use crate::qemu_support::*;
 
@@ -101,7 +101,7 @@ fn step_cost_is_within_5000_instructions_and_the_stack_is_measured(board: Board)
     // The paper's log without loss, and a lossy one: a reciprocating sea log that loses 10 rows in
     // a row every 120 s, 2 % of rows at random and has jittered Unix stamps (filled rows, runs
     // left out with their taper, the window catching up after filled rows). mps2-an386's paper
-    // log one sample at a time is `qemu_e2e`'s 10000 s stream, which checks the same budgets.
+    // log one sample at a time is `qemu_restart`'s 20,000 s sea stream, which checks the same budgets.
     let mut logs = Vec::new();
     if board != Board::Mps2An386 {
         logs.push(("paper, every row", paper_log(&dir, 6000)));

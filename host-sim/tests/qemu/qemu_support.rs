@@ -267,3 +267,92 @@ pub fn stack_peaks(stdout: &str) -> (u64, u64, u64) {
     );
     (boot, service, size)
 }
+
+/// Checks a `host-sim stream` run through `board` (its estimates CSV `streamed`, its stdout
+/// `stdout`, the log it streamed `log`) against `host-sim estimate`'s CSV `expected` of a log
+/// that starts with the same rows (the same log, or a longer one it was cut from): the streamed
+/// CSV byte-identical to `expected`'s first rows; its last estimate within 10 arcsec of `truth_x_arcsec`;
+/// every frame answered, none lost, no overrun, a link without faults; and, `pushed`, frames
+/// really queued in the firmware's receive ring.
+pub fn assert_stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
+    board: Board,
+    log: &Path,
+    streamed: &Path,
+    expected: &Path,
+    truth_x_arcsec: [f64; 4],
+    stdout: &str,
+    pushed: bool,
+) {
+    let expected = std::fs::read(expected).unwrap();
+    let streamed_bytes = std::fs::read(streamed).unwrap();
+    let log_rows = std::fs::read_to_string(log)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .count();
+    assert_eq!(
+        streamed_bytes.iter().filter(|b| **b == b'\n').count(),
+        log_rows,
+        "{}: header + one row per input row",
+        board.name()
+    );
+    if let Some(i) = (0..streamed_bytes.len()).find(|&i| expected.get(i) != streamed_bytes.get(i)) {
+        let line = streamed_bytes[..i].iter().filter(|b| **b == b'\n').count() + 1;
+        panic!(
+            "{}: stream and estimate differ first at line {line}",
+            board.name()
+        );
+    }
+
+    let rows = host_sim::estimates_csv::read_estimates(streamed).unwrap();
+    let x = rows
+        .last()
+        .unwrap()
+        .x_arcsec
+        .expect("an estimate at the end of the run");
+    for i in 0..4 {
+        let err = (x[i] - truth_x_arcsec[i]).abs();
+        assert!(
+            err < 10.0,
+            "{}: x{} = {} arcsec, truth {} arcsec: off by {err}",
+            board.name(),
+            i + 1,
+            x[i],
+            truth_x_arcsec[i]
+        );
+    }
+    let (max, mean) = step_cost(stdout);
+    assert!(
+        max >= mean && mean > 0.0,
+        "step cost must be measured: {max} {mean}"
+    );
+    let frames = log_rows - 1;
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l == format!("frames sent {frames}, answered {frames}, lost 0, overruns 0")),
+        "summary:\n{stdout}"
+    );
+    let link = stdout
+        .lines()
+        .find(|l| l.starts_with("  firmware's link: "))
+        .expect("the link line");
+    assert!(
+        link.starts_with("  firmware's link: 0 lost frames, 0 UART overruns, 0 buffer overruns, 0 framing errors, 0 noise errors;"),
+        "{link}"
+    );
+    if pushed {
+        // The frames really queued in the firmware's receive ring: more than one frame waited.
+        let peak: u32 = link
+            .split("peak ")
+            .nth(1)
+            .and_then(|p| p.split(' ').next())
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            peak > 43,
+            "receive buffer peak {peak} bytes: the push did not queue frames"
+        );
+    }
+}
