@@ -5,6 +5,9 @@
 # so the peak must not grow with the log. Fails above 64 MB (LIMIT_MB to change it).
 # Measured with GNU time's "Maximum resident set size" (`/usr/bin/time -v`).
 # Usage: bash scripts/memory-30day.sh
+# HOST_SIM=PATH runs that host-sim binary instead of building one (the test command passes the one
+# its `cargo test --workspace --release` built: `cargo build -p host-sim` alone resolves the
+# workspace's features differently and would build host-sim and two of its crates again).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 LIMIT_MB="${LIMIT_MB:-64}"
@@ -13,8 +16,12 @@ if [ ! -x /usr/bin/time ]; then
     echo "/usr/bin/time (GNU time) is missing: apt-get install -y time" >&2
     exit 1
 fi
-cargo build --release -q -p host-sim
-BIN="${CARGO_TARGET_DIR:-target}/release/host-sim"
+if [ -n "${HOST_SIM:-}" ]; then
+    BIN="$HOST_SIM"
+else
+    cargo build --release -q -p host-sim
+    BIN="${CARGO_TARGET_DIR:-target}/release/host-sim"
+fi
 DIR="$(mktemp -d)"
 trap 'rm -rf "$DIR"' EXIT
 

@@ -132,7 +132,7 @@ rm -rf "$C_DIR"
 bash scripts/c-nav-loop.sh
 
 log "peak memory of a 30-day replay"
-bash scripts/memory-30day.sh
+HOST_SIM=target/release/host-sim bash scripts/memory-30day.sh
 
 log "the tests left no trace in the checkout"
 STATUS_AFTER="$(git_status)"
