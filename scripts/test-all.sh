@@ -3,7 +3,8 @@
 #   1. the thumbv7em-none-eabihf Rust target, flip-link (the firmware's linker, cargo install),
 #      qemu-system-arm, GNU time, and the ARM C toolchain with newlib (gcc-arm-none-eabi,
 #      libnewlib-arm-none-eabi) for the C examples (apt), if absent;
-#   2. `cargo test --workspace --release`: estimator-core, estimator-ffi (the C library: its API,
+#   2. `cargo test --workspace --release` (the target's builds of step 4 and the C library run
+#      meanwhile in the background): estimator-core, estimator-ffi (the C library: its API,
 #      and that the checked-in C header is the one its sources generate), link-protocol, the
 #      firmware's library on the host (the checkpoint store, receive rings, the STM32F405's receive
 #      timeline), host-sim (including the QEMU end-to-end tests, which build the firmware for both
@@ -15,7 +16,7 @@
 #   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
 #      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
 #   5. the gates: `cargo fmt --all --check`; clippy with -D warnings on the host (every crate, all
-#      targets) and on the firmware (each board), the link code and the C library, which deny every
+#      targets, in release) and on the firmware (each board), the link code and the C library, which deny every
 #      panicking construct (the workspace's lints, `[workspace.lints]`, apply to every crate);
 #   5b. the C examples: examples/c/replay.c on a short log with every kind of bad row, built with
 #      the host's cc and with arm-none-eabi-gcc for a Cortex-M4F run in QEMU, both estimates
@@ -65,7 +66,28 @@ arm-none-eabi-gcc --version | head -n 1
 cargo --version
 
 log "every crate's tests (release): estimator-core, estimator-ffi, link-protocol, firmware (its library on the host), host-sim (with the QEMU end-to-end tests)"
+# Meanwhile, the builds for the target (their own lock in target/, and mostly one core each: fat
+# LTO into one codegen unit): the firmware for each board, as the QEMU tests and step 4 build it
+# (mps2-an386 with and without checkpoints, its watchdog test's build, the STM32F405), and the C
+# library. The QEMU tests and the C examples then find them built.
+THUMB_LOG="$(mktemp)"
+(
+    set -e
+    firmware() { cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware "$@"; }
+    firmware
+    firmware --no-default-features --features board-stm32f405
+    firmware --features test-hang
+    firmware --no-default-features --features board-mps2-an386
+    cargo build -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware
+) > "$THUMB_LOG" 2>&1 &
+THUMB_BUILDS=$!
 cargo test --workspace --release --no-run
+if ! wait "$THUMB_BUILDS"; then
+    cat "$THUMB_LOG"
+    echo "building for thumbv7em-none-eabihf failed" >&2
+    exit 1
+fi
+rm -f "$THUMB_LOG"
 log "running them"
 cargo test --workspace --release
 
@@ -73,6 +95,8 @@ log "estimator-core with f64: its unit tests, the identification and the checkpo
 cargo test --release -p estimator-core --features f64 --lib --test identification --test checkpoint_roundtrip
 
 log "firmware build for thumbv7em-none-eabihf (mps2-an386 default, without its checkpoint feature; STM32F405)"
+# Built in step 2's background; these find them built (the default image again after the QEMU
+# tests' build with another checkpoint interval).
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-mps2-an386
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
@@ -82,7 +106,8 @@ log "gates: rustfmt, and clippy with every warning an error (host, all targets; 
 # their sources: unwrap_used, expect_used, indexing_slicing, panic (no panicking path on the link or
 # through the C API); the workspace's [workspace.lints] apply to every crate.
 cargo fmt --all --check
-cargo clippy --workspace --all-targets -- -D warnings
+# In release: the proc-macros and build scripts are those step 2 built.
+cargo clippy --workspace --all-targets --release -- -D warnings
 cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware -- -D warnings
 cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405 -- -D warnings
 cargo clippy -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware -- -D warnings
