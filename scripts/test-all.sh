@@ -106,8 +106,9 @@ log "gates: rustfmt, and clippy with every warning an error (host, all targets; 
 # their sources: unwrap_used, expect_used, indexing_slicing, panic (no panicking path on the link or
 # through the C API); the workspace's [workspace.lints] apply to every crate.
 cargo fmt --all --check
-# In release: the proc-macros and build scripts are those step 2 built.
-cargo clippy --workspace --all-targets --release -- -D warnings
+# In release: the proc-macros and build scripts are those step 2 built. The `bench` feature brings
+# host-sim's benchmarks (and criterion) in, which the test build leaves out.
+cargo clippy --workspace --all-targets --release --features host-sim/bench -- -D warnings
 cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware -- -D warnings
 cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405 -- -D warnings
 cargo clippy -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware -- -D warnings

@@ -1,5 +1,5 @@
 //! Benchmarks: the core's step (each method) and `estimate` on a 2-day log (read, replay, write).
-//! `cargo bench -p host-sim --bench estimator`; results in docs/results.md.
+//! `cargo bench -p host-sim --features bench --bench estimator`; results in docs/results.md.
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use estimator_core::{Config, Method};
