@@ -75,7 +75,8 @@ struct GenerateArgs {
     overrides: ScenarioOverrides,
     #[command(flatten)]
     shape: LogShapeArgs,
-    /// Output attitude log (CSV).
+    /// Output attitude log (CSV), and its truth file beside it (`FILE.truth.json`); `-` writes
+    /// the log to standard output and no truth file.
     #[arg(long, value_name = "FILE.csv")]
     out: PathBuf,
 }
@@ -350,6 +351,12 @@ fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
         .filter_map(|(row, _)| recorder.record(&row))
         .inspect(|_| written += 1);
     log_csv::write_log(&a.out, rows)?;
+    if a.out == Path::new(host_sim::output_file::STDOUT) {
+        // The log is on standard output: the summary goes to standard error, and there is no
+        // file for the truth to sit beside.
+        eprintln!("wrote {written} rows to standard output (no truth file)");
+        return Ok(());
+    }
     let truth_path = log_csv::truth_path(&a.out);
     log_csv::write_truth(&truth_path, &Truth::new(&params))?;
     println!(

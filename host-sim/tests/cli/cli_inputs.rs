@@ -97,6 +97,44 @@ fn a_gzip_log_and_standard_input_give_the_same_estimates_as_the_plain_log() {
 }
 
 #[test]
+fn generate_to_standard_output_writes_the_log_there_and_no_file() {
+    let dir = temp_dir("generate-stdout");
+    let file = paper(&dir, 60);
+    // In a directory of its own, so that any file it wrote there would show.
+    let cwd = dir.join("cwd");
+    std::fs::create_dir_all(&cwd).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .current_dir(&cwd)
+        .args([
+            "generate",
+            "--scenario",
+            "paper",
+            "--duration",
+            "60",
+            "--out",
+            "-",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The log byte for byte as written to a file, nothing else on standard output.
+    assert_eq!(out.stdout, std::fs::read(&file).unwrap());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("60 rows to standard output (no truth file)")
+    );
+    assert_eq!(
+        std::fs::read_dir(&cwd).unwrap().count(),
+        0,
+        "a file written"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn an_output_naming_the_log_is_refused_and_the_log_kept() {
     let dir = temp_dir("cli-out-is-in");
     let log = paper(&dir, 600);
