@@ -469,6 +469,16 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         self.span()
     }
 
+    /// The number of the first entry since the window was emptied.
+    pub fn first_number(&self) -> u32 {
+        self.first
+    }
+
+    /// The number of the newest entry (0 when empty).
+    pub fn newest_number(&self) -> u32 {
+        self.newest.unwrap_or(0)
+    }
+
     /// The running sums.
     pub fn sums(&self) -> &CorrelationSums {
         &self.sums

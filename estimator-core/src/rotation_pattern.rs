@@ -6,15 +6,17 @@
 //! multi-position stop-and-go with or without reversals. Nothing here assumes a constant rate.
 //!
 //! # Period
-//! Pinned by [`crate::Config::rotation_period_s`], or detected: eight reference angles 45 deg apart
-//! are placed around the first angle seen (offset by 22.5 deg, so that none sits on a dwell position
-//! of a scheme that stops at multiples of 45 deg from where it started). A pattern that repeats
-//! passes every angle it reaches once per period in each direction it turns, so the time between two
+//! Pinned by [`crate::Config::rotation_period_s`], or detected: eight reference angles are placed
+//! around the first angle seen ([`LEVEL_OFFSETS_DEG`]): two [`NEAR_LEVEL_DEG`] either side of it,
+//! and six at 67.5, 112.5, ..., 292.5 deg from it, so that none sits on a dwell position of a
+//! scheme that stops at multiples of 45 deg from where it started. A pattern that repeats passes
+//! every angle it reaches once per period in each direction it turns, so the time between two
 //! passes of the same reference angle in the same direction is the period. A pass is counted with
 //! 1 deg of hysteresis (jitter of the angle reading does not count as passes). The first reference
-//! passed twice in one direction gives the period: a one-way rotation within a period and 1/16 of
-//! the start. (Sixteen references would take a sixteenth of a period off the first estimate; the
-//! measured effect on its accuracy was mixed, and the checkpoint image keeps eight.)
+//! passed twice in one direction gives the period: a one-way rotation, either way, within a period
+//! and `NEAR_LEVEL_DEG / 360` of the start (1.4 %; with references 45 deg apart from 22.5 deg it
+//! was 1/16, and the first estimate, which must come within 1.25 periods, had 18 s less of a 360 s
+//! period to build on: see [`crate::methods::windowed::start`]).
 //!
 //! # Across lost rows
 //! A gap is not a restart: the angle is continuous between the rows that are there. A pass seen
@@ -59,8 +61,45 @@ pub const LEVELS: usize = 8;
 /// Samples in the short mean of the rotation increment.
 pub const SHORT_STEPS: u32 = 4;
 const PI: Real = core::f64::consts::PI as Real;
-/// The spacing of the reference angles, rad (45 deg).
-const LEVEL_STEP_RAD: Real = core::f64::consts::FRAC_PI_4 as Real;
+/// The first reference angles either side of the first angle seen, deg: clear of the hysteresis
+/// and of the jitter of a dwell there, and passed within 1.4 % of a period by a one-way rotation.
+pub const NEAR_LEVEL_DEG: f64 = 5.0;
+
+/// The reference angles from the first angle seen, deg, in `[0, 360)`: [`NEAR_LEVEL_DEG`] ahead,
+/// six 45 deg apart from 67.5 deg, and [`NEAR_LEVEL_DEG`] behind.
+pub const LEVEL_OFFSETS_DEG: [f64; LEVELS] = [
+    NEAR_LEVEL_DEG,
+    67.5,
+    112.5,
+    157.5,
+    202.5,
+    247.5,
+    292.5,
+    360.0 - NEAR_LEVEL_DEG,
+];
+
+/// The angle the monitor keeps (its checkpoint too) as where its references are: 22.5 deg from
+/// the first angle seen, where the first reference was when they were 45 deg apart from 22.5 deg
+/// (an image written then still finds six of its eight references where they were).
+const BASE_DEG: f64 = 22.5;
+
+/// [`LEVEL_OFFSETS_DEG`] in rad from the kept angle ([`BASE_DEG`]), each in `[0, 2 pi)`.
+const LEVEL_FROM_BASE_RAD: [Real; LEVELS] = {
+    let mut out = [0.0; LEVELS];
+    let mut m = 0;
+    while m < LEVELS {
+        let mut deg = LEVEL_OFFSETS_DEG[m] - BASE_DEG;
+        if deg < 0.0 {
+            deg += 360.0;
+        }
+        out[m] = (deg * core::f64::consts::PI / 180.0) as Real;
+        m += 1;
+    }
+    out
+};
+
+/// [`BASE_DEG`] in rad.
+const BASE_RAD: Real = (BASE_DEG * core::f64::consts::PI / 180.0) as Real;
 
 /// Hysteresis of a pass, rad (1 deg).
 pub const PASS_HYSTERESIS_RAD: Real = 0.017_453_292;
@@ -199,7 +238,8 @@ pub struct RotationMonitor {
     pinned: bool,
     /// Features, once a whole cycle has been watched with the period known.
     features: Option<Features>,
-    /// The reference angles, rad (set at the first sample).
+    /// Where the reference angles are: the first angle seen plus [`BASE_DEG`], rad (set at the
+    /// first sample).
     levels_rad: Option<Real>,
     /// Per reference angle: -1 below, +1 above, 0 far (more than 90 deg away).
     level_side: [i8; LEVELS],
@@ -303,7 +343,7 @@ impl RotationMonitor {
     ) -> Result<PatternEvent, RotationFault> {
         let base = *self
             .levels_rad
-            .get_or_insert(wrap_pi(rotation_rad + 0.5 * LEVEL_STEP_RAD));
+            .get_or_insert(wrap_pi(rotation_rad + BASE_RAD));
         let previous = self.previous.replace((index, rotation_rad));
         let (steps, increment) = self.track_rate(previous, index, rotation_rad);
         let event = self.watch_passes(previous, steps, index, rotation_rad, base, limits)?;
@@ -354,10 +394,10 @@ impl RotationMonitor {
         (steps, increment)
     }
 
-    /// The passes of the reference angles (45 deg apart from `base`): the first two passes of one
-    /// reference the same way give the period; once it is known, only the reference that times
-    /// it is watched, and a pass off time forgets the pattern. A pass inside a run of lost rows is
-    /// placed by interpolation across it.
+    /// The passes of the reference angles ([`LEVEL_OFFSETS_DEG`]; `base` the kept angle): the first
+    /// two passes of one reference the same way give the period; once it is known, only the
+    /// reference that times it is watched, and a pass off time forgets the pattern. A pass inside
+    /// a run of lost rows is placed by interpolation across it.
     #[inline(always)]
     fn watch_passes(
         &mut self,
@@ -369,8 +409,9 @@ impl RotationMonitor {
         limits: &Limits,
     ) -> Result<PatternEvent, RotationFault> {
         let mut event = PatternEvent::None;
-        // The angle from the first reference, once wrapped; from the others by subtracting 45 deg
-        // steps and wrapping with one comparison (no division on the step's path).
+        // The angle from the kept angle, once wrapped; from each reference by subtracting its
+        // offset (in [0, 2 pi)) and wrapping with one comparison (no division on the step's
+        // path).
         let d0 = wrap_pi(rotation_rad - base);
         let watched = match (self.period_samples, self.timing_pass) {
             (Some(_), Some((level, _))) => {
@@ -381,7 +422,7 @@ impl RotationMonitor {
             _ => 0..LEVELS,
         };
         for m in watched {
-            let mut d = d0 - m as Real * LEVEL_STEP_RAD;
+            let mut d = d0 - LEVEL_FROM_BASE_RAD[m];
             if d < -PI {
                 d += 2.0 * PI;
             }
@@ -405,7 +446,7 @@ impl RotationMonitor {
                 Some((k, rho)) if steps > 1 => pass_across_gap(
                     k,
                     steps,
-                    wrap_pi(rho - base) - m as Real * LEVEL_STEP_RAD,
+                    wrap_pi(rho - base) - LEVEL_FROM_BASE_RAD[m],
                     d,
                     dir,
                 ),

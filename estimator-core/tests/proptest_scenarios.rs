@@ -142,6 +142,7 @@ fn thirty_day_run_keeps_sums_exact_covariance_spd_estimates_within_10_arcsec_and
     let mut src = Source::new(40.0);
     let mut worst_after_day1 = [0.0f64; 4];
     let mut first_update = None;
+    let mut first_estimate = None;
     let mut statuses = std::collections::BTreeMap::<&'static str, u64>::new();
     for k in 1..=DAYS * DAY {
         let before = est.counters();
@@ -158,12 +159,17 @@ fn thirty_day_run_keeps_sums_exact_covariance_spd_estimates_within_10_arcsec_and
             "step {k}: counters"
         );
         *statuses.entry(out.status.name()).or_default() += 1;
-        if first_update.is_none() && updating(out.status) {
+        if first_update.is_none() && est.windowed().is_some_and(|w| w.updates() > 0) {
             first_update = Some(k);
         }
-        if let Some(first) = first_update {
+        // The first estimate comes at the end of the first windows' first bump, after the
+        // first update (`estimator_core::methods::windowed::start`).
+        if first_estimate.is_none() && updating(out.status) {
+            first_estimate = Some(k);
+        }
+        if let Some(first) = first_estimate {
             assert!(updating(out.status), "step {k}: status {:?}", out.status);
-            assert!(first < 3 * 480, "first update at step {first}");
+            assert!(first <= 600, "first estimate at step {first}");
         }
         if k > DAY {
             let e = errors_arcsec(&out);
@@ -228,8 +234,6 @@ fn thirty_day_run_keeps_sums_exact_covariance_spd_estimates_within_10_arcsec_and
     );
 }
 
-/// Runs `steps` healthy samples at `latitude_deg`; returns the last output and whether any step
-/// was `Converged`, and checks honesty at every hour: each error within 3 sigma.
 /// The configuration of the latitude runs: the defaults without the random walk. The windowed
 /// method learns how much of the walk to apply from its residuals, so with it the covariance
 /// would depend on the noise drawn; without it the covariance is that of the information alone,
@@ -241,14 +245,21 @@ fn latitude_config() -> Config {
     }
 }
 
-fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator) {
+/// Runs `steps` healthy samples at `latitude_deg`; returns the last output, whether any step
+/// was `Converged` and the share of the last hour's steps that were, and checks honesty at every
+/// hour: each error within 3 sigma.
+fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator, f64) {
     let mut est: Estimator = Estimator::new(latitude_config()).unwrap();
     let mut src = Source::new(latitude_deg);
     let mut last = None;
     let mut converged = false;
+    let mut converged_last_hour = 0u32;
     for k in 1..=steps {
         let out = est.step(&src.next(NOMINAL_RAD)).unwrap();
         converged |= out.status == Status::Converged;
+        if k + 3600 > steps && out.status == Status::Converged {
+            converged_last_hour += 1;
+        }
         if k % 3600 == 0 {
             let (e, s) = (errors_arcsec(&out), sigma_arcsec(&out));
             for i in 0..4 {
@@ -264,7 +275,8 @@ fn run_latitude(latitude_deg: f64, steps: u64) -> (Output, bool, Estimator) {
         }
         last = Some(out);
     }
-    (last.unwrap(), converged, est)
+    let share = f64::from(converged_last_hour) / 3600.0;
+    (last.unwrap(), converged, est, share)
 }
 
 /// The scalar filter x1 would have if it were observed by the pitch channel alone (its gain
@@ -306,7 +318,7 @@ fn pitch_gain(est: &Estimator) -> f64 {
 /// and everything converges.
 #[test]
 fn equator_x1_x2_come_from_pitch_alone() {
-    let (out, converged, est) = run_latitude(0.0, LATITUDE_STEPS);
+    let (out, converged, est, last_hour) = run_latitude(0.0, LATITUDE_STEPS);
     let s = internals(&est);
     let p = s.p;
     let pitch_only = pitch_only_variance(u64::from(s.updates), pitch_gain(&est));
@@ -325,11 +337,7 @@ fn equator_x1_x2_come_from_pitch_alone() {
         assert_eq!(p[i][2], 0.0);
         assert_eq!(p[i][3], 0.0);
     }
-    assert!(
-        converged && out.status == Status::Converged,
-        "{:?}",
-        out.status
-    );
+    assert_converged(converged, last_hour);
     let e = errors_arcsec(&out);
     assert!(e.iter().all(|v| v.abs() < 1.0), "errors {e:?}");
     println!(
@@ -338,18 +346,30 @@ fn equator_x1_x2_come_from_pitch_alone() {
     );
 }
 
+/// The status said `Converged`, and says it through the last hour but for the blocks whose
+/// residual mean the change detector finds beyond 2 of its standard deviations (about one in 20
+/// under noise, by design): while such a block is the last, the error of its channel has its
+/// 1-sigma widened by the excess (`estimator_core::methods::windowed::change`), and at 45 deg
+/// the widening of x4 (gain cos L / 2) can take it past the 1 arcsec of `Converged`. (The last
+/// step alone was asserted before: whether it falls on such a block depends on where the blocks
+/// begin, measured: 94 % of the last hour `Converged` with the reference angles 5 deg from the
+/// first angle, 100 % with them at 22.5 deg.)
+fn assert_converged(converged: bool, last_hour_share: f64) {
+    assert!(converged, "never converged");
+    assert!(
+        last_hour_share >= 0.9,
+        "converged in {last_hour_share:.3} of the last hour"
+    );
+}
+
 /// At 45 deg roll also informs x1 (through the leakage of eq 12): its variance is below the
 /// pitch-only one; everything converges within 3 sigma.
 #[test]
 fn mid_latitude_converges_honestly() {
-    let (out, converged, est) = run_latitude(45.0, LATITUDE_STEPS);
+    let (out, converged, est, last_hour) = run_latitude(45.0, LATITUDE_STEPS);
     let s = internals(&est);
     assert!(s.p[0][0] < pitch_only_variance(u64::from(s.updates), pitch_gain(&est)));
-    assert!(
-        converged && out.status == Status::Converged,
-        "{:?}",
-        out.status
-    );
+    assert_converged(converged, last_hour);
     let e = errors_arcsec(&out);
     assert!(e.iter().all(|v| v.abs() < 1.0), "errors {e:?}");
     println!(
@@ -362,7 +382,7 @@ fn mid_latitude_converges_honestly() {
 /// twice that of x1, x2, and the errors stay within 3 sigma.
 #[test]
 fn high_latitude_weakens_x3_x4_and_says_so() {
-    let (out, _, _) = run_latitude(80.0, LATITUDE_STEPS);
+    let (out, _, _, _) = run_latitude(80.0, LATITUDE_STEPS);
     let s = sigma_arcsec(&out);
     for j in 2..4 {
         for i in 0..2 {
@@ -381,7 +401,7 @@ fn high_latitude_weakens_x3_x4_and_says_so() {
 /// `converged`, and the errors stay within 3 sigma. x1, x2 still converge (pitch).
 #[test]
 fn near_pole_x3_x4_unobservable_and_status_says_so() {
-    let (out, converged, _) = run_latitude(89.0, LATITUDE_STEPS);
+    let (out, converged, _, _) = run_latitude(89.0, LATITUDE_STEPS);
     let s = sigma_arcsec(&out);
     let threshold = rad_to_arcsec(Config::default().converged_sigma_rad as f64);
     assert!(!converged, "status was converged at 89 deg");

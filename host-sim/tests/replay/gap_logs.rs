@@ -8,8 +8,7 @@
 //!   at 45,000 s; never worse than the traditional baseline on the same log; every error within 3
 //!   times its reported 1-sigma at the end. The whole study: `scripts/gap-study.sh`.
 //! - First estimate: within 1.25 periods of the start, every scheme, periods 360, 480 and 720 s,
-//!   paper and sea scenarios, and every error within 10 arcsec by then (except at sea at 360 s,
-//!   where it is not met: an ignored test says by how much).
+//!   paper and sea scenarios, and every error within 10 arcsec by then.
 
 use estimator_core::{Config, Method};
 use host_sim::monte_carlo::track_run;
@@ -119,12 +118,12 @@ fn regular_gaps_and_random_loss_every_scheme_paper_and_sea() {
 }
 
 /// The first estimate at 1.25 periods of the start of a clean log of `kind`, every scheme, the
-/// given periods, seeds 1-2: `(scheme, period, seed, worst error or infinity without an estimate)`.
+/// given periods, seeds 1-4: `(scheme, period, seed, worst error or infinity without an estimate)`.
 fn first_estimates(kind: ScenarioKind, periods: &[f64]) -> Vec<(RotationScheme, f64, u64, f64)> {
     let mut cases = Vec::new();
     for scheme in RotationScheme::ALL {
         for &period in periods {
-            for seed in 1..=2 {
+            for seed in 1..=4 {
                 cases.push((scheme, period, seed));
             }
         }
@@ -152,20 +151,16 @@ fn first_estimates(kind: ScenarioKind, periods: &[f64]) -> Vec<(RotationScheme, 
         .collect()
 }
 
-/// Every scheme, periods 360, 480 and 720 s, paper and sea: an estimate within 1.25 periods, and
-/// every error within 10 arcsec by then on the paper scenario at every period and on the sea
-/// scenario at 480 and 720 s (at 360 s see the ignored test below).
+/// Every scheme, periods 360, 480 and 720 s, paper and sea, seeds 1-4: an estimate within 1.25
+/// periods of the start, every error within 10 arcsec by then.
 #[test]
-fn the_first_estimate_comes_within_a_period_and_a_quarter() {
+fn the_first_estimate_comes_within_a_period_and_a_quarter_within_10_arcsec() {
     let mut failures = Vec::new();
+    let mut worst_of_all: f64 = 0.0;
     for kind in [ScenarioKind::Paper, ScenarioKind::Sea] {
         for (scheme, period, seed, w) in first_estimates(kind, &[360.0, 480.0, 720.0]) {
-            let bound = if kind == ScenarioKind::Sea && period < 480.0 {
-                f64::INFINITY
-            } else {
-                10.0
-            };
-            if !(w.is_finite() && w < bound) {
+            worst_of_all = worst_of_all.max(w);
+            if !(w.is_finite() && w < 10.0) {
                 failures.push(format!(
                     "{} {} {period} s seed {seed}: {w:.2} arcsec at 1.25 periods",
                     kind.name(),
@@ -174,18 +169,6 @@ fn the_first_estimate_comes_within_a_period_and_a_quarter() {
             }
         }
     }
-    assert!(failures.is_empty(), "{failures:#?}");
-}
-
-/// The target where it is not met: on the sea scenario at a 360 s period the first estimate is
-/// there at 1.25 periods, but one window of sea sway (and the few windows after it) leaves 4 to 19
-/// arcsec (docs/real-logs.md, "Where it falls short"). Run it with `-- --ignored`.
-#[test]
-#[ignore = "not met: sea sway leaves 4-19 arcsec at 1.25 periods of 360 s"]
-fn the_first_estimate_is_within_10_arcsec_at_a_period_and_a_quarter_of_360_s_at_sea() {
-    let failures: Vec<_> = first_estimates(ScenarioKind::Sea, &[360.0])
-        .into_iter()
-        .filter(|r| r.3.is_nan() || r.3 >= 10.0)
-        .collect();
+    println!("worst of all at 1.25 periods: {worst_of_all:.2} arcsec");
     assert!(failures.is_empty(), "{failures:#?}");
 }

@@ -6,8 +6,10 @@
 //! averages per pair (2 x u32), the noise scale and the drift share per pair (2 + 2 `R`); then
 //! what the report and the change detector need: each error's reported 1-sigma (4 `R`), a flag
 //! byte (bits 0-3: each channel's residual mean beyond the check's bound; bits 4-5: the pitch and
-//! roll pair learning their errors again after a change), the estimate they are learned against
-//! (4 `R`), the learned spread of each channel's residual (4 `R`) and the residuals learned into
+//! roll pair learning their errors again after a change; bits 6-7: the first windows' weights
+//! ([`super::start`]): 0 not in their bumps, 1 in them with no estimate held yet, 2 in them with
+//! the estimate of the last bump's end held), the estimate they are learned against, or, in the
+//! bumps, the one held (4 `R`; its 1-sigma is the reported one), the learned spread of each channel's residual (4 `R`) and the residuals learned into
 //! it per pair (2 x u32), and the change detector's part (`change/checkpoint.rs`). The window, the
 //! low-pass of its references, the entries since the last update and the detector's blocks are
 //! not kept: the next period of samples refills them (the window restarts, as after a long gap).
@@ -18,10 +20,13 @@
 //! of sines and cosines, minus a product of two such means); the per-product variances within
 //! [`MAX_PRODUCT_VARIANCE_RAD2`]; powers and noise scales within [`MAX_NOISE_SCALE`]; drift shares
 //! within `[0, 1]`; the pair 0 or 1; the reported 1-sigma finite and not negative; the flag
-//! byte's unused bits zero; the estimate learned against within [`MAX_STATE`]; the spreads within
-//! [`MAX_RESIDUAL`]^2.
+//! byte's bits 6-7 not both set; the estimate learned against within [`MAX_STATE`]; the spreads
+//! within [`MAX_RESIDUAL`]^2. The bumps begin again at the next full window after a restore, the
+//! estimate held meanwhile (an image of before the bumps has bits 6-7 zero: the filter's estimate
+//! is reported, as then).
 
 use super::change::checkpoint::BlockVariance;
+use super::start::StartTaper;
 use super::Windowed;
 use crate::checkpoint::wire::{Reader, Writer};
 use crate::checkpoint::{
@@ -62,6 +67,7 @@ pub(crate) struct Learned {
     spread_rad2: [Real; 4],
     spread_count: [u32; 2],
     change: BlockVariance,
+    start: StartTaper,
 }
 
 impl<const CAP: usize> Windowed<CAP> {
@@ -87,6 +93,13 @@ impl<const CAP: usize> Windowed<CAP> {
             spread_rad2: self.spread_rad2,
             spread_count: self.spread_count,
             change: self.change.learned(),
+            // What the image says of the weights: in the bumps or not, and whether one ended.
+            start: match self.start {
+                StartTaper::Bumps { held, .. } | StartTaper::Restarted { held } => {
+                    StartTaper::Restarted { held }
+                }
+                _ => StartTaper::Fresh,
+            },
         }
     }
 
@@ -111,6 +124,9 @@ impl<const CAP: usize> Windowed<CAP> {
         self.spread_rad2 = l.spread_rad2;
         self.spread_count = l.spread_count;
         self.change.keep_learned(l.change);
+        // The window restarts: bumps begun go on at its next full window.
+        self.start = l.start;
+        self.report = self.estimate_now();
         // What the detector goes back to, should a change build up before the next block.
         self.keep_clean_state();
     }
@@ -170,7 +186,11 @@ impl Stored for Learned {
             .chain(&m.relearning)
             .enumerate()
             .fold(0u8, |b, (i, f)| b | (u8::from(*f) << i));
-        w.u8(bits);
+        let start = match m.start {
+            StartTaper::Restarted { held } => 1 + u8::from(held),
+            _ => 0,
+        };
+        w.u8(bits | start << 6);
         for v in m.held_x_rad.into_iter().chain(m.spread_rad2) {
             w.real(v);
         }
@@ -211,6 +231,7 @@ impl Stored for Learned {
             spread_rad2: [0.0; 4],
             spread_count: [0; 2],
             change: BlockVariance::default(),
+            start: StartTaper::Fresh,
         };
         let bits = r.u8();
         m.channel_mismatch = core::array::from_fn(|i| bits & (1 << i) != 0);
@@ -220,10 +241,12 @@ impl Stored for Learned {
         }
         m.spread_count = [r.u32(), r.u32()];
         m.change = BlockVariance::read(r, ())?;
-        ensure(
-            bits & 0xC0 == 0,
-            CheckpointError::InvalidValue(Part::Residuals),
-        )?;
+        m.start = match bits >> 6 {
+            0 => StartTaper::Fresh,
+            1 => StartTaper::Restarted { held: false },
+            2 => StartTaper::Restarted { held: true },
+            _ => return Err(CheckpointError::InvalidValue(Part::Residuals)),
+        };
         let in_range = m
             .residual_mean
             .iter()
@@ -323,6 +346,11 @@ mod tests {
             Err(InvalidValue(Part::ChangeDetector))
         );
         assert!(with(&|m| m.relearning = [true, false]).is_ok());
+        // In the first windows' bumps, with an estimate held (flag bits 6-7).
+        assert_eq!(
+            with(&|m| m.start = StartTaper::Restarted { held: true }).map(|m| m.start),
+            Ok(StartTaper::Restarted { held: true })
+        );
         // The Kalman filter's checks (see `kalman/checkpoint.rs`) apply to the method's.
         assert_eq!(
             with(&|m| m.kf = ConstantStateKalman::new([Real::NAN; 4])),

@@ -1,0 +1,318 @@
+//! The first estimate: the weights the first windows enter the filter with, and when their
+//! estimate is reported.
+//!
+//! # Why the first windows need weights
+//! Each window is the mean over one period `W` of the products (a boxcar), and the filter, which
+//! starts from a weak prior and takes every window with the same variance, ends up after `N`
+//! windows with a least-squares estimate whose weight on the products is the boxcar convolved with
+//! the run of windows: `g = rect_W * rect_N`, a trapezoid with ramps `N` long. A sway component
+//! at angular frequency `w` (periods of 6-14 s, degrees of amplitude `A`) leaks through the
+//! trapezoid's two kinks: `|G(w)| / G(0) <= 4 / (w^2 W N)` for `w N >> 1`. Long after the start
+//! that is nothing (module doc of [`super`]: about `20 / N` arcsec), but the first estimate is due
+//! within 1.25 periods of the start, and a one-way rotation makes its period known after about one
+//! period and the filler's delay (31 rows): at a 360 s period `N` is then about 30 windows, and
+//! 5 deg of sway at 14 s leaks `4 A / (w^2 W N)` = 33 arcsec into a channel (measured: 12 to 56
+//! arcsec on x at 450 s on four sea logs of the one-way schemes).
+//!
+//! # Bumps
+//! So the first windows enter with the weights of a bump: the `k`-th window of a bump of `L`
+//! windows with `w(u) = 30 u^2 (1 - u)^2`, `u = k / L` (its variance `r / w`). Its mean over the
+//! bump is 1, so the filter's information is what equal weights give; it is zero with a zero
+//! slope at both ends, so `g = rect_W * w` has a continuous second derivative at both of its ends
+//! and the leakage falls like `1 / w^4` instead of `1 / w^2`. The newest windows of a bump still
+//! carry most of its weight until it ends, so its estimate is reported when it ends (at the
+//! window of weight 0) and held until the next one ends. The bumps double in length until they
+//! span a quarter of a period of windows; then the weights rise to 1 over twice the last bump's
+//! length (`3 u^2 - 2 u^3`: a step to 1 would be a kink of `g` inside the data, leaking as much as
+//! an edge), the estimate reported at every update from the end of the last bump on. (Doubling
+//! until the bumps span a period held estimates for up to 0.4 periods while the data improved
+//! them: measured on the paper scenario at 360 s, a mean error of 1.45 arcsec at two periods
+//! instead of 0.64.)
+//!
+//! Measured on the same four sea logs per scheme at 360 s (`host-sim/tests/replay/gap_logs.rs`):
+//! at most 4.6 arcsec at 1.25 periods on every scheme, where it was 56 (docs/real-logs.md).
+//!
+//! # The first bump's length
+//! It ends when the first estimate is due: when the newest entry is 1.25 periods from the first
+//! entry of the window, less the rows the estimator has not yet turned into entries at that moment
+//! (the filler's delay, [`crate::gap_fill::DELAY`], and the stamps the sample interval is learned
+//! from, [`crate::time_grid::LEARNING_STEPS`] and one). At least a sixteenth of a period (a
+//! pattern whose period is known late: its first estimate comes a sixteenth of a period after
+//! its first full window), at most a quarter. A window of bins (periods longer than the ring) starts
+//! empty when the period is known, so it has no earlier samples to take the first estimate
+//! from: its first bump is a sixteenth of a period.
+//!
+//! # Restarts
+//! A window restarted during the bumps (a long gap, a rotation fault) begins them again at its
+//! next full window, the estimate held meanwhile. A restore from a checkpoint keeps the filter but
+//! not the window: the bumps are not kept, and a filter that has taken windows reports its
+//! estimate from the next window on, with equal weights.
+
+use crate::gap_fill::DELAY;
+use crate::time_grid::LEARNING_STEPS;
+use crate::Real;
+
+/// Rows the estimator has not turned into window entries when a row arrives: the filler's delay
+/// and the stamps the interval is learned from (the first stamp and [`LEARNING_STEPS`] steps).
+pub const ROWS_BEHIND: u32 = DELAY + LEARNING_STEPS as u32 + 1;
+
+/// The smallest weight a window is taken with (a bump's ends are 0): its variance 65,536 times a
+/// window's.
+pub const MIN_WEIGHT: Real = 1.0 / 65_536.0;
+
+/// Where the windows' weights stand.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StartTaper {
+    /// No window taken since the filter started afresh: the first full window begins the bumps
+    /// (or, for a filter restored with windows taken, equal weights).
+    Fresh,
+    /// The window restarted during the bumps: its next full window begins them again. `held`:
+    /// a bump had ended (its estimate is held).
+    Restarted { held: bool },
+    /// In a bump: the window numbers of the first bump's first window and of this bump's, this
+    /// bump's length in windows, and whether a bump has ended (its estimate is held).
+    Bumps {
+        first: u32,
+        start: u32,
+        len: u32,
+        held: bool,
+    },
+    /// After the bumps, the weights rising to 1 over `len` windows from window `start`, the
+    /// estimate reported at every update.
+    Rise { start: u32, len: u32 },
+    /// Equal weights, the estimate reported at every update.
+    Done,
+}
+
+/// A window's weight and whether its estimate is to be reported.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Weight {
+    /// In `[0, 1.875]` in a bump, `[0, 1]` in the rise, then 1: the window's variance is divided
+    /// by it.
+    pub value: Real,
+    /// This window ends a bump: the estimate after it is the one to report until the next does.
+    pub ends_bump: bool,
+}
+
+impl StartTaper {
+    /// The weight of a bump at `k` of `len` windows: `30 u^2 (1 - u)^2`, `u = k / len`.
+    pub fn bump(k: u32, len: u32) -> Real {
+        let u = k as Real / len.max(1) as Real;
+        let v = u * (1.0 - u);
+        30.0 * v * v
+    }
+
+    /// The weight at `k` of a rise of `len` windows from 0 to 1: `3 u^2 - 2 u^3`, `u = k / len`.
+    pub fn rise(k: u32, len: u32) -> Real {
+        let u = k as Real / len.max(1) as Real;
+        u * u * (3.0 - 2.0 * u)
+    }
+
+    /// The length of the first bump, windows, for a window of `len` entries of `bin` samples whose
+    /// first entry is number `first`, first full at number `newest` (see the module doc).
+    pub fn first_bump_len(first: u32, newest: u32, len: u32, bin: u32) -> u32 {
+        let due = first.wrapping_add(len + len / 4).wrapping_sub(ROWS_BEHIND);
+        // A due number already passed wraps to a huge number: the shortest bump, as with bins.
+        let left = if bin > 1 { 0 } else { due.wrapping_sub(newest) };
+        let left = if left > len { 0 } else { left };
+        left.min(len / 4).max(len / 16).max(1)
+    }
+
+    /// Whether the estimate reported is the one held at the end of the last bump (none before
+    /// the first ends).
+    #[inline]
+    pub fn holds(&self) -> bool {
+        matches!(
+            self,
+            StartTaper::Bumps { .. } | StartTaper::Restarted { .. }
+        )
+    }
+
+    /// Whether a bump has ended, while the bumps go on: there is an estimate held.
+    pub fn has_held(&self) -> bool {
+        matches!(
+            self,
+            StartTaper::Bumps { held: true, .. } | StartTaper::Restarted { held: true }
+        )
+    }
+
+    /// The window restarted: bumps begin again at its next full window.
+    pub fn restart(&mut self) {
+        if let StartTaper::Bumps { held, .. } = *self {
+            *self = StartTaper::Restarted { held };
+        }
+    }
+
+    /// The weight of the window numbered `newest` of a full window of `len` entries of `bin`
+    /// samples whose first entry is numbered `first`; `cold` when the filter has taken no window
+    /// yet.
+    // On the step's path: the usual case (done) inlined, the start out of line.
+    #[inline]
+    pub fn weight(&mut self, newest: u32, first: u32, len: u32, bin: u32, cold: bool) -> Weight {
+        if let StartTaper::Done = self {
+            return Weight {
+                value: 1.0,
+                ends_bump: false,
+            };
+        }
+        self.weight_at_start(newest, first, len, bin, cold)
+    }
+
+    /// [`StartTaper::weight`] before the weights are done.
+    #[inline(never)]
+    fn weight_at_start(
+        &mut self,
+        newest: u32,
+        first: u32,
+        len: u32,
+        bin: u32,
+        cold: bool,
+    ) -> Weight {
+        let (value, ends_bump) = match *self {
+            StartTaper::Fresh if !cold => {
+                *self = StartTaper::Done;
+                (1.0, false)
+            }
+            // A bump's first window has weight 0.
+            StartTaper::Fresh | StartTaper::Restarted { .. } => {
+                *self = StartTaper::Bumps {
+                    first: newest,
+                    start: newest,
+                    len: Self::first_bump_len(first, newest, len, bin),
+                    held: self.has_held(),
+                };
+                (0.0, false)
+            }
+            StartTaper::Bumps {
+                first: begun,
+                start,
+                len: bump,
+                ..
+            } => {
+                let k = newest.wrapping_sub(start);
+                if k < bump {
+                    (Self::bump(k, bump), false)
+                } else {
+                    // This window ends the bump (a run of lost rows may have skipped past its
+                    // end): its weight is 0, and it begins the next bump, twice as long, until
+                    // the bumps span a quarter of a period; then the rise, over twice the last
+                    // bump.
+                    let next = bump.saturating_mul(2);
+                    *self = if newest.wrapping_sub(begun) >= len / 4 {
+                        StartTaper::Rise {
+                            start: newest,
+                            len: next,
+                        }
+                    } else {
+                        StartTaper::Bumps {
+                            first: begun,
+                            start: newest,
+                            len: next,
+                            held: true,
+                        }
+                    };
+                    (0.0, true)
+                }
+            }
+            StartTaper::Rise { start, len: rise } => {
+                let k = newest.wrapping_sub(start);
+                if k < rise {
+                    (Self::rise(k, rise), false)
+                } else {
+                    *self = StartTaper::Done;
+                    (1.0, false)
+                }
+            }
+            StartTaper::Done => (1.0, false),
+        };
+        Weight { value, ends_bump }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bump_has_mean_one_and_is_zero_at_its_ends() {
+        for len in [8u32, 24, 45, 90] {
+            let sum: Real = (0..len).map(|k| StartTaper::bump(k, len)).sum();
+            assert!((sum / len as Real - 1.0).abs() < 0.02, "{len}: {sum}");
+            assert_eq!(StartTaper::bump(0, len), 0.0);
+            // Zero slope at the ends: the first window's weight is of order 1/len^2.
+            assert!(StartTaper::bump(1, len) <= 30.0 / (len * len) as Real);
+            assert!(StartTaper::bump(len - 1, len) <= 30.0 / (len * len) as Real);
+        }
+    }
+
+    #[test]
+    fn the_first_bump_ends_when_the_first_estimate_is_due() {
+        // A 360-entry window from entry 0, first full at 372: due at 450 - ROWS_BEHIND.
+        assert_eq!(
+            StartTaper::first_bump_len(0, 372, 360, 1),
+            450 - ROWS_BEHIND - 372
+        );
+        // Known late: a sixteenth of a period; early: at most a quarter.
+        assert_eq!(StartTaper::first_bump_len(0, 440, 360, 1), 22);
+        assert_eq!(StartTaper::first_bump_len(0, 300, 360, 1), 90);
+        assert_eq!(StartTaper::first_bump_len(0, 1000, 360, 1), 22);
+        // Bins: a sixteenth.
+        assert_eq!(StartTaper::first_bump_len(0, 720, 720, 2), 45);
+    }
+
+    #[test]
+    fn bumps_double_until_a_quarter_period_then_the_weights_rise() {
+        let mut t = StartTaper::Fresh;
+        let mut ends = std::vec::Vec::new();
+        let mut n = 400u32;
+        // First entry 0, 360 entries, first full at 400: due at 410, ten windows: a sixteenth (22).
+        loop {
+            let w = t.weight(n, 0, 360, 1, true);
+            if w.ends_bump {
+                assert_eq!(w.value, 0.0);
+                ends.push(n - 400);
+            }
+            if let StartTaper::Rise { len, .. } = t {
+                assert_eq!(len, 176);
+                break;
+            }
+            assert!(t.holds());
+            n += 1;
+        }
+        assert_eq!(ends, [22, 66, 154]);
+        // Then the weights rise to 1 over twice the last bump's length, reported at every window.
+        assert!(!t.holds());
+        let w = t.weight(n + 88, 0, 360, 1, true).value;
+        assert!((w - 0.5).abs() < 1e-6, "{w}");
+        assert_eq!(t.weight(n + 176, 0, 360, 1, true).value, 1.0);
+        assert_eq!(t, StartTaper::Done);
+    }
+
+    #[test]
+    fn a_restored_filter_takes_equal_weights_and_a_restart_begins_the_bumps_again() {
+        let mut t = StartTaper::Fresh;
+        assert_eq!(t.weight(500, 0, 360, 1, false).value, 1.0);
+        assert_eq!(t, StartTaper::Done);
+        let mut t = StartTaper::Fresh;
+        t.weight(400, 0, 360, 1, true);
+        t.restart();
+        assert_eq!(t, StartTaper::Restarted { held: false });
+        assert!(t.holds() && !t.has_held());
+        assert_eq!(t.weight(900, 500, 360, 1, false).value, 0.0);
+        assert!(matches!(
+            t,
+            StartTaper::Bumps {
+                first: 900,
+                held: false,
+                ..
+            }
+        ));
+        // After a bump ended, its estimate stays held through a restart.
+        for n in 901..=922 {
+            t.weight(n, 500, 360, 1, false);
+        }
+        assert!(t.has_held());
+        t.restart();
+        assert_eq!(t, StartTaper::Restarted { held: true });
+    }
+}
