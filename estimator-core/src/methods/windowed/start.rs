@@ -11,8 +11,8 @@
 //! that is nothing (module doc of [`super`]: about `20 / N` arcsec), but the first estimate is due
 //! within 1.25 periods of the start, and a one-way rotation makes its period known after about one
 //! period and the filler's delay (31 rows): at a 360 s period `N` is then about 30 windows, and
-//! 5 deg of sway at 14 s leaks `4 A / (w^2 W N)` = 33 arcsec into a channel (measured: 12 to 56
-//! arcsec on x at 450 s on four sea logs of the one-way schemes).
+//! 5 deg of sway at 14 s leaks `4 A / (w^2 W N)` = 33 arcsec into a channel (measured: 10 to 56
+//! arcsec on x at 450 s on four sea logs of each one-way scheme).
 //!
 //! # Bumps
 //! So the first windows enter with the weights of a bump: the `k`-th window of a bump of `L`
@@ -26,11 +26,12 @@
 //! length (`3 u^2 - 2 u^3`: a step to 1 would be a kink of `g` inside the data, leaking as much as
 //! an edge), the estimate reported at every update from the end of the last bump on. (Doubling
 //! until the bumps span a period held estimates for up to 0.4 periods while the data improved
-//! them: measured on the paper scenario at 360 s, a mean error of 1.45 arcsec at two periods
-//! instead of 0.64.)
+//! them: measured on six logs of every scheme of the paper scenario at 360 s, a mean error of
+//! 1.45 arcsec at two periods instead of 0.64.)
 //!
-//! Measured on the same four sea logs per scheme at 360 s (`host-sim/tests/replay/gap_logs.rs`):
-//! at most 4.6 arcsec at 1.25 periods on every scheme, where it was 56 (docs/real-logs.md).
+//! Measured at 1.25 periods (`host-sim/tests/replay/gap_logs.rs`, four logs of every scheme at
+//! 360, 480 and 720 s, paper and sea): every error within 7.3 arcsec, where at sea at 360 s it
+//! was up to 56.
 //!
 //! # The first bump's length
 //! It ends when the first estimate is due: when the newest entry is 1.25 periods from the first
