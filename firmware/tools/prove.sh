@@ -35,7 +35,7 @@ section "link-protocol unit tests"
 run cargo test -p link-protocol
 
 section "QEMU tests (faults, serial-port path, power cuts, 20,000 s end to end and restart, budgets)"
-run cargo test -p host-sim --release --no-fail-fast --test qemu qemu_faults --test qemu qemu_port --test qemu qemu_power_cut --test qemu qemu_checkpoint_interval --test qemu qemu_e2e --test qemu qemu_restart --test qemu qemu_budgets -- --nocapture --test-threads=1
+run cargo test -p host-sim --release --no-fail-fast --test qemu -- qemu_faults qemu_port qemu_power_cut qemu_checkpoint_interval qemu_e2e qemu_restart qemu_budgets --nocapture --test-threads=1
 
 section "exact step instruction count (TCG plugin firmware/tools/stepcount.c)"
 WORK="$PWD/target/qemu-tests/plugin"   # absolute: host-sim runs QEMU in a scratch directory
