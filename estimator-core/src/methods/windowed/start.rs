@@ -46,8 +46,10 @@
 //! # Restarts
 //! A window restarted during the bumps (a long gap, a rotation fault) begins them again at its
 //! next full window, the estimate held meanwhile. A restore from a checkpoint keeps the filter but
-//! not the window: the bumps are not kept, and a filter that has taken windows reports its
-//! estimate from the next window on, with equal weights.
+//! not the window: it keeps whether the bumps go on and the estimate held (two bits of the
+//! windowed method's flag byte, `checkpoint.rs`), so that a restore in the bumps begins them again
+//! at the next full window, reporting the held estimate meanwhile; a restore after them (the rise
+//! included) takes equal weights at once.
 
 use crate::gap_fill::DELAY;
 use crate::time_grid::LEARNING_STEPS;
