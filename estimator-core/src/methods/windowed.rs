@@ -142,6 +142,12 @@
 //!    a cold start carries tens of arcsec of sway; a block, a fraction of an arcsec. The status is
 //!    [`crate::Status::ErrorsChanged`] for one period from the declaration.
 //!
+//! # The first windows
+//! Until the filter has taken a quarter of a period of windows, the windows enter it with the
+//! weights of smooth bumps and the estimate is reported at each bump's end ([`start`] has the
+//! derivation): the first estimate, due within 1.25 periods, is then not the sway that a few tens
+//! of equally weighted windows let through.
+//!
 //! # Innovation gate
 //! With change detection on, a channel's measurement is left out when its innovation is beyond
 //! [`GATE_SIGMAS`] = 8 standard deviations of `h' P h + s`, `s` the learned mean square of that
@@ -267,7 +273,8 @@ pub struct Windowed<const CAP: usize> {
     /// did not hold it (see [`change`]): what they knew before a change or a passing disturbance
     /// began to pull at them.
     clean: CleanState,
-    /// The first windows' weights ([`start`]; not kept by a checkpoint).
+    /// The first windows' weights ([`start`]; a checkpoint keeps whether their bumps go on and
+    /// whether one has ended, not where they stand).
     start: StartTaper,
     /// The estimate reported ([`Windowed::estimate_now`] after each update).
     report: Option<MethodEstimate>,
@@ -1027,7 +1034,7 @@ impl<const CAP: usize> Windowed<CAP> {
     }
 
     /// The filter's estimate now (see [`Windowed::estimate`]).
-    pub(crate) fn live_estimate(&self) -> Option<MethodEstimate> {
+    fn live_estimate(&self) -> Option<MethodEstimate> {
         if self.updates == 0 {
             return None;
         }

@@ -9,8 +9,9 @@
 //! roll pair learning their errors again after a change; bits 6-7: the first windows' weights
 //! ([`super::start`]): 0 not in their bumps, 1 in them with no estimate held yet, 2 in them with
 //! the estimate of the last bump's end held), the estimate they are learned against, or, in the
-//! bumps, the one held (4 `R`; its 1-sigma is the reported one), the learned spread of each channel's residual (4 `R`) and the residuals learned into
-//! it per pair (2 x u32), and the change detector's part (`change/checkpoint.rs`). The window, the
+//! bumps, the one held (4 `R`; its 1-sigma is the reported one), the learned spread of each
+//! channel's residual (4 `R`) and the residuals learned into it per pair (2 x u32), and the change
+//! detector's part (`change/checkpoint.rs`). The window, the
 //! low-pass of its references, the entries since the last update and the detector's blocks are
 //! not kept: the next period of samples refills them (the window restarts, as after a long gap).
 //! The state the detector goes back to while a change builds up is the restored one.
