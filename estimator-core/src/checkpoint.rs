@@ -278,6 +278,13 @@ pub(crate) fn within(v: Real, bound: Real) -> bool {
     v.is_finite() && v.abs() <= bound
 }
 
+/// Whether every value of `values` is finite and within `[lo, hi]`. Out of line: the readers check
+/// dozens of arrays, and the checks inlined and unrolled cost the firmware some 800 bytes of flash.
+#[inline(never)]
+pub(crate) fn all_within(values: &[Real], lo: Real, hi: Real) -> bool {
+    values.iter().all(|v| v.is_finite() && *v >= lo && *v <= hi)
+}
+
 /// Whether `v` is finite and within `[0, bound]`.
 pub(crate) fn within_non_negative(v: Real, bound: Real) -> bool {
     v.is_finite() && (0.0..=bound).contains(&v)

@@ -661,8 +661,7 @@ impl<const CAP: usize> Windowed<CAP> {
             (None, false)
         };
         // A block's test is the costliest part of an update: after it, the pair's report waits
-        // for the pair's next update, two windows later (a change declared has refreshed both;
-        // a hold begun, which takes the filter back a block, the other pair's).
+        // for the pair's next update, two windows later (a change declared has refreshed both).
         if !(tested || self.start.holds()) {
             self.refresh_report(config, pair);
         }
@@ -752,9 +751,11 @@ impl<const CAP: usize> Windowed<CAP> {
         // Kept at the next update: this one has the block's work already.
         self.clean_state_due |= alarm.is_none() && pair == 1 && !self.change.holding();
         if self.change.holding() && !was_holding {
-            // The block that started the hold was taken: back to before it.
+            // The block that started the hold was taken: back to before it. Each pair's report
+            // follows at its next update without a block's test (the other pair's block ends at
+            // its next update, so some three windows on); refreshing the other pair's here too
+            // took a hold's first step to 5,050 instructions on a lossy 360 s log.
             self.restore_clean_state();
-            self.refresh_report(config, 1 - pair);
         }
         let Some(mut alarm) = alarm else {
             return (None, true);

@@ -415,9 +415,11 @@ fn no_false_detection(runs: [usize; 5], thirty_day_runs: usize, period_s: f64) {
 #[test]
 fn no_change_is_declared_at_sea_under_coloured_noise_drift_or_turns_nor_in_a_month() {
     no_false_detection([20, 6, 6, 4, 4], 1, 480.0);
-    // A long period, whose blocks are a quarter of it (240 s at most): the rough sea, coloured
-    // noise and drift (heel in turns at 720 s falls short: see `study_no_false_detection`).
-    no_false_detection([6, 3, 3, 0, 0], 0, 720.0);
+    // A long period, whose blocks are a quarter of it (240 s at most) and tested only from some
+    // 9,800 s on: the first turn, at 7,200 s, comes before that (turns at 720 s were declared
+    // on the seeds 6 and 10 of 0.5 deg and 8 of 3 deg before a gross block held the filter
+    // ahead of the first test).
+    no_false_detection([6, 3, 3, 12, 12], 0, 720.0);
 }
 
 #[test]
@@ -528,16 +530,5 @@ fn study_steps() {
 #[ignore = "the full study: bash scripts/change-study.sh"]
 fn study_no_false_detection() {
     no_false_detection([200; 5], 10, 480.0);
-    no_false_detection([200, 200, 200, 0, 0], 10, 720.0);
-    // Where it falls short, measured and printed, not asserted: heel in turns at a 720 s period
-    // (docs/uncertainty.md).
-    for (name, draw) in no_change_draws(720.0).into_iter().skip(3) {
-        let changes = declared(&draw, 200, 45_000.0, None);
-        let runs: std::collections::BTreeSet<usize> = changes.iter().map(|c| c.0).collect();
-        println!(
-            "| {name} (falls short) | 720 | 200 | 0.52 | {} (in {} runs) |",
-            changes.len(),
-            runs.len()
-        );
-    }
+    no_false_detection([200; 5], 10, 720.0);
 }

@@ -31,7 +31,7 @@ use super::start::StartTaper;
 use super::Windowed;
 use crate::checkpoint::wire::{Reader, Writer};
 use crate::checkpoint::{
-    ensure, within, within_non_negative, CheckpointError, Part, Stored, MAX_RESIDUAL, MAX_STATE, R,
+    all_within, ensure, CheckpointError, Part, Stored, MAX_RESIDUAL, MAX_STATE, R,
 };
 use crate::kalman::ConstantStateKalman;
 use crate::Real;
@@ -248,36 +248,33 @@ impl Stored for Learned {
             2 => StartTaper::Restarted { held: true },
             _ => return Err(CheckpointError::InvalidValue(Part::Residuals)),
         };
-        let in_range = m
-            .residual_mean
-            .iter()
-            .all(|v| within(*v, MAX_RESIDUAL as Real))
-            && m.gains.iter().all(|g| within_non_negative(*g, 4.0))
-            && m.product_variance_rad2
-                .iter()
-                .all(|v| within_non_negative(*v, MAX_PRODUCT_VARIANCE_RAD2))
-            && m.residual_mean_long
-                .iter()
-                .all(|v| within(*v, MAX_RESIDUAL as Real))
-            && m.residual_power
-                .iter()
-                .chain(&m.noise_scale)
-                .all(|v| within_non_negative(*v, MAX_NOISE_SCALE))
-            && m.drift_share.iter().all(|v| within_non_negative(*v, 1.0))
-            && m.reported_sigma_rad
-                .iter()
-                .all(|v| within_non_negative(*v, Real::MAX))
-            && m.spread_rad2
-                .iter()
-                .all(|v| within_non_negative(*v, (MAX_RESIDUAL * MAX_RESIDUAL) as Real));
-        ensure(in_range, CheckpointError::InvalidValue(Part::Residuals))?;
-        let held_in_range = m.held_x_rad.iter().all(|v| within(*v, MAX_STATE as Real));
         ensure(
-            held_in_range,
+            residuals_in_range(&m),
+            CheckpointError::InvalidValue(Part::Residuals),
+        )?;
+        let state = MAX_STATE as Real;
+        ensure(
+            all_within(&m.held_x_rad, -state, state),
             CheckpointError::InvalidValue(Part::ChangeDetector),
         )?;
         Ok(m)
     }
+}
+
+/// Whether the residual statistics of `m` are finite and within their bounds. Out of line, so that
+/// the restore's stack does not hold its temporaries while it reads the method's part.
+#[inline(never)]
+fn residuals_in_range(m: &Learned) -> bool {
+    let residual = MAX_RESIDUAL as Real;
+    all_within(&m.residual_mean, -residual, residual)
+        && all_within(&m.gains, 0.0, 4.0)
+        && all_within(&m.product_variance_rad2, 0.0, MAX_PRODUCT_VARIANCE_RAD2)
+        && all_within(&m.residual_mean_long, -residual, residual)
+        && all_within(&m.residual_power, 0.0, MAX_NOISE_SCALE)
+        && all_within(&m.noise_scale, 0.0, MAX_NOISE_SCALE)
+        && all_within(&m.drift_share, 0.0, 1.0)
+        && all_within(&m.reported_sigma_rad, 0.0, Real::MAX)
+        && all_within(&m.spread_rad2, 0.0, residual * residual)
 }
 
 #[cfg(test)]
