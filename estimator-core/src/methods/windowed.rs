@@ -131,6 +131,8 @@
 //!    statistics), so that neither a change nor a passing disturbance (a turn's heel) pulls at it.
 //!    A hold never outlasts the persistence: a longer run is a change, or an inconsistency the
 //!    filter must work through. What the filter holds out stays out of the residual averages.
+//!    Before the blocks are tested (their first 8 periods), a block 10 sigma out holds the filter
+//!    alike ([`change`], "Before the first test": a turn's heel).
 //! 3. **Learning again**: when a change is declared, the filter goes back to the clean state, the
 //!    errors that changed get the prior's covariance ([`ConstantStateKalman::forget`]) and their
 //!    pairs' residual statistics start afresh; x3 and x4 are learned again with any change of x1
