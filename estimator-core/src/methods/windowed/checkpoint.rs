@@ -261,8 +261,8 @@ impl Stored for Learned {
     }
 }
 
-/// Whether the residual statistics of `m` are finite and within their bounds. Out of line, so that
-/// the restore's stack does not hold its temporaries while it reads the method's part.
+/// Whether the residual statistics of `m` are finite and within their bounds. Out of line: 48 bytes
+/// less flash than written into the reader above (the restore's stack is the same either way).
 #[inline(never)]
 fn residuals_in_range(m: &Learned) -> bool {
     let residual = MAX_RESIDUAL as Real;
