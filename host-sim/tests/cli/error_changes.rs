@@ -206,36 +206,42 @@ fn check_step_line(name: &str, period_s: f64, l: &StepLine) {
     assert!(l.worst_final_arcsec <= 2.0, "{name}: {l:?}");
 }
 
-/// Steps of each error, of the smallest size and of 150 arcsec, at 20,000 s on sea logs
-/// (`seeds` runs a line, alternating signs), on `schemes` at `periods_s`.
+/// One line of the study: steps of `size` arcsec of error `which` at 20,000 s on `seeds` sea logs
+/// (alternating signs) of `scheme` at `period_s`, printed and checked.
+fn study_line(seeds: usize, which: usize, size: f64, scheme: RotationScheme, period_s: f64) {
+    let mut draw = Draw::new(ScenarioKind::Sea, 21);
+    draw.scheme = scheme;
+    draw.rotation_period_s = Some(period_s);
+    let params: Vec<ScenarioParams> = (0..seeds)
+        .map(|i| {
+            stepped(
+                &draw,
+                i,
+                which,
+                if i % 2 == 0 { size } else { -size },
+                20_000.0,
+                6_000.0,
+            )
+        })
+        .collect();
+    let line = step_line(&params, Config::default());
+    print_step_line(which, size, scheme, period_s, &line);
+    check_step_line(
+        &format!("x{} {size} {} {period_s}", which + 1, scheme.name()),
+        period_s,
+        &line,
+    );
+}
+
+/// Steps of each error, of each of `sizes` arcsec, at 20,000 s on sea logs (`seeds` runs a line,
+/// alternating signs), on `schemes` at `periods_s`.
 fn steps(seeds: usize, sizes: &[f64], schemes: &[RotationScheme], periods_s: &[f64]) {
     print_step_header();
     for &scheme in schemes {
         for &period_s in periods_s {
-            let mut draw = Draw::new(ScenarioKind::Sea, 21);
-            draw.scheme = scheme;
-            draw.rotation_period_s = Some(period_s);
             for which in 0..4 {
                 for &size in sizes {
-                    let params: Vec<ScenarioParams> = (0..seeds)
-                        .map(|i| {
-                            stepped(
-                                &draw,
-                                i,
-                                which,
-                                if i % 2 == 0 { size } else { -size },
-                                20_000.0,
-                                6_000.0,
-                            )
-                        })
-                        .collect();
-                    let line = step_line(&params, Config::default());
-                    print_step_line(which, size, scheme, period_s, &line);
-                    check_step_line(
-                        &format!("x{} {size} {} {period_s}", which + 1, scheme.name()),
-                        period_s,
-                        &line,
-                    );
+                    study_line(seeds, which, size, scheme, period_s);
                 }
             }
         }
@@ -268,25 +274,23 @@ fn a_step_is_detected_and_learned_again_on_a_reciprocating_720_s_rotation() {
     check_step_line("reciprocating", 720.0, &line);
 }
 
-/// Four-position rotation at 360 s: detected once, within 3.5 periods, every error within 10
-/// arcsec of the new values by 2,000 s after the step, within 2 sigma as often as the others; the
-/// 3-sigma cover through the transition is where it falls short (next test).
 #[test]
 fn a_step_is_detected_and_learned_again_on_a_four_position_360_s_rotation() {
     let line = one_step_line(RotationScheme::FourPosition, 360.0, 3);
-    let mut without_the_3_sigma_cover = line.clone();
-    without_the_3_sigma_cover.coverage_3_sigma = 1.0;
-    check_step_line("four-position", 360.0, &without_the_3_sigma_cover);
+    check_step_line("four-position", 360.0, &line);
 }
 
-/// Where it falls short: on this log the 3-sigma cover from one period after the step on is
-/// 98.2 % against 98.5 % (the full study's four-position 360 s lines fall short alike,
-/// `bash scripts/change-study.sh`). Run it with `-- --ignored`.
+/// The three lines of the full study that once fell short, at full size (4 logs each): a 20 arcsec
+/// step of x3 on a four-position 360 s rotation (a block of the run short of half the shift: once
+/// declared after 4.96 periods), and 150 arcsec steps of x3 at 360 s and of x1 at 720 s, one-way
+/// (an unchanged error moved by the block it was learned again from, and a noise scale learned
+/// again from a few residual means: once 98.1 % and 98.4 % within 3 sigma).
 #[test]
-#[ignore = "not met: 98.2 % within 3 sigma through the transition against 98.5 %"]
-fn a_step_on_a_four_position_360_s_rotation_is_covered_at_3_sigma() {
-    let line = one_step_line(RotationScheme::FourPosition, 360.0, 3);
-    check_step_line("four-position", 360.0, &line);
+fn the_hardest_lines_of_the_study_meet_every_target() {
+    print_step_header();
+    study_line(4, 2, 20.0, RotationScheme::FourPosition, 360.0);
+    study_line(4, 2, 150.0, RotationScheme::Continuous, 360.0);
+    study_line(4, 0, 150.0, RotationScheme::Continuous, 720.0);
 }
 
 /// `runs` logs of `draw`, each of `duration_s` (`course_deg` overrides the course, so that a
