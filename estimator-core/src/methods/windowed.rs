@@ -621,7 +621,7 @@ impl<const CAP: usize> Windowed<CAP> {
             r /= weight.value.larger(start::MIN_WEIGHT);
         }
         let detecting = config.change_detection_step_rad > 0.0;
-        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
+        let horizon = self.residual_horizon();
         let gate = (detecting
             && self.spread_count[pair] >= (horizon / RESIDUAL_PERIODS as u32).max(1))
         .then_some(GATE_SIGMAS);
@@ -697,7 +697,7 @@ impl<const CAP: usize> Windowed<CAP> {
     // Called once, on the step's path.
     #[inline(always)]
     fn learn_spread(&mut self, pair: usize, residual: [Real; 2], gated: bool) {
-        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2).max(1) as u32;
+        let horizon = self.residual_horizon().max(1);
         let learned = self.spread_count[pair];
         let full = SPREAD_HORIZONS * horizon;
         let count = learned.saturating_add(1).min(full);
@@ -712,6 +712,14 @@ impl<const CAP: usize> Windowed<CAP> {
             self.spread_rad2[ch] += weight * (e2 - self.spread_rad2[ch]);
         }
         self.spread_count[pair] = count;
+    }
+
+    /// The residual average's horizon, in updates of a pair: [`RESIDUAL_PERIODS`] periods of
+    /// windows, each pair taking every other one (the count of a pair's residual average
+    /// saturates there).
+    #[inline(always)]
+    fn residual_horizon(&self) -> u32 {
+        (RESIDUAL_PERIODS * self.window.len() / 2) as u32
     }
 
     /// The model's variance of a block mean of the change detector for blocks of `block` entries,
@@ -753,7 +761,7 @@ impl<const CAP: usize> Windowed<CAP> {
         }
         self.block_held[pair] = true;
         let len = self.window.len() as u32;
-        let horizon = (RESIDUAL_PERIODS as u32 * len / 2).max(1);
+        let horizon = self.residual_horizon().max(1);
         let ctx = BlockContext {
             persistence_blocks: persistence_blocks(len, block_entries, entry_s),
             floor_rad2: self.block_floor_rad2(pair, block_entries),
@@ -846,8 +854,7 @@ impl<const CAP: usize> Windowed<CAP> {
             self.residual_count[pair] = 0;
             // What was learned of the noise before the change, the prior of what is learned
             // after it, with the weight of one horizon.
-            let horizon = (RESIDUAL_PERIODS * self.window.len() / 2).max(1) as u32;
-            self.long_count[pair] = self.long_count[pair].min(horizon);
+            self.long_count[pair] = self.long_count[pair].min(self.residual_horizon().max(1));
             self.noise_scale[pair] = 1.0;
             self.drift_share[pair] = 1.0;
         }
@@ -932,7 +939,7 @@ impl<const CAP: usize> Windowed<CAP> {
     // Called once, on the step's path.
     #[inline(always)]
     fn learn_noise_and_drift(&mut self, config: &Config, pair: usize) {
-        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
+        let horizon = self.residual_horizon();
         if self.residual_count[pair] < horizon.max(1) {
             return;
         }
@@ -970,7 +977,7 @@ impl<const CAP: usize> Windowed<CAP> {
     ) -> [Real; 2] {
         // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
         let pair = pair.min(1);
-        let horizon = (RESIDUAL_PERIODS * self.window.len() / 2) as u32;
+        let horizon = self.residual_horizon();
         let count = &mut self.residual_count[pair];
         if average {
             *count = count.saturating_add(1).min(horizon.max(1));
@@ -1073,9 +1080,9 @@ impl<const CAP: usize> Windowed<CAP> {
         // Flag only with a full horizon of residuals: the first windows carry sway residuals of
         // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
         // stays: it is conservative).
-        let horizon = RESIDUAL_PERIODS * self.window.len() / 2;
+        let horizon = self.residual_horizon();
         let mismatch = self.channel_mismatch.iter().any(|m| *m)
-            && self.residual_count.iter().all(|c| *c as usize >= horizon);
+            && self.residual_count.iter().all(|c| *c >= horizon);
         let x = self.kf.state();
         Some(MethodEstimate {
             x_rad: [x[0], x[1], x[2], x[3]],
