@@ -183,16 +183,18 @@
 
 pub mod change;
 pub(crate) mod checkpoint;
+pub mod pair;
 pub mod start;
 
 use crate::config::Config;
 use crate::correlation::{ReferenceFilter, FULL_WEIGHT};
 use crate::gap_fill::{FillVariance, GridSample};
 use crate::kalman::{ConstantStateKalman, KalmanError};
-use crate::math::{sqrt, Compare};
+use crate::math::Compare;
 use crate::moving_average::CorrelationWindow;
 use crate::Real;
 use change::{persistence_blocks, Alarm, BlockContext, ChangeDetector};
+use pair::{channels, Pair, ResidualStats};
 use start::StartTaper;
 
 /// Time constant of the residual average, in rotation periods.
@@ -237,34 +239,10 @@ pub struct Windowed<const CAP: usize> {
     entries_since_update: u32,
     /// The channel pair the next update takes: 0 pitch (x1, x2), 1 roll (x3, x4).
     next_pair: u8,
-    /// Exponential mean of each channel's post-fit residual, rad (see the module doc).
-    residual_mean: [Real; 4],
-    /// Residuals averaged so far per channel pair (saturates at the averaging time).
-    residual_count: [u32; 2],
-    /// Channel gains (diagonal of the rows, about `(1/2, 1/2, cosL/2, cosL/2)`) of the last update,
-    /// for mapping residuals to x.
-    gains: [Real; 4],
-    /// Per-product variance of the pitch and of the roll channels at the last update, rad^2
-    /// (`r` of the module doc, filled samples included).
-    product_variance_rad2: [Real; 2],
-    /// Long exponential mean of each channel's residual mean, rad.
-    residual_mean_long: [Real; 4],
-    /// Long exponential mean of each channel's squared residual mean, over the model's variance of
-    /// that mean (about 1 when the model holds).
-    residual_power: [Real; 4],
-    /// Residual means averaged into the long averages per pair (saturates at their horizon).
-    long_count: [u32; 2],
-    /// Noise scale of each pair: the factor applied to the filter's variance in the reported
-    /// 1-sigma (1 until the long averages start).
-    noise_scale: [Real; 2],
-    /// Share of the configured random walk's variance applied to each pair's errors, in [0, 1]
-    /// (1 until the long averages start).
-    drift_share: [Real; 2],
+    /// What each channel pair learned beside the filter ([`pair`]): pitch, roll.
+    pairs: [Pair; 2],
     /// The detector of changes of the errors ([`change`]).
     change: ChangeDetector,
-    /// Per pair: its updates wait for a block of residuals after a change was declared (see
-    /// "Changes of the errors" in the module doc).
-    relearning: [bool; 2],
     /// The estimate when the change was declared, rad: the residuals of that block are formed
     /// against it; while the first windows' bumps go on ([`start`]), the estimate held at the end
     /// of the last bump.
@@ -274,21 +252,6 @@ pub struct Windowed<const CAP: usize> {
     changed_entries: u32,
     /// Channel measurements held out by the innovation gate.
     gated: u32,
-    /// Each error's reported 1-sigma, rad, refreshed with its pair's updates.
-    reported_sigma_rad: [Real; 4],
-    /// Each channel's residual mean beyond the residual check's bound at its pair's last update.
-    channel_mismatch: [bool; 4],
-    /// The usual spread of each channel's residual, rad^2 (mean square, learned).
-    spread_rad2: [Real; 4],
-    /// Residuals learned into it, per pair (saturates at [`SPREAD_HORIZONS`] horizons).
-    spread_count: [u32; 2],
-    /// Per pair: the filter has held through every update of the current block so far.
-    block_held: [bool; 2],
-    /// Each channel's last block mean, rad, and the rows of the update that ended it.
-    last_block_rad: [Real; 4],
-    last_block_rows: [[Real; 4]; 4],
-    /// Per pair: the filter held through all of its last block.
-    last_block_held: [bool; 2],
     /// Whether the clean state is to be kept at the next update.
     clean_state_due: bool,
     /// The filter and its residual statistics at the end of the last block of the roll pair that
@@ -306,45 +269,19 @@ pub struct Windowed<const CAP: usize> {
 }
 
 /// A copy of what a change or a passing disturbance pulls at before the change detector sees it:
-/// the filter and the residual statistics learned alongside it (the residual means, the long
-/// averages and what they give).
+/// the filter and each pair's residual statistics learned alongside it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CleanState {
     kf: ConstantStateKalman<Real, 4>,
-    residual_mean: [Real; 4],
-    residual_count: [u32; 2],
-    residual_mean_long: [Real; 4],
-    residual_power: [Real; 4],
-    long_count: [u32; 2],
-    noise_scale: [Real; 2],
-    drift_share: [Real; 2],
+    stats: [ResidualStats; 2],
 }
 
 impl CleanState {
     /// A filter of zeros (see [`Windowed::unconfigured`]).
     const UNCONFIGURED: CleanState = CleanState {
         kf: ConstantStateKalman::from_parts([0.0; 4], [[0.0; 4]; 4]),
-        residual_mean: [0.0; 4],
-        residual_count: [0; 2],
-        residual_mean_long: [0.0; 4],
-        residual_power: [0.0; 4],
-        long_count: [0; 2],
-        noise_scale: [0.0; 2],
-        drift_share: [0.0; 2],
+        stats: [ResidualStats::UNCONFIGURED; 2],
     };
-
-    fn new(config: &Config) -> Self {
-        CleanState {
-            kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
-            residual_mean: [0.0; 4],
-            residual_count: [0; 2],
-            residual_mean_long: [0.0; 4],
-            residual_power: [0.0; 4],
-            long_count: [0; 2],
-            noise_scale: [1.0; 2],
-            drift_share: [1.0; 2],
-        }
-    }
 }
 
 /// The estimate of one step: x1..x4, their 1-sigma, whether the model is inconsistent and
@@ -388,28 +325,11 @@ impl<const CAP: usize> Windowed<CAP> {
             updates: 0,
             entries_since_update: 0,
             next_pair: 0,
-            residual_mean: [0.0; 4],
-            residual_count: [0; 2],
-            gains: [0.0; 4],
-            product_variance_rad2: [0.0; 2],
-            residual_mean_long: [0.0; 4],
-            residual_power: [0.0; 4],
-            long_count: [0; 2],
-            noise_scale: [0.0; 2],
-            drift_share: [0.0; 2],
+            pairs: [Pair::UNCONFIGURED; 2],
             change: ChangeDetector::NEW,
-            relearning: [false; 2],
             held_x_rad: [0.0; 4],
             changed_entries: 0,
             gated: 0,
-            reported_sigma_rad: [0.0; 4],
-            channel_mismatch: [false; 4],
-            spread_rad2: [0.0; 4],
-            spread_count: [0; 2],
-            block_held: [true; 2],
-            last_block_rad: [0.0; 4],
-            last_block_rows: [[0.0; 4]; 4],
-            last_block_held: [false; 2],
             clean_state_due: false,
             clean: CleanState::UNCONFIGURED,
             start: StartTaper::Fresh,
@@ -420,44 +340,13 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// Fresh state: empty window, prior covariance.
     pub fn new(config: &Config) -> Self {
-        Windowed {
-            window: CorrelationWindow::new(),
-            reference: ReferenceFilter::default(),
-            kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
-            updates: 0,
-            entries_since_update: 0,
-            next_pair: 0,
-            residual_mean: [0.0; 4],
-            residual_count: [0; 2],
-            gains: [0.5; 4],
-            product_variance_rad2: [0.0; 2],
-            residual_mean_long: [0.0; 4],
-            residual_power: [0.0; 4],
-            long_count: [0; 2],
-            noise_scale: [1.0; 2],
-            drift_share: [1.0; 2],
-            change: ChangeDetector::NEW,
-            relearning: [false; 2],
-            held_x_rad: [0.0; 4],
-            changed_entries: 0,
-            gated: 0,
-            reported_sigma_rad: [config.prior_sigma_rad; 4],
-            channel_mismatch: [false; 4],
-            spread_rad2: [0.0; 4],
-            spread_count: [0; 2],
-            block_held: [true; 2],
-            last_block_rad: [0.0; 4],
-            last_block_rows: [[0.0; 4]; 4],
-            last_block_held: [false; 2],
-            clean_state_due: false,
-            clean: CleanState::new(config),
-            start: StartTaper::Fresh,
-            report: None,
-            held_report_due: false,
-        }
+        let mut w = Self::unconfigured();
+        w.reset(config);
+        w
     }
 
-    /// Back to the state of [`Windowed::new`], in place.
+    /// Back to the state of [`Windowed::new`], in place (the window's ring is not copied). The
+    /// one place that says what a fresh state is.
     pub fn reset(&mut self, config: &Config) {
         self.window.reset();
         self.reference = ReferenceFilter::default();
@@ -465,43 +354,42 @@ impl<const CAP: usize> Windowed<CAP> {
         self.updates = 0;
         self.entries_since_update = 0;
         self.next_pair = 0;
-        self.residual_mean = [0.0; 4];
-        self.residual_count = [0; 2];
-        self.gains = [0.5; 4];
-        self.product_variance_rad2 = [0.0; 2];
-        self.residual_mean_long = [0.0; 4];
-        self.residual_power = [0.0; 4];
-        self.long_count = [0; 2];
-        self.noise_scale = [1.0; 2];
-        self.drift_share = [1.0; 2];
+        self.pairs = [Pair::new(config); 2];
         self.change = ChangeDetector::NEW;
-        self.relearning = [false; 2];
         self.held_x_rad = [0.0; 4];
         self.changed_entries = 0;
         self.gated = 0;
-        self.reported_sigma_rad = [config.prior_sigma_rad; 4];
-        self.channel_mismatch = [false; 4];
-        self.spread_rad2 = [0.0; 4];
-        self.spread_count = [0; 2];
-        self.block_held = [true; 2];
-        self.last_block_rad = [0.0; 4];
-        self.last_block_rows = [[0.0; 4]; 4];
-        self.last_block_held = [false; 2];
         self.clean_state_due = false;
-        self.clean = CleanState::new(config);
+        self.keep_clean_state();
         self.start = StartTaper::Fresh;
         self.report = None;
         self.held_report_due = false;
     }
-
     /// Channel measurements the innovation gate held out so far.
     pub fn gated(&self) -> u32 {
         self.gated
     }
 
     /// The learned mean square of each channel's residual, rad^2 (0 until learned).
-    pub fn residual_spread_rad2(&self) -> &[Real; 4] {
-        &self.spread_rad2
+    pub fn residual_spread_rad2(&self) -> [Real; 4] {
+        let [p, r] = &self.pairs;
+        [
+            p.spread_rad2[0],
+            p.spread_rad2[1],
+            r.spread_rad2[0],
+            r.spread_rad2[1],
+        ]
+    }
+
+    /// Each error's reported 1-sigma, rad, as its pair last refreshed it.
+    fn reported_sigma_rad(&self) -> [Real; 4] {
+        let [p, r] = &self.pairs;
+        [
+            p.reported_sigma_rad[0],
+            p.reported_sigma_rad[1],
+            r.reported_sigma_rad[0],
+            r.reported_sigma_rad[1],
+        ]
     }
 
     /// The detector of changes of the errors.
@@ -514,8 +402,10 @@ impl<const CAP: usize> Windowed<CAP> {
         self.window.configure(period_samples);
         self.entries_since_update = 0;
         self.change.restart_blocks();
-        self.block_held = [true; 2];
-        self.last_block_held = [false; 2];
+        for p in &mut self.pairs {
+            p.block_held = true;
+            p.last_block.held = false;
+        }
     }
 
     /// Adds one sample of weight `weight` to the window (its references low-passed on the way,
@@ -553,7 +443,7 @@ impl<const CAP: usize> Windowed<CAP> {
         }
         self.start.has_held().then_some(MethodEstimate {
             x_rad: self.held_x_rad,
-            sigma_rad: self.reported_sigma_rad,
+            sigma_rad: self.reported_sigma_rad(),
             mismatch: false,
             relearning: false,
         })
@@ -581,7 +471,10 @@ impl<const CAP: usize> Windowed<CAP> {
             .saturating_sub(self.entries_since_update);
         self.entries_since_update = 0;
         let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
-        let (qp, qr) = (q * self.drift_share[0], q * self.drift_share[1]);
+        let (qp, qr) = (
+            q * self.pairs[0].stats.drift_share,
+            q * self.pairs[1].stats.drift_share,
+        );
         self.kf.predict(&[qp, qp, qr, qr]);
         let sums = self.window.sums();
         let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
@@ -592,13 +485,12 @@ impl<const CAP: usize> Windowed<CAP> {
         if sums.weight < full && sums.weight > 0 {
             r0 *= full as Real / sums.weight as Real;
         }
-        let r_pitch = r0 + 0.5 * filled * fill_variance.pitch_rad2;
-        let r_roll = r0 + 0.5 * filled * fill_variance.roll_rad2;
-        self.product_variance_rad2 = [r_pitch, r_roll];
+        self.pairs[0].product_variance_rad2 = r0 + 0.5 * filled * fill_variance.pitch_rad2;
+        self.pairs[1].product_variance_rad2 = r0 + 0.5 * filled * fill_variance.roll_rad2;
         if core::mem::take(&mut self.clean_state_due) && !self.change.holding() {
             self.keep_clean_state();
         }
-        if self.relearning[pair] {
+        if self.pairs[pair].relearning {
             if self.relearn_from_block(pair, &m.rows, &m.z, interval * bin) {
                 self.refresh_report(config, 0);
                 self.refresh_report(config, 1);
@@ -614,7 +506,7 @@ impl<const CAP: usize> Windowed<CAP> {
             self.window.bin(),
             self.updates == 0,
         );
-        let mut r = 0.5 * self.product_variance_rad2[pair];
+        let mut r = 0.5 * self.pairs[pair].product_variance_rad2;
         if weight.value < 1.0 {
             // A window of weight 0 (at the ends of a bump) adds next to nothing, but is taken as
             // every window is: one update a step.
@@ -623,7 +515,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let detecting = config.change_detection_step_rad > 0.0;
         let horizon = self.residual_horizon();
         let gate = (detecting
-            && self.spread_count[pair] >= (horizon / RESIDUAL_PERIODS as u32).max(1))
+            && self.pairs[pair].spread_count >= (horizon / RESIDUAL_PERIODS as u32).max(1))
         .then_some(GATE_SIGMAS);
         // Whether the measurement was taken (applied, or held out by the gate or the detector's
         // hold: its residuals still go on to the checks).
@@ -632,12 +524,12 @@ impl<const CAP: usize> Windowed<CAP> {
             // A change may be building up: the filter waits.
             taken = true;
         } else {
-            for ch in 2 * pair..2 * pair + 2 {
+            for (k, ch) in channels(pair).into_iter().enumerate() {
                 match self.kf.update_gated(
                     &m.rows[ch],
                     m.z[ch],
                     r,
-                    gate.map(|g| (self.spread_rad2[ch], g)),
+                    gate.map(|g| (self.pairs[pair].spread_rad2[k], g)),
                 ) {
                     Ok(_) => applied = true,
                     Err(KalmanError::Gated) => {
@@ -672,12 +564,20 @@ impl<const CAP: usize> Windowed<CAP> {
         // window's residual is then most of its sway (measured: the 1-sigma 20 % too large at
         // 5,000 s on the sea scenario while they were averaged).
         let settled = !self.start.holds();
-        let residual = self.average_residuals(pair, &m.rows, &m.z, applied && settled);
+        let residual = self.pairs[pair].average_residuals(
+            pair,
+            horizon,
+            &m.rows,
+            &m.z,
+            self.kf.state().as_slice(),
+            applied && settled,
+        );
         if applied && settled {
-            self.learn_noise_and_drift(config, pair);
+            let (bin, len) = (self.window.bin(), self.window.len());
+            self.pairs[pair].learn_noise_and_drift(config, bin, len, horizon);
         }
         let (alarm, tested) = if detecting && settled {
-            self.learn_spread(pair, residual, taken);
+            self.pairs[pair].learn_spread(horizon, residual, taken);
             self.detect_change(config, pair, residual, &m.rows, interval * bin)
         } else {
             (None, false)
@@ -688,30 +588,6 @@ impl<const CAP: usize> Windowed<CAP> {
             self.refresh_report(config, pair);
         }
         alarm
-    }
-
-    /// The usual spread of each channel's residuals: a running mean of the squared residual over
-    /// [`SPREAD_HORIZONS`] horizons. A residual the gate held out enters clipped at
-    /// [`SPREAD_CLIP_SIGMAS`] and with the weight of a full average, so that a disturbance cannot
-    /// widen the gate it is being held out by (see "Innovation gate" in the module doc).
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn learn_spread(&mut self, pair: usize, residual: [Real; 2], gated: bool) {
-        let horizon = self.residual_horizon().max(1);
-        let learned = self.spread_count[pair];
-        let full = SPREAD_HORIZONS * horizon;
-        let count = learned.saturating_add(1).min(full);
-        let weight = 1.0 / if gated { full } else { count } as Real;
-        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
-            let e2 = residual[k] * residual[k];
-            let e2 = if learned == 0 {
-                e2
-            } else {
-                e2.smaller(SPREAD_CLIP_SIGMAS * SPREAD_CLIP_SIGMAS * self.spread_rad2[ch])
-            };
-            self.spread_rad2[ch] += weight * (e2 - self.spread_rad2[ch]);
-        }
-        self.spread_count[pair] = count;
     }
 
     /// The residual average's horizon, in updates of a pair: [`RESIDUAL_PERIODS`] periods of
@@ -726,7 +602,8 @@ impl<const CAP: usize> Windowed<CAP> {
     /// rad^2 ([`change::block_variance_factor`]).
     fn block_floor_rad2(&self, pair: usize, block: u32) -> Real {
         let len = self.window.len().max(1) as u32;
-        self.product_variance_rad2[pair] * change::block_variance_factor(len, block) / len as Real
+        self.pairs[pair.min(1)].product_variance_rad2 * change::block_variance_factor(len, block)
+            / len as Real
     }
 
     /// Passes the pair's residuals to the change detector; when it declares a change, the errors
@@ -742,7 +619,10 @@ impl<const CAP: usize> Windowed<CAP> {
         rows: &[[Real; 4]; 4],
         entry_s: Real,
     ) -> (Option<Alarm>, bool) {
-        self.block_held[pair] &= self.change.holding();
+        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
+        let pair = pair.min(1);
+        let holding = self.change.holding();
+        self.pairs[pair].block_held &= holding;
         // A block's updates of a pair: half its entries.
         let block_entries = change::block_entries(self.window.len() as u32, entry_s);
         let Some(block) = self
@@ -752,32 +632,27 @@ impl<const CAP: usize> Windowed<CAP> {
             return (None, false);
         };
         // Kept for learning the errors again, should a change be declared while the filter holds.
-        self.last_block_held[pair] = self.block_held[pair];
-        if self.block_held[pair] {
-            self.last_block_rad[2 * pair] = block[0];
-            self.last_block_rad[2 * pair + 1] = block[1];
-            self.last_block_rows[2 * pair] = rows[2 * pair];
-            self.last_block_rows[2 * pair + 1] = rows[2 * pair + 1];
+        let p = &mut self.pairs[pair];
+        p.last_block.held = p.block_held;
+        if p.block_held {
+            let [a, b] = channels(pair);
+            p.last_block.rad = block;
+            p.last_block.rows = [rows[a], rows[b]];
         }
-        self.block_held[pair] = true;
+        p.block_held = true;
         let len = self.window.len() as u32;
         let horizon = self.residual_horizon().max(1);
         let ctx = BlockContext {
             persistence_blocks: persistence_blocks(len, block_entries, entry_s),
             floor_rad2: self.block_floor_rad2(pair, block_entries),
             step_rad: config.change_detection_step_rad,
-            settled: self.residual_count[pair] >= horizon,
-            armed: self.residual_count.iter().all(|c| *c >= horizon),
+            settled: self.pairs[pair].stats.count >= horizon,
+            armed: self.pairs.iter().all(|p| p.stats.count >= horizon),
             max_widening_rad: config.prior_sigma_rad,
             blocks_per_half_period: change::blocks_per_half_period(len, block_entries),
         };
         let was_holding = self.change.holding();
-        let alarm = self.change.test(
-            pair,
-            block,
-            [self.gains[2 * pair], self.gains[2 * pair + 1]],
-            &ctx,
-        );
+        let alarm = self.change.test(pair, block, self.pairs[pair].gains, &ctx);
         // Kept at the next update: this one has the block's work already.
         self.clean_state_due |= alarm.is_none() && pair == 1 && !self.change.holding();
         if self.change.holding() && !was_holding {
@@ -807,26 +682,18 @@ impl<const CAP: usize> Windowed<CAP> {
     fn keep_clean_state(&mut self) {
         let c = &mut self.clean;
         c.kf.clone_from(&self.kf);
-        c.residual_mean = self.residual_mean;
-        c.residual_count = self.residual_count;
-        c.residual_mean_long = self.residual_mean_long;
-        c.residual_power = self.residual_power;
-        c.long_count = self.long_count;
-        c.noise_scale = self.noise_scale;
-        c.drift_share = self.drift_share;
+        for (kept, p) in c.stats.iter_mut().zip(&self.pairs) {
+            *kept = p.stats;
+        }
     }
 
     /// Goes back to the copy of [`Windowed::keep_clean_state`].
     fn restore_clean_state(&mut self) {
         let c = &self.clean;
         self.kf = c.kf.clone();
-        self.residual_mean = c.residual_mean;
-        self.residual_count = c.residual_count;
-        self.residual_mean_long = c.residual_mean_long;
-        self.residual_power = c.residual_power;
-        self.long_count = c.long_count;
-        self.noise_scale = c.noise_scale;
-        self.drift_share = c.drift_share;
+        for (p, kept) in self.pairs.iter_mut().zip(&c.stats) {
+            p.stats = *kept;
+        }
     }
 
     /// Starts learning the errors `changed` again: their covariance back to the prior, the
@@ -844,26 +711,21 @@ impl<const CAP: usize> Windowed<CAP> {
         self.restore_clean_state();
         self.clean_state_due = false;
         self.kf.forget(changed, config.prior_sigma_rad);
-        for pair in 0..2 {
-            if !(changed[2 * pair] || changed[2 * pair + 1]) {
-                continue;
+        let horizon = self.residual_horizon();
+        for (pair, p) in self.pairs.iter_mut().enumerate() {
+            let [a, b] = channels(pair);
+            if changed[a] || changed[b] {
+                p.stats.relearn(horizon);
             }
-            for ch in 2 * pair..2 * pair + 2 {
-                self.residual_mean[ch] = 0.0;
-            }
-            self.residual_count[pair] = 0;
-            // What was learned of the noise before the change, the prior of what is learned
-            // after it, with the weight of one horizon.
-            self.long_count[pair] = self.long_count[pair].min(self.residual_horizon().max(1));
-            self.noise_scale[pair] = 1.0;
-            self.drift_share[pair] = 1.0;
         }
         let x = self.kf.state();
         self.held_x_rad = [x[0], x[1], x[2], x[3]];
-        self.relearning = [true; 2];
         self.changed_entries = self.window.len() as u32;
         self.change.restart_blocks();
-        self.block_held = [true; 2];
+        for p in &mut self.pairs {
+            p.relearning = true;
+            p.block_held = true;
+        }
         self.refresh_report(config, 0);
         self.refresh_report(config, 1);
     }
@@ -886,22 +748,21 @@ impl<const CAP: usize> Windowed<CAP> {
         z: &[Real; 4],
         entry_s: Real,
     ) -> bool {
+        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
+        let pair = pair.min(1);
         let held = self.held_x_rad;
+        let fit = |row: &[Real; 4]| -> Real { (0..4).map(|i| row[i] * held[i]).sum() };
         let block_entries = change::block_entries(self.window.len() as u32, entry_s);
-        let (block, rows) = if self.last_block_held[pair] {
-            self.last_block_held[pair] = false;
-            (
-                [
-                    self.last_block_rad[2 * pair],
-                    self.last_block_rad[2 * pair + 1],
-                ],
-                self.last_block_rows,
-            )
+        let chs = channels(pair);
+        let (block, rows) = if self.pairs[pair].last_block.held {
+            let last = &mut self.pairs[pair].last_block;
+            last.held = false;
+            (last.rad, last.rows)
         } else {
-            let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
+            let pair_rows = [rows[chs[0]], rows[chs[1]]];
             let residual = [
-                z[2 * pair] - fit(2 * pair),
-                z[2 * pair + 1] - fit(2 * pair + 1),
+                z[chs[0]] - fit(&pair_rows[0]),
+                z[chs[1]] - fit(&pair_rows[1]),
             ];
             let Some(block) = self
                 .change
@@ -909,139 +770,47 @@ impl<const CAP: usize> Windowed<CAP> {
             else {
                 return false;
             };
-            (block, *rows)
+            (block, pair_rows)
         };
-        let fit = |ch: usize| -> Real { (0..4).map(|i| rows[ch][i] * held[i]).sum() };
         let floor = self.block_floor_rad2(pair, block_entries);
         let mut applied = false;
-        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
-            let target = block[k] + fit(ch);
+        let p = &mut self.pairs[pair];
+        for (k, ch) in chs.into_iter().enumerate() {
+            let target = block[k] + fit(&rows[k]);
             applied |= self
                 .kf
                 .update(
-                    &rows[ch],
+                    &rows[k],
                     target,
-                    self.change.block_variance(ch, floor) / self.noise_scale[pair],
+                    self.change.block_variance(ch, floor) / p.stats.noise_scale,
                 )
                 .is_ok();
-            self.gains[ch] = rows[ch][ch].abs();
+            p.gains[k] = rows[k][ch].abs();
         }
         if applied {
             self.updates = self.updates.saturating_add(1);
         }
-        self.relearning[pair] = false;
+        p.relearning = false;
         true
     }
 
-    /// The long averages of the residual means of `pair` and what they give: the pair's noise
-    /// scale and drift share (see "Learning the noise and the drift" in the module doc). Starts
-    /// once a full horizon of residuals has been averaged.
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn learn_noise_and_drift(&mut self, config: &Config, pair: usize) {
-        let horizon = self.residual_horizon();
-        if self.residual_count[pair] < horizon.max(1) {
-            return;
-        }
-        let count = &mut self.long_count[pair];
-        *count = count.saturating_add(1).min(LONG_HORIZONS * horizon.max(1));
-        let alpha = 1.0 / *count as Real;
-        // The model's variance of a residual mean, s_e^2 = r / n (as in `consistency`).
-        let sigma2 =
-            config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
-        let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
-        let inv_s_e2 = n / self.product_variance_rad2[pair].larger(sigma2);
-        let (mut power, mut bias) = (0.0, 0.0);
-        for ch in 2 * pair..2 * pair + 2 {
-            let mean = self.residual_mean[ch];
-            self.residual_mean_long[ch] += alpha * (mean - self.residual_mean_long[ch]);
-            self.residual_power[ch] += alpha * (mean * mean * inv_s_e2 - self.residual_power[ch]);
-            power += self.residual_power[ch];
-            bias += self.residual_mean_long[ch] * self.residual_mean_long[ch] * inv_s_e2;
-        }
-        self.noise_scale[pair] = power.larger(MIN_NOISE_SCALE);
-        let share = if power > 0.0 { bias / power } else { 0.0 };
-        self.drift_share[pair] = ((share - BIAS_SHARE_NOISE)
-            * (1.0 / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE)))
-            .clamp(0.0, 1.0);
-    }
-
-    /// The pair's post-fit residuals (returned, rad), averaged into the residual means when
-    /// `average`.
-    fn average_residuals(
-        &mut self,
-        pair: usize,
-        rows: &[[Real; 4]; 4],
-        z: &[Real; 4],
-        average: bool,
-    ) -> [Real; 2] {
-        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
-        let pair = pair.min(1);
-        let horizon = self.residual_horizon();
-        let count = &mut self.residual_count[pair];
-        if average {
-            *count = count.saturating_add(1).min(horizon.max(1));
-        }
-        let alpha = if average { 1.0 / *count as Real } else { 0.0 };
-        let mut out = [0.0; 2];
-        for (k, ch) in (2 * pair..2 * pair + 2).enumerate() {
-            let fit: Real = (0..4).map(|i| rows[ch][i] * self.kf.state()[i]).sum();
-            let residual = z[ch] - fit;
-            self.residual_mean[ch] += alpha * (residual - self.residual_mean[ch]);
-            self.gains[ch] = rows[ch][ch].abs();
-            out[k] = residual;
-        }
-        out
-    }
-
     /// Refreshes what is reported of the errors of `pair` (after its update, or after anything
-    /// that changed the filter): each error's 1-sigma, the filter's widened by the residual check,
-    /// the lag and the change detector (see the module doc), and whether its channel's residual
-    /// mean is beyond the check's bound. Once per update of the pair, not every step: the other
-    /// pair's report is at most one update old.
+    /// that changed the filter): [`Pair::refresh_report`] with the filter's variance of the pair's
+    /// errors and the change detector's widening. Once per update of the pair, not every step:
+    /// the other pair's report is at most one update old.
     fn refresh_report(&mut self, config: &Config, pair: usize) {
         // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
         let pair = pair.min(1);
-        // The residual mean of a pair averages `count` updates of two entries each, of per-entry
-        // variance `r` (filled samples included); without an update yet, the configured sigma.
-        let sigma2 =
-            config.measurement_sigma_rad * config.measurement_sigma_rad / self.window.bin() as Real;
-        let n = (2 * self.residual_count[pair] as usize).max(self.window.len()) as Real;
-        let s_e2 = self.product_variance_rad2[pair].larger(sigma2) / n;
-        for ch in 2 * pair..2 * pair + 2 {
-            let mean = self.residual_mean[ch];
-            let mut model = 0.0;
-            let mut mismatch = false;
-            // Within 2 sigma: nothing to add, no mismatch (the usual case, without a root).
-            if mean * mean > 4.0 * s_e2 {
-                let s_e = sqrt(s_e2);
-                let excess = (mean.abs() - 2.0 * s_e).larger(0.0);
-                // A bias b on a channel of gain g means an error of about b/g, but never more than
-                // the prior says we could not know anyway: near the pole the gain of x3, x4 is
-                // cos L / 2, about 0, and they are unobservable (their filter 1-sigma stays at the
-                // prior).
-                model = if excess <= 0.0 {
-                    0.0
-                } else if self.gains[ch] > 1e-6 {
-                    (excess / self.gains[ch]).smaller(config.prior_sigma_rad)
-                } else {
-                    config.prior_sigma_rad
-                };
-                mismatch = mean.abs() > 4.0 * s_e;
-            }
-            // The persistent residual mean as a state error (a drift's lag), where a drift is seen.
-            let lag = if self.drift_share[pair] > 0.0 && self.gains[ch] > 1e-6 {
-                (self.residual_mean_long[ch] / self.gains[ch])
-                    .abs()
-                    .smaller(config.prior_sigma_rad)
-            } else {
-                0.0
-            };
-            let m = model.larger(lag).larger(self.change.widening_rad()[ch]);
-            self.reported_sigma_rad[ch] =
-                sqrt(self.noise_scale[pair] * self.kf.covariance()[(ch, ch)].larger(0.0) + m * m);
-            self.channel_mismatch[ch] = mismatch;
-        }
+        let [a, b] = channels(pair);
+        let p = self.kf.covariance();
+        let widening = self.change.widening_rad();
+        self.pairs[pair].refresh_report(
+            config,
+            self.window.bin(),
+            self.window.len(),
+            [p[(a, a)], p[(b, b)]],
+            [widening[a], widening[b]],
+        );
     }
 
     /// The rotation pattern was forgotten (a new one is being learned): the window lets go of the
@@ -1081,14 +850,14 @@ impl<const CAP: usize> Windowed<CAP> {
         // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
         // stays: it is conservative).
         let horizon = self.residual_horizon();
-        let mismatch = self.channel_mismatch.iter().any(|m| *m)
-            && self.residual_count.iter().all(|c| *c >= horizon);
+        let mismatch = self.pairs.iter().any(|p| p.mismatch.iter().any(|m| *m))
+            && self.pairs.iter().all(|p| p.stats.count >= horizon);
         let x = self.kf.state();
         Some(MethodEstimate {
             x_rad: [x[0], x[1], x[2], x[3]],
-            sigma_rad: self.reported_sigma_rad,
+            sigma_rad: self.reported_sigma_rad(),
             mismatch,
-            relearning: self.changed_entries > 0 || self.relearning.iter().any(|r| *r),
+            relearning: self.changed_entries > 0 || self.pairs.iter().any(|p| p.relearning),
         })
     }
 }

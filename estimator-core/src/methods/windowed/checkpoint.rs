@@ -27,6 +27,7 @@
 //! is reported, as then).
 
 use super::change::checkpoint::BlockVariance;
+use super::pair::Pair;
 use super::start::StartTaper;
 use super::Windowed;
 use crate::checkpoint::wire::{Reader, Writer};
@@ -46,29 +47,26 @@ const MAX_NOISE_SCALE: Real = 1.0e30;
 const MAX_PRODUCT_VARIANCE_RAD2: Real = 1.0e7;
 
 /// What a restart keeps of the windowed method (the fields of [`Windowed`] of the same names; the
-/// period during which the status says the errors changed is not kept).
+/// period during which the status says the errors changed is not kept, nor the change detector's
+/// last block of each pair).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Learned {
     updates: u32,
     kf: ConstantStateKalman<Real, 4>,
-    residual_mean: [Real; 4],
     next_pair: u8,
-    residual_count: [u32; 2],
-    gains: [Real; 4],
-    product_variance_rad2: [Real; 2],
-    residual_mean_long: [Real; 4],
-    residual_power: [Real; 4],
-    long_count: [u32; 2],
-    noise_scale: [Real; 2],
-    drift_share: [Real; 2],
-    reported_sigma_rad: [Real; 4],
-    channel_mismatch: [bool; 4],
-    relearning: [bool; 2],
+    pairs: [Pair; 2],
     held_x_rad: [Real; 4],
-    spread_rad2: [Real; 4],
-    spread_count: [u32; 2],
     change: BlockVariance,
     start: StartTaper,
+}
+
+/// What a restart keeps of a pair: all but the change detector's block in progress.
+fn kept(p: &Pair) -> Pair {
+    Pair {
+        block_held: Pair::UNCONFIGURED.block_held,
+        last_block: Pair::UNCONFIGURED.last_block,
+        ..*p
+    }
 }
 
 impl<const CAP: usize> Windowed<CAP> {
@@ -77,22 +75,9 @@ impl<const CAP: usize> Windowed<CAP> {
         Learned {
             updates: self.updates,
             kf: self.kf.clone(),
-            residual_mean: self.residual_mean,
             next_pair: self.next_pair,
-            residual_count: self.residual_count,
-            gains: self.gains,
-            product_variance_rad2: self.product_variance_rad2,
-            residual_mean_long: self.residual_mean_long,
-            residual_power: self.residual_power,
-            long_count: self.long_count,
-            noise_scale: self.noise_scale,
-            drift_share: self.drift_share,
-            reported_sigma_rad: self.reported_sigma_rad,
-            channel_mismatch: self.channel_mismatch,
-            relearning: self.relearning,
+            pairs: [kept(&self.pairs[0]), kept(&self.pairs[1])],
             held_x_rad: self.held_x_rad,
-            spread_rad2: self.spread_rad2,
-            spread_count: self.spread_count,
             change: self.change.learned(),
             // What the image says of the weights: in the bumps or not, and whether one ended.
             start: match self.start {
@@ -108,22 +93,9 @@ impl<const CAP: usize> Windowed<CAP> {
     pub(crate) fn keep_learned(&mut self, l: Learned) {
         self.updates = l.updates;
         self.kf = l.kf;
-        self.residual_mean = l.residual_mean;
         self.next_pair = l.next_pair;
-        self.residual_count = l.residual_count;
-        self.gains = l.gains;
-        self.product_variance_rad2 = l.product_variance_rad2;
-        self.residual_mean_long = l.residual_mean_long;
-        self.residual_power = l.residual_power;
-        self.long_count = l.long_count;
-        self.noise_scale = l.noise_scale;
-        self.drift_share = l.drift_share;
-        self.reported_sigma_rad = l.reported_sigma_rad;
-        self.channel_mismatch = l.channel_mismatch;
-        self.relearning = l.relearning;
+        self.pairs = l.pairs;
         self.held_x_rad = l.held_x_rad;
-        self.spread_rad2 = l.spread_rad2;
-        self.spread_count = l.spread_count;
         self.change.keep_learned(l.change);
         // The window restarts: bumps begun go on at its next full window.
         self.start = l.start;
@@ -154,93 +126,139 @@ impl Stored for Learned {
     type Context<'a> = f64;
 
     fn write(&self, w: &mut Writer<'_>) {
-        let m = self;
-        w.u32(m.updates);
-        m.kf.write(w);
-        for v in m.residual_mean {
+        // Each quantity for both pairs (channels 0-3, pairs 0-1) before the next.
+        let [p, q] = &self.pairs;
+        w.u32(self.updates);
+        self.kf.write(w);
+        for v in p.stats.mean_rad.into_iter().chain(q.stats.mean_rad) {
             w.real(v);
         }
-        w.u8(m.next_pair);
-        for c in m.residual_count {
-            w.u32(c);
-        }
-        for v in m.gains.into_iter().chain(m.product_variance_rad2) {
+        w.u8(self.next_pair);
+        w.u32(p.stats.count);
+        w.u32(q.stats.count);
+        for v in p.gains.into_iter().chain(q.gains) {
             w.real(v);
         }
-        for v in m.residual_mean_long.into_iter().chain(m.residual_power) {
-            w.real(v);
-        }
-        for c in m.long_count {
-            w.u32(c);
-        }
-        for v in m
-            .noise_scale
+        w.real(p.product_variance_rad2);
+        w.real(q.product_variance_rad2);
+        for v in p
+            .stats
+            .mean_long_rad
             .into_iter()
-            .chain(m.drift_share)
-            .chain(m.reported_sigma_rad)
+            .chain(q.stats.mean_long_rad)
         {
             w.real(v);
         }
-        let bits = m
-            .channel_mismatch
+        for v in p.stats.power.into_iter().chain(q.stats.power) {
+            w.real(v);
+        }
+        w.u32(p.stats.long_count);
+        w.u32(q.stats.long_count);
+        for v in [
+            p.stats.noise_scale,
+            q.stats.noise_scale,
+            p.stats.drift_share,
+            q.stats.drift_share,
+        ] {
+            w.real(v);
+        }
+        for v in p.reported_sigma_rad.into_iter().chain(q.reported_sigma_rad) {
+            w.real(v);
+        }
+        let bits = p
+            .mismatch
             .iter()
-            .chain(&m.relearning)
+            .chain(&q.mismatch)
+            .chain([&p.relearning, &q.relearning])
             .enumerate()
             .fold(0u8, |b, (i, f)| b | (u8::from(*f) << i));
-        let start = match m.start {
+        let start = match self.start {
             StartTaper::Restarted { held } => 1 + u8::from(held),
             _ => 0,
         };
         w.u8(bits | start << 6);
-        for v in m.held_x_rad.into_iter().chain(m.spread_rad2) {
+        for v in self
+            .held_x_rad
+            .into_iter()
+            .chain(p.spread_rad2)
+            .chain(q.spread_rad2)
+        {
             w.real(v);
         }
-        for c in m.spread_count {
-            w.u32(c);
-        }
-        m.change.write(w);
+        w.u32(p.spread_count);
+        w.u32(q.spread_count);
+        self.change.write(w);
     }
 
     fn read(r: &mut Reader<'_>, max_variance: f64) -> Result<Learned, CheckpointError> {
         let updates = r.u32();
         let kf = ConstantStateKalman::read(r, max_variance)?;
-        let residual_mean: [Real; 4] = core::array::from_fn(|_| r.real());
-        let next_pair = r.u8();
-        ensure(
-            next_pair <= 1,
-            CheckpointError::InvalidValue(Part::Residuals),
-        )?;
         // One value built in place, then its later fields read into it: a second `Learned`
         // made from this one (`..m`) took its size again on the restore's stack.
         let mut m = Learned {
             updates,
             kf,
-            residual_mean,
-            next_pair,
-            residual_count: [r.u32(), r.u32()],
-            gains: core::array::from_fn(|_| r.real()),
-            product_variance_rad2: core::array::from_fn(|_| r.real()),
-            residual_mean_long: core::array::from_fn(|_| r.real()),
-            residual_power: core::array::from_fn(|_| r.real()),
-            long_count: [r.u32(), r.u32()],
-            noise_scale: core::array::from_fn(|_| r.real()),
-            drift_share: core::array::from_fn(|_| r.real()),
-            reported_sigma_rad: core::array::from_fn(|_| r.real()),
-            channel_mismatch: [false; 4],
-            relearning: [false; 2],
+            next_pair: 0,
+            pairs: [Pair::UNCONFIGURED; 2],
             held_x_rad: [0.0; 4],
-            spread_rad2: [0.0; 4],
-            spread_count: [0; 2],
             change: BlockVariance::default(),
             start: StartTaper::Fresh,
         };
-        let bits = r.u8();
-        m.channel_mismatch = core::array::from_fn(|i| bits & (1 << i) != 0);
-        m.relearning = core::array::from_fn(|i| bits & (1 << (4 + i)) != 0);
-        for v in m.held_x_rad.iter_mut().chain(&mut m.spread_rad2) {
+        let [p, q] = &mut m.pairs;
+        for v in p.stats.mean_rad.iter_mut().chain(&mut q.stats.mean_rad) {
             *v = r.real();
         }
-        m.spread_count = [r.u32(), r.u32()];
+        m.next_pair = r.u8();
+        ensure(
+            m.next_pair <= 1,
+            CheckpointError::InvalidValue(Part::Residuals),
+        )?;
+        p.stats.count = r.u32();
+        q.stats.count = r.u32();
+        for v in p.gains.iter_mut().chain(&mut q.gains) {
+            *v = r.real();
+        }
+        p.product_variance_rad2 = r.real();
+        q.product_variance_rad2 = r.real();
+        for v in p
+            .stats
+            .mean_long_rad
+            .iter_mut()
+            .chain(&mut q.stats.mean_long_rad)
+        {
+            *v = r.real();
+        }
+        for v in p.stats.power.iter_mut().chain(&mut q.stats.power) {
+            *v = r.real();
+        }
+        p.stats.long_count = r.u32();
+        q.stats.long_count = r.u32();
+        p.stats.noise_scale = r.real();
+        q.stats.noise_scale = r.real();
+        p.stats.drift_share = r.real();
+        q.stats.drift_share = r.real();
+        for v in p
+            .reported_sigma_rad
+            .iter_mut()
+            .chain(&mut q.reported_sigma_rad)
+        {
+            *v = r.real();
+        }
+        let bits = r.u8();
+        p.mismatch = core::array::from_fn(|i| bits & (1 << i) != 0);
+        q.mismatch = core::array::from_fn(|i| bits & (1 << (2 + i)) != 0);
+        p.relearning = bits & (1 << 4) != 0;
+        q.relearning = bits & (1 << 5) != 0;
+        for v in m
+            .held_x_rad
+            .iter_mut()
+            .chain(&mut p.spread_rad2)
+            .chain(&mut q.spread_rad2)
+        {
+            *v = r.real();
+        }
+        p.spread_count = r.u32();
+        q.spread_count = r.u32();
         m.change = BlockVariance::read(r, ())?;
         m.start = match bits >> 6 {
             0 => StartTaper::Fresh,
@@ -249,7 +267,7 @@ impl Stored for Learned {
             _ => return Err(CheckpointError::InvalidValue(Part::Residuals)),
         };
         ensure(
-            residuals_in_range(&m),
+            m.pairs.iter().all(residuals_in_range),
             CheckpointError::InvalidValue(Part::Residuals),
         )?;
         let state = MAX_STATE as Real;
@@ -261,20 +279,22 @@ impl Stored for Learned {
     }
 }
 
-/// Whether the residual statistics of `m` are finite and within their bounds. Out of line: 48 bytes
-/// less flash than written into the reader above (the restore's stack is the same either way).
+/// Whether the residual statistics of a pair are finite and within their bounds. Out of line: 48
+/// bytes less flash than written into the reader above (the restore's stack is the same either
+/// way).
 #[inline(never)]
-fn residuals_in_range(m: &Learned) -> bool {
+fn residuals_in_range(p: &Pair) -> bool {
     let residual = MAX_RESIDUAL as Real;
-    all_within(&m.residual_mean, -residual, residual)
-        && all_within(&m.gains, 0.0, 4.0)
-        && all_within(&m.product_variance_rad2, 0.0, MAX_PRODUCT_VARIANCE_RAD2)
-        && all_within(&m.residual_mean_long, -residual, residual)
-        && all_within(&m.residual_power, 0.0, MAX_NOISE_SCALE)
-        && all_within(&m.noise_scale, 0.0, MAX_NOISE_SCALE)
-        && all_within(&m.drift_share, 0.0, 1.0)
-        && all_within(&m.reported_sigma_rad, 0.0, Real::MAX)
-        && all_within(&m.spread_rad2, 0.0, residual * residual)
+    let s = &p.stats;
+    all_within(&s.mean_rad, -residual, residual)
+        && all_within(&p.gains, 0.0, 4.0)
+        && all_within(&[p.product_variance_rad2], 0.0, MAX_PRODUCT_VARIANCE_RAD2)
+        && all_within(&s.mean_long_rad, -residual, residual)
+        && all_within(&s.power, 0.0, MAX_NOISE_SCALE)
+        && all_within(&[s.noise_scale], 0.0, MAX_NOISE_SCALE)
+        && all_within(&[s.drift_share], 0.0, 1.0)
+        && all_within(&p.reported_sigma_rad, 0.0, Real::MAX)
+        && all_within(&p.spread_rad2, 0.0, residual * residual)
 }
 
 #[cfg(test)]
@@ -299,11 +319,11 @@ mod tests {
         };
         assert_eq!(with(&|_| {}), Ok(base.clone()));
         assert_eq!(
-            with(&|m| m.gains[3] = -0.5),
+            with(&|m| m.pairs[1].gains[1] = -0.5),
             Err(InvalidValue(Part::Residuals))
         );
         assert_eq!(
-            with(&|m| m.gains[1] = Real::NAN),
+            with(&|m| m.pairs[0].gains[1] = Real::NAN),
             Err(InvalidValue(Part::Residuals))
         );
         assert_eq!(
@@ -311,39 +331,39 @@ mod tests {
             Err(InvalidValue(Part::Residuals))
         );
         assert_eq!(
-            with(&|m| m.drift_share[0] = 1.5),
+            with(&|m| m.pairs[0].stats.drift_share = 1.5),
             Err(InvalidValue(Part::Residuals))
         );
         // Regression, fuzz target `checkpoint_restore`: finite but absurd residuals and gains
         // (a flipped top byte) were accepted and overflowed the outputs.
         assert_eq!(
-            with(&|m| m.residual_mean[2] = 1e30),
+            with(&|m| m.pairs[1].stats.mean_rad[0] = 1e30),
             Err(InvalidValue(Part::Residuals))
         );
         assert_eq!(
-            with(&|m| m.gains[0] = 1e30),
+            with(&|m| m.pairs[0].gains[0] = 1e30),
             Err(InvalidValue(Part::Residuals))
         );
         // A zero gain (a window whose reference does not move) is a state the estimator can be in.
-        assert!(with(&|m| m.gains[3] = 0.0).is_ok());
+        assert!(with(&|m| m.pairs[1].gains[1] = 0.0).is_ok());
         // What the report and the change detector keep.
         assert_eq!(
-            with(&|m| m.reported_sigma_rad[1] = -1e-6),
+            with(&|m| m.pairs[0].reported_sigma_rad[1] = -1e-6),
             Err(InvalidValue(Part::Residuals))
         );
         assert_eq!(
-            with(&|m| m.reported_sigma_rad[2] = Real::INFINITY),
+            with(&|m| m.pairs[1].reported_sigma_rad[0] = Real::INFINITY),
             Err(InvalidValue(Part::Residuals))
         );
         assert_eq!(
-            with(&|m| m.spread_rad2[0] = -1e-9),
+            with(&|m| m.pairs[0].spread_rad2[0] = -1e-9),
             Err(InvalidValue(Part::Residuals))
         );
         assert_eq!(
             with(&|m| m.held_x_rad[3] = 1e9),
             Err(InvalidValue(Part::ChangeDetector))
         );
-        assert!(with(&|m| m.relearning = [true, false]).is_ok());
+        assert!(with(&|m| m.pairs[0].relearning = true).is_ok());
         // In the first windows' bumps, with an estimate held (flag bits 6-7).
         assert_eq!(
             with(&|m| m.start = StartTaper::Restarted { held: true }).map(|m| m.start),
