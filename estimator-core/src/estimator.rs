@@ -97,6 +97,15 @@ impl Feed {
 pub struct Estimator<const CAP: usize = DEFAULT_CAPACITY> {
     config: Config,
     method: MethodState<CAP>,
+    /// Everything else a step changes.
+    run: RunState,
+}
+
+/// What the estimator keeps besides its configuration and its method: the sample grid, the gap
+/// filler, the rotation monitor, the sway gate, the status and the counters. One value made by
+/// [`RunState::new`], so that every way of making or resetting an estimator starts it the same.
+#[derive(Clone, Debug, PartialEq)]
+struct RunState {
     grid: TimeGrid,
     /// Grid index of the last accepted sample, once the grid is known.
     index: u32,
@@ -118,6 +127,29 @@ pub struct Estimator<const CAP: usize = DEFAULT_CAPACITY> {
     error_change: Option<ErrorChange>,
 }
 
+impl RunState {
+    /// Nothing seen yet under `config`. Inlined, so that [`Estimator::init_in`] writes it into its
+    /// place rather than building it on the stack (the gap filler's delay line is most of it).
+    #[inline(always)]
+    fn new(config: &Config) -> RunState {
+        RunState {
+            grid: TimeGrid::new(config.sample_interval_s),
+            index: 0,
+            feed: None,
+            filler: GapFiller::new(),
+            rotation: RotationMonitor::new(None),
+            latitude_trig: (0.0, 0.0, 1.0),
+            sway: SwayMonitor::NEW,
+            gate_open: config.sway_gate_rad == 0.0,
+            window_status: Status::DetectingPattern,
+            fault: None,
+            rejected: RejectCounts::ZERO,
+            counters: Counters::ZERO,
+            error_change: None,
+        }
+    }
+}
+
 impl Estimator<DEFAULT_CAPACITY> {
     /// [`Estimator::step`] at the default capacity, compiled in this crate at its own optimisation
     /// level. A firmware built for size calls this one: the step, its hot path, keeps the speed
@@ -132,23 +164,10 @@ impl<const CAP: usize> Estimator<CAP> {
     /// A fresh estimator, or why the configuration cannot run.
     pub fn new(config: Config) -> Result<Self, ConfigError> {
         config.check(CAP)?;
-        let (s, c) = sin_cos(0.0);
         Ok(Estimator {
             config,
             method: MethodState::new(&config),
-            grid: TimeGrid::new(config.sample_interval_s),
-            index: 0,
-            feed: None,
-            filler: GapFiller::default(),
-            rotation: RotationMonitor::new(None),
-            latitude_trig: (0.0, s, c),
-            sway: SwayMonitor::default(),
-            gate_open: config.sway_gate_rad == 0.0,
-            window_status: Status::DetectingPattern,
-            fault: None,
-            rejected: RejectCounts::default(),
-            counters: Counters::default(),
-            error_change: None,
+            run: RunState::new(&config),
         })
     }
 
@@ -175,27 +194,15 @@ impl<const CAP: usize> Estimator<CAP> {
     ) -> Result<&mut Self, ConfigError> {
         config.check(CAP)?;
         let p = slot.as_mut_ptr();
-        // SAFETY: every field of `*p` is written (through raw pointers, never read) before `p` is
-        // made a reference; each write stores a small value, or, for the method, the windowed
-        // method's state whose ring is uninitialised (`heapless::Deque::new` stores nothing in it).
+        // SAFETY: each of the three fields of `*p` is written (through raw pointers, never read)
+        // before `p` is made a reference: the configuration, the windowed method's state whose
+        // ring is uninitialised (`heapless::Deque::new` stores nothing in it) and the run state.
         let estimator = unsafe {
             addr_of_mut!((*p).config).write(config);
             addr_of_mut!((*p).method).write(MethodState::Windowed(
                 crate::methods::Windowed::unconfigured(),
             ));
-            addr_of_mut!((*p).grid).write(TimeGrid::new(None));
-            addr_of_mut!((*p).index).write(0);
-            addr_of_mut!((*p).feed).write(None);
-            addr_of_mut!((*p).filler).write(GapFiller::new());
-            addr_of_mut!((*p).rotation).write(RotationMonitor::new(None));
-            addr_of_mut!((*p).latitude_trig).write((0.0, 0.0, 1.0));
-            addr_of_mut!((*p).sway).write(SwayMonitor::NEW);
-            addr_of_mut!((*p).gate_open).write(false);
-            addr_of_mut!((*p).window_status).write(Status::DetectingPattern);
-            addr_of_mut!((*p).fault).write(None);
-            addr_of_mut!((*p).rejected).write(RejectCounts::ZERO);
-            addr_of_mut!((*p).counters).write(Counters::ZERO);
-            addr_of_mut!((*p).error_change).write(None);
+            addr_of_mut!((*p).run).write(RunState::new(&config));
             slot.assume_init_mut()
         };
         // The windowed method resets in place; another method's state is built by value (see
@@ -207,10 +214,10 @@ impl<const CAP: usize> Estimator<CAP> {
     /// Forgets everything learnt (keeps the configuration and the rejection counters). In place:
     /// nothing the size of the estimator passes through the stack.
     pub fn reset(&mut self) {
-        let rejected = self.rejected;
+        let rejected = self.run.rejected;
         // The configuration passed its check when this estimator was made.
         if self.reinit(self.config).is_ok() {
-            self.rejected = rejected;
+            self.run.rejected = rejected;
         }
     }
 
@@ -220,21 +227,8 @@ impl<const CAP: usize> Estimator<CAP> {
     pub(crate) fn reinit(&mut self, config: Config) -> Result<(), ConfigError> {
         config.check(CAP)?;
         self.method.reset(&config);
-        let (s, c) = sin_cos(0.0);
         self.config = config;
-        self.grid = TimeGrid::new(config.sample_interval_s);
-        self.index = 0;
-        self.feed = None;
-        self.filler = GapFiller::default();
-        self.rotation = RotationMonitor::new(None);
-        self.latitude_trig = (0.0, s, c);
-        self.sway = SwayMonitor::default();
-        self.gate_open = config.sway_gate_rad == 0.0;
-        self.window_status = Status::DetectingPattern;
-        self.fault = None;
-        self.rejected = RejectCounts::default();
-        self.counters = Counters::default();
-        self.error_change = None;
+        self.run = RunState::new(&config);
         Ok(())
     }
 
@@ -245,34 +239,37 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// Rejected samples by reason.
     pub fn rejected(&self) -> RejectCounts {
-        self.rejected
+        self.run.rejected
     }
 
     /// What has been counted.
     pub fn counters(&self) -> Counters {
-        self.counters
+        self.run.counters
     }
 
     /// The sample interval, s, once pinned or learned.
     pub fn sample_interval_s(&self) -> Option<f64> {
-        self.grid.interval_s()
+        self.run.grid.interval_s()
     }
 
     /// The time stamp of the last accepted sample, s.
     pub fn last_sample_time_s(&self) -> Option<f64> {
-        self.grid.last_stamp_s()
+        self.run.grid.last_stamp_s()
     }
 
     /// The rotation pattern as far as it is known.
     pub fn rotation(&self) -> RotationSummary {
-        let period_s = match (self.rotation.period_samples(), self.grid.interval_s()) {
-            (Some(p), Some(dt)) if self.feed.is_some() => Some(f64::from(p) * dt),
+        let period_s = match (
+            self.run.rotation.period_samples(),
+            self.run.grid.interval_s(),
+        ) {
+            (Some(p), Some(dt)) if self.run.feed.is_some() => Some(f64::from(p) * dt),
             _ => None,
         };
         RotationSummary {
             period_s,
             pinned: self.config.rotation_period_s.is_some(),
-            kind: self.rotation.features().map(|f| f.kind()),
+            kind: self.run.rotation.features().map(|f| f.kind()),
             samples_per_entry: match &self.method {
                 MethodState::Windowed(m) => m.window().bin(),
                 #[allow(unreachable_patterns)]
@@ -283,16 +280,17 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// What holds the estimate back, if anything does.
     pub fn progress(&self) -> Option<Holdup> {
-        if !self.gate_open {
+        if !self.run.gate_open {
             return Some(Holdup::WaitingForSway);
         }
-        if self.grid.interval_s().is_none() {
+        if self.run.grid.interval_s().is_none() {
             return Some(Holdup::SampleIntervalNotKnown);
         }
-        if self.rotation.period_samples().is_none() {
+        if self.run.rotation.period_samples().is_none() {
             return Some(Holdup::RotationPeriodNotDetected);
         }
-        if let (Status::RotationFault(fault), Some((_, since_s))) = (self.window_status, self.fault)
+        if let (Status::RotationFault(fault), Some((_, since_s))) =
+            (self.run.window_status, self.run.fault)
         {
             return Some(Holdup::RotationFault { fault, since_s });
         }
@@ -320,7 +318,7 @@ impl<const CAP: usize> Estimator<CAP> {
     /// The last change of the installation errors declared (windowed method), if any: when, and
     /// which errors are learned again.
     pub fn error_change(&self) -> Option<ErrorChange> {
-        self.error_change
+        self.run.error_change
     }
 
     /// The current estimate, if any.
@@ -333,28 +331,31 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// Processes one sample. On error nothing changes but the rejection counter.
     pub fn step(&mut self, sample: &Sample) -> Result<Output, SampleError> {
-        let placement = match sample.check().and_then(|()| self.grid.place(sample.time_s)) {
+        let placement = match sample
+            .check()
+            .and_then(|()| self.run.grid.place(sample.time_s))
+        {
             Ok(p) => p,
             Err(e) => {
-                self.rejected.count(e.reason());
+                self.run.rejected.count(e.reason());
                 return Err(e);
             }
         };
-        self.grid.accept(sample.time_s, placement);
-        self.counters.accepted = self.counters.accepted.saturating_add(1);
+        self.run.grid.accept(sample.time_s, placement);
+        self.run.counters.accepted = self.run.counters.accepted.saturating_add(1);
         if placement == Placement::ClockStep {
-            self.counters.clock_steps = self.counters.clock_steps.saturating_add(1);
+            self.run.counters.clock_steps = self.run.counters.clock_steps.saturating_add(1);
         }
         let angles = self.angles(sample);
-        self.sway.observe(sample.attitude.roll_rad);
-        if !self.gate_open && self.sway.opens(self.config.sway_gate_rad) {
-            self.gate_open = true;
+        self.run.sway.observe(sample.attitude.roll_rad);
+        if !self.run.gate_open && self.run.sway.opens(self.config.sway_gate_rad) {
+            self.run.gate_open = true;
         }
-        let status = match self.grid.interval_s() {
-            Some(interval_s) if self.gate_open => {
+        let status = match self.run.grid.interval_s() {
+            Some(interval_s) if self.run.gate_open => {
                 self.feed(sample, &angles, placement, interval_s, sample.time_s)
             }
-            _ if !self.gate_open => Status::WaitingForSway,
+            _ if !self.run.gate_open => Status::WaitingForSway,
             _ => Status::DetectingPattern,
         };
         let estimate = self.method.estimate(&self.config);
@@ -409,7 +410,7 @@ impl<const CAP: usize> Estimator<CAP> {
         interval_s: f64,
         stamp_s: f64,
     ) -> Status {
-        let (feed, restart) = match self.feed {
+        let (feed, restart) = match self.run.feed {
             None => (self.start_feeding(interval_s), false),
             Some(feed) => {
                 let (step, restart) = match placement {
@@ -419,12 +420,12 @@ impl<const CAP: usize> Estimator<CAP> {
                     ),
                     Placement::Learning | Placement::ClockStep => (1, true),
                 };
-                self.index = self.index.wrapping_add(step);
+                self.run.index = self.run.index.wrapping_add(step);
                 (feed, restart)
             }
         };
         let grid_sample = GridSample {
-            index: self.index,
+            index: self.run.index,
             roll_rad: sample.attitude.roll_rad,
             pitch_rad: sample.attitude.pitch_rad,
             rotation_rad: sample.rotation_rad,
@@ -433,10 +434,11 @@ impl<const CAP: usize> Estimator<CAP> {
             angles: *angles,
             fill_weight: 0,
         };
-        self.filler
+        self.run
+            .filler
             .push(&grid_sample, restart, self.config.max_filled_gap_samples);
         self.take(&feed, stamp_s);
-        self.window_status
+        self.run.window_status
     }
 
     /// Lost rows in a row from which the window restarts rather than leaving them out: an eighth
@@ -445,7 +447,7 @@ impl<const CAP: usize> Estimator<CAP> {
     /// for the first window, and gaps must not restart the period's detection).
     fn restart_gap_samples(&self, feed: &Feed) -> u32 {
         let fill = self.config.max_filled_gap_samples + 1;
-        match self.rotation.period_samples() {
+        match self.run.rotation.period_samples() {
             Some(p) => (p / 8).max(fill),
             None => (feed.limits.min_period_samples / 2).max(fill),
         }
@@ -455,22 +457,22 @@ impl<const CAP: usize> Estimator<CAP> {
     /// starts (with the pinned period in samples, if any, and the window set to it).
     fn start_feeding(&mut self, interval_s: f64) -> Feed {
         let feed = Feed::new(interval_s, &self.config);
-        self.feed = Some(feed);
-        self.index = 0;
+        self.run.feed = Some(feed);
+        self.run.index = 0;
         let pinned = self
             .config
             .rotation_period_s
             .map(|t| libm::round(t / interval_s).max(2.0) as u32);
-        self.rotation = RotationMonitor::new(pinned);
+        self.run.rotation = RotationMonitor::new(pinned);
         if let Some(p) = pinned {
             self.method.configure(p);
         }
-        self.window_status = Status::DetectingPattern;
+        self.run.window_status = Status::DetectingPattern;
         feed
     }
 
     /// The window takes what the filler passes on, then the filter updates once. `stamp_s` is the
-    /// time stamp of the newest sample received (at grid index `self.index`).
+    /// time stamp of the newest sample received (at grid index `self.run.index`).
     ///
     /// # Bounded work a step
     /// Normally one sample comes out of the filler a step and the window takes it, removing the
@@ -489,11 +491,11 @@ impl<const CAP: usize> Estimator<CAP> {
         let mut took = 0;
         let mut filled = false;
         while took < MAX_SAMPLES_PER_STEP && work < MAX_WORK_PER_STEP {
-            if took > 0 && (filled || self.filler.backlog() == 0) {
+            if took > 0 && (filled || self.run.filler.backlog() == 0) {
                 break;
             }
             // A second sample is never a filled one (a fill is the costliest sample).
-            let Some(passed) = self.filler.pass_on(took == 0) else {
+            let Some(passed) = self.run.filler.pass_on(took == 0) else {
                 break;
             };
             filled = passed.sample.fill_weight > 0;
@@ -504,7 +506,7 @@ impl<const CAP: usize> Estimator<CAP> {
         if took > 0 && work <= 2 && !filled {
             if let Some(alarm) =
                 self.method
-                    .update(&self.config, feed, self.filler.single_fill_variance())
+                    .update(&self.config, feed, self.run.filler.single_fill_variance())
             {
                 self.record_error_change(&alarm, feed, stamp_s);
             }
@@ -521,7 +523,7 @@ impl<const CAP: usize> Estimator<CAP> {
         // The run's first block began `run_blocks` blocks of half a window before this update.
         let entry_s = feed.interval_s * f64::from(self.rotation().samples_per_entry);
         let window_s = entry_s * self.method.window_len() as f64;
-        self.error_change = Some(ErrorChange {
+        self.run.error_change = Some(ErrorChange {
             detected_s: stamp_s,
             seen_since_s: stamp_s - f64::from(alarm.run_blocks) * 0.5 * window_s,
             relearned: alarm.changed,
@@ -533,27 +535,30 @@ impl<const CAP: usize> Estimator<CAP> {
         let s = &passed.sample;
         if passed.restart {
             self.restart_window();
-            self.rotation.restart();
+            self.run.rotation.restart();
         }
         if s.fill_weight > 0 {
-            self.counters.filled = self.counters.filled.saturating_add(1);
+            self.run.counters.filled = self.run.counters.filled.saturating_add(1);
         }
-        let observed = self.rotation.observe(s.index, s.rotation_rad, &feed.limits);
-        if self.rotation.period_samples().is_none() {
+        let observed = self
+            .run
+            .rotation
+            .observe(s.index, s.rotation_rad, &feed.limits);
+        if self.run.rotation.period_samples().is_none() {
             // The pattern is being learned anew: no window of the old period goes on filling.
             self.method.forget_period();
         }
         match observed {
             Err(fault) => {
-                if !matches!(self.window_status, Status::RotationFault(_)) {
-                    let behind = f64::from(self.index.wrapping_sub(s.index));
-                    self.fault = Some((fault, stamp_s - behind * feed.interval_s));
+                if !matches!(self.run.window_status, Status::RotationFault(_)) {
+                    let behind = f64::from(self.run.index.wrapping_sub(s.index));
+                    self.run.fault = Some((fault, stamp_s - behind * feed.interval_s));
                 }
                 self.restart_window();
                 if fault != RotationFault::RateMismatch {
-                    self.rotation.after_fault();
+                    self.run.rotation.after_fault();
                 }
-                self.window_status = Status::RotationFault(fault);
+                self.run.window_status = Status::RotationFault(fault);
                 return 0;
             }
             Ok(PatternEvent::PeriodKnown(period)) => self.method.configure(period),
@@ -566,9 +571,9 @@ impl<const CAP: usize> Estimator<CAP> {
             feed,
             s,
             passed.weight,
-            self.rotation.period_samples().is_some(),
+            self.run.rotation.period_samples().is_some(),
         );
-        self.window_status = if self.rotation.period_samples().is_none() {
+        self.run.window_status = if self.run.rotation.period_samples().is_none() {
             Status::DetectingPattern
         } else if self.method.window_full() {
             Status::Estimating
@@ -580,8 +585,8 @@ impl<const CAP: usize> Estimator<CAP> {
 
     fn restart_window(&mut self) {
         self.method.restart_window();
-        self.counters.window_restarts = self.counters.window_restarts.saturating_add(1);
-        self.window_status = if self.rotation.period_samples().is_some() {
+        self.run.counters.window_restarts = self.run.counters.window_restarts.saturating_add(1);
+        self.run.window_status = if self.run.rotation.period_samples().is_some() {
             Status::WarmingUp
         } else {
             Status::DetectingPattern
@@ -589,14 +594,14 @@ impl<const CAP: usize> Estimator<CAP> {
     }
 
     fn angles(&mut self, sample: &Sample) -> Angles {
-        if sample.latitude_rad != self.latitude_trig.0 {
+        if sample.latitude_rad != self.run.latitude_trig.0 {
             let (s, c) = sin_cos(sample.latitude_rad);
-            self.latitude_trig = (sample.latitude_rad, s, c);
+            self.run.latitude_trig = (sample.latitude_rad, s, c);
         }
         Angles::new(
             sample.rotation_rad,
             sample.platform_rad,
-            (self.latitude_trig.1, self.latitude_trig.2),
+            (self.run.latitude_trig.1, self.run.latitude_trig.2),
         )
     }
 }
@@ -605,13 +610,13 @@ impl<const CAP: usize> Estimator<CAP> {
 #[cfg(test)]
 impl<const CAP: usize> Estimator<CAP> {
     pub(crate) fn grid_for_test(&self) -> TimeGrid {
-        self.grid
+        self.run.grid
     }
     pub(crate) fn rotation_for_test(&self) -> RotationMonitor {
-        self.rotation
+        self.run.rotation
     }
     pub(crate) fn filler_for_test(&self) -> &GapFiller {
-        &self.filler
+        &self.run.filler
     }
     pub(crate) fn method_for_test(&self) -> &MethodState<CAP> {
         &self.method

@@ -74,13 +74,13 @@ impl<const CAP: usize> Estimator<CAP> {
         write_header(&mut w, self.config.method);
         self.config.write(&mut w);
         Running::of(self).write(&mut w);
-        self.grid.write(&mut w);
+        self.run.grid.write(&mut w);
         // Without its sample history, which a restored monitor forgets (so that an image restored
         // and written again is the same image).
-        let mut rotation = self.rotation;
+        let mut rotation = self.run.rotation;
         rotation.restart();
         rotation.write(&mut w);
-        self.filler.fill_error().write(&mut w);
+        self.run.filler.fill_error().write(&mut w);
         self.method.learned().write(&mut w);
         debug_assert_eq!(w.pos(), PARTS_END);
         seal(image);
@@ -144,12 +144,12 @@ fn read_parts<const CAP: usize>(
     }
     let grid = TimeGrid::read(&mut r, &config)?;
     if let Some(e) = target.as_deref_mut() {
-        e.grid = grid;
+        e.run.grid = grid;
     }
     let period = read_rotation(&mut r, &config, target.as_deref_mut())?;
     let fill = FillError::read(&mut r, ())?;
     if let Some(e) = target.as_deref_mut() {
-        e.filler.keep_fill_error(fill);
+        e.run.filler.keep_fill_error(fill);
     }
     read_method_part(&mut r, &config, target, period)?;
     let padding_start = r.pos();
@@ -170,7 +170,7 @@ fn read_rotation<const CAP: usize>(
     rotation.restart();
     let period = rotation.period_samples();
     if let Some(e) = target {
-        e.rotation = rotation;
+        e.run.rotation = rotation;
     }
     Ok(period)
 }
@@ -189,10 +189,10 @@ fn read_method_part<const CAP: usize>(
     let method_part = MethodPart::read(r, config)?;
     if let Some(e) = target {
         e.method.keep_learned(method_part);
-        if let (Some(_), Some(p)) = (e.feed, period) {
+        if let (Some(_), Some(p)) = (e.run.feed, period) {
             e.method.configure(p);
         }
-        e.window_status = if period.is_some() {
+        e.run.window_status = if period.is_some() {
             Status::WarmingUp
         } else {
             Status::DetectingPattern
@@ -217,27 +217,27 @@ struct Running {
 impl Running {
     /// Hands the part over to an estimator reset to the image's configuration.
     fn apply<const CAP: usize>(&self, e: &mut Estimator<CAP>) {
-        e.index = self.index;
+        e.run.index = self.index;
         // The constants are derived from the interval alone, exactly as when they were fixed.
-        e.feed = self.feed_interval_s.map(|d| Feed::new(d, &e.config));
-        e.gate_open = self.gate_open;
-        e.fault = self.fault;
-        e.sway = self.sway;
-        e.rejected = self.rejected;
-        e.counters = self.counters;
-        e.error_change = self.error_change;
+        e.run.feed = self.feed_interval_s.map(|d| Feed::new(d, &e.config));
+        e.run.gate_open = self.gate_open;
+        e.run.fault = self.fault;
+        e.run.sway = self.sway;
+        e.run.rejected = self.rejected;
+        e.run.counters = self.counters;
+        e.run.error_change = self.error_change;
     }
 
     fn of<const CAP: usize>(e: &Estimator<CAP>) -> Running {
         Running {
-            index: e.index,
-            feed_interval_s: e.feed.map(|f| f.interval_s),
-            gate_open: e.gate_open,
-            fault: e.fault,
-            sway: e.sway,
-            rejected: e.rejected,
-            counters: e.counters,
-            error_change: e.error_change,
+            index: e.run.index,
+            feed_interval_s: e.run.feed.map(|f| f.interval_s),
+            gate_open: e.run.gate_open,
+            fault: e.run.fault,
+            sway: e.run.sway,
+            rejected: e.run.rejected,
+            counters: e.run.counters,
+            error_change: e.run.error_change,
         }
     }
 }
@@ -382,11 +382,11 @@ mod tests {
                 written_and_read(&Running::of(&est), ()),
                 Ok(Running::of(&est))
             );
-            assert_eq!(written_and_read(&est.grid, &config), Ok(est.grid));
-            assert_eq!(written_and_read(&est.rotation, &config), Ok(est.rotation));
+            assert_eq!(written_and_read(&est.run.grid, &config), Ok(est.run.grid));
+            assert_eq!(written_and_read(&est.run.rotation, &config), Ok(est.run.rotation));
             assert_eq!(
-                written_and_read(&est.filler.fill_error(), ()),
-                Ok(est.filler.fill_error())
+                written_and_read(&est.run.filler.fill_error(), ()),
+                Ok(est.run.filler.fill_error())
             );
             assert_eq!(
                 written_and_read(&est.method.learned(), &config),

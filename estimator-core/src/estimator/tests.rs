@@ -73,10 +73,10 @@ fn bad_samples_are_rejected_by_reason_and_change_nothing_else() {
     for (s, expected) in bad {
         let before = est.clone();
         assert_eq!(est.step(&s), Err(expected));
-        let counted = est.rejected.of(expected.reason());
-        assert_eq!(counted, before.rejected.of(expected.reason()) + 1);
+        let counted = est.run.rejected.of(expected.reason());
+        assert_eq!(counted, before.run.rejected.of(expected.reason()) + 1);
         let mut restored = est.clone();
-        restored.rejected = before.rejected;
+        restored.run.rejected = before.run.rejected;
         assert!(restored == before, "state changed by {expected:?}");
     }
     assert_eq!(est.rejected().total(), 10);
@@ -370,7 +370,7 @@ fn reset_forgets_all_but_the_configuration_and_rejections() {
     let rejected = est.rejected();
     est.reset();
     let mut fresh: Estimator = Estimator::new(config).unwrap();
-    fresh.rejected = rejected;
+    fresh.run.rejected = rejected;
     assert!(est == fresh);
 }
 
