@@ -153,7 +153,7 @@ impl Drop for FirmwareLink {
 }
 
 /// The reader thread: decodes every response and hands it over, until the port closes, fails, or
-/// the link is dropped (seen at the next read timeout).
+/// the link is dropped (seen at the next read, or read timeout, after it).
 fn read_responses(
     mut reader: Box<dyn PortReader>,
     answers: &mpsc::Sender<anyhow::Result<Numbered<Response>>>,
@@ -184,6 +184,10 @@ fn read_responses(
             }
         };
         bytes_in.fetch_add(n as u64, Ordering::Relaxed);
+        // Bytes that keep coming (noise on the line, no frame in them) do not keep it alive.
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
         for &b in &buf[..n] {
             let item = match rx.push_decode::<Numbered<Response>>(b) {
                 None => continue,
@@ -193,6 +197,43 @@ fn read_responses(
             if answers.send(item).is_err() {
                 return;
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::unix::net::UnixStream;
+
+    #[test]
+    fn the_reader_thread_ends_when_the_link_is_dropped_though_noise_keeps_coming() {
+        let (host_end, mut firmware_end) = UnixStream::pair().unwrap();
+        let reader = host_end.try_clone().unwrap();
+        reader
+            .set_read_timeout(Some(Duration::from_millis(100)))
+            .unwrap();
+        let link = FirmwareLink::new(Box::new(reader), Box::new(host_end), Duration::from_secs(1));
+        drop(link);
+        // Noise without a frame's end, with no pause: once the reader thread has ended, its end
+        // of the port is closed and a write fails.
+        firmware_end
+            .set_write_timeout(Some(Duration::from_millis(100)))
+            .unwrap();
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            match firmware_end.write(&[0x55; 64]) {
+                Ok(_) => {}
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+                Err(e) => {
+                    assert_eq!(e.kind(), ErrorKind::BrokenPipe, "{e}");
+                    break;
+                }
+            }
+            assert!(
+                Instant::now() < deadline,
+                "the reader thread still reads 10 s after the link was dropped"
+            );
         }
     }
 }
