@@ -78,7 +78,7 @@ pub struct StreamArgs {
     /// Baud rate of --port.
     #[arg(long, default_value_t = 115_200)]
     pub baud: u32,
-    /// Seconds to wait for each answer before giving up.
+    /// Seconds to wait for each answer before giving up (above 0, at most a day).
     #[arg(long, value_name = "S", default_value_t = 10.0)]
     pub timeout_s: f64,
     /// Save the firmware's defmt log (QEMU's semihosting output; decode with `defmt-print -e ELF`),
@@ -510,9 +510,21 @@ pub fn stream_log<R: Read, W: Write>(
     })
 }
 
+/// The longest `--timeout-s`, s: a firmware that has not answered within a day is lost.
+const MAX_TIMEOUT_S: f64 = 86_400.0;
+
+/// `--timeout-s` as a duration; refused unless above 0 and at most [`MAX_TIMEOUT_S`].
+fn answer_timeout(timeout_s: f64) -> anyhow::Result<Duration> {
+    anyhow::ensure!(
+        timeout_s > 0.0 && timeout_s <= MAX_TIMEOUT_S,
+        "--timeout-s must be above 0 and at most {MAX_TIMEOUT_S} s, got {timeout_s}"
+    );
+    Ok(Duration::from_secs_f64(timeout_s))
+}
+
 /// `host-sim stream`.
 pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
-    let timeout = Duration::from_secs_f64(args.timeout_s.max(0.001));
+    let timeout = answer_timeout(args.timeout_s)?;
     let out = args
         .out
         .clone()

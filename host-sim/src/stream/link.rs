@@ -7,7 +7,7 @@
 //! answer as soon as it arrives. Requests are numbered 1, 2, 3, ... in the order they are sent
 //! (protocol 5); every answer carries its request's number.
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use link_protocol::frame::MAX_FRAME;
 use link_protocol::{
     encode_frame, FrameAccumulator, Numbered, Request, Response, MAX_RESPONSE_ENCODED,
@@ -70,10 +70,8 @@ impl FirmwareLink {
     pub fn send_raw(&mut self, bytes: &[u8]) -> anyhow::Result<()> {
         self.writer
             .write_all(bytes)
-            .context("cannot write to the firmware's port")?;
-        self.writer
-            .flush()
-            .context("cannot write to the firmware's port")?;
+            .and_then(|()| self.writer.flush())
+            .map_err(|e| port_error("cannot write to", &e))?;
         self.bytes_out += bytes.len() as u64;
         Ok(())
     }
@@ -138,6 +136,13 @@ impl FirmwareLink {
     }
 }
 
+/// An error of the port, as a message without the `std::io::Error` in its chain: a port that hangs
+/// up (a serial port's `BrokenPipe`, QEMU's socket closed) must not pass for a closed standard
+/// output, which ends a run quietly with exit status 0.
+fn port_error(what: &str, e: &std::io::Error) -> anyhow::Error {
+    anyhow::anyhow!("{what} the firmware's port: {e}")
+}
+
 /// The number after `seq` (after `u32::MAX` comes 1: 0 is the unnumbered frame's).
 fn firmware_next_seq(seq: u32) -> u32 {
     match seq.wrapping_add(1) {
@@ -153,7 +158,7 @@ impl Drop for FirmwareLink {
 }
 
 /// The reader thread: decodes every response and hands it over, until the port closes, fails, or
-/// the link is dropped (seen at the next read timeout).
+/// the link is dropped (seen at the next read, or read timeout, after it).
 fn read_responses(
     mut reader: Box<dyn PortReader>,
     answers: &mpsc::Sender<anyhow::Result<Numbered<Response>>>,
@@ -177,13 +182,15 @@ fn read_responses(
                 continue;
             }
             Err(e) => {
-                let _ = answers.send(Err(
-                    anyhow::Error::new(e).context("cannot read from the firmware's port")
-                ));
+                let _ = answers.send(Err(port_error("cannot read from", &e)));
                 return;
             }
         };
         bytes_in.fetch_add(n as u64, Ordering::Relaxed);
+        // Bytes that keep coming (noise on the line, no frame in them) do not keep it alive.
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
         for &b in &buf[..n] {
             let item = match rx.push_decode::<Numbered<Response>>(b) {
                 None => continue,
@@ -193,6 +200,71 @@ fn read_responses(
             if answers.send(item).is_err() {
                 return;
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::unix::net::UnixStream;
+
+    #[test]
+    fn a_port_that_hangs_up_is_an_error_not_a_closed_standard_output() {
+        let (host_end, firmware_end) = UnixStream::pair().unwrap();
+        drop(firmware_end);
+        let reader = host_end.try_clone().unwrap();
+        reader
+            .set_read_timeout(Some(Duration::from_millis(100)))
+            .unwrap();
+        let mut link =
+            FirmwareLink::new(Box::new(reader), Box::new(host_end), Duration::from_secs(1));
+        let e = link.send(&Request::ReadStatus).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("cannot write to the firmware's port: Broken pipe"),
+            "{e}"
+        );
+        // `host-sim` ends quietly (exit status 0) on a broken pipe found in an error's chain.
+        assert!(
+            !e.chain()
+                .any(|c| c.downcast_ref::<std::io::Error>().is_some()),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn the_reader_thread_ends_when_the_link_is_dropped_though_noise_keeps_coming() {
+        let (host_end, mut firmware_end) = UnixStream::pair().unwrap();
+        let reader = host_end.try_clone().unwrap();
+        reader
+            .set_read_timeout(Some(Duration::from_millis(100)))
+            .unwrap();
+        let link = FirmwareLink::new(Box::new(reader), Box::new(host_end), Duration::from_secs(1));
+        drop(link);
+        // Noise without a frame's end, with no pause: once the reader thread has ended, its end
+        // of the port is closed and a write fails.
+        firmware_end
+            .set_write_timeout(Some(Duration::from_millis(100)))
+            .unwrap();
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            match firmware_end.write(&[0x55; 64]) {
+                Ok(_) => {}
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+                // Reset when the reader's end was closed with bytes unread.
+                Err(e) => {
+                    assert!(
+                        matches!(e.kind(), ErrorKind::BrokenPipe | ErrorKind::ConnectionReset),
+                        "{e}"
+                    );
+                    break;
+                }
+            }
+            assert!(
+                Instant::now() < deadline,
+                "the reader thread still reads 10 s after the link was dropped"
+            );
         }
     }
 }

@@ -196,10 +196,10 @@ pub fn stream_log_push<R: Read, W: Write>(
             }
         }
         if options.realtime {
-            let first = *first_time_s.get_or_insert(line.row.time_s);
-            let due = start + Duration::from_secs_f64((line.row.time_s - first).max(0.0));
-            while Instant::now() < due {
-                push.settle(target, writer, info, Some(due), each)?;
+            if let Some(due) = realtime_due(start, &mut first_time_s, line.row.time_s) {
+                while Instant::now() < due {
+                    push.settle(target, writer, info, Some(due), each)?;
+                }
             }
         }
         while push.samples_in_flight() >= window {
@@ -230,6 +230,18 @@ pub fn stream_log_push<R: Read, W: Write>(
         wall: start.elapsed(),
         unreadable: filter,
     })
+}
+
+/// When a row stamped `time_s` is due with `--realtime`: as long after `start` as it is after the
+/// first stamp (`first_s`, set by the first finite one). `None`, sent at once: a stamp that is not
+/// finite (the firmware rejects it), or so far ahead that no clock reaches it.
+fn realtime_due(start: Instant, first_s: &mut Option<f64>, time_s: f64) -> Option<Instant> {
+    if !time_s.is_finite() {
+        return None;
+    }
+    let first = *first_s.get_or_insert(time_s);
+    let after = Duration::try_from_secs_f64((time_s - first).max(0.0)).ok()?;
+    start.checked_add(after)
 }
 
 #[cfg(test)]
@@ -343,6 +355,20 @@ mod tests {
         restart_after: Option<u32>,
         window: usize,
     ) -> (StreamSummary, String, String) {
+        let times: Vec<String> = (0..rows)
+            .map(|k| (f64::from(k) * interval_s).to_string())
+            .collect();
+        push_times(&times, realtime, drop, restart_after, window)
+    }
+
+    /// The same with rows stamped `times` (as the log writes them).
+    fn push_times(
+        times: &[String],
+        realtime: bool,
+        drop: Vec<u32>,
+        restart_after: Option<u32>,
+        window: usize,
+    ) -> (StreamSummary, String, String) {
         let (host_end, firmware_end) = UnixStream::pair().unwrap();
         std::thread::spawn(move || fake_firmware(firmware_end, drop, restart_after));
         let reader = host_end.try_clone().unwrap();
@@ -358,8 +384,8 @@ mod tests {
         let mut csv = String::from(
             "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n",
         );
-        for k in 0..rows {
-            csv.push_str(&format!("{},10,20,30,40,1,2\n", f64::from(k) * interval_s));
+        for t in times {
+            csv.push_str(&format!("{t},10,20,30,40,1,2\n"));
         }
         let mut lines = LogReader::new(
             Path::new("test.csv"),
@@ -449,6 +475,21 @@ mod tests {
             wall < 10.0,
             "without --realtime as fast as the link takes them: {wall} s"
         );
+    }
+
+    #[test]
+    fn realtime_sends_a_stamp_no_clock_reaches_at_once() {
+        // Not finite, or 1e300 s after the first: each sent at once, every one answered (it used
+        // to panic converting the wait into a duration).
+        let times: Vec<String> = ["-inf", "0", "0.1", "inf", "nan", "1e300", "0.2"]
+            .iter()
+            .map(|t| t.to_string())
+            .collect();
+        let start = Instant::now();
+        let (summary, _, _) = push_times(&times, true, vec![], None, 50);
+        let wall = start.elapsed().as_secs_f64();
+        assert_eq!((summary.link.answered, summary.link.lost), (7, 0));
+        assert!(wall < 5.0, "7 rows 0.2 s of log apart took {wall} s");
     }
 
     #[test]
