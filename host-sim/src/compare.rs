@@ -5,7 +5,7 @@ use crate::cli_args::method_label;
 use crate::monte_carlo::{coverage_2sigma, quantile, run_all, sorted, Draw};
 use crate::replay::HostEstimator;
 use crate::report::Accuracy;
-use crate::scenario::ScenarioKind;
+use crate::scenario::{ScenarioKind, ShipMotionSettings};
 use estimator_core::{Config, Method};
 
 /// Times of the error columns, s.
@@ -185,7 +185,8 @@ pub fn format_table(rows: &[CompareRow]) -> String {
     s
 }
 
-/// How the logs of a draw are made, one line: scheme, period, interval and the recorder.
+/// How the logs of a draw are made, one line: scheme, period, interval, the recorder and the
+/// ship's slow motions (when there are any).
 pub fn describe(draw: &Draw) -> String {
     let p = draw.params(0);
     let mut s = format!(
@@ -229,5 +230,37 @@ pub fn describe(draw: &Draw) -> String {
     } else {
         s.push_str(&format!("; recorder: {}", rec.join(", ")));
     }
+    let ship = describe_ship(&draw.ship_motion, draw.mismatch.heel_in_turns_deg);
+    if !ship.is_empty() {
+        s.push_str(&format!("; ship: {ship}"));
+    }
     s
+}
+
+/// The ship's slow motions in words (empty when there are none).
+fn describe_ship(m: &ShipMotionSettings, heel_in_turns_deg: f64) -> String {
+    let sinusoids = |items: &[(f64, f64)]| {
+        items
+            .iter()
+            .map(|(a, p)| format!("{a} deg / {p} s"))
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
+    let mut parts = Vec::new();
+    if !m.slow_heel.is_empty() {
+        parts.push(format!("slow heel {}", sinusoids(&m.slow_heel)));
+    }
+    if !m.slow_trim.is_empty() {
+        parts.push(format!("slow trim {}", sinusoids(&m.slow_trim)));
+    }
+    if heel_in_turns_deg != 0.0 {
+        parts.push(format!("turns heeling {heel_in_turns_deg} deg"));
+    }
+    if m.heel_per_turn_rate_deg_per_deg_s != 0.0 {
+        parts.push(format!(
+            "heel {} deg per deg/s of turn",
+            m.heel_per_turn_rate_deg_per_deg_s
+        ));
+    }
+    parts.join(", ")
 }

@@ -7,7 +7,9 @@ use crate::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
 use crate::replay::sample_of;
 use crate::report::{Accuracy, Tracker};
 use crate::rotation_scheme::RotationScheme;
-use crate::scenario::{Mismatch, Samples, ScenarioKind, ScenarioParams, SwayComponent};
+use crate::scenario::{
+    Mismatch, Samples, ScenarioKind, ScenarioParams, ShipMotionSettings, SwayComponent,
+};
 use estimator_core::Config;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -95,6 +97,9 @@ pub struct Draw {
     /// Roll sway amplitude (sqrt(2) x RMS) uniform between the scenario's and this, deg.
     pub max_roll_deg: Option<f64>,
     pub mismatch: Mismatch,
+    /// The ship's slow heel and trim and its heel per turn rate; the phases drawn per run, from
+    /// the run's seed.
+    pub ship_motion: ShipMotionSettings,
     /// Log length override, s.
     pub duration_s: Option<f64>,
     pub scheme: RotationScheme,
@@ -114,6 +119,7 @@ impl Draw {
             lat_range_deg: None,
             max_roll_deg: None,
             mismatch: Mismatch::default(),
+            ship_motion: ShipMotionSettings::default(),
             duration_s: None,
             scheme: RotationScheme::Continuous,
             rotation_period_s: None,
@@ -189,6 +195,7 @@ impl Draw {
             }
         }
         p.mismatch = self.mismatch;
+        p.ship_motion = self.ship_motion.motion(seed);
         if let Some(d) = self.duration_s {
             p.duration_s = d;
         }
