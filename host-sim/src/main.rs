@@ -17,7 +17,7 @@ use host_sim::pipeline::{
 };
 use host_sim::recorder::{recorded_rows, Recorder};
 use host_sim::replay::{Replay, Step};
-use host_sim::report::{format_accuracy, format_rms, Report, TruthRows};
+use host_sim::report::{format_accuracy, format_honesty, format_rms, Report, TruthRows};
 use host_sim::rotation_scheme::RotationScheme;
 use host_sim::scenario::{generate, Mismatch, Samples, ScenarioKind};
 use std::io::Write;
@@ -532,6 +532,7 @@ fn print_summary(
 fn print_report(w: &mut dyn Write, method: Method, rep: &Report) -> std::io::Result<()> {
     writeln!(w, "\naccuracy against the truth, {}:", method_label(method))?;
     write!(w, "{}", format_accuracy(&rep.accuracy))?;
+    write!(w, "{}", format_honesty(&rep.accuracy.honesty))?;
     if let Some(r) = &rep.rms_from_first_estimate {
         write!(w, "{}", format_rms("from the first estimate", r))?;
     }
@@ -591,6 +592,7 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
             rows: &generated.rows,
             truth: &generated.truth,
             time_offset_s: params.recording.time_offset_s,
+            errors_step_at_s: params.errors_step.map(|step| step.at_s),
         };
         let est = estimate_log(
             &log,

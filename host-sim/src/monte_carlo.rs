@@ -245,18 +245,23 @@ pub fn track_run_with_capacity<const CAP: usize>(
     let mut est = estimator_core::Estimator::<CAP>::new(config)
         .map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
     let mut recorder = Recorder::new(&params.recording, params.seed, params.sample_interval_s);
-    let mut tracker = Tracker::new(times_s);
+    let mut tracker =
+        Tracker::new(times_s).with_errors_step(params.errors_step.map(|step| step.at_s));
     let mut held = None;
     let mut status = None;
     for (row, truth) in Samples::new(params) {
         let Some(logged) = recorder.record(&row) else {
             continue;
         };
-        if let Ok(out) = est.step(&sample_of(&logged)) {
-            held = out.estimate;
-            status = Some(out.status);
-        }
-        tracker.observe(row.time_s, held.as_ref(), &truth.errors_arcsec);
+        let row_status = match est.step(&sample_of(&logged)) {
+            Ok(out) => {
+                held = out.estimate;
+                status = Some(out.status);
+                Some(out.status)
+            }
+            Err(_) => None,
+        };
+        tracker.observe(row.time_s, held.as_ref(), row_status, &truth.errors_arcsec);
     }
     Ok(Accuracy {
         final_status: status,
@@ -599,6 +604,7 @@ mod tests {
             within_percent_from_s: [None; 4],
             within_arcsec_from_s: [None; 4],
             final_status: None,
+            honesty: crate::report::Honesty::default(),
         }
     }
 

@@ -90,6 +90,72 @@ fn sea_scenario_within_10_arcsec_at_end() {
     }
 }
 
+/// Parses `19,401`.
+fn count(text: &str) -> u64 {
+    text.replace(',', "").parse().unwrap()
+}
+
+/// The 1-sigma's honesty row by row, under the accuracy table: every row from the first estimate
+/// (599 s on the sea scenario) judged; a change of the errors' rows left out, the rest judged.
+#[test]
+fn estimate_prints_the_honesty_of_the_1_sigma_row_by_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, _, stdout) = generate_and_estimate(dir.path(), "sea", &["--duration", "6000"]);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("1-sigma honesty, "))
+        .unwrap_or_else(|| panic!("no honesty line: {stdout}"));
+    assert!(
+        line.starts_with(
+            "1-sigma honesty, 5,401 rows from the first estimate: some error beyond 2 sigma on "
+        ),
+        "{line}"
+    );
+    // Some error beyond 3 sigma on a few rows at most, none beyond 5 sigma.
+    let beyond_3: f64 = line
+        .split("beyond 3 sigma on ")
+        .nth(1)
+        .and_then(|r| r.split(" %").next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(beyond_3 < 1.0, "{line}");
+    assert!(line.contains("beyond 5 sigma on 0 %;"), "{line}");
+    let (_, _, stdout) = generate_and_estimate(
+        dir.path(),
+        "sea",
+        &[
+            "--duration",
+            "8000",
+            "--errors-step-at",
+            "3000",
+            "--errors-after-arcsec",
+            "230,-150,300,-250",
+        ],
+    );
+    let mut lines = stdout
+        .lines()
+        .skip_while(|l| !l.starts_with("1-sigma honesty, "));
+    let judged = count(
+        lines
+            .next()
+            .unwrap()
+            .trim_start_matches("1-sigma honesty, ")
+            .split(' ')
+            .next()
+            .unwrap(),
+    );
+    let note = lines.next().unwrap();
+    let (left_out, span) = note
+        .trim_start()
+        .split_once(" rows of the change of the errors left out (3,000 s to ")
+        .unwrap_or_else(|| panic!("{stdout}"));
+    let to_s = count(span.split(" s:").next().unwrap());
+    assert_eq!(count(left_out), to_s - 3000, "{note}");
+    assert!(to_s >= 5000, "at least 2,000 s left out: {note}");
+    assert_eq!(judged + count(left_out), 8000 - 599, "{stdout}");
+}
+
 #[test]
 fn run_writes_log_estimates_and_pngs() {
     let dir = temp_dir("cli-run");
