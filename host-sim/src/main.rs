@@ -768,7 +768,9 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
         pool.current_num_threads()
     );
     println!("absolute error |x_hat - x| over runs, arcsec:");
-    let table = format_summary(&summary);
+    let honesty = host_sim::monte_carlo::pool_honesty(&results);
+    let table = format_summary(&summary)
+        + &host_sim::monte_carlo::format_honesty_over_runs(&honesty, results.len());
     print!("{table}");
     let command = host_sim::html_report::command_line();
     if let Some(out) = &a.out {
@@ -784,6 +786,7 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
             version: env!("CARGO_PKG_VERSION").to_string(),
             summary: summary.clone(),
             over_time: over_time.clone(),
+            honesty,
         };
         let text = serde_json::to_string_pretty(&json)?;
         host_sim::output_file::write_bytes(out, (text + "\n").as_bytes())?;

@@ -5,7 +5,7 @@
 
 use crate::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
 use crate::replay::sample_of;
-use crate::report::{Accuracy, Tracker};
+use crate::report::{format_honesty_shares, rows_text, Accuracy, Honesty, Tracker};
 use crate::rotation_scheme::RotationScheme;
 use crate::scenario::{
     Mismatch, Samples, ScenarioKind, ScenarioParams, ShipMotionSettings, SwayComponent,
@@ -287,6 +287,46 @@ pub fn run_all(
         .collect()
 }
 
+/// The row-level honesty of the 1-sigma over runs: the runs' rows pooled, the largest |error| /
+/// 1-sigma of any run (with its index in `results`).
+pub fn pool_honesty(results: &[Accuracy]) -> Honesty {
+    let mut h = Honesty::default();
+    for (i, r) in results.iter().enumerate() {
+        h.pool(&r.honesty, i);
+    }
+    h
+}
+
+/// The honesty lines printed under the Monte Carlo table.
+pub fn format_honesty_over_runs(h: &Honesty, runs: usize) -> String {
+    if h.rows == 0 {
+        return "\n1-sigma honesty: no row with an estimate to judge\n".into();
+    }
+    let mut s = format!(
+        "\n1-sigma honesty over the {runs} runs, {} from their first estimates: {}\n",
+        rows_text(h.rows),
+        format_honesty_shares(h)
+    );
+    let mut notes = Vec::new();
+    if h.rows_left_out > 0 {
+        notes.push(format!(
+            "{} of changes of the errors left out (each until 2,000 s after the estimator \
+             declared it, or after the change when it never did)",
+            rows_text(h.rows_left_out)
+        ));
+    }
+    if h.rows_without_estimate > 0 {
+        notes.push(format!(
+            "{} after a first estimate without one, not judged",
+            rows_text(h.rows_without_estimate)
+        ));
+    }
+    if !notes.is_empty() {
+        s.push_str(&format!("  {}\n", notes.join("; ")));
+    }
+    s
+}
+
 /// Linear-interpolated quantile of sorted values (`q` in [0, 1]).
 pub fn quantile(sorted: &[f64], q: f64) -> f64 {
     if sorted.is_empty() {
@@ -381,6 +421,9 @@ pub struct StudyJson {
     #[serde(flatten)]
     pub summary: Summary,
     pub over_time: Summary,
+    /// The 1-sigma's honesty row by row, the runs' rows pooled ([`pool_honesty`]; `largest.run`
+    /// indexes `run_seeds`).
+    pub honesty: Honesty,
 }
 
 /// Share of the (run, error) pairs at report time `k` whose |error| is within twice the reported

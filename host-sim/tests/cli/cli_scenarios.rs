@@ -211,9 +211,30 @@ fn monte_carlo_writes_summary() {
         path_str(&out),
     ]);
     assert!(stdout.contains("3 runs"), "{stdout}");
+    // The honesty of the 1-sigma over the three runs' rows from their first estimates (599 s).
+    assert!(
+        stdout.contains("\n1-sigma honesty over the 3 runs, 13,206 rows from their first estimates: some error beyond 2 sigma on "),
+        "{stdout}"
+    );
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(v["runs"], 3);
+    let h = &v["honesty"];
+    assert_eq!(h["rows"], 3 * (5001 - 599));
+    let beyond: Vec<u64> = [
+        "beyond_2_sigma_rows",
+        "beyond_3_sigma_rows",
+        "beyond_5_sigma_rows",
+    ]
+    .iter()
+    .map(|k| h[k].as_u64().unwrap())
+    .collect();
+    assert!(beyond[0] >= beyond[1] && beyond[1] >= beyond[2], "{h}");
+    assert!(
+        beyond[2] == 0 && h["largest"]["ratio"].as_f64().unwrap() < 5.0,
+        "{h}"
+    );
+    assert!(h["largest"]["run"].as_u64().unwrap() < 3, "{h}");
     assert_eq!(v["times_s"], serde_json::json!([2000.0, 5000.0]));
     for key in [
         "median_abs_error_arcsec",
@@ -248,10 +269,40 @@ fn compare_prints_a_markdown_line_per_scenario_and_method() {
     let lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("| ")).collect();
     assert_eq!(lines.len(), 1 + 6, "{stdout}");
     assert!(lines[0].contains("time to 0.5 %") && lines[0].contains("at 45000 s"));
+    assert!(
+        lines[0].ends_with(
+            "| errors within 2 sigma at 20000 / 45000 s | rows beyond 2 / 3 sigma | largest error/sigma | status at the end (runs) |"
+        ),
+        "{}",
+        lines[0]
+    );
     let ours = lines
         .iter()
         .find(|l| l.starts_with("| sea | ours (windowed) | 2 |"))
         .expect("sea/ours line");
+    // The 1-sigma's honesty row by row: (share of rows with some error beyond 3 sigma, %; the
+    // largest |error| / sigma). Ours is honest; the paper's method as published is not (its
+    // filter cannot represent the leakage it leaves, its 1-sigma knows nothing of it).
+    let honesty = |line: &str| {
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        let n = cells.len();
+        let beyond_3: f64 = cells[n - 4]
+            .split(" / ")
+            .nth(1)
+            .unwrap()
+            .trim_end_matches(" %")
+            .parse()
+            .unwrap();
+        (beyond_3, cells[n - 3].parse::<f64>().unwrap())
+    };
+    let (beyond_3, largest) = honesty(ours);
+    assert!(beyond_3 < 5.0 && largest < 10.0, "{ours}");
+    let paper = lines
+        .iter()
+        .find(|l| l.starts_with("| sea | paper (literal) | 2 |"))
+        .expect("sea/paper line");
+    let (beyond_3, largest) = honesty(paper);
+    assert!(beyond_3 > 50.0 && largest > 10.0, "{paper}");
     // Outside the 3000 s run, the 20000 s and 45000 s columns are "-"; then the final statuses of
     // both runs.
     assert!(ours.contains("| - / - | - / - |"), "{ours}");
