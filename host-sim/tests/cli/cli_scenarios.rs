@@ -187,6 +187,8 @@ fn run_writes_log_estimates_and_pngs() {
         3,
         "{stdout}"
     );
+    // Each method's 1-sigma judged row by row, from its first estimate on.
+    assert_eq!(stdout.matches("\n1-sigma honesty, ").count(), 3, "{stdout}");
 }
 
 #[test]
