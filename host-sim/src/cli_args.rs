@@ -416,7 +416,7 @@ pub struct ShipMotionArgs {
     #[arg(long, value_name = "DEG", default_value_t = 0.0)]
     pub heel_in_turns_deg: f64,
     /// Ship: heel proportional to the rate of its course (the slow heading weave and the turns,
-    /// not the wave-frequency yaw), deg of heel per deg/s: roll += -K x rate (a turn to
+    /// not the wave-frequency yaw), K deg of heel per deg/s: roll += -K x rate (a turn to
     /// starboard heels to port).
     #[arg(long, value_name = "DEG_PER_DEG_S", default_value_t = 0.0)]
     pub heel_per_turn_rate: f64,
