@@ -2,7 +2,7 @@
 
 use crate::recorder::RecorderSettings;
 use crate::rotation_scheme::RotationScheme;
-use crate::scenario::{ErrorsStep, ScenarioKind, ScenarioParams};
+use crate::scenario::{ErrorsStep, ScenarioKind, ScenarioParams, ShipMotionSettings};
 use estimator_core::units::{arcsec_to_rad, RAD_PER_DEG};
 use estimator_core::{Config, Method, Real};
 
@@ -368,6 +368,86 @@ impl RecorderArgs {
             gap_every_s: self.gap_every,
             gap_rows: self.gap_rows,
         }
+    }
+}
+
+/// The ship's slow motions on an ordinary day (`generate`, `run`, `compare`, `monte-carlo`): true
+/// attitude of eq (3) that the estimator must cancel, not errors.
+#[derive(Clone, Debug, Default, PartialEq, clap::Args)]
+pub struct ShipMotionArgs {
+    /// Ship: slow heel (roll) from wind, fuel and loading, amplitudes deg: each adds
+    /// `A sin(2 pi t / P + phase)` to the roll, P from --slow-heel-period-s (one period per
+    /// amplitude), the phase drawn from the seed.
+    #[arg(
+        long,
+        value_name = "A1,A2,...",
+        value_delimiter = ',',
+        requires = "slow_heel_period_s"
+    )]
+    pub slow_heel_deg: Vec<f64>,
+    /// Ship: periods of the slow heel's sinusoids, s (above 0; as many as --slow-heel-deg).
+    #[arg(
+        long,
+        value_name = "P1,P2,...",
+        value_delimiter = ',',
+        requires = "slow_heel_deg"
+    )]
+    pub slow_heel_period_s: Vec<f64>,
+    /// Ship: slow trim (pitch), amplitudes deg: each adds `A sin(2 pi t / P + phase)` to the
+    /// pitch, P from --slow-trim-period-s, the phase drawn from the seed.
+    #[arg(
+        long,
+        value_name = "A1,A2,...",
+        value_delimiter = ',',
+        requires = "slow_trim_period_s"
+    )]
+    pub slow_trim_deg: Vec<f64>,
+    /// Ship: periods of the slow trim's sinusoids, s (above 0; as many as --slow-trim-deg).
+    #[arg(
+        long,
+        value_name = "P1,P2,...",
+        value_delimiter = ',',
+        requires = "slow_trim_deg"
+    )]
+    pub slow_trim_period_s: Vec<f64>,
+    /// Ship: heel in turns, deg: a 90 deg course change at 0.5 deg/s every hour from 2 h on,
+    /// alternately to starboard and port, the ship heeling outward by this much while it turns
+    /// (0: no turns).
+    #[arg(long, value_name = "DEG", default_value_t = 0.0)]
+    pub heel_in_turns_deg: f64,
+    /// Ship: heel proportional to the rate of its course (the slow heading weave and the turns,
+    /// not the wave-frequency yaw), K deg of heel per deg/s: roll += -K x rate (a turn to
+    /// starboard heels to port).
+    #[arg(long, value_name = "DEG_PER_DEG_S", default_value_t = 0.0)]
+    pub heel_per_turn_rate: f64,
+}
+
+impl ShipMotionArgs {
+    /// The slow heel and trim and the heel per turn rate, checked (the heel in turns is a field
+    /// of [`crate::scenario::Mismatch`]: [`ShipMotionArgs::heel_in_turns_deg`]).
+    pub fn settings(&self) -> anyhow::Result<ShipMotionSettings> {
+        Ok(ShipMotionSettings::new(
+            (&self.slow_heel_deg, &self.slow_heel_period_s),
+            (&self.slow_trim_deg, &self.slow_trim_period_s),
+            self.heel_per_turn_rate,
+        )?)
+    }
+
+    /// Checks the heel in turns.
+    pub fn heel_in_turns_deg(&self) -> anyhow::Result<f64> {
+        let h = self.heel_in_turns_deg;
+        anyhow::ensure!(
+            h.is_finite(),
+            "--heel-in-turns-deg must be a finite number of degrees, got {h}"
+        );
+        Ok(h)
+    }
+
+    /// Puts the motions into `p`, their phases drawn from `p`'s seed.
+    pub fn apply(&self, p: &mut ScenarioParams) -> anyhow::Result<()> {
+        p.ship_motion = self.settings()?.motion(p.seed);
+        p.mismatch.heel_in_turns_deg = self.heel_in_turns_deg()?;
+        Ok(())
     }
 }
 

@@ -1,11 +1,14 @@
 //! `compare`: every method on every scenario over several seeds, as a markdown table for docs/results.md;
-//! one table per rotation scheme, headed by how its logs are made ([`describe`]).
+//! one table per rotation scheme, headed by how its logs are made ([`describe`]). Besides the
+//! errors at two times, the honesty of the 1-sigma row by row ([`crate::report::Honesty`]): the
+//! share of the runs' rows where some error lies beyond 2 and 3 sigma, and the largest
+//! |error| / 1-sigma of any run.
 
 use crate::cli_args::method_label;
-use crate::monte_carlo::{coverage_2sigma, quantile, run_all, sorted, Draw};
+use crate::monte_carlo::{coverage_2sigma, pool_honesty, quantile, run_all, sorted, Draw};
 use crate::replay::HostEstimator;
-use crate::report::Accuracy;
-use crate::scenario::ScenarioKind;
+use crate::report::{percent_of_rows, Accuracy, Honesty};
+use crate::scenario::{ScenarioKind, ShipMotionSettings};
 use estimator_core::{Config, Method};
 
 /// Times of the error columns, s.
@@ -28,6 +31,9 @@ pub struct CompareRow {
     /// [`COMPARE_TIMES_S`] inside the run (NaN outside; [`coverage_2sigma`]).
     pub coverage_2sigma: Vec<f64>,
     pub duration_s: f64,
+    /// Row-level honesty of the 1-sigma, pooled over the runs' rows (the largest |error| /
+    /// 1-sigma: the largest over the runs).
+    pub honesty: Honesty,
     /// Status at the end of each run, with how many runs ended in it (most frequent first); a
     /// configuration the estimator rejects counts every run under `configuration rejected (...)`.
     pub final_status: Vec<(String, usize)>,
@@ -65,6 +71,7 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
                 .map(|t| if *t > duration_s { f64::NAN } else { 0.0 })
                 .collect(),
             duration_s,
+            honesty: Honesty::default(),
             final_status: vec![(format!("configuration rejected ({e:?})"), seeds)],
         });
     }
@@ -106,6 +113,7 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
         }
     }
     final_status.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    let honesty = pool_honesty(&results);
     Ok(CompareRow {
         scenario: draw.kind,
         final_status,
@@ -124,6 +132,7 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
         error_at_arcsec,
         coverage_2sigma: coverage,
         duration_s,
+        honesty,
     })
 }
 
@@ -156,12 +165,13 @@ fn fmt_err(e: f64) -> String {
 /// The markdown table.
 pub fn format_table(rows: &[CompareRow]) -> String {
     let mut s = String::from(
-        "| scenario | method | runs | time to 0.5 % s (median / p95) | time to 10 arcsec s (median / p95) | max abs error at 20000 s arcsec (median / p95) | max abs error at 45000 s arcsec (median / p95) | errors within 2 sigma at 20000 / 45000 s | status at the end (runs) |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| scenario | method | runs | time to 0.5 % s (median / p95) | time to 10 arcsec s (median / p95) | max abs error at 20000 s arcsec (median / p95) | max abs error at 45000 s arcsec (median / p95) | errors within 2 sigma at 20000 / 45000 s | rows beyond 2 / 3 sigma | largest error/sigma | status at the end (runs) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let d = r.duration_s;
+        let h = &r.honesty;
         s.push_str(&format!(
-            "| {} | {} | {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} | {} |\n",
+            "| {} | {} | {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} | {} | {} |\n",
             r.scenario.name(),
             method_label(r.method),
             r.runs,
@@ -175,6 +185,9 @@ pub fn format_table(rows: &[CompareRow]) -> String {
             fmt_err(r.error_at_arcsec[1].1),
             fmt_share(r.coverage_2sigma[0]),
             fmt_share(r.coverage_2sigma[1]),
+            percent_of_rows(h.beyond_2_sigma_rows, h.rows),
+            percent_of_rows(h.beyond_3_sigma_rows, h.rows),
+            h.largest.map_or("-".to_string(), |l| format!("{:.1}", l.ratio)),
             r.final_status
                 .iter()
                 .map(|(n, c)| format!("{n} ({c})"))
@@ -185,7 +198,8 @@ pub fn format_table(rows: &[CompareRow]) -> String {
     s
 }
 
-/// How the logs of a draw are made, one line: scheme, period, interval and the recorder.
+/// How the logs of a draw are made, one line: scheme, period, interval, the recorder and the
+/// ship's slow motions (when there are any).
 pub fn describe(draw: &Draw) -> String {
     let p = draw.params(0);
     let mut s = format!(
@@ -229,5 +243,37 @@ pub fn describe(draw: &Draw) -> String {
     } else {
         s.push_str(&format!("; recorder: {}", rec.join(", ")));
     }
+    let ship = describe_ship(&draw.ship_motion, draw.mismatch.heel_in_turns_deg);
+    if !ship.is_empty() {
+        s.push_str(&format!("; ship: {ship}"));
+    }
     s
+}
+
+/// The ship's slow motions in words (empty when there are none).
+fn describe_ship(m: &ShipMotionSettings, heel_in_turns_deg: f64) -> String {
+    let sinusoids = |items: &[(f64, f64)]| {
+        items
+            .iter()
+            .map(|(a, p)| format!("{a} deg / {p} s"))
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
+    let mut parts = Vec::new();
+    if !m.slow_heel.is_empty() {
+        parts.push(format!("slow heel {}", sinusoids(&m.slow_heel)));
+    }
+    if !m.slow_trim.is_empty() {
+        parts.push(format!("slow trim {}", sinusoids(&m.slow_trim)));
+    }
+    if heel_in_turns_deg != 0.0 {
+        parts.push(format!("turns heeling {heel_in_turns_deg} deg"));
+    }
+    if m.heel_per_turn_rate_deg_per_deg_s != 0.0 {
+        parts.push(format!(
+            "heel {} deg per deg/s of turn",
+            m.heel_per_turn_rate_deg_per_deg_s
+        ));
+    }
+    parts.join(", ")
 }

@@ -6,7 +6,7 @@ use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Method, RejectReason};
 use host_sim::cli_args::{
     method_label, LogShapeArgs, MethodArg, RecorderArgs, ScenarioArg, ScenarioOverrides,
-    SchemeList, TimingArgs, TuningArgs,
+    SchemeList, ShipMotionArgs, TimingArgs, TuningArgs,
 };
 use host_sim::exit_status::{RunEnd, HELP as EXIT_HELP};
 use host_sim::log_csv::{self, LogError, Truth};
@@ -17,7 +17,7 @@ use host_sim::pipeline::{
 };
 use host_sim::recorder::{recorded_rows, Recorder};
 use host_sim::replay::{Replay, Step};
-use host_sim::report::{format_accuracy, format_rms, Report, TruthRows};
+use host_sim::report::{format_accuracy, format_honesty, format_rms, Report, TruthRows};
 use host_sim::rotation_scheme::RotationScheme;
 use host_sim::scenario::{generate, Mismatch, Samples, ScenarioKind};
 use std::io::Write;
@@ -75,6 +75,8 @@ struct GenerateArgs {
     overrides: ScenarioOverrides,
     #[command(flatten)]
     shape: LogShapeArgs,
+    #[command(flatten)]
+    motion: ShipMotionArgs,
     /// Output attitude log (CSV), and its truth file beside it (`FILE.truth.json`); `-` writes
     /// the log to standard output and no truth file.
     #[arg(long, value_name = "FILE.csv")]
@@ -123,6 +125,8 @@ struct RunArgs {
     overrides: ScenarioOverrides,
     #[command(flatten)]
     shape: LogShapeArgs,
+    #[command(flatten)]
+    motion: ShipMotionArgs,
     #[command(flatten)]
     tuning: TuningArgs,
     /// Output directory (default: out/SCENARIO-SEED).
@@ -212,15 +216,8 @@ struct SpreadArgs {
     /// Model mismatch: coloured (Gauss-Markov, 60 s) attitude noise, 1-sigma arcsec.
     #[arg(long, value_name = "ARCSEC", default_value_t = 0.0)]
     coloured_noise_arcsec: f64,
-    /// Heel in turns: a 90 deg course change at 0.5 deg/s every hour, alternately to starboard
-    /// and port, the ship heeling outward by this much while it turns, deg.
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 0.0,
-        allow_negative_numbers = true
-    )]
-    heel_in_turns_deg: f64,
+    #[command(flatten)]
+    motion: ShipMotionArgs,
     #[command(flatten)]
     timing: TimingArgs,
     #[command(flatten)]
@@ -258,7 +255,6 @@ impl SpreadArgs {
             self.error_drift_arcsec_per_day,
             self.lowfreq_rate_error,
             self.coloured_noise_arcsec,
-            self.heel_in_turns_deg,
         ];
         anyhow::ensure!(
             finite.iter().all(|v| v.is_finite()),
@@ -275,8 +271,9 @@ impl SpreadArgs {
             error_drift_arcsec_per_day: self.error_drift_arcsec_per_day,
             low_frequency_rate_error: self.lowfreq_rate_error,
             coloured_noise_arcsec: self.coloured_noise_arcsec,
-            heel_in_turns_deg: self.heel_in_turns_deg,
+            heel_in_turns_deg: self.motion.heel_in_turns_deg()?,
         };
+        d.ship_motion = self.motion.settings()?;
         d.check()?;
         Ok(d)
     }
@@ -344,6 +341,7 @@ fn main() {
 fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
     let mut params = a.overrides.params(a.scenario.into(), a.seed)?;
     a.shape.apply(&mut params)?;
+    a.motion.apply(&mut params)?;
     // Row by row from the generator through the recorder into the file: nothing held in memory.
     let mut recorder = Recorder::new(&params.recording, params.seed, params.sample_interval_s);
     let mut written = 0usize;
@@ -534,6 +532,7 @@ fn print_summary(
 fn print_report(w: &mut dyn Write, method: Method, rep: &Report) -> std::io::Result<()> {
     writeln!(w, "\naccuracy against the truth, {}:", method_label(method))?;
     write!(w, "{}", format_accuracy(&rep.accuracy))?;
+    write!(w, "{}", format_honesty(&rep.accuracy.honesty))?;
     if let Some(r) = &rep.rms_from_first_estimate {
         write!(w, "{}", format_rms("from the first estimate", r))?;
     }
@@ -546,6 +545,7 @@ fn print_report(w: &mut dyn Write, method: Method, rep: &Report) -> std::io::Res
 fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     let mut params = a.overrides.params(a.scenario.into(), a.seed)?;
     a.shape.apply(&mut params)?;
+    a.motion.apply(&mut params)?;
     let dir = a.out_dir.clone().unwrap_or_else(|| {
         PathBuf::from(format!("out/{}-{}", params.scenario.name(), params.seed))
     });
@@ -592,6 +592,7 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
             rows: &generated.rows,
             truth: &generated.truth,
             time_offset_s: params.recording.time_offset_s,
+            errors_step_at_s: params.errors_step.map(|step| step.at_s),
         };
         let est = estimate_log(
             &log,
@@ -767,7 +768,9 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
         pool.current_num_threads()
     );
     println!("absolute error |x_hat - x| over runs, arcsec:");
-    let table = format_summary(&summary);
+    let honesty = host_sim::monte_carlo::pool_honesty(&results);
+    let table = format_summary(&summary)
+        + &host_sim::monte_carlo::format_honesty_over_runs(&honesty, results.len());
     print!("{table}");
     let command = host_sim::html_report::command_line();
     if let Some(out) = &a.out {
@@ -783,6 +786,7 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
             version: env!("CARGO_PKG_VERSION").to_string(),
             summary: summary.clone(),
             over_time: over_time.clone(),
+            honesty,
         };
         let text = serde_json::to_string_pretty(&json)?;
         host_sim::output_file::write_bytes(out, (text + "\n").as_bytes())?;

@@ -5,9 +5,11 @@
 
 use crate::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
 use crate::replay::sample_of;
-use crate::report::{Accuracy, Tracker};
+use crate::report::{format_honesty_shares, rows_text, Accuracy, Honesty, Tracker};
 use crate::rotation_scheme::RotationScheme;
-use crate::scenario::{Mismatch, Samples, ScenarioKind, ScenarioParams, SwayComponent};
+use crate::scenario::{
+    Mismatch, Samples, ScenarioKind, ScenarioParams, ShipMotionSettings, SwayComponent,
+};
 use estimator_core::Config;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -95,6 +97,9 @@ pub struct Draw {
     /// Roll sway amplitude (sqrt(2) x RMS) uniform between the scenario's and this, deg.
     pub max_roll_deg: Option<f64>,
     pub mismatch: Mismatch,
+    /// The ship's slow heel and trim and its heel per turn rate; the phases drawn per run, from
+    /// the run's seed.
+    pub ship_motion: ShipMotionSettings,
     /// Log length override, s.
     pub duration_s: Option<f64>,
     pub scheme: RotationScheme,
@@ -114,6 +119,7 @@ impl Draw {
             lat_range_deg: None,
             max_roll_deg: None,
             mismatch: Mismatch::default(),
+            ship_motion: ShipMotionSettings::default(),
             duration_s: None,
             scheme: RotationScheme::Continuous,
             rotation_period_s: None,
@@ -189,6 +195,7 @@ impl Draw {
             }
         }
         p.mismatch = self.mismatch;
+        p.ship_motion = self.ship_motion.motion(seed);
         if let Some(d) = self.duration_s {
             p.duration_s = d;
         }
@@ -238,18 +245,23 @@ pub fn track_run_with_capacity<const CAP: usize>(
     let mut est = estimator_core::Estimator::<CAP>::new(config)
         .map_err(|e| anyhow::anyhow!("invalid estimator configuration: {e:?}"))?;
     let mut recorder = Recorder::new(&params.recording, params.seed, params.sample_interval_s);
-    let mut tracker = Tracker::new(times_s);
+    let mut tracker =
+        Tracker::new(times_s).with_errors_step(params.errors_step.map(|step| step.at_s));
     let mut held = None;
     let mut status = None;
     for (row, truth) in Samples::new(params) {
         let Some(logged) = recorder.record(&row) else {
             continue;
         };
-        if let Ok(out) = est.step(&sample_of(&logged)) {
-            held = out.estimate;
-            status = Some(out.status);
-        }
-        tracker.observe(row.time_s, held.as_ref(), &truth.errors_arcsec);
+        let row_status = match est.step(&sample_of(&logged)) {
+            Ok(out) => {
+                held = out.estimate;
+                status = Some(out.status);
+                Some(out.status)
+            }
+            Err(_) => None,
+        };
+        tracker.observe(row.time_s, held.as_ref(), row_status, &truth.errors_arcsec);
     }
     Ok(Accuracy {
         final_status: status,
@@ -273,6 +285,46 @@ pub fn run_all(
             r
         })
         .collect()
+}
+
+/// The row-level honesty of the 1-sigma over runs: the runs' rows pooled, the largest |error| /
+/// 1-sigma of any run (with its index in `results`).
+pub fn pool_honesty(results: &[Accuracy]) -> Honesty {
+    let mut h = Honesty::default();
+    for (i, r) in results.iter().enumerate() {
+        h.pool(&r.honesty, i);
+    }
+    h
+}
+
+/// The honesty lines printed under the Monte Carlo table.
+pub fn format_honesty_over_runs(h: &Honesty, runs: usize) -> String {
+    if h.rows == 0 {
+        return "\n1-sigma honesty: no row with an estimate to judge\n".into();
+    }
+    let mut s = format!(
+        "\n1-sigma honesty over the {runs} runs, {} from their first estimates: {}\n",
+        rows_text(h.rows),
+        format_honesty_shares(h)
+    );
+    let mut notes = Vec::new();
+    if h.rows_left_out > 0 {
+        notes.push(format!(
+            "{} of changes of the errors left out (each until 2,000 s after the estimator \
+             declared it, or after the change when it never did)",
+            rows_text(h.rows_left_out)
+        ));
+    }
+    if h.rows_without_estimate > 0 {
+        notes.push(format!(
+            "{} after a first estimate without one, not judged",
+            rows_text(h.rows_without_estimate)
+        ));
+    }
+    if !notes.is_empty() {
+        s.push_str(&format!("  {}\n", notes.join("; ")));
+    }
+    s
 }
 
 /// Linear-interpolated quantile of sorted values (`q` in [0, 1]).
@@ -369,6 +421,9 @@ pub struct StudyJson {
     #[serde(flatten)]
     pub summary: Summary,
     pub over_time: Summary,
+    /// The 1-sigma's honesty row by row, the runs' rows pooled ([`pool_honesty`]; `largest.run`
+    /// indexes `run_seeds`).
+    pub honesty: Honesty,
 }
 
 /// Share of the (run, error) pairs at report time `k` whose |error| is within twice the reported
@@ -592,6 +647,7 @@ mod tests {
             within_percent_from_s: [None; 4],
             within_arcsec_from_s: [None; 4],
             final_status: None,
+            honesty: crate::report::Honesty::default(),
         }
     }
 

@@ -109,6 +109,10 @@ pub fn truth_rows<'a>(truth: &'a TruthFile, generated: Option<&'a Generated>) ->
                 .params
                 .as_ref()
                 .map_or(0.0, |p| p.recording.time_offset_s),
+            errors_step_at_s: truth
+                .params
+                .as_ref()
+                .and_then(|p| p.errors_step.map(|step| step.at_s)),
         },
         None => TruthRows::Constant(truth.x_arcsec),
     }

@@ -8,6 +8,13 @@
 //!   percentage error: it is judged in arcsec only (its "within 0.5 %" is "within 10 arcsec").
 //! - Each log row is judged against the truth row nearest in time ([`ReportBuilder`]), so logs
 //!   starting at any time, shifted or jittered, are judged against the right truth.
+//! - Honesty of the reported 1-sigma, row by row ([`Honesty`]): over every row from the first
+//!   estimate on, the share of rows where some of the four |error| exceeds 2, 3 and 5 times its
+//!   1-sigma, and the largest |error| / 1-sigma. The rows from a true change of the errors
+//!   (`errors_step`) are left out until 2,000 s after the estimator first reports
+//!   `errors_changed` from then on (2,000 s after the change if it never does): while it relearns,
+//!   its 1-sigma is of the errors before. Rows without an estimate after the first (a restart
+//!   before the next one) are counted apart, not in the shares.
 //! - Attitude error before and after compensation: the oscillation of eq (2) put into the log
 //!   (truth) versus what is left of it after the core's correction:
 //!   `residual = oscillation_in - (raw attitude - corrected attitude)`. The true attitude, the
@@ -16,7 +23,8 @@
 use crate::replay::Step;
 use crate::scenario::{Row, RowTruth};
 use estimator_core::units::rad_to_arcsec;
-use estimator_core::{Estimate, Output, SampleError};
+use estimator_core::{Estimate, Output, SampleError, Status};
+use serde::Serialize;
 
 /// Times of the accuracy table, s.
 pub const REPORT_TIMES_S: [f64; 4] = [20_000.0, 45_000.0, 86_400.0, 172_800.0];
@@ -62,6 +70,7 @@ pub struct Tracker {
     last_time_s: f64,
     last: Option<Held>,
     next_time: usize,
+    honesty: HonestyTracker,
 }
 
 /// What the tracker keeps of the estimate on board: error, truth, reported 1-sigma, arcsec.
@@ -78,12 +87,27 @@ impl Tracker {
             last_time_s: f64::NEG_INFINITY,
             last: None,
             next_time: 0,
+            honesty: HonestyTracker::default(),
         }
     }
 
-    /// One row: its time, the estimate on board, and the true errors at that time (arcsec).
-    /// Rows with a non-finite time or out of order are ignored.
-    pub fn observe(&mut self, time_s: f64, estimate: Option<&Estimate>, truth_arcsec: &[f64; 4]) {
+    /// The tracker of a log whose errors change at `at_s` (the truth's `errors_step`), s on the
+    /// rows' time: [`Honesty`] leaves the rows of the change out.
+    pub fn with_errors_step(mut self, at_s: Option<f64>) -> Tracker {
+        self.honesty.step_at_s = at_s.filter(|t| t.is_finite());
+        self
+    }
+
+    /// One row: its time, the estimate on board, the status the estimator reported for it (`None`
+    /// for a rejected row) and the true errors at that time (arcsec). Rows with a non-finite time
+    /// or out of order are ignored.
+    pub fn observe(
+        &mut self,
+        time_s: f64,
+        estimate: Option<&Estimate>,
+        status: Option<Status>,
+        truth_arcsec: &[f64; 4],
+    ) {
         if !time_s.is_finite() || time_s <= self.last_time_s {
             return;
         }
@@ -94,6 +118,8 @@ impl Tracker {
         }
         self.last_time_s = time_s;
         let err = errors_arcsec(estimate, truth_arcsec);
+        self.honesty
+            .observe(time_s, err.zip(sigmas_arcsec(estimate)).as_ref(), status);
         self.last = err
             .zip(sigmas_arcsec(estimate))
             .map(|(e, sigma)| (e, *truth_arcsec, sigma));
@@ -149,8 +175,311 @@ impl Tracker {
             within_percent_from_s: self.within_percent_since,
             within_arcsec_from_s: self.within_arcsec_since,
             final_status: None,
+            honesty: self.honesty.finish(),
         }
     }
+}
+
+/// How long after a change of the errors, or after the estimator declares it, the rows are left
+/// out of [`Honesty`], s.
+pub const HONESTY_SETTLE_S: f64 = 2_000.0;
+
+/// The multiples of the reported 1-sigma [`Honesty`] counts rows beyond.
+pub const HONESTY_SIGMAS: [f64; 3] = [2.0, 3.0, 5.0];
+
+/// The largest |error| / reported 1-sigma of a set of rows, and where it was.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SigmaRatio {
+    /// |error| / 1-sigma (infinite for an error beside a 1-sigma of 0).
+    pub ratio: f64,
+    /// Time of the row, s (from the log's start, as the truth's).
+    pub time_s: f64,
+    /// Which error, 1..=4 (x1..x4).
+    pub error: usize,
+    /// Which run, for statistics over runs (`None` for one run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub run: Option<usize>,
+}
+
+/// Honesty of the reported 1-sigma, row by row: over every row from the first estimate on (rows
+/// of a change of the errors left out, see [`Tracker::with_errors_step`]), how often some of the
+/// four |error| exceeded 2, 3 and 5 times its 1-sigma. For an honest, Gaussian 1-sigma, a single
+/// error exceeds 2 sigma on 4.6 % of rows and 3 sigma on 0.27 %; some of four independent errors
+/// on 17 % and 1.1 % (fewer when the errors' estimates are correlated).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Honesty {
+    /// Rows judged: with an estimate, from the first estimate on, outside the change's rows.
+    pub rows: u64,
+    /// Rows judged where some of the four |error| exceeds 2 sigma.
+    pub beyond_2_sigma_rows: u64,
+    /// ... exceeds 3 sigma.
+    pub beyond_3_sigma_rows: u64,
+    /// ... exceeds 5 sigma.
+    pub beyond_5_sigma_rows: u64,
+    /// The largest |error| / 1-sigma over the rows judged.
+    pub largest: Option<SigmaRatio>,
+    /// Rows after the first estimate without one (e.g. a restart before the next): not judged,
+    /// not in the shares.
+    pub rows_without_estimate: u64,
+    /// Rows left out after a true change of the errors.
+    pub rows_left_out: u64,
+    /// The span left out, s: from the change to 2,000 s after its declaration (or after the
+    /// change, when the estimator never declared it); `None` without a change (and over runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub left_out_s: Option<[f64; 2]>,
+    /// When the estimator declared the change (`errors_changed` from the change on), s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub declared_at_s: Option<f64>,
+}
+
+impl Honesty {
+    /// Share of the rows judged beyond `HONESTY_SIGMAS[k]` sigma (NaN without rows).
+    pub fn share_beyond(&self, k: usize) -> f64 {
+        let n = [
+            self.beyond_2_sigma_rows,
+            self.beyond_3_sigma_rows,
+            self.beyond_5_sigma_rows,
+        ][k];
+        if self.rows == 0 {
+            f64::NAN
+        } else {
+            n as f64 / self.rows as f64
+        }
+    }
+
+    /// Adds `other`'s rows (run `run` of a study): the counts add up, the largest ratio is the
+    /// larger; the span left out is per run and dropped.
+    pub fn pool(&mut self, other: &Honesty, run: usize) {
+        self.rows += other.rows;
+        self.beyond_2_sigma_rows += other.beyond_2_sigma_rows;
+        self.beyond_3_sigma_rows += other.beyond_3_sigma_rows;
+        self.beyond_5_sigma_rows += other.beyond_5_sigma_rows;
+        self.rows_without_estimate += other.rows_without_estimate;
+        self.rows_left_out += other.rows_left_out;
+        self.left_out_s = None;
+        self.declared_at_s = None;
+        if let Some(l) = other.largest {
+            if self.largest.is_none_or(|m| l.ratio > m.ratio) {
+                self.largest = Some(SigmaRatio {
+                    run: Some(run),
+                    ..l
+                });
+            }
+        }
+    }
+
+    /// Counts one row with an estimate: its errors and reported 1-sigma, arcsec.
+    fn judge(&mut self, time_s: f64, error_arcsec: &[f64; 4], sigma_arcsec: &[f64; 4]) {
+        self.rows += 1;
+        let beyond = |k: f64| (0..4).any(|i| error_arcsec[i].abs() > k * sigma_arcsec[i]);
+        self.beyond_2_sigma_rows += beyond(HONESTY_SIGMAS[0]) as u64;
+        self.beyond_3_sigma_rows += beyond(HONESTY_SIGMAS[1]) as u64;
+        self.beyond_5_sigma_rows += beyond(HONESTY_SIGMAS[2]) as u64;
+        for i in 0..4 {
+            let (e, s) = (error_arcsec[i].abs(), sigma_arcsec[i]);
+            let ratio = if s > 0.0 {
+                e / s
+            } else if e == 0.0 {
+                0.0
+            } else {
+                f64::INFINITY
+            };
+            if self.largest.is_none_or(|m| ratio > m.ratio) {
+                self.largest = Some(SigmaRatio {
+                    ratio,
+                    time_s,
+                    error: i + 1,
+                    run: None,
+                });
+            }
+        }
+    }
+}
+
+/// Follows [`Honesty`] row by row without holding rows: the rows after the change's first
+/// 2,000 s, while the estimator has not declared it yet, are counted aside; a declaration leaves
+/// them out, the end of the log without one takes them in.
+#[derive(Clone, Debug, Default)]
+struct HonestyTracker {
+    step_at_s: Option<f64>,
+    started: bool,
+    counted: Honesty,
+    pending: Honesty,
+}
+
+impl HonestyTracker {
+    fn observe(
+        &mut self,
+        time_s: f64,
+        held: Option<&([f64; 4], [f64; 4])>,
+        status: Option<Status>,
+    ) {
+        if !self.started {
+            if held.is_none() {
+                return;
+            }
+            self.started = true;
+        }
+        let mut waiting = false;
+        if let Some(at_s) = self.step_at_s.filter(|at| time_s >= *at) {
+            if self.counted.declared_at_s.is_none() && status == Some(Status::ErrorsChanged) {
+                // Declared: what waited is left out with the rest of the change's rows.
+                self.counted.declared_at_s = Some(time_s);
+                self.counted.rows_left_out +=
+                    self.pending.rows + self.pending.rows_without_estimate;
+                self.pending = Honesty::default();
+            }
+            let end_s = self.counted.declared_at_s.unwrap_or(at_s) + HONESTY_SETTLE_S;
+            if time_s < end_s {
+                self.counted.rows_left_out += 1;
+                return;
+            }
+            // Past the change's first 2,000 s, not declared yet: counted aside until the
+            // estimator declares it or the log ends.
+            waiting = self.counted.declared_at_s.is_none();
+        }
+        let into = if waiting {
+            &mut self.pending
+        } else {
+            &mut self.counted
+        };
+        match held {
+            Some((e, s)) => into.judge(time_s, e, s),
+            None => into.rows_without_estimate += 1,
+        }
+    }
+
+    fn finish(&self) -> Honesty {
+        let mut h = self.counted;
+        // Never declared: the rows after the change's first 2,000 s count after all.
+        if h.declared_at_s.is_none() {
+            h.rows += self.pending.rows;
+            h.beyond_2_sigma_rows += self.pending.beyond_2_sigma_rows;
+            h.beyond_3_sigma_rows += self.pending.beyond_3_sigma_rows;
+            h.beyond_5_sigma_rows += self.pending.beyond_5_sigma_rows;
+            h.rows_without_estimate += self.pending.rows_without_estimate;
+            if let Some(l) = self.pending.largest {
+                if h.largest.is_none_or(|m| l.ratio > m.ratio) {
+                    h.largest = Some(l);
+                }
+            }
+        }
+        h.left_out_s = self
+            .step_at_s
+            .filter(|_| self.started)
+            .map(|at_s| [at_s, h.declared_at_s.unwrap_or(at_s) + HONESTY_SETTLE_S]);
+        h
+    }
+}
+
+/// `n` with its thousands separated by commas (`19,401`).
+pub fn thousands(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// `1 row`, `19,401 rows`.
+pub fn rows_text(n: u64) -> String {
+    if n == 1 {
+        "1 row".into()
+    } else {
+        format!("{} rows", thousands(n))
+    }
+}
+
+/// A time in whole seconds with its thousands separated (`2,940 s`).
+fn seconds(t: f64) -> String {
+    if t.is_finite() && t >= 0.0 {
+        format!("{} s", thousands(t.round() as u64))
+    } else {
+        format!("{t:.0} s")
+    }
+}
+
+/// A share of rows in percent, with as many decimals as a share above 0 needs to show (`0.3 %`,
+/// `0.01 %`); exactly `0 %` for none and `100 %` for all.
+pub fn percent_of_rows(count: u64, rows: u64) -> String {
+    if rows == 0 {
+        return "-".into();
+    }
+    if count == 0 {
+        return "0 %".into();
+    }
+    if count == rows {
+        return "100 %".into();
+    }
+    let p = 100.0 * count as f64 / rows as f64;
+    let decimals = (-p.log10()).ceil().max(1.0) as usize;
+    format!("{p:.decimals$} %")
+}
+
+/// `3.4 (x3 at 2,940 s)`: the largest |error| / 1-sigma and where (with the run, over runs).
+pub fn format_largest(l: &SigmaRatio) -> String {
+    let run = l.run.map_or(String::new(), |r| format!("run {r}: "));
+    format!(
+        "{:.1} ({run}x{} at {})",
+        l.ratio,
+        l.error,
+        seconds(l.time_s)
+    )
+}
+
+/// The shares beyond 2, 3 and 5 sigma and the largest ratio:
+/// `some error beyond 2 sigma on 0.3 %, beyond 3 sigma on 0.01 %, beyond 5 sigma on 0 %; largest
+/// |error|/sigma 3.4 (x3 at 2,940 s)`.
+pub fn format_honesty_shares(h: &Honesty) -> String {
+    let mut s = format!(
+        "some error beyond 2 sigma on {}, beyond 3 sigma on {}, beyond 5 sigma on {}",
+        percent_of_rows(h.beyond_2_sigma_rows, h.rows),
+        percent_of_rows(h.beyond_3_sigma_rows, h.rows),
+        percent_of_rows(h.beyond_5_sigma_rows, h.rows),
+    );
+    if let Some(l) = &h.largest {
+        s.push_str(&format!("; largest |error|/sigma {}", format_largest(l)));
+    }
+    s
+}
+
+/// The honesty line of one run (with a line more for rows left out or without an estimate).
+pub fn format_honesty(h: &Honesty) -> String {
+    if h.rows == 0 {
+        return "1-sigma honesty: no row with an estimate to judge\n".into();
+    }
+    let mut s = format!(
+        "1-sigma honesty, {} from the first estimate: {}\n",
+        rows_text(h.rows),
+        format_honesty_shares(h)
+    );
+    let mut notes = Vec::new();
+    if let (Some([from_s, to_s]), true) = (h.left_out_s, h.rows_left_out > 0) {
+        let why = match h.declared_at_s {
+            Some(d) => format!("2,000 s after errors_changed at {}", seconds(d)),
+            None => "never declared: 2,000 s after the change".to_string(),
+        };
+        notes.push(format!(
+            "{} of the change of the errors left out ({} to {}: {why})",
+            rows_text(h.rows_left_out),
+            seconds(from_s),
+            seconds(to_s),
+        ));
+    }
+    if h.rows_without_estimate > 0 {
+        notes.push(format!(
+            "{} after the first estimate without one, not judged",
+            rows_text(h.rows_without_estimate)
+        ));
+    }
+    if !notes.is_empty() {
+        s.push_str(&format!("  {}\n", notes.join("; ")));
+    }
+    s
 }
 
 /// Accuracy at one report time.
@@ -187,6 +516,8 @@ pub struct Accuracy {
     pub within_arcsec_from_s: [Option<f64>; 4],
     /// The estimator's status at the last accepted row, where the caller recorded it.
     pub final_status: Option<estimator_core::Status>,
+    /// How honest the reported 1-sigma was, row by row.
+    pub honesty: Honesty,
 }
 
 impl Accuracy {
@@ -337,11 +668,13 @@ pub enum TruthRows<'a> {
     Constant([f64; 4]),
     /// The generator's rows and their truth: accuracy against the errors in force, and the
     /// attitude error of eq (2) before and after compensation. `time_offset_s`: what the recorder
-    /// added to the log's time stamps (its `--time-offset`), taken off before matching.
+    /// added to the log's time stamps (its `--time-offset`), taken off before matching;
+    /// `errors_step_at_s`: when the truth's errors change (its `errors_step`), s from the start.
     Generated {
         rows: &'a [Row],
         truth: &'a [RowTruth],
         time_offset_s: f64,
+        errors_step_at_s: Option<f64>,
     },
 }
 
@@ -359,6 +692,12 @@ pub struct ReportBuilder<'a> {
 
 impl<'a> ReportBuilder<'a> {
     pub fn new(truth: TruthRows<'a>) -> Self {
+        let errors_step_at_s = match truth {
+            TruthRows::Constant(_) => None,
+            TruthRows::Generated {
+                errors_step_at_s, ..
+            } => errors_step_at_s,
+        };
         let rms_quarter = match truth {
             TruthRows::Constant(_) => None,
             TruthRows::Generated { rows, .. } => {
@@ -372,7 +711,7 @@ impl<'a> ReportBuilder<'a> {
         };
         ReportBuilder {
             truth,
-            tracker: Tracker::new(&REPORT_TIMES_S),
+            tracker: Tracker::new(&REPORT_TIMES_S).with_errors_step(errors_step_at_s),
             rms_all: None,
             rms_quarter,
             held: None,
@@ -408,6 +747,7 @@ impl<'a> ReportBuilder<'a> {
                 rows,
                 truth,
                 time_offset_s,
+                ..
             } => {
                 let t = row.time_s - time_offset_s;
                 let k = self.nearest(rows, t)?;
@@ -431,8 +771,13 @@ impl<'a> ReportBuilder<'a> {
             TruthRows::Generated { time_offset_s, .. } => time_offset_s,
             TruthRows::Constant(_) => 0.0,
         };
-        self.tracker
-            .observe(row.time_s - offset_s, self.held.as_ref(), &truth_errors);
+        let status = result.as_ref().ok().map(|out| out.status);
+        self.tracker.observe(
+            row.time_s - offset_s,
+            self.held.as_ref(),
+            status,
+            &truth_errors,
+        );
         Some(TruthAt {
             errors_arcsec: truth_errors,
             oscillation_deg,
@@ -449,18 +794,21 @@ impl<'a> ReportBuilder<'a> {
     }
 }
 
-/// Evaluates a replay of `rows` (the log as read) against the generator's rows and truth.
+/// Evaluates a replay of `rows` (the log as read) against the generator's rows and truth (whose
+/// errors change at `errors_step_at_s`, if they do).
 pub fn evaluate(
     rows: &[Row],
     steps: &[Step],
     generated_rows: &[Row],
     truth: &[RowTruth],
+    errors_step_at_s: Option<f64>,
     interval_s: f64,
 ) -> Report {
     let mut builder = ReportBuilder::new(TruthRows::Generated {
         rows: generated_rows,
         truth,
         time_offset_s: 0.0,
+        errors_step_at_s,
     });
     for (row, step) in rows.iter().zip(steps) {
         builder.observe(row, &step.result);
@@ -619,8 +967,8 @@ mod tests {
     fn tracker_keeps_the_reported_sigma_and_counts_errors_within_two_sigma() {
         let truth = [100.0, -100.0, 200.0, 1000.0];
         let mut t = Tracker::new(&[1.0, 3.0]);
-        t.observe(0.0, None, &truth);
-        t.observe(1.0, None, &truth);
+        t.observe(0.0, None, None, &truth);
+        t.observe(1.0, None, None, &truth);
         // Errors 1, -2.5, 0.5, 10 arcsec against 1-sigma 1, 1, 0.2, 4: within 2 sigma is x1 only
         // (1 <= 2; 2.5 > 2, 0.5 > 0.4, 10 > 8); within 3 sigma all four.
         t.observe(
@@ -629,6 +977,7 @@ mod tests {
                 [101.0, -102.5, 200.5, 1010.0],
                 [1.0, 1.0, 0.2, 4.0],
             )),
+            None,
             &truth,
         );
         let a = t.finish(1.0);
@@ -651,12 +1000,32 @@ mod tests {
     fn tracker_settling_and_report_times() {
         let truth = [100.0, -100.0, 200.0, 1000.0];
         let mut t = Tracker::new(&[2.0, 4.0, 10.0]);
-        t.observe(0.0, None, &truth);
-        t.observe(1.0, Some(&est([130.0, -100.0, 200.0, 1000.0])), &truth);
-        t.observe(2.0, Some(&est([100.2, -100.0, 200.0, 1003.0])), &truth);
+        t.observe(0.0, None, None, &truth);
+        t.observe(
+            1.0,
+            Some(&est([130.0, -100.0, 200.0, 1000.0])),
+            None,
+            &truth,
+        );
+        t.observe(
+            2.0,
+            Some(&est([100.2, -100.0, 200.0, 1003.0])),
+            None,
+            &truth,
+        );
         // 3 s missing: the 4 s report time is taken at 5 s's predecessor (2 s)
-        t.observe(5.0, Some(&est([101.0, -100.0, 200.0, 1012.0])), &truth);
-        t.observe(6.0, Some(&est([100.1, -100.0, 200.0, 1001.0])), &truth);
+        t.observe(
+            5.0,
+            Some(&est([101.0, -100.0, 200.0, 1012.0])),
+            None,
+            &truth,
+        );
+        t.observe(
+            6.0,
+            Some(&est([100.1, -100.0, 200.0, 1001.0])),
+            None,
+            &truth,
+        );
         let a = t.finish(1.0);
         assert_eq!(a.points.len(), 2, "10 s is past the end");
         let e2 = a.points[0].error_arcsec.unwrap();
@@ -674,8 +1043,8 @@ mod tests {
     fn unsettled_error_reports_none() {
         let truth = [100.0; 4];
         let mut t = Tracker::new(&[]);
-        t.observe(0.0, Some(&est([100.0, 100.0, 100.0, 100.0])), &truth);
-        t.observe(1.0, Some(&est([100.0, 100.0, 100.0, 120.0])), &truth);
+        t.observe(0.0, Some(&est([100.0, 100.0, 100.0, 100.0])), None, &truth);
+        t.observe(1.0, Some(&est([100.0, 100.0, 100.0, 120.0])), None, &truth);
         let a = t.finish(1.0);
         assert_eq!(
             a.within_arcsec_from_s,
@@ -688,8 +1057,8 @@ mod tests {
     fn a_true_error_of_zero_is_judged_in_arcsec_only() {
         let truth = [100.0, 0.0, 200.0, 0.0];
         let mut t = Tracker::new(&[1.0]);
-        t.observe(0.0, Some(&est([100.0, 0.0, 200.0, 3.0])), &truth);
-        t.observe(1.0, Some(&est([100.0, 0.0, 200.0, 3.0])), &truth);
+        t.observe(0.0, Some(&est([100.0, 0.0, 200.0, 3.0])), None, &truth);
+        t.observe(1.0, Some(&est([100.0, 0.0, 200.0, 3.0])), None, &truth);
         let a = t.finish(1.0);
         let pc = a.points[0].percent.unwrap();
         assert!(
@@ -747,6 +1116,7 @@ mod tests {
             rows: &generated,
             truth: &truth,
             time_offset_s: 0.0,
+            errors_step_at_s: None,
         });
         for (k, jitter) in [
             0.3, -0.2, 0.1, 0.45, -0.4, 0.0, 0.2, -0.1, 0.3, 0.0, 0.2, -0.3, 0.1, 0.0,
@@ -818,6 +1188,134 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn honesty_counts_rows_beyond_2_3_and_5_sigma_from_the_first_estimate() {
+        let truth = [100.0, -100.0, 200.0, 1000.0];
+        let one = [1.0; 4];
+        let off = |e: [f64; 4]| est_sigma(core::array::from_fn(|i| truth[i] + e[i]), one);
+        let mut t = Tracker::new(&[]);
+        t.observe(0.0, None, None, &truth);
+        t.observe(1.0, Some(&off([0.5, 0.0, 0.0, 0.0])), None, &truth);
+        t.observe(2.0, Some(&off([0.0, 2.5, 0.0, 0.0])), None, &truth);
+        t.observe(3.0, Some(&off([0.0, 0.0, -3.5, 0.0])), None, &truth);
+        t.observe(4.0, None, None, &truth);
+        t.observe(5.0, Some(&off([0.0, 0.0, 0.0, 6.0])), None, &truth);
+        t.observe(6.0, Some(&off([1.9, -1.9, 1.9, -1.9])), None, &truth);
+        let h = t.finish(1.0).honesty;
+        assert_eq!(
+            (
+                h.rows,
+                h.beyond_2_sigma_rows,
+                h.beyond_3_sigma_rows,
+                h.beyond_5_sigma_rows,
+                h.rows_without_estimate,
+                h.rows_left_out
+            ),
+            (5, 3, 2, 1, 1, 0),
+            "the row before the first estimate is not counted, the one after without one apart"
+        );
+        let l = h.largest.unwrap();
+        assert_eq!((l.time_s, l.error, l.run), (5.0, 4, None));
+        assert!((l.ratio - 6.0).abs() < 1e-3, "{l:?}");
+        assert!((h.share_beyond(0) - 0.6).abs() < 1e-12);
+        assert_eq!(
+            format_honesty(&h),
+            "1-sigma honesty, 5 rows from the first estimate: some error beyond 2 sigma on 60.0 %, \
+             beyond 3 sigma on 40.0 %, beyond 5 sigma on 20.0 %; largest |error|/sigma 6.0 (x4 at 5 s)\n  \
+             1 row after the first estimate without one, not judged\n"
+        );
+        // Pooled with a second run whose largest ratio is larger: counts add, its run is named.
+        let mut pooled = Honesty::default();
+        pooled.pool(&h, 0);
+        let mut t = Tracker::new(&[]);
+        t.observe(2940.0, Some(&off([0.0, 0.0, 8.0, 0.0])), None, &truth);
+        pooled.pool(&t.finish(1.0).honesty, 1);
+        assert_eq!((pooled.rows, pooled.beyond_5_sigma_rows), (6, 2));
+        assert!(format_honesty_shares(&pooled)
+            .ends_with("largest |error|/sigma 8.0 (run 1: x3 at 2,940 s)"));
+        assert_eq!(Tracker::new(&[]).finish(1.0).honesty, Honesty::default());
+    }
+
+    /// Rows 0..6000 s, an estimate from 10 s, errors changing at 100 s: the estimate is 50 sigma
+    /// off until 3000 s, then 0.1 sigma; `errors_changed` reported at `declared_s`.
+    fn through_a_change(declared_s: Option<f64>) -> Honesty {
+        let truth = [100.0, -100.0, 200.0, 1000.0];
+        let mut t = Tracker::new(&[]).with_errors_step(Some(100.0));
+        for k in 0..6000 {
+            let time_s = k as f64;
+            let e = if (100.0..3000.0).contains(&time_s) {
+                50.0
+            } else {
+                0.1
+            };
+            let estimate = est_sigma([truth[0] + e, truth[1], truth[2], truth[3]], [1.0; 4]);
+            let status = if declared_s.is_some_and(|d| (d..d + 100.0).contains(&time_s)) {
+                Status::ErrorsChanged
+            } else {
+                Status::Estimating
+            };
+            t.observe(time_s, (k >= 10).then_some(&estimate), Some(status), &truth);
+        }
+        t.finish(1.0).honesty
+    }
+
+    #[test]
+    fn honesty_leaves_out_a_change_of_the_errors_until_2000_s_after_its_declaration() {
+        // Declared at 2600 s: 100-4600 s left out (the rows after 2100 s waited for it).
+        let h = through_a_change(Some(2600.0));
+        assert_eq!(
+            (h.rows, h.rows_left_out, h.beyond_2_sigma_rows),
+            (90 + 1400, 4500, 0)
+        );
+        assert_eq!(
+            (h.left_out_s, h.declared_at_s),
+            (Some([100.0, 4600.0]), Some(2600.0))
+        );
+        assert!(h.largest.unwrap().ratio < 0.2);
+        assert!(
+            format_honesty(&h).ends_with(
+                "\n  4,500 rows of the change of the errors left out (100 s to 4,600 s: 2,000 s after errors_changed at 2,600 s)\n"
+            ),
+            "{}",
+            format_honesty(&h)
+        );
+        // Declared at 500 s: 100-2500 s left out; 2500-3000 s counted, 50 sigma off.
+        let h = through_a_change(Some(500.0));
+        assert_eq!(
+            (h.rows, h.rows_left_out, h.beyond_5_sigma_rows),
+            (90 + 3500, 2400, 500)
+        );
+        // Never declared (or only before the change): 100-2100 s left out, the rest counted.
+        for declared in [None, Some(0.0)] {
+            let h = through_a_change(declared);
+            assert_eq!(
+                (h.rows, h.rows_left_out, h.beyond_5_sigma_rows),
+                (90 + 3900, 2000, 900)
+            );
+            assert_eq!(
+                (h.left_out_s, h.declared_at_s),
+                (Some([100.0, 2100.0]), None)
+            );
+            let l = h.largest.unwrap();
+            assert_eq!((l.time_s, l.error), (2100.0, 1));
+            assert!(format_honesty(&h)
+                .contains("(100 s to 2,100 s: never declared: 2,000 s after the change)"));
+        }
+    }
+
+    #[test]
+    fn shares_of_rows_and_thousands_read_as_printed() {
+        assert_eq!(thousands(19_401), "19,401");
+        assert_eq!(thousands(999), "999");
+        assert_eq!(thousands(1_000_000), "1,000,000");
+        assert_eq!(percent_of_rows(0, 19_401), "0 %");
+        assert_eq!(percent_of_rows(58, 19_401), "0.3 %");
+        assert_eq!(percent_of_rows(2, 19_401), "0.01 %");
+        assert_eq!(percent_of_rows(1, 200_000), "0.0005 %");
+        assert_eq!(percent_of_rows(7, 7), "100 %");
+        assert_eq!(percent_of_rows(0, 0), "-");
     }
 
     #[test]

@@ -12,7 +12,9 @@
 //!   about 1.5 deg, periods 6-14 s), heading changes up to 0.5 deg/s, 5 m/s forward speed so the
 //!   latitude drifts, low latitude, 47340 s.
 //!
-//! Effects eq (2) does not contain ([`Mismatch`]) can be switched on for robustness studies.
+//! Effects eq (2) does not contain ([`Mismatch`]) can be switched on for robustness studies, and
+//! so can a ship's ordinary day ([`ShipMotion`]: slow heel and trim, heel in course changes), true
+//! attitude the estimator must cancel.
 //!
 //! The rotation angle `rho(t)` follows a [`RotationScheme`] (one way at a constant rate by
 //! default, as in the paper; also reversed, reciprocating and stop-and-go), and eq (2) is
@@ -106,13 +108,25 @@ pub const FIRST_TURN_S: f64 = 2.0 * TURN_EVERY_S;
 /// Time the heel takes to build up and to die away at the start and the end of a turn, s.
 pub const TURN_HEEL_RAMP_S: f64 = 20.0;
 
-/// Heading change and heel of the ship's turns at `t`, deg: `(heading, heel)`.
-fn turns_deg(heel_deg: f64, t: f64) -> (f64, f64) {
+/// Where the ship's turns of [`Mismatch::heel_in_turns_deg`] stand at one instant.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TurnState {
+    /// Heading changed by the turns so far, deg.
+    pub heading_deg: f64,
+    /// Heel of the turn under way, deg (outward: a turn to starboard heels to port, negative).
+    pub heel_deg: f64,
+    /// Rate of the heading change, deg/s: the exact derivative of `heading_deg` (+-
+    /// [`TURN_RATE_DEG_S`] while a turn is under way, 0 between turns).
+    pub rate_deg_s: f64,
+}
+
+/// The ship's turns at `t` (none when `heel_deg` is 0: the turns come with their heel).
+pub fn turns(heel_deg: f64, t: f64) -> TurnState {
     if heel_deg == 0.0 {
-        return (0.0, 0.0);
+        return TurnState::default();
     }
     if t < FIRST_TURN_S {
-        return (0.0, 0.0);
+        return TurnState::default();
     }
     let k = ((t - FIRST_TURN_S) / TURN_EVERY_S).floor();
     let into = t - FIRST_TURN_S - k * TURN_EVERY_S;
@@ -120,21 +134,191 @@ fn turns_deg(heel_deg: f64, t: f64) -> (f64, f64) {
     // Turns alternate: to starboard (heading up), then back to port.
     let starboard = (k as i64) % 2 == 0;
     let before = if starboard { 0.0 } else { TURN_DEG };
-    let (turned, heel) = if into >= duration {
-        (TURN_DEG, 0.0)
+    // The heading changes at a constant rate (no ramp): its derivative is the rate inside the
+    // turn and 0 outside; only the heel ramps in and out.
+    let (turned, heel, rate) = if into >= duration {
+        (TURN_DEG, 0.0, 0.0)
     } else {
         let ramp = |u: f64| 0.5 - 0.5 * (PI * (u / TURN_HEEL_RAMP_S).clamp(0.0, 1.0)).cos();
         (
             TURN_RATE_DEG_S * into,
             heel_deg * ramp(into).min(ramp(duration - into)),
+            TURN_RATE_DEG_S,
         )
     };
     // Outward: a turn to starboard heels the ship to port (roll < 0).
     if starboard {
-        (before + turned, -heel)
+        TurnState {
+            heading_deg: before + turned,
+            heel_deg: -heel,
+            rate_deg_s: rate,
+        }
     } else {
-        (before - turned, heel)
+        TurnState {
+            heading_deg: before - turned,
+            heel_deg: heel,
+            rate_deg_s: -rate,
+        }
     }
+}
+
+/// Period of the ship's slow heading weave ([`ScenarioParams::heading_weave_rate_deg_s`]), s.
+pub const WEAVE_PERIOD_S: f64 = 600.0;
+
+/// The slow heading weave at `t`: `(heading, rate)`, deg and deg/s. The heading is
+/// `R P / (2 pi) sin(2 pi t / P)` for a peak rate `R` and period `P` = [`WEAVE_PERIOD_S`]; the rate
+/// its exact derivative, `R cos(2 pi t / P)`.
+pub fn weave(peak_rate_deg_s: f64, t: f64) -> (f64, f64) {
+    if peak_rate_deg_s > 0.0 {
+        let w = 2.0 * PI * t / WEAVE_PERIOD_S;
+        (
+            peak_rate_deg_s * WEAVE_PERIOD_S / (2.0 * PI) * w.sin(),
+            peak_rate_deg_s * w.cos(),
+        )
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// The ship's slow motions on an ordinary day, beyond the wave-frequency sway: wind heel, fuel
+/// and loading shift the roll and the pitch over tens of minutes, and the ship heels in its
+/// course changes. They are part of the TRUE attitude of eq (3), not errors: the estimator must
+/// cancel them. All off by default (truth files without them: none).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ShipMotion {
+    /// Slow heel (roll, deg): sinusoids `amplitude_deg sin(2 pi t / period_s + phase_rad)` added
+    /// to the roll (phases drawn from the seed).
+    #[serde(default)]
+    pub slow_heel: Vec<SwayComponent>,
+    /// Slow trim (pitch, deg), of the same form, added to the pitch.
+    #[serde(default)]
+    pub slow_trim: Vec<SwayComponent>,
+    /// Heel per rate of turn of the course, deg of heel per deg/s: the ship heels outward by this
+    /// much times the rate of its course (the slow heading weave and the turns of
+    /// [`Mismatch::heel_in_turns_deg`], not the wave-frequency yaw sway): roll +=
+    /// `-K * rate_deg_s` (a turn to starboard, heading increasing, heels to port). 0: none.
+    #[serde(default)]
+    pub heel_per_turn_rate_deg_per_deg_s: f64,
+}
+
+impl ShipMotion {
+    /// Whether any of the slow motions is on.
+    pub fn is_none(&self) -> bool {
+        self.slow_heel.is_empty()
+            && self.slow_trim.is_empty()
+            && self.heel_per_turn_rate_deg_per_deg_s == 0.0
+    }
+
+    /// What the slow motions add to the true attitude at `t`, deg: `(roll, pitch)`;
+    /// `course_rate_deg_s` is the rate of the ship's course then ([`course_rate_deg_s`]).
+    pub fn roll_pitch_deg(&self, t: f64, course_rate_deg_s: f64) -> (f64, f64) {
+        (
+            sway(&self.slow_heel, t) - self.heel_per_turn_rate_deg_per_deg_s * course_rate_deg_s,
+            sway(&self.slow_trim, t),
+        )
+    }
+}
+
+/// The ship's slow motions as asked for: amplitudes and periods; the phases are drawn per seed
+/// ([`ShipMotionSettings::motion`]), so each run of a study has its own.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShipMotionSettings {
+    /// Slow heel components: (amplitude deg, period s).
+    pub slow_heel: Vec<(f64, f64)>,
+    /// Slow trim components: (amplitude deg, period s).
+    pub slow_trim: Vec<(f64, f64)>,
+    /// [`ShipMotion::heel_per_turn_rate_deg_per_deg_s`], deg per deg/s.
+    pub heel_per_turn_rate_deg_per_deg_s: f64,
+}
+
+/// Why the ship's slow motions asked for cannot be made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ShipMotionError {
+    /// A list of amplitudes and its list of periods differ in length.
+    #[error("--{what}-deg gives {amplitudes} amplitudes but --{what}-period-s {periods} periods: give one period per amplitude")]
+    CountsDiffer {
+        what: &'static str,
+        amplitudes: usize,
+        periods: usize,
+    },
+    /// An amplitude that is not a finite number.
+    #[error("--{what}-deg: every amplitude must be a finite number of degrees, got {value}")]
+    Amplitude { what: &'static str, value: f64 },
+    /// A period that is not a finite positive number.
+    #[error(
+        "--{what}-period-s: every period must be a finite number of seconds above 0, got {value}"
+    )]
+    Period { what: &'static str, value: f64 },
+    /// A heel per turn rate that is not finite.
+    #[error(
+        "--heel-per-turn-rate must be a finite number (deg of heel per deg/s of turn), got {0}"
+    )]
+    HeelPerTurnRate(f64),
+}
+
+impl ShipMotionSettings {
+    /// The settings of the two lists of each slow motion (amplitudes deg, periods s) and the heel
+    /// per turn rate, checked: as many periods as amplitudes, every value finite, periods above 0.
+    pub fn new(
+        slow_heel: (&[f64], &[f64]),
+        slow_trim: (&[f64], &[f64]),
+        heel_per_turn_rate_deg_per_deg_s: f64,
+    ) -> Result<ShipMotionSettings, ShipMotionError> {
+        fn pairs(
+            what: &'static str,
+            (amplitudes, periods): (&[f64], &[f64]),
+        ) -> Result<Vec<(f64, f64)>, ShipMotionError> {
+            if amplitudes.len() != periods.len() {
+                return Err(ShipMotionError::CountsDiffer {
+                    what,
+                    amplitudes: amplitudes.len(),
+                    periods: periods.len(),
+                });
+            }
+            if let Some(&value) = amplitudes.iter().find(|a| !a.is_finite()) {
+                return Err(ShipMotionError::Amplitude { what, value });
+            }
+            if let Some(&value) = periods.iter().find(|p| !(p.is_finite() && **p > 0.0)) {
+                return Err(ShipMotionError::Period { what, value });
+            }
+            Ok(amplitudes
+                .iter()
+                .copied()
+                .zip(periods.iter().copied())
+                .collect())
+        }
+        if !heel_per_turn_rate_deg_per_deg_s.is_finite() {
+            return Err(ShipMotionError::HeelPerTurnRate(
+                heel_per_turn_rate_deg_per_deg_s,
+            ));
+        }
+        Ok(ShipMotionSettings {
+            slow_heel: pairs("slow-heel", slow_heel)?,
+            slow_trim: pairs("slow-trim", slow_trim)?,
+            heel_per_turn_rate_deg_per_deg_s,
+        })
+    }
+
+    /// The motions of a log of `seed`: each component's phase drawn uniformly in [0, 2 pi) from
+    /// the seed (the heel's and the trim's from streams of their own, so adding a trim leaves the
+    /// heel as it was). Deterministic; the generator's other random draws are untouched.
+    pub fn motion(&self, seed: u64) -> ShipMotion {
+        let draw = |salt: u64, items: &[(f64, f64)]| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ salt);
+            sway_set(&mut rng, items)
+        };
+        ShipMotion {
+            slow_heel: draw(0x510_4EE1, &self.slow_heel),
+            slow_trim: draw(0x510_7819, &self.slow_trim),
+            heel_per_turn_rate_deg_per_deg_s: self.heel_per_turn_rate_deg_per_deg_s,
+        }
+    }
+}
+
+/// Rate of the ship's course at `t`, deg/s: the exact derivative of its slow heading, the weave
+/// ([`weave`]) plus the turns ([`turns`]); the wave-frequency yaw sway is not part of it.
+pub fn course_rate_deg_s(p: &ScenarioParams, t: f64) -> f64 {
+    weave(p.heading_weave_rate_deg_s, t).1 + turns(p.mismatch.heel_in_turns_deg, t).rate_deg_s
 }
 
 /// A change of the installation errors during the log: a re-installation after maintenance, or a
@@ -190,6 +374,10 @@ pub struct ScenarioParams {
     /// 1-sigma of white attitude noise, arcsec.
     pub noise_arcsec: f64,
     pub mismatch: Mismatch,
+    /// The ship's slow heel and trim and its heel in course changes: true attitude, not errors
+    /// (truth files without it: none).
+    #[serde(default)]
+    pub ship_motion: ShipMotion,
     /// What the data recorder loses and how it stamps time (default: nothing lost, exact stamps).
     #[serde(flatten)]
     pub recording: Recording,
@@ -297,6 +485,7 @@ impl ScenarioParams {
             low_frequency_deg: 0.05,
             noise_arcsec: 5.0,
             mismatch: Mismatch::default(),
+            ship_motion: ShipMotion::default(),
             recording: Recording::default(),
         };
         match kind {
@@ -463,7 +652,6 @@ impl Iterator for Samples<'_> {
             return None;
         }
         let p = self.p;
-        let weave_period_s = 600.0;
         let t = self.k as f64 * p.sample_interval_s;
         self.k += 1;
         let drift = p.mismatch.error_drift_arcsec_per_day * t / 86_400.0;
@@ -480,18 +668,20 @@ impl Iterator for Samples<'_> {
             + self.jitter.sample(&mut self.rng);
         let s = p.platform_phase_deg * RAD_PER_DEG + EARTH_RATE_RAD_PER_S * t;
         let lat = p.latitude_deg * RAD_PER_DEG + self.north_rate_rad_s * t;
-        let weave = if p.heading_weave_rate_deg_s > 0.0 {
-            p.heading_weave_rate_deg_s * weave_period_s / (2.0 * PI)
-                * (2.0 * PI * t / weave_period_s).sin()
-        } else {
-            0.0
-        };
-        let (turned_deg, heel_deg) = turns_deg(p.mismatch.heel_in_turns_deg, t);
-        let true_att = [
-            p.heading_deg + weave + turned_deg + sway(&p.heading_sway, t),
-            sway(&p.roll_sway, t) + heel_deg,
+        let (weave_deg, weave_rate_deg_s) = weave(p.heading_weave_rate_deg_s, t);
+        let turn = turns(p.mismatch.heel_in_turns_deg, t);
+        let mut true_att = [
+            p.heading_deg + weave_deg + turn.heading_deg + sway(&p.heading_sway, t),
+            sway(&p.roll_sway, t) + turn.heel_deg,
             sway(&p.pitch_sway, t),
         ];
+        if !p.ship_motion.is_none() {
+            let (roll_deg, pitch_deg) = p
+                .ship_motion
+                .roll_pitch_deg(t, weave_rate_deg_s + turn.rate_deg_s);
+            true_att[1] += roll_deg;
+            true_att[2] += pitch_deg;
+        }
         let osc = oscillation_rad(&x, rho, s, lat);
         let we = self.w_lf * t;
         let mut out = [0.0; 3];
@@ -632,5 +822,218 @@ mod tests {
             let rms = (dev.iter().map(|d| d * d).sum::<f64>() / dev.len() as f64).sqrt();
             assert!((rms - 0.05).abs() < 0.005, "{}: {rms}", scheme.name());
         }
+    }
+    /// Generates `p` and `q` (the same scenario with some slow motion added) and checks, row by
+    /// row, that they differ only in roll and pitch, by `roll(t)` and `pitch(t)`.
+    fn differ_by(
+        p: &ScenarioParams,
+        q: &ScenarioParams,
+        roll: impl Fn(f64) -> f64,
+        pitch: impl Fn(f64) -> f64,
+    ) {
+        let (a, b) = (generate(p), generate(q));
+        assert_eq!(a.rows.len(), b.rows.len());
+        for (ra, rb) in a.rows.iter().zip(&b.rows) {
+            let t = ra.time_s;
+            assert_eq!(
+                (ra.time_s, ra.rotation_deg, ra.platform_deg, ra.latitude_deg),
+                (rb.time_s, rb.rotation_deg, rb.platform_deg, rb.latitude_deg)
+            );
+            assert_eq!(ra.heading_deg, rb.heading_deg, "heading at {t}");
+            let (dr, dp) = (rb.roll_deg - ra.roll_deg, rb.pitch_deg - ra.pitch_deg);
+            assert!(
+                (dr - roll(t)).abs() < 1e-12,
+                "roll at {t}: {dr} against {}",
+                roll(t)
+            );
+            assert!(
+                (dp - pitch(t)).abs() < 1e-12,
+                "pitch at {t}: {dp} against {}",
+                pitch(t)
+            );
+        }
+        for (ta, tb) in a.truth.iter().zip(&b.truth) {
+            assert_eq!(ta.oscillation_deg, tb.oscillation_deg);
+            assert_eq!(ta.errors_arcsec, tb.errors_arcsec);
+        }
+    }
+
+    #[test]
+    fn slow_heel_and_trim_add_exactly_their_sinusoids_to_roll_and_pitch() {
+        let mut p = ScenarioParams::new(ScenarioKind::Sea, 5);
+        p.duration_s = 4000.0;
+        let settings =
+            ShipMotionSettings::new((&[0.3, 0.15], &[1200.0, 2500.0]), (&[0.1], &[1800.0]), 0.0)
+                .unwrap();
+        let mut q = p.clone();
+        q.ship_motion = settings.motion(q.seed);
+        let heel = q.ship_motion.slow_heel.clone();
+        let trim = q.ship_motion.slow_trim.clone();
+        assert_eq!(
+            heel.iter()
+                .map(|c| (c.amplitude_deg, c.period_s))
+                .collect::<Vec<_>>(),
+            vec![(0.3, 1200.0), (0.15, 2500.0)]
+        );
+        assert_eq!((trim[0].amplitude_deg, trim[0].period_s), (0.1, 1800.0));
+        let phases: Vec<f64> = heel.iter().chain(&trim).map(|c| c.phase_rad).collect();
+        assert!(
+            phases.iter().all(|f| (0.0..2.0 * PI).contains(f)),
+            "{phases:?}"
+        );
+        assert_eq!(
+            settings.motion(5),
+            q.ship_motion,
+            "phases drawn from the seed"
+        );
+        assert_ne!(settings.motion(6).slow_heel[0].phase_rad, heel[0].phase_rad);
+        let wave =
+            |a: f64, period: f64, phase: f64, t: f64| a * (2.0 * PI * t / period + phase).sin();
+        differ_by(
+            &p,
+            &q,
+            |t| wave(0.3, 1200.0, heel[0].phase_rad, t) + wave(0.15, 2500.0, heel[1].phase_rad, t),
+            |t| wave(0.1, 1800.0, trim[0].phase_rad, t),
+        );
+        // Trim alone: the heel is the same without it, and the trim swings +-0.1 deg.
+        let mut r = p.clone();
+        r.ship_motion = ShipMotionSettings::new((&[], &[]), (&[0.1], &[1800.0]), 0.0)
+            .unwrap()
+            .motion(r.seed);
+        assert_eq!(r.ship_motion.slow_trim, trim);
+        let (a, b) = (generate(&p), generate(&r));
+        let d: Vec<f64> = a
+            .rows
+            .iter()
+            .zip(&b.rows)
+            .map(|(x, y)| y.pitch_deg - x.pitch_deg)
+            .collect();
+        let (lo, hi) = d
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
+        assert!(
+            (hi - 0.1).abs() < 1e-5 && (lo + 0.1).abs() < 1e-5,
+            "{lo} {hi}"
+        );
+    }
+
+    #[test]
+    fn heel_per_turn_rate_heels_outward_by_k_times_the_course_rate() {
+        // The sea scenario weaves its heading at up to 0.5 deg/s (period 600 s); turns of 90 deg at
+        // 0.5 deg/s at 7200 s (to starboard) and 10800 s (to port), 180 s each.
+        let mut p = ScenarioParams::new(ScenarioKind::Sea, 2);
+        p.duration_s = 11_500.0;
+        p.mismatch.heel_in_turns_deg = 2.0;
+        let mut q = p.clone();
+        q.ship_motion.heel_per_turn_rate_deg_per_deg_s = 0.4;
+        let course_rate = |t: f64| {
+            let turn = if (7200.0..7380.0).contains(&t) {
+                0.5
+            } else if (10_800.0..10_980.0).contains(&t) {
+                -0.5
+            } else {
+                0.0
+            };
+            0.5 * (2.0 * PI * t / 600.0).cos() + turn
+        };
+        differ_by(&p, &q, |t| -0.4 * course_rate(t), |_| 0.0);
+        // Mid-turn to starboard, where the weave stands still: the ship heels to port.
+        let t = 7200.0 + 150.0;
+        assert!((course_rate(t) - 0.5).abs() < 1e-12);
+        assert!((q.ship_motion.roll_pitch_deg(t, course_rate_deg_s(&q, t)).0 + 0.2).abs() < 1e-12);
+        // The rate is the exact derivative of the slow heading (weave and turns, not the yaw
+        // sway): central differences of the true heading without its sway, away from the turns'
+        // corners.
+        let mut smooth = p.clone();
+        smooth.heading_sway.clear();
+        let g = generate(&smooth);
+        let heading: Vec<f64> = g.truth.iter().map(|tr| tr.true_attitude_deg[0]).collect();
+        let corners = [7200.0, 7380.0, 10_800.0, 10_980.0];
+        for k in 1..heading.len() - 1 {
+            let t = k as f64;
+            if corners.iter().any(|c| (t - c).abs() <= 1.0) {
+                continue;
+            }
+            let numeric = (heading[k + 1] - heading[k - 1]) / 2.0;
+            let rate = course_rate_deg_s(&smooth, t);
+            assert!((rate - course_rate(t)).abs() < 1e-12, "at {t}");
+            assert!(
+                (numeric - rate).abs() < 1e-4,
+                "at {t}: {numeric} against {rate}"
+            );
+        }
+    }
+
+    #[test]
+    fn truth_files_without_ship_motion_read_as_none() {
+        let p = ScenarioParams::new(ScenarioKind::Sea, 2);
+        let mut v = serde_json::to_value(&p).unwrap();
+        assert!(v.as_object_mut().unwrap().remove("ship_motion").is_some());
+        let back: ScenarioParams = serde_json::from_value(v).unwrap();
+        assert_eq!(back, p);
+        assert!(back.ship_motion.is_none());
+        // With motions: read back as written; an object with only some of them, the rest none.
+        let mut q = p.clone();
+        q.ship_motion = ShipMotionSettings::new((&[0.3], &[1200.0]), (&[0.1], &[1800.0]), 0.4)
+            .unwrap()
+            .motion(q.seed);
+        let text = serde_json::to_string(&q).unwrap();
+        assert_eq!(serde_json::from_str::<ScenarioParams>(&text).unwrap(), q);
+        let mut v = serde_json::to_value(&q).unwrap();
+        v["ship_motion"] = serde_json::json!({"heel_per_turn_rate_deg_per_deg_s": 0.4});
+        let partial: ScenarioParams = serde_json::from_value(v).unwrap();
+        assert_eq!(
+            partial.ship_motion,
+            ShipMotion {
+                heel_per_turn_rate_deg_per_deg_s: 0.4,
+                ..ShipMotion::default()
+            }
+        );
+    }
+
+    #[test]
+    fn ship_motion_settings_are_checked() {
+        let e = ShipMotionSettings::new((&[0.3, 0.1], &[1200.0]), (&[], &[]), 0.0).unwrap_err();
+        assert_eq!(
+            e,
+            ShipMotionError::CountsDiffer {
+                what: "slow-heel",
+                amplitudes: 2,
+                periods: 1
+            }
+        );
+        assert!(
+            e.to_string()
+                .contains("--slow-heel-deg gives 2 amplitudes but --slow-heel-period-s 1 periods"),
+            "{e}"
+        );
+        for period in [0.0, -600.0, f64::NAN, f64::INFINITY] {
+            let e = ShipMotionSettings::new((&[], &[]), (&[0.1], &[period]), 0.0).unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    ShipMotionError::Period {
+                        what: "slow-trim",
+                        ..
+                    }
+                ),
+                "{e:?}"
+            );
+        }
+        let e = ShipMotionSettings::new((&[f64::NAN], &[60.0]), (&[], &[]), 0.0).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                ShipMotionError::Amplitude {
+                    what: "slow-heel",
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        let e = ShipMotionSettings::new((&[], &[]), (&[], &[]), f64::INFINITY).unwrap_err();
+        assert_eq!(e, ShipMotionError::HeelPerTurnRate(f64::INFINITY));
+        let none = ShipMotionSettings::new((&[], &[]), (&[], &[]), 0.0).unwrap();
+        assert!(none.motion(1).is_none());
     }
 }

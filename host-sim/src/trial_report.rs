@@ -12,7 +12,7 @@ use crate::figures::{monte_carlo_figure, timeline_figures};
 use crate::html_report::{command_line, Block, Figure, Page, Section};
 use crate::monte_carlo::Summary;
 use crate::replay::{significant_4, Replay};
-use crate::report::{accuracy_table, rms_table, rms_title, Report};
+use crate::report::{accuracy_table, format_honesty, rms_table, rms_title, Report};
 use crate::time_stamps::format_utc;
 use crate::timeline::{EstimateArcsec, EventKind, Timeline};
 use anyhow::Context;
@@ -150,7 +150,12 @@ fn events_section(tl: &Timeline) -> Section {
 fn accuracy_sections(report: &Report, method: &str) -> Section {
     let (head, rows) = accuracy_table(&report.accuracy);
     let mut s = Section::new(format!("Accuracy against the truth ({method})"))
-        .with(Block::Table { head, rows });
+        .with(Block::Table { head, rows })
+        .with(Block::Paragraph(
+            format_honesty(&report.accuracy.honesty)
+                .trim_end()
+                .to_string(),
+        ));
     for (label, rms) in [
         ("from the first estimate", &report.rms_from_first_estimate),
         ("last quarter of the run", &report.rms_last_quarter),

@@ -534,3 +534,108 @@ fn an_offset_log_estimates_and_reports_as_the_plain_one() {
         assert_eq!(x.x_arcsec, y.x_arcsec);
     }
 }
+
+/// `generate`'s ship options put their motion into the roll and pitch (true attitude: the truth
+/// file records them, the errors' oscillation is unchanged) and nothing else; the sinusoids'
+/// phases come from the seed and are recorded.
+#[test]
+fn ship_options_add_slow_heel_trim_and_heel_in_turns() {
+    use host_sim::scenario::turns;
+    use std::f64::consts::PI;
+    let dir = tempfile::tempdir().unwrap();
+    let (plain, _) = generate(dir.path(), "plain", &["--duration", "7500"]);
+    let (ship, truth) = generate(
+        dir.path(),
+        "ship",
+        &[
+            "--duration",
+            "7500",
+            "--slow-heel-deg",
+            "0.3,0.15",
+            "--slow-heel-period-s",
+            "1200,2500",
+            "--slow-trim-deg",
+            "0.1",
+            "--slow-trim-period-s",
+            "1800",
+            "--heel-in-turns-deg",
+            "3",
+            "--heel-per-turn-rate",
+            "0.4",
+        ],
+    );
+    let m = &truth.params.ship_motion;
+    assert_eq!(truth.params.mismatch.heel_in_turns_deg, 3.0);
+    assert_eq!(m.heel_per_turn_rate_deg_per_deg_s, 0.4);
+    let heel: Vec<(f64, f64)> = m
+        .slow_heel
+        .iter()
+        .map(|c| (c.amplitude_deg, c.period_s))
+        .collect();
+    assert_eq!(heel, vec![(0.3, 1200.0), (0.15, 2500.0)]);
+    assert_eq!(
+        (m.slow_trim[0].amplitude_deg, m.slow_trim[0].period_s),
+        (0.1, 1800.0)
+    );
+    let wave = |c: &host_sim::scenario::SwayComponent, t: f64| {
+        c.amplitude_deg * (2.0 * PI * t / c.period_s + c.phase_rad).sin()
+    };
+    assert_eq!(plain.len(), ship.len());
+    let mut turning = 0;
+    for (a, b) in plain.iter().zip(&ship) {
+        let t = a.time_s;
+        // The paper scenario has no heading weave: the course turns only in the turns (the first
+        // at 7200 s, to starboard at 0.5 deg/s), heeling 3 deg outward plus 0.4 x 0.5 deg.
+        let turn = turns(3.0, t);
+        if turn.rate_deg_s != 0.0 {
+            turning += 1;
+            assert_eq!(turn.rate_deg_s, 0.5);
+        }
+        let roll = m.slow_heel.iter().map(|c| wave(c, t)).sum::<f64>() + turn.heel_deg
+            - 0.4 * turn.rate_deg_s;
+        let pitch = wave(&m.slow_trim[0], t);
+        let heading = (b.heading_deg - a.heading_deg + 180.0).rem_euclid(360.0) - 180.0;
+        assert!((b.roll_deg - a.roll_deg - roll).abs() < 2e-9, "roll at {t}");
+        assert!(
+            (b.pitch_deg - a.pitch_deg - pitch).abs() < 2e-9,
+            "pitch at {t}"
+        );
+        assert!((heading - turn.heading_deg).abs() < 2e-9, "heading at {t}");
+        assert_eq!(
+            (a.rotation_deg, a.platform_deg, a.latitude_deg),
+            (b.rotation_deg, b.platform_deg, b.latitude_deg)
+        );
+    }
+    assert_eq!(turning, 180, "one turn of 180 s from 7200 s");
+    // An amplitude without its period, or counts that differ, are refused with the reason.
+    let log = dir.path().join("x.csv");
+    for (args, message) in [
+        (
+            &["--slow-heel-deg", "0.3,0.1", "--slow-heel-period-s", "1200"][..],
+            "--slow-heel-deg gives 2 amplitudes but --slow-heel-period-s 1 periods",
+        ),
+        (&["--slow-trim-deg", "0.1"][..], "--slow-trim-period-s"),
+        (
+            &["--slow-trim-deg", "0.1", "--slow-trim-period-s", "0"][..],
+            "every period must be a finite number of seconds above 0, got 0",
+        ),
+    ] {
+        let mut a = vec![
+            "generate",
+            "--scenario",
+            "paper",
+            "--duration",
+            "100",
+            "--out",
+        ];
+        a.push(path_str(&log));
+        a.extend_from_slice(args);
+        let out = crate::common::host_sim(&a);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains(message),
+            "{args:?}: {stderr}"
+        );
+    }
+    assert!(!log.exists());
+}

@@ -240,6 +240,7 @@ fn estimate_report_of_a_log_with_and_without_truth_reads_in_a_browser() {
             "<dt>rotation pattern</dt><dd>one-way</dd>",
             "2023-11-14T22:13:20.000Z",
             "Accuracy against the truth",
+            "1-sigma honesty, ",
             "window restarts",
             "samples lost before this row",
             "status detecting_pattern -&gt; warming_up",

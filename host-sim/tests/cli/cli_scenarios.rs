@@ -90,6 +90,72 @@ fn sea_scenario_within_10_arcsec_at_end() {
     }
 }
 
+/// Parses `19,401`.
+fn count(text: &str) -> u64 {
+    text.replace(',', "").parse().unwrap()
+}
+
+/// The 1-sigma's honesty row by row, under the accuracy table: every row from the first estimate
+/// (599 s on the sea scenario) judged; a change of the errors' rows left out, the rest judged.
+#[test]
+fn estimate_prints_the_honesty_of_the_1_sigma_row_by_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, _, stdout) = generate_and_estimate(dir.path(), "sea", &["--duration", "6000"]);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("1-sigma honesty, "))
+        .unwrap_or_else(|| panic!("no honesty line: {stdout}"));
+    assert!(
+        line.starts_with(
+            "1-sigma honesty, 5,401 rows from the first estimate: some error beyond 2 sigma on "
+        ),
+        "{line}"
+    );
+    // Some error beyond 3 sigma on a few rows at most, none beyond 5 sigma.
+    let beyond_3: f64 = line
+        .split("beyond 3 sigma on ")
+        .nth(1)
+        .and_then(|r| r.split(" %").next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(beyond_3 < 1.0, "{line}");
+    assert!(line.contains("beyond 5 sigma on 0 %;"), "{line}");
+    let (_, _, stdout) = generate_and_estimate(
+        dir.path(),
+        "sea",
+        &[
+            "--duration",
+            "8000",
+            "--errors-step-at",
+            "3000",
+            "--errors-after-arcsec",
+            "230,-150,300,-250",
+        ],
+    );
+    let mut lines = stdout
+        .lines()
+        .skip_while(|l| !l.starts_with("1-sigma honesty, "));
+    let judged = count(
+        lines
+            .next()
+            .unwrap()
+            .trim_start_matches("1-sigma honesty, ")
+            .split(' ')
+            .next()
+            .unwrap(),
+    );
+    let note = lines.next().unwrap();
+    let (left_out, span) = note
+        .trim_start()
+        .split_once(" rows of the change of the errors left out (3,000 s to ")
+        .unwrap_or_else(|| panic!("{stdout}"));
+    let to_s = count(span.split(" s:").next().unwrap());
+    assert_eq!(count(left_out), to_s - 3000, "{note}");
+    assert!(to_s >= 5000, "at least 2,000 s left out: {note}");
+    assert_eq!(judged + count(left_out), 8000 - 599, "{stdout}");
+}
+
 #[test]
 fn run_writes_log_estimates_and_pngs() {
     let dir = temp_dir("cli-run");
@@ -121,6 +187,8 @@ fn run_writes_log_estimates_and_pngs() {
         3,
         "{stdout}"
     );
+    // Each method's 1-sigma judged row by row, from its first estimate on.
+    assert_eq!(stdout.matches("\n1-sigma honesty, ").count(), 3, "{stdout}");
 }
 
 #[test]
@@ -145,9 +213,30 @@ fn monte_carlo_writes_summary() {
         path_str(&out),
     ]);
     assert!(stdout.contains("3 runs"), "{stdout}");
+    // The honesty of the 1-sigma over the three runs' rows from their first estimates (599 s).
+    assert!(
+        stdout.contains("\n1-sigma honesty over the 3 runs, 13,206 rows from their first estimates: some error beyond 2 sigma on "),
+        "{stdout}"
+    );
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(v["runs"], 3);
+    let h = &v["honesty"];
+    assert_eq!(h["rows"], 3 * (5001 - 599));
+    let beyond: Vec<u64> = [
+        "beyond_2_sigma_rows",
+        "beyond_3_sigma_rows",
+        "beyond_5_sigma_rows",
+    ]
+    .iter()
+    .map(|k| h[k].as_u64().unwrap())
+    .collect();
+    assert!(beyond[0] >= beyond[1] && beyond[1] >= beyond[2], "{h}");
+    assert!(
+        beyond[2] == 0 && h["largest"]["ratio"].as_f64().unwrap() < 5.0,
+        "{h}"
+    );
+    assert!(h["largest"]["run"].as_u64().unwrap() < 3, "{h}");
     assert_eq!(v["times_s"], serde_json::json!([2000.0, 5000.0]));
     for key in [
         "median_abs_error_arcsec",
@@ -182,10 +271,40 @@ fn compare_prints_a_markdown_line_per_scenario_and_method() {
     let lines: Vec<&str> = stdout.lines().filter(|l| l.starts_with("| ")).collect();
     assert_eq!(lines.len(), 1 + 6, "{stdout}");
     assert!(lines[0].contains("time to 0.5 %") && lines[0].contains("at 45000 s"));
+    assert!(
+        lines[0].ends_with(
+            "| errors within 2 sigma at 20000 / 45000 s | rows beyond 2 / 3 sigma | largest error/sigma | status at the end (runs) |"
+        ),
+        "{}",
+        lines[0]
+    );
     let ours = lines
         .iter()
         .find(|l| l.starts_with("| sea | ours (windowed) | 2 |"))
         .expect("sea/ours line");
+    // The 1-sigma's honesty row by row: (share of rows with some error beyond 3 sigma, %; the
+    // largest |error| / sigma). Ours is honest; the paper's method as published is not (its
+    // filter cannot represent the leakage it leaves, its 1-sigma knows nothing of it).
+    let honesty = |line: &str| {
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        let n = cells.len();
+        let beyond_3: f64 = cells[n - 4]
+            .split(" / ")
+            .nth(1)
+            .unwrap()
+            .trim_end_matches(" %")
+            .parse()
+            .unwrap();
+        (beyond_3, cells[n - 3].parse::<f64>().unwrap())
+    };
+    let (beyond_3, largest) = honesty(ours);
+    assert!(beyond_3 < 5.0 && largest < 10.0, "{ours}");
+    let paper = lines
+        .iter()
+        .find(|l| l.starts_with("| sea | paper (literal) | 2 |"))
+        .expect("sea/paper line");
+    let (beyond_3, largest) = honesty(paper);
+    assert!(beyond_3 > 50.0 && largest > 10.0, "{paper}");
     // Outside the 3000 s run, the 20000 s and 45000 s columns are "-"; then the final statuses of
     // both runs.
     assert!(ours.contains("| - / - | - / - |"), "{ours}");
