@@ -95,6 +95,22 @@ pub const PITCH_PAIR: usize = 0;
 /// The roll channels (x3, x4 and the leakage of x1, x2).
 pub const ROLL_PAIR: usize = 1;
 
+/// States of the windowed method's filter: x1..x4 and the heel per rate of turn
+/// ([`HEEL_STATE`]).
+pub const STATES: usize = 5;
+
+/// Index of the state of the heel in turns: the roll the ship takes at a rate of turn of
+/// [`TURN_RATE_UNIT_RAD_S`], rad (see "Heel in turns" in the module doc).
+pub const HEEL_STATE: usize = 4;
+
+/// The rate of turn the heel state is the heel at, rad/s (0.057 deg/s): a ship heeling 6 deg per
+/// deg/s of turn rate heels 0.006 rad at it.
+pub const TURN_RATE_UNIT_RAD_S: Real = 0.001;
+
+/// Fixed-point counts per [`TURN_RATE_UNIT_RAD_S`] of a rate of turn: an `i16` holds rates up to
+/// 0.128 rad/s (7.3 deg/s) to 3.9e-6 rad/s.
+pub const RATE_COUNTS: f64 = 256.0;
+
 /// The four correlation products of one sample, in channel order (the paper's method uses them
 /// as they are).
 pub fn products(attitude: &Attitude, angles: &Angles) -> [Real; 4] {
@@ -109,19 +125,28 @@ pub fn products(attitude: &Attitude, angles: &Angles) -> [Real; 4] {
 /// Time constant of each of the reference's three low-pass stages, s.
 pub const REFERENCE_TIME_CONSTANT_S: f64 = 10.0;
 
-/// The low-passed references `(sin(rho-s), cos(rho-s), sin rho, cos rho)` in channel order: three
-/// one-pole stages in series (see the module doc).
+/// The low-passed references `(sin(rho-s), cos(rho-s), sin rho, cos rho)` in channel order, and
+/// the turn channel's, the rate of turn in units of [`TURN_RATE_UNIT_RAD_S`]: three one-pole stages
+/// in series (see the module doc).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ReferenceFilter {
-    /// Each stage's output per channel; meaningless until `started`.
-    stages: [[Real; 4]; 3],
+    /// Each stage's output per reference; meaningless until `started`.
+    stages: [[Real; 5]; 3],
     started: bool,
+}
+
+/// The references of one sample: the four channels' and the turn channel's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct References {
+    pub channels: [Real; 4],
+    /// The rate of turn, low-passed, in units of [`TURN_RATE_UNIT_RAD_S`].
+    pub turn: Real,
 }
 
 impl ReferenceFilter {
     /// Not started.
     pub const NEW: ReferenceFilter = ReferenceFilter {
-        stages: [[0.0; 4]; 3],
+        stages: [[0.0; 5]; 3],
         started: false,
     };
 
@@ -131,27 +156,33 @@ impl ReferenceFilter {
     }
 
     /// Filters one sample's references with stage gain `alpha`; the first sample starts every
-    /// stage at its value.
-    pub fn filter(&mut self, angles: &Angles, alpha: Real) -> [Real; 4] {
+    /// stage at its value. `turn_rate` in units of [`TURN_RATE_UNIT_RAD_S`].
+    pub fn filter(&mut self, angles: &Angles, turn_rate: Real, alpha: Real) -> References {
         let c = [
             angles.sin_rho_s,
             angles.cos_rho_s,
             angles.sin_rho,
             angles.cos_rho,
+            turn_rate,
         ];
-        if !self.started {
+        let out = if !self.started {
             self.stages = [c; 3];
             self.started = true;
-            return c;
-        }
-        let mut input = c;
-        for stage in &mut self.stages {
-            for ch in 0..4 {
-                stage[ch] += alpha * (input[ch] - stage[ch]);
+            c
+        } else {
+            let mut input = c;
+            for stage in &mut self.stages {
+                for ch in 0..5 {
+                    stage[ch] += alpha * (input[ch] - stage[ch]);
+                }
+                input = *stage;
             }
-            input = *stage;
+            input
+        };
+        References {
+            channels: [out[0], out[1], out[2], out[3]],
+            turn: out[4],
         }
-        input
     }
 }
 
@@ -174,6 +205,10 @@ pub struct QuantizedSample {
     pub cos_lat: i16,
     /// The references of the four channels, low-passed ([`ReferenceFilter`]), in channel order.
     pub reference: [i16; 4],
+    /// The rate of turn in [`RATE_COUNTS`] per [`TURN_RATE_UNIT_RAD_S`] (saturating).
+    pub turn_rate: i16,
+    /// The turn channel's reference, the low-passed rate of turn, in the same counts.
+    pub turn_reference: i16,
 }
 
 /// A sine, cosine or reference in fixed point ([`TRIG_COUNTS`] per unit), clamped to +-1; NaN
@@ -196,9 +231,14 @@ impl QuantizedSample {
         roll_rad: Real,
         pitch_rad: Real,
         angles: &Angles,
-        reference: &[Real; 4],
+        reference: &References,
+        turn_rate: Real,
     ) -> QuantizedSample {
         let att = |v: Real| round_to_i32(v * ATTITUDE_COUNTS as Real);
+        let rate = |u: Real| {
+            round_to_i32(u * RATE_COUNTS as Real).clamp(i32::from(i16::MIN), i32::from(i16::MAX))
+                as i16
+        };
         QuantizedSample {
             roll: att(roll_rad),
             pitch: att(pitch_rad),
@@ -208,7 +248,9 @@ impl QuantizedSample {
             cos_rho_s: trig_count(angles.cos_rho_s),
             sin_lat: trig_count(angles.sin_lat),
             cos_lat: trig_count(angles.cos_lat),
-            reference: reference.map(trig_count),
+            reference: reference.channels.map(trig_count),
+            turn_rate: rate(turn_rate),
+            turn_reference: rate(reference.turn),
         }
     }
 
@@ -231,6 +273,8 @@ impl QuantizedSample {
         // The references times the weight: within 2^14 x 2^6.
         let [c0, c1, c2, c3] = self.reference.map(|c| i32::from(c) * w);
         let (r, p) = (i64::from(self.roll), i64::from(self.pitch));
+        let u = i32::from(self.turn_rate);
+        let uf = i32::from(self.turn_reference) * w;
         let w64 = i64::from(w);
         // eq (2)'s roll row without its signs: sinL cos(rho-s), sinL sin(rho-s), cosL sin rho, cosL cos rho.
         let (h0, h1, h2, h3) = (sl * cs, sl * ss, cl * sr, cl * cr);
@@ -264,12 +308,23 @@ impl QuantizedSample {
             m(c3, h1),
             m(c3, h2),
             m(c3, h3),
+            i64::from(u * w),
+            m(c2, u),
+            m(c3, u),
+            // The turn channel: the low-passed rate of turn as the reference of roll.
+            i64::from(uf),
+            r * i64::from(uf),
+            m(uf, h0),
+            m(uf, h1),
+            m(uf, h2),
+            m(uf, h3),
+            m(uf, u),
         ]
     }
 }
 
 /// Number of running sums.
-pub const SUMS: usize = 28;
+pub const SUMS: usize = 38;
 
 /// The weight of an entry that counts in full (see [`CorrelationSums`]); a sample next to a run of
 /// lost rows counts less ([`crate::gap_fill`]).
@@ -290,7 +345,7 @@ pub const FULL_WEIGHT: u8 = 64;
 /// `sinL cos(rho-s)`, `sinL sin(rho-s)`, `cosL sin rho`, `cosL cos rho` (T^2); 20-23 `c2` times
 /// each of those, 24-27 `c3` times each (T^3). Magnitudes: at most 2^46 per sample, so `i64`
 /// holds more than 2^16 samples.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CorrelationSums {
     /// Samples (window entries) summed.
     pub count: u32,
@@ -311,6 +366,12 @@ impl CorrelationSums {
     };
 }
 
+impl Default for CorrelationSums {
+    fn default() -> Self {
+        Self::ZERO
+    }
+}
+
 /// An exact sum in the step's float type: its high and low 32 bits converted apart (one FPU
 /// instruction each on the Cortex-M4F, against a library call of dozens for a 64-bit integer)
 /// and added. Rounds twice, within 2 ulp; IEEE operations only, so every target agrees.
@@ -324,7 +385,11 @@ fn to_real(v: i64) -> Real {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Measurement {
     pub z: [Real; 4],
-    pub rows: [[Real; 4]; 4],
+    pub rows: [[Real; STATES]; 4],
+    /// The turn channel (roll with the rate of turn as its reference; with the roll pair only):
+    /// its measurement and row.
+    pub turn_z: Real,
+    pub turn_row: [Real; STATES],
 }
 
 impl CorrelationSums {
@@ -386,6 +451,8 @@ impl CorrelationSums {
         Some(Measurement {
             z: [pitch.z[0], pitch.z[1], roll.z[2], roll.z[3]],
             rows: [pitch.rows[0], pitch.rows[1], roll.rows[2], roll.rows[3]],
+            turn_z: roll.turn_z,
+            turn_row: roll.turn_row,
         })
     }
 
@@ -410,17 +477,22 @@ impl CorrelationSums {
         let cov = |mean_product: Real, a: Real, b: Real| mean_product - a * b;
         let mut out = Measurement {
             z: [0.0; 4],
-            rows: [[0.0; 4]; 4],
+            rows: [[0.0; STATES]; 4],
+            turn_z: 0.0,
+            turn_row: [0.0; STATES],
         };
         if pair == PITCH_PAIR {
             let (c0, c1, ss, cs, pitch) = (m(0, t), m(1, t), m(4, t), m(5, t), m(7, a));
             out.z[0] = cov(m(8, at), pitch, c0);
             out.z[1] = cov(m(9, at), pitch, c1);
-            out.rows[0] = [cov(m(12, tt), c0, ss), -cov(m(13, tt), c0, cs), 0.0, 0.0];
-            out.rows[1] = [cov(m(14, tt), c1, ss), -cov(m(15, tt), c1, cs), 0.0, 0.0];
+            out.rows[0] = [cov(m(12, tt), c0, ss), -cov(m(13, tt), c0, cs), 0.0, 0.0, 0.0];
+            out.rows[1] = [cov(m(14, tt), c1, ss), -cov(m(15, tt), c1, cs), 0.0, 0.0, 0.0];
         } else {
             let (c2, c3, roll) = (m(2, t), m(3, t), m(6, a));
             let h = [m(16, tt), m(17, tt), m(18, tt), m(19, tt)];
+            // The rate of turn in units of the heel state's rate.
+            let tu = t / RATE_COUNTS as Real;
+            let rate = m(28, inv_n / RATE_COUNTS as Real);
             out.z[2] = cov(m(10, at), roll, c2);
             out.z[3] = cov(m(11, at), roll, c3);
             out.rows[2] = [
@@ -428,12 +500,24 @@ impl CorrelationSums {
                 -cov(m(21, ttt), c2, h[1]),
                 cov(m(22, ttt), c2, h[2]),
                 -cov(m(23, ttt), c2, h[3]),
+                cov(m(29, tu), c2, rate),
             ];
             out.rows[3] = [
                 -cov(m(24, ttt), c3, h[0]),
                 -cov(m(25, ttt), c3, h[1]),
                 cov(m(26, ttt), c3, h[2]),
                 -cov(m(27, ttt), c3, h[3]),
+                cov(m(30, tu), c3, rate),
+            ];
+            let ut = ttt * (TRIG_COUNTS / RATE_COUNTS) as Real;
+            let turn_ref = m(31, inv_n / RATE_COUNTS as Real);
+            out.turn_z = cov(m(32, a / RATE_COUNTS as Real), roll, turn_ref);
+            out.turn_row = [
+                -cov(m(33, ut), turn_ref, h[0]),
+                -cov(m(34, ut), turn_ref, h[1]),
+                cov(m(35, ut), turn_ref, h[2]),
+                -cov(m(36, ut), turn_ref, h[3]),
+                cov(m(37, inv_n / (RATE_COUNTS * RATE_COUNTS) as Real), turn_ref, rate),
             ];
         }
         Some(out)

@@ -431,6 +431,16 @@ impl<const CAP: usize> Estimator<CAP> {
             rotation_rad: sample.rotation_rad,
             rotation_minus_platform_rad: wrap_pi(sample.rotation_rad - sample.platform_rad),
             latitude_rad: sample.latitude_rad,
+            // The heading with eq (2)'s oscillation for the estimate so far taken out: its rate is
+            // the ship's turn (the heel in turns), not the installation errors' oscillation.
+            heading_rad: match self.method.estimate(&self.config) {
+                Some(e) => {
+                    let row = angles.heading_row();
+                    let d: Real = row.iter().zip(&e.x_rad).map(|(a, b)| a * b).sum();
+                    wrap_pi(sample.attitude.heading_rad - d)
+                }
+                None => sample.attitude.heading_rad,
+            },
             angles: *angles,
             fill_weight: 0,
         };

@@ -96,6 +96,8 @@ pub struct GridSample {
     /// Rotation minus platform angle, rad.
     pub rotation_minus_platform_rad: Real,
     pub latitude_rad: Real,
+    /// Heading, rad (the ship's turns: [`crate::correlation`], "Heel in turns").
+    pub heading_rad: Real,
     /// Trigonometry of the angles.
     pub angles: Angles,
     /// 0 for a received sample; for a filled one, its variance in units of a filled single
@@ -594,6 +596,7 @@ impl GapFiller {
         let rotation_minus_platform_rad =
             ang(b.rotation_minus_platform_rad, a.rotation_minus_platform_rad);
         let latitude_rad = b.latitude_rad + (a.latitude_rad - b.latitude_rad) * f;
+        let heading_rad = ang(b.heading_rad, a.heading_rad);
         let lat = if latitude_rad == b.latitude_rad {
             (b.angles.sin_lat, b.angles.cos_lat)
         } else {
@@ -607,6 +610,7 @@ impl GapFiller {
             rotation_rad,
             rotation_minus_platform_rad,
             latitude_rad,
+            heading_rad,
             angles: Angles::from_rotation(rotation_rad, rotation_minus_platform_rad, lat),
             fill_weight: weight,
         })
@@ -684,6 +688,7 @@ mod tests {
             rotation_rad: 0.0,
             rotation_minus_platform_rad: 0.0,
             latitude_rad: 0.5,
+            heading_rad: 0.0,
             angles: Angles::from_rotation(0.0, 0.0, sin_cos(0.5)),
             fill_weight: 0,
         }

@@ -111,6 +111,31 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         r: T,
         gate: Option<(T, T)>,
     ) -> Result<T, KalmanError> {
+        self.update_masked(h, z, r, gate, None)
+    }
+
+    /// [`ConstantStateKalman::update`] that moves only the states `updated`, the others taken as
+    /// they are (their uncertainty enters the innovation's variance and the covariance, not
+    /// their estimates).
+    pub fn update_states(
+        &mut self,
+        h: &[T; N],
+        z: T,
+        r: T,
+        updated: &[bool; N],
+    ) -> Result<T, KalmanError> {
+        self.update_masked(h, z, r, None, Some(updated))
+    }
+
+    /// [`ConstantStateKalman::update_gated`] that moves only the states `updated` (all: `None`).
+    pub fn update_masked(
+        &mut self,
+        h: &[T; N],
+        z: T,
+        r: T,
+        gate: Option<(T, T)>,
+        updated: Option<&[bool; N]>,
+    ) -> Result<T, KalmanError> {
         let h = SVector::<T, N>::from_column_slice(h);
         if !z.is_finite() || !r.is_finite() || r < T::zero() || h.iter().any(|v| !v.is_finite()) {
             return Err(KalmanError::NonFinite);
@@ -127,7 +152,16 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
                 return Err(KalmanError::Gated);
             }
         }
-        let k = ph / s;
+        let mut k = ph / s;
+        // The states not in `updated` keep their estimates (a Schmidt "consider" update: the
+        // Joseph form below is the covariance of any gain).
+        if let Some(updated) = updated {
+            for i in 0..N {
+                if !updated[i] {
+                    k[i] = T::zero();
+                }
+            }
+        }
         // D = (I - k h') P = P - k b', b = P h = ph (P symmetric).
         let mut d = self.p;
         for i in 0..N {
@@ -162,7 +196,7 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
     /// move them as at a cold start); the other states keep their estimates and covariance. The
     /// covariance stays symmetric positive definite: the kept block is a principal submatrix of a
     /// positive definite matrix, and the forgotten states are uncorrelated with it.
-    pub fn forget(&mut self, which: &[bool; N], prior_sigma: T) {
+    pub fn forget(&mut self, which: &[bool; N], prior_sigma: &[T; N]) {
         for i in 0..N {
             if !which[i] {
                 continue;
@@ -171,7 +205,7 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
                 self.p[(i, j)] = T::zero();
                 self.p[(j, i)] = T::zero();
             }
-            self.p[(i, i)] = prior_sigma * prior_sigma;
+            self.p[(i, i)] = prior_sigma[i] * prior_sigma[i];
         }
     }
 

@@ -90,7 +90,7 @@ impl<const CAP: usize> MethodState<CAP> {
         period_known: bool,
     ) -> u32 {
         match self {
-            MethodState::Windowed(m) => m.push(sample, feed.reference_alpha, weight),
+            MethodState::Windowed(m) => m.push(sample, feed.reference_alpha, feed.interval, weight),
             #[cfg(feature = "paper-method")]
             MethodState::Paper(m) => {
                 if period_known {

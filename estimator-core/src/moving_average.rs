@@ -19,7 +19,7 @@
 
 use heapless::Deque;
 
-use crate::correlation::{CorrelationSums, QuantizedSample, FULL_WEIGHT};
+use crate::correlation::{CorrelationSums, QuantizedSample, References, FULL_WEIGHT};
 use crate::gap_fill::GridSample;
 use crate::installation::Angles;
 use crate::math::{round, sin_cos, wrap_pi};
@@ -229,6 +229,8 @@ impl Entry {
             sin_lat: 0,
             cos_lat: 0,
             reference: [0; 4],
+            turn_rate: 0,
+            turn_reference: 0,
         },
         number: 0,
         weight: 0,
@@ -297,6 +299,10 @@ pub struct Bin {
     pub latitude_rad: Real,
     /// Sum of the low-passed references.
     pub reference: [Real; 4],
+    /// Sum of the rates of turn and of the turn channel's references, in units of
+    /// [`crate::correlation::TURN_RATE_UNIT_RAD_S`].
+    pub turn_rate: Real,
+    pub turn_reference: Real,
     /// The first sample's rotation and rotation-minus-platform angles, and the sums of the offsets
     /// from them.
     pub rotation0_rad: Real,
@@ -316,6 +322,8 @@ impl Bin {
         pitch_rad: 0.0,
         latitude_rad: 0.0,
         reference: [0.0; 4],
+        turn_rate: 0.0,
+        turn_reference: 0.0,
         rotation0_rad: 0.0,
         rotation_offset_rad: 0.0,
         rotation_minus_platform0_rad: 0.0,
@@ -492,9 +500,21 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
     /// Adds one sample with its low-passed references and its weight (0 to [`FULL_WEIGHT`]):
     /// whether it completed an entry (every sample, without bins) and how many old entries went.
     /// Samples come in grid order; lost ones are simply not pushed.
-    pub fn push(&mut self, s: &GridSample, reference: &[Real; 4], weight: u8) -> Pushed {
+    pub fn push(
+        &mut self,
+        s: &GridSample,
+        reference: &References,
+        turn_rate: Real,
+        weight: u8,
+    ) -> Pushed {
         if self.bin <= 1 {
-            let q = QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference);
+            let q = QuantizedSample::new(
+                s.roll_rad,
+                s.pitch_rad,
+                &s.angles,
+                reference,
+                turn_rate,
+            );
             let removed =
                 self.push_entry(s.index, q, FillCode::of(u32::from(s.fill_weight)), weight);
             return Pushed {
@@ -528,8 +548,10 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         b.pitch_rad += w * s.pitch_rad;
         b.latitude_rad += w * s.latitude_rad;
         for ch in 0..4 {
-            b.reference[ch] += w * reference[ch];
+            b.reference[ch] += w * reference.channels[ch];
         }
+        b.turn_rate += w * turn_rate;
+        b.turn_reference += w * reference.turn;
         b.rotation_offset_rad += w * wrap_pi(s.rotation_rad - b.rotation0_rad);
         b.rotation_minus_platform_offset_rad +=
             w * wrap_pi(s.rotation_minus_platform_rad - b.rotation_minus_platform0_rad);
@@ -567,7 +589,11 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             b.roll_rad / n,
             b.pitch_rad / n,
             &angles,
-            &b.reference.map(|r| r / n),
+            &References {
+                channels: b.reference.map(|r| r / n),
+                turn: b.turn_reference / n,
+            },
+            b.turn_rate / n,
         );
         let fill = FillCode::of(b.fill_weight);
         // The bin's weight: the mean of its samples' (lost samples count 0).

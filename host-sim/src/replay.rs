@@ -157,7 +157,7 @@ impl StepView<'_> {
         let m = w.window().sums().measurement()?;
         let x = w.filter().state();
         Some(core::array::from_fn(|ch| {
-            m.z[ch] - (0..4).map(|i| m.rows[ch][i] * x[i]).sum::<Real>()
+            m.z[ch] - (0..x.len()).map(|i| m.rows[ch][i] * x[i]).sum::<Real>()
         }))
     }
 }
@@ -268,6 +268,13 @@ where
         interval_check.observe(line.row.time_s)?;
         let result = est.step(&sample_of(&line.row));
         count += 1;
+        if std::env::var("RINS_DEBUG_HEEL").is_ok() && (line.row.time_s as u64) % 20 == 0 && line.row.time_s < 900.0 {
+            if let Some(w) = est.windowed() {
+                let x = w.filter().state();
+                let p = w.filter().covariance();
+                eprintln!("DEBUG t {} x5 {:.6} sd5 {:.6}", line.row.time_s, x[4], p[(4, 4)].max(0.0).sqrt());
+            }
+        }
         if let Ok(out) = &result {
             final_status = Some(out.status);
             if let Some(change) = est.error_change().filter(|c| c.detected_s == out.time_s) {

@@ -187,14 +187,48 @@ pub mod pair;
 pub mod start;
 
 use crate::config::Config;
-use crate::correlation::{ReferenceFilter, FULL_WEIGHT};
+use crate::correlation::{
+    ReferenceFilter, FULL_WEIGHT, HEEL_STATE, ROLL_PAIR, STATES, TURN_RATE_UNIT_RAD_S,
+};
 use crate::gap_fill::{FillVariance, GridSample};
 use crate::kalman::{ConstantStateKalman, KalmanError};
-use crate::math::Compare;
+use crate::math::{wrap_pi, Compare};
 use crate::moving_average::CorrelationWindow;
 use crate::Real;
 use change::{persistence_blocks, Alarm, BlockContext, ChangeDetector};
 use pair::{channels, Pair, ResidualStats};
+
+/// The prior 1-sigma of the heel state ([`crate::correlation::HEEL_STATE`]), rad: a heel of 10 deg
+/// per deg/s of turn rate.
+pub const HEEL_PRIOR_SIGMA_RAD: Real = 0.01;
+
+/// The low-passed rate of turn beyond which the ship turns enough for its heel in turns to be
+/// learned, in units of [`TURN_RATE_UNIT_RAD_S`] (0.029 deg/s): far above what eq (2)'s heading
+/// oscillation left in the heading gives (about 0.001 deg/s), far below a course change or an
+/// autopilot's yawing.
+pub const TURN_EXCITATION: Real = 0.5;
+
+/// The 1-sigma x3 and x4 go back to when the heel in turns starts to be learned, rad (200
+/// arcsec: a course weave's heel leaks into them by hundreds of arcsec).
+pub const HEEL_FORGET_SIGMA_RAD: Real = 1.0e-3;
+
+/// A heel at the unit rate of turn beyond which the first turn channel's measurement makes x3,
+/// x4 be learned again, rad (1.5 s of heel per rad/s of turn; one window's measurement of no heel
+/// at sea scatters by a few 1e-4).
+pub const HEEL_SIGNIFICANT_RAD: Real = 3.0e-4;
+
+/// The heel state's variance below which the correlation channels update it too, rad^2: a heel
+/// known to 2e-5 rad (4 arcsec) at the unit rate of turn.
+pub const HEEL_LEARNED_VARIANCE_RAD2: Real = 4.0e-10;
+
+/// The prior 1-sigma of each state: the configuration's for x1..x4; for the heel in turns,
+/// [`HEEL_PRIOR_SIGMA_RAD`] once the ship has turned (`turning`), else 0: until then the heel
+/// state is held at 0 (a rate of turn that is only the rest of eq (2)'s heading oscillation is
+/// locked to the rotation, and would trade the heel for x3, x4).
+fn prior_sigma_rad(config: &Config, turning: bool) -> [Real; STATES] {
+    let p = config.prior_sigma_rad;
+    [p, p, p, p, if turning { HEEL_PRIOR_SIGMA_RAD } else { 0.0 }]
+}
 use start::StartTaper;
 
 /// Time constant of the residual average, in rotation periods.
@@ -232,7 +266,7 @@ pub struct Windowed<const CAP: usize> {
     /// The low-pass of the correlation references.
     reference: ReferenceFilter,
     /// The 4-state filter of x1..x4.
-    kf: ConstantStateKalman<Real, 4>,
+    kf: ConstantStateKalman<Real, STATES>,
     /// Measurement steps applied so far.
     updates: u32,
     /// Window entries added since the last update.
@@ -246,7 +280,7 @@ pub struct Windowed<const CAP: usize> {
     /// The estimate when the change was declared, rad: the residuals of that block are formed
     /// against it; while the first windows' bumps go on ([`start`]), the estimate held at the end
     /// of the last bump.
-    held_x_rad: [Real; 4],
+    held_x_rad: [Real; STATES],
     /// Window entries still to come in the period after a change was declared, while which the
     /// status says so (not kept by a checkpoint).
     changed_entries: u32,
@@ -261,6 +295,12 @@ pub struct Windowed<const CAP: usize> {
     /// The first windows' weights ([`start`]; a checkpoint keeps whether their bumps go on and
     /// whether one has ended, not where they stand).
     start: StartTaper,
+    /// The grid index and heading of the last sample pushed, for the rate of turn (not kept by a
+    /// checkpoint: the window restarts).
+    last_heading: Option<(u32, Real, Option<Real>)>,
+    /// The ship has turned since the start (its low-passed rate of turn beyond
+    /// [`TURN_EXCITATION`]): the heel in turns is learned once the first windows' bumps are over.
+    turning: bool,
     /// The estimate reported ([`Windowed::estimate_now`] after each update).
     report: Option<MethodEstimate>,
     /// A bump has just ended: the other pair's report is to be refreshed at the next update (not
@@ -272,14 +312,14 @@ pub struct Windowed<const CAP: usize> {
 /// the filter and each pair's residual statistics learned alongside it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CleanState {
-    kf: ConstantStateKalman<Real, 4>,
+    kf: ConstantStateKalman<Real, STATES>,
     stats: [ResidualStats; 2],
 }
 
 impl CleanState {
     /// A filter of zeros (see [`Windowed::unconfigured`]).
     const UNCONFIGURED: CleanState = CleanState {
-        kf: ConstantStateKalman::from_parts([0.0; 4], [[0.0; 4]; 4]),
+        kf: ConstantStateKalman::from_parts([0.0; STATES], [[0.0; STATES]; STATES]),
         stats: [ResidualStats::UNCONFIGURED; 2],
     };
 }
@@ -303,7 +343,7 @@ impl<const CAP: usize> Windowed<CAP> {
     }
 
     /// The Kalman filter of x1..x4.
-    pub fn filter(&self) -> &ConstantStateKalman<Real, 4> {
+    pub fn filter(&self) -> &ConstantStateKalman<Real, STATES> {
         &self.kf
     }
 
@@ -321,18 +361,20 @@ impl<const CAP: usize> Windowed<CAP> {
         Windowed {
             window: CorrelationWindow::new(),
             reference: ReferenceFilter::NEW,
-            kf: ConstantStateKalman::from_parts([0.0; 4], [[0.0; 4]; 4]),
+            kf: ConstantStateKalman::from_parts([0.0; STATES], [[0.0; STATES]; STATES]),
             updates: 0,
             entries_since_update: 0,
             next_pair: 0,
             pairs: [Pair::UNCONFIGURED; 2],
             change: ChangeDetector::NEW,
-            held_x_rad: [0.0; 4],
+            held_x_rad: [0.0; STATES],
             changed_entries: 0,
             gated: 0,
             clean_state_due: false,
             clean: CleanState::UNCONFIGURED,
             start: StartTaper::Fresh,
+            last_heading: None,
+            turning: false,
             report: None,
             held_report_due: false,
         }
@@ -350,18 +392,20 @@ impl<const CAP: usize> Windowed<CAP> {
     pub fn reset(&mut self, config: &Config) {
         self.window.reset();
         self.reference = ReferenceFilter::default();
-        self.kf = ConstantStateKalman::new([config.prior_sigma_rad; 4]);
+        self.kf = ConstantStateKalman::new(prior_sigma_rad(config, false));
         self.updates = 0;
         self.entries_since_update = 0;
         self.next_pair = 0;
         self.pairs = [Pair::new(config); 2];
         self.change = ChangeDetector::NEW;
-        self.held_x_rad = [0.0; 4];
+        self.held_x_rad = [0.0; STATES];
         self.changed_entries = 0;
         self.gated = 0;
         self.clean_state_due = false;
         self.keep_clean_state();
         self.start = StartTaper::Fresh;
+        self.last_heading = None;
+        self.turning = false;
         self.report = None;
         self.held_report_due = false;
     }
@@ -411,9 +455,37 @@ impl<const CAP: usize> Windowed<CAP> {
     /// Adds one sample of weight `weight` to the window (its references low-passed on the way,
     /// with stage gain `reference_alpha`: [`ReferenceFilter::alpha`]); returns how many old
     /// entries the window removed.
-    pub fn push(&mut self, sample: &GridSample, reference_alpha: Real, weight: u8) -> u32 {
-        let reference = self.reference.filter(&sample.angles, reference_alpha);
-        let pushed = self.window.push(sample, &reference, weight);
+    pub fn push(
+        &mut self,
+        sample: &GridSample,
+        reference_alpha: Real,
+        interval: Real,
+        weight: u8,
+    ) -> u32 {
+        // The rate of turn at the sample: the heading's difference since the last sample pushed
+        // is the rate half an interval before (over the rows lost in between, the mean rate);
+        // extrapolated to the sample from the difference before, when both are one interval.
+        let (turn_rate_rad_s, difference) = match self.last_heading {
+            Some((index, heading, previous)) if sample.index != index => {
+                let steps = sample.index.wrapping_sub(index);
+                let d = wrap_pi(sample.heading_rad - heading) / (steps as Real * interval);
+                match previous {
+                    Some(p) if steps == 1 => (1.5 * d - 0.5 * p, Some(d)),
+                    _ => (d, (steps == 1).then_some(d)),
+                }
+            }
+            _ => (0.0, None),
+        };
+        self.last_heading = Some((sample.index, sample.heading_rad, difference));
+        let turn_rate = turn_rate_rad_s * (1.0 / TURN_RATE_UNIT_RAD_S);
+        let reference = self
+            .reference
+            .filter(&sample.angles, turn_rate, reference_alpha);
+        if reference.turn.abs() > TURN_EXCITATION {
+            // The ship turns: its heel in turns is to be learned (from the next roll update).
+            self.turning = true;
+        }
+        let pushed = self.window.push(sample, &reference, turn_rate, weight);
         if pushed.completed {
             self.entries_since_update = self.entries_since_update.saturating_add(1);
         }
@@ -442,7 +514,12 @@ impl<const CAP: usize> Windowed<CAP> {
             return self.live_estimate();
         }
         self.start.has_held().then_some(MethodEstimate {
-            x_rad: self.held_x_rad,
+            x_rad: [
+                self.held_x_rad[0],
+                self.held_x_rad[1],
+                self.held_x_rad[2],
+                self.held_x_rad[3],
+            ],
             sigma_rad: self.reported_sigma_rad(),
             mismatch: false,
             relearning: false,
@@ -475,7 +552,7 @@ impl<const CAP: usize> Windowed<CAP> {
             q * self.pairs[0].stats.drift_share,
             q * self.pairs[1].stats.drift_share,
         );
-        self.kf.predict(&[qp, qp, qr, qr]);
+        self.kf.predict(&[qp, qp, qr, qr, 0.0]);
         let sums = self.window.sums();
         let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
         let mut r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
@@ -507,6 +584,9 @@ impl<const CAP: usize> Windowed<CAP> {
             self.updates == 0,
         );
         let mut r = 0.5 * self.pairs[pair].product_variance_rad2;
+        // The turn channel's, at full weight from the first window on: the heel it learns is what
+        // the first windows need to tell x3, x4 from the heel of a course weave.
+        let r_full = r;
         if weight.value < 1.0 {
             // A window of weight 0 (at the ends of a bump) adds next to nothing, but is taken as
             // every window is: one update a step.
@@ -524,12 +604,52 @@ impl<const CAP: usize> Windowed<CAP> {
             // A change may be building up: the filter waits.
             taken = true;
         } else {
+            if pair == ROLL_PAIR
+                && self.turning
+                && self.updates > 0
+                && !self.start.holds()
+                && self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] == 0.0
+                && m.turn_row[HEEL_STATE] > 0.0
+            {
+                self.start_learning_heel(&m);
+            }
+            let heel_variance = self.kf.covariance()[(HEEL_STATE, HEEL_STATE)];
+            // The turn channel first, with the roll pair: it learns the heel in turns (see
+            // "Heel in turns" in the module doc of [`crate::correlation`]) and only it, x1..x4
+            // taken as they are. Its products are roll times the rate of turn, whose mean square
+            // is the row's last term.
+            if pair == ROLL_PAIR && m.turn_row[HEEL_STATE] > 0.0 && heel_variance > 0.0 {
+                // The channel's terms in x1..x4 taken at their estimates, their uncertainty added
+                // to the measurement's: a measurement of the heel alone, which moves the other
+                // states only through their covariance with it.
+                let x = self.kf.state();
+                let p = self.kf.covariance();
+                let mut z = m.turn_z;
+                let mut r_turn = 2.0 * r_full * m.turn_row[HEEL_STATE];
+                for j in 0..HEEL_STATE {
+                    z -= m.turn_row[j] * x[j];
+                    r_turn += m.turn_row[j] * m.turn_row[j] * p[(j, j)];
+                }
+                let mut h = [0.0; STATES];
+                h[HEEL_STATE] = m.turn_row[HEEL_STATE];
+                if self.kf.update(&h, z, r_turn).is_ok() {
+                    applied = true;
+                }
+            }
+            // Until the turn channel has learned the heel, the channels only consider it: its
+            // uncertainty widens the others', its estimate stays (over a window or two, a course
+            // weave near the rotation's frequency cannot tell it from x3, x4).
+            let mut all_but_heel = [true; STATES];
+            all_but_heel[HEEL_STATE] = false;
+            let learned = self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] < HEEL_LEARNED_VARIANCE_RAD2;
+            let updated = (!learned).then_some(&all_but_heel);
             for (k, ch) in channels(pair).into_iter().enumerate() {
-                match self.kf.update_gated(
+                match self.kf.update_masked(
                     &m.rows[ch],
                     m.z[ch],
                     r,
                     gate.map(|g| (self.pairs[pair].spread_rad2[k], g)),
+                    updated,
                 ) {
                     Ok(_) => applied = true,
                     Err(KalmanError::Gated) => {
@@ -545,7 +665,7 @@ impl<const CAP: usize> Windowed<CAP> {
             // report, and the other pair's at the next update (a window of weight 0 too: the
             // next bump's first), one report a step as always (not refreshed in between).
             let x = self.kf.state();
-            self.held_x_rad = [x[0], x[1], x[2], x[3]];
+            self.held_x_rad = (*x).into();
             self.refresh_report(config, pair);
             self.held_report_due = self.start.holds();
         } else if core::mem::take(&mut self.held_report_due) {
@@ -590,6 +710,31 @@ impl<const CAP: usize> Windowed<CAP> {
         alarm
     }
 
+    /// The heel in turns starts to be learned (its prior covariance). When the turn channel of
+    /// this window already shows a heel of [`HEEL_SIGNIFICANT_RAD`] or more, x3 and x4, which the
+    /// roll channels gave with the heel taken as none, are learned again with it
+    /// ([`HEEL_FORGET_SIGMA_RAD`]): a course weave near the rotation's frequency leaks its heel
+    /// into them by hundreds of arcsec.
+    #[cold]
+    #[inline(never)]
+    fn start_learning_heel(&mut self, m: &crate::correlation::Measurement) {
+        let x = self.kf.state();
+        let mut z = m.turn_z;
+        for j in 0..HEEL_STATE {
+            z -= m.turn_row[j] * x[j];
+        }
+        let heel = z / m.turn_row[HEEL_STATE];
+        let mut which = [false; STATES];
+        let mut sigma = [HEEL_FORGET_SIGMA_RAD; STATES];
+        which[HEEL_STATE] = true;
+        sigma[HEEL_STATE] = HEEL_PRIOR_SIGMA_RAD;
+        if heel.abs() > HEEL_SIGNIFICANT_RAD {
+            which[2] = true;
+            which[3] = true;
+        }
+        self.kf.forget(&which, &sigma);
+    }
+
     /// The residual average's horizon, in updates of a pair: [`RESIDUAL_PERIODS`] periods of
     /// windows, each pair taking every other one (the count of a pair's residual average
     /// saturates there).
@@ -616,7 +761,7 @@ impl<const CAP: usize> Windowed<CAP> {
         config: &Config,
         pair: usize,
         residual: [Real; 2],
-        rows: &[[Real; 4]; 4],
+        rows: &[[Real; STATES]; 4],
         entry_s: Real,
     ) -> (Option<Alarm>, bool) {
         // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
@@ -710,7 +855,9 @@ impl<const CAP: usize> Windowed<CAP> {
         // into the roll channels, the errors that did not change were pulled too.
         self.restore_clean_state();
         self.clean_state_due = false;
-        self.kf.forget(changed, config.prior_sigma_rad);
+        let prior = prior_sigma_rad(config, true);
+        let forget: [bool; STATES] = core::array::from_fn(|i| changed.get(i).copied().unwrap_or(false));
+        self.kf.forget(&forget, &prior);
         let horizon = self.residual_horizon();
         for (pair, p) in self.pairs.iter_mut().enumerate() {
             let [a, b] = channels(pair);
@@ -718,8 +865,7 @@ impl<const CAP: usize> Windowed<CAP> {
                 p.stats.relearn(horizon);
             }
         }
-        let x = self.kf.state();
-        self.held_x_rad = [x[0], x[1], x[2], x[3]];
+        self.held_x_rad = (*self.kf.state()).into();
         self.changed_entries = self.window.len() as u32;
         self.change.restart_blocks();
         for p in &mut self.pairs {
@@ -744,14 +890,14 @@ impl<const CAP: usize> Windowed<CAP> {
     fn relearn_from_block(
         &mut self,
         pair: usize,
-        rows: &[[Real; 4]; 4],
+        rows: &[[Real; STATES]; 4],
         z: &[Real; 4],
         entry_s: Real,
     ) -> bool {
         // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
         let pair = pair.min(1);
         let held = self.held_x_rad;
-        let fit = |row: &[Real; 4]| -> Real { (0..4).map(|i| row[i] * held[i]).sum() };
+        let fit = |row: &[Real; STATES]| -> Real { (0..STATES).map(|i| row[i] * held[i]).sum() };
         let block_entries = change::block_entries(self.window.len() as u32, entry_s);
         let chs = channels(pair);
         let (block, rows) = if self.pairs[pair].last_block.held {

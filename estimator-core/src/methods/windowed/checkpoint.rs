@@ -34,6 +34,7 @@ use crate::checkpoint::wire::{Reader, Writer};
 use crate::checkpoint::{
     all_within, ensure, CheckpointError, Part, Stored, MAX_RESIDUAL, MAX_STATE, R,
 };
+use crate::correlation::STATES;
 use crate::kalman::ConstantStateKalman;
 use crate::Real;
 
@@ -52,10 +53,10 @@ const MAX_PRODUCT_VARIANCE_RAD2: Real = 1.0e7;
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Learned {
     updates: u32,
-    kf: ConstantStateKalman<Real, 4>,
+    kf: ConstantStateKalman<Real, STATES>,
     next_pair: u8,
     pairs: [Pair; 2],
-    held_x_rad: [Real; 4],
+    held_x_rad: [Real; STATES],
     change: BlockVariance,
     start: StartTaper,
 }
@@ -108,7 +109,7 @@ impl<const CAP: usize> Windowed<CAP> {
 /// Read with the largest variance allowed (see [`crate::checkpoint::MAX_VARIANCE`]).
 impl Stored for Learned {
     const LEN: usize = 4
-        + ConstantStateKalman::<Real, 4>::LEN
+        + ConstantStateKalman::<Real, STATES>::LEN
         + 4 * R
         + 1
         + 8
@@ -119,7 +120,7 @@ impl Stored for Learned {
         + 4 * R
         + 4 * R
         + 1
-        + 4 * R
+        + STATES * R
         + 4 * R
         + 8
         + BlockVariance::LEN;
@@ -200,7 +201,7 @@ impl Stored for Learned {
             kf,
             next_pair: 0,
             pairs: [Pair::UNCONFIGURED; 2],
-            held_x_rad: [0.0; 4],
+            held_x_rad: [0.0; STATES],
             change: BlockVariance::default(),
             start: StartTaper::Fresh,
         };
@@ -371,7 +372,7 @@ mod tests {
         );
         // The Kalman filter's checks (see `kalman/checkpoint.rs`) apply to the method's.
         assert_eq!(
-            with(&|m| m.kf = ConstantStateKalman::new([Real::NAN; 4])),
+            with(&|m| m.kf = ConstantStateKalman::new([Real::NAN; STATES])),
             Err(InvalidValue(Part::KalmanCovariance))
         );
     }

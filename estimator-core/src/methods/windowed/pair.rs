@@ -10,6 +10,7 @@
 //! arithmetic that updates it, one pair at a time.
 
 use crate::config::Config;
+use crate::correlation::STATES;
 use crate::math::{sqrt, Compare};
 use crate::Real;
 
@@ -87,7 +88,7 @@ pub struct LastBlock {
     /// Each channel's block mean, rad.
     pub rad: [Real; 2],
     /// The rows of the pair's channels at the update that ended it.
-    pub rows: [[Real; 4]; 2],
+    pub rows: [[Real; STATES]; 2],
     /// Whether the filter held through all of it.
     pub held: bool,
 }
@@ -133,7 +134,7 @@ impl Pair {
         block_held: true,
         last_block: LastBlock {
             rad: [0.0; 2],
-            rows: [[0.0; 4]; 2],
+            rows: [[0.0; STATES]; 2],
             held: false,
         },
     };
@@ -167,7 +168,7 @@ impl Pair {
         &mut self,
         pair: usize,
         horizon: u32,
-        rows: &[[Real; 4]; 4],
+        rows: &[[Real; STATES]; 4],
         z: &[Real; 4],
         x: &[Real],
         average: bool,
@@ -179,7 +180,7 @@ impl Pair {
         let alpha = if average { 1.0 / *count as Real } else { 0.0 };
         let mut out = [0.0; 2];
         for (k, ch) in channels(pair).into_iter().enumerate() {
-            let fit: Real = (0..4).map(|i| rows[ch][i] * x[i]).sum();
+            let fit: Real = (0..STATES).map(|i| rows[ch][i] * x[i]).sum();
             let residual = z[ch] - fit;
             self.stats.mean_rad[k] += alpha * (residual - self.stats.mean_rad[k]);
             self.gains[k] = rows[ch][ch].abs();
