@@ -183,6 +183,7 @@
 
 pub mod change;
 pub(crate) mod checkpoint;
+pub mod long_run;
 pub mod pair;
 pub mod start;
 
@@ -215,7 +216,7 @@ pub const HEEL_FORGET_SIGMA_RAD: Real = 1.0e-3;
 /// A heel at the unit rate of turn beyond which the first turn channel's measurement makes x3,
 /// x4 be learned again, rad (1.5 s of heel per rad/s of turn; one window's measurement of no heel
 /// at sea scatters by a few 1e-4).
-pub const HEEL_SIGNIFICANT_RAD: Real = 3.0e-4;
+pub const HEEL_SIGNIFICANT_RAD: Real = 1.0e-3;
 
 /// The heel state's variance below which the correlation channels update it too, rad^2: a heel
 /// known to 2e-5 rad (4 arcsec) at the unit rate of turn.
@@ -275,6 +276,10 @@ pub struct Windowed<const CAP: usize> {
     next_pair: u8,
     /// What each channel pair learned beside the filter ([`pair`]): pitch, roll.
     pairs: [Pair; 2],
+    /// The information the roll pair's measurements gave the filter, `sum h h' / r` (symmetric):
+    /// the roll pair's share of the filter's covariance is about `P I P`, which its noise scale
+    /// rescales (see "The 1-sigma" in the module doc).
+    roll_information: [[Real; STATES]; STATES],
     /// The detector of changes of the errors ([`change`]).
     change: ChangeDetector,
     /// The estimate when the change was declared, rad: the residuals of that block are formed
@@ -286,6 +291,8 @@ pub struct Windowed<const CAP: usize> {
     changed_entries: u32,
     /// Channel measurements held out by the innovation gate.
     gated: u32,
+    /// Window entries since the filter last held its updates (saturating).
+    entries_since_hold: u32,
     /// Whether the clean state is to be kept at the next update.
     clean_state_due: bool,
     /// The filter and its residual statistics at the end of the last block of the roll pair that
@@ -301,6 +308,9 @@ pub struct Windowed<const CAP: usize> {
     /// The ship has turned since the start (its low-passed rate of turn beyond
     /// [`TURN_EXCITATION`]): the heel in turns is learned once the first windows' bumps are over.
     turning: bool,
+    /// The turn channel's measurement of the heel while it is not yet learned: its running mean
+    /// over a period of the roll pair's updates, rad, and the updates in it.
+    heel_evidence: (Real, u32),
     /// The estimate reported ([`Windowed::estimate_now`] after each update).
     report: Option<MethodEstimate>,
     /// A bump has just ended: the other pair's report is to be refreshed at the next update (not
@@ -314,6 +324,7 @@ pub struct Windowed<const CAP: usize> {
 pub struct CleanState {
     kf: ConstantStateKalman<Real, STATES>,
     stats: [ResidualStats; 2],
+    roll_information: [[Real; STATES]; STATES],
 }
 
 impl CleanState {
@@ -321,6 +332,7 @@ impl CleanState {
     const UNCONFIGURED: CleanState = CleanState {
         kf: ConstantStateKalman::from_parts([0.0; STATES], [[0.0; STATES]; STATES]),
         stats: [ResidualStats::UNCONFIGURED; 2],
+        roll_information: [[0.0; STATES]; STATES],
     };
 }
 
@@ -366,15 +378,18 @@ impl<const CAP: usize> Windowed<CAP> {
             entries_since_update: 0,
             next_pair: 0,
             pairs: [Pair::UNCONFIGURED; 2],
+            roll_information: [[0.0; STATES]; STATES],
             change: ChangeDetector::NEW,
             held_x_rad: [0.0; STATES],
             changed_entries: 0,
             gated: 0,
+            entries_since_hold: u32::MAX,
             clean_state_due: false,
             clean: CleanState::UNCONFIGURED,
             start: StartTaper::Fresh,
             last_heading: None,
             turning: false,
+            heel_evidence: (0.0, 0),
             report: None,
             held_report_due: false,
         }
@@ -397,15 +412,18 @@ impl<const CAP: usize> Windowed<CAP> {
         self.entries_since_update = 0;
         self.next_pair = 0;
         self.pairs = [Pair::new(config); 2];
+        self.roll_information = [[0.0; STATES]; STATES];
         self.change = ChangeDetector::NEW;
         self.held_x_rad = [0.0; STATES];
         self.changed_entries = 0;
         self.gated = 0;
+        self.entries_since_hold = u32::MAX;
         self.clean_state_due = false;
         self.keep_clean_state();
         self.start = StartTaper::Fresh;
         self.last_heading = None;
         self.turning = false;
+        self.heel_evidence = (0.0, 0);
         self.report = None;
         self.held_report_due = false;
     }
@@ -434,6 +452,11 @@ impl<const CAP: usize> Windowed<CAP> {
             r.reported_sigma_rad[0],
             r.reported_sigma_rad[1],
         ]
+    }
+
+    /// What each channel pair learned beside the filter: pitch, roll.
+    pub fn pairs(&self) -> &[Pair; 2] {
+        &self.pairs
     }
 
     /// The detector of changes of the errors.
@@ -488,6 +511,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let pushed = self.window.push(sample, &reference, turn_rate, weight);
         if pushed.completed {
             self.entries_since_update = self.entries_since_update.saturating_add(1);
+            self.entries_since_hold = self.entries_since_hold.saturating_add(1);
         }
         pushed.removed
     }
@@ -611,7 +635,7 @@ impl<const CAP: usize> Windowed<CAP> {
                 && self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] == 0.0
                 && m.turn_row[HEEL_STATE] > 0.0
             {
-                self.start_learning_heel(&m);
+                self.weigh_heel_evidence(&m);
             }
             let heel_variance = self.kf.covariance()[(HEEL_STATE, HEEL_STATE)];
             // The turn channel first, with the roll pair: it learns the heel in turns (see
@@ -634,6 +658,7 @@ impl<const CAP: usize> Windowed<CAP> {
                 h[HEEL_STATE] = m.turn_row[HEEL_STATE];
                 if self.kf.update(&h, z, r_turn).is_ok() {
                     applied = true;
+                    self.add_roll_information(&h, r_turn);
                 }
             }
             // Until the turn channel has learned the heel, the channels only consider it: its
@@ -651,7 +676,12 @@ impl<const CAP: usize> Windowed<CAP> {
                     gate.map(|g| (self.pairs[pair].spread_rad2[k], g)),
                     updated,
                 ) {
-                    Ok(_) => applied = true,
+                    Ok(_) => {
+                        applied = true;
+                        if pair == ROLL_PAIR {
+                            self.add_roll_information(&m.rows[ch], r);
+                        }
+                    }
                     Err(KalmanError::Gated) => {
                         taken = true;
                         self.gated = self.gated.saturating_add(1);
@@ -692,9 +722,22 @@ impl<const CAP: usize> Windowed<CAP> {
             self.kf.state().as_slice(),
             applied && settled,
         );
+        if self.change.holding() {
+            self.entries_since_hold = 0;
+        }
         if applied && settled {
             let (bin, len) = (self.window.bin(), self.window.len());
             self.pairs[pair].learn_noise_and_drift(config, bin, len, horizon);
+        }
+        // The first batch a quarter of a period of the pair's updates, from the first update on
+        // ([`long_run`]); the windows that hold what the filter held out are left out of it as
+        // they were of the filter.
+        if applied && self.entries_since_hold >= self.window.len() as u32 {
+            let len = self.window.len() as u32;
+            let q = self.pairs[pair].product_variance_rad2;
+            self.pairs[pair]
+                .long_run
+                .add(residual, (len / 16).max(1), len, q);
         }
         let (alarm, tested) = if detecting && settled {
             self.pairs[pair].learn_spread(horizon, residual, taken);
@@ -710,29 +753,37 @@ impl<const CAP: usize> Windowed<CAP> {
         alarm
     }
 
-    /// The heel in turns starts to be learned (its prior covariance). When the turn channel of
-    /// this window already shows a heel of [`HEEL_SIGNIFICANT_RAD`] or more, x3 and x4, which the
-    /// roll channels gave with the heel taken as none, are learned again with it
+    /// Whether the heel in turns is to be learned: the turn channel's measurement of it (x1..x4
+    /// taken at their estimates), averaged over a period of the roll pair's updates, is beyond
+    /// [`HEEL_SIGNIFICANT_RAD`]. Then it starts to be learned (its prior covariance), and x3 and
+    /// x4, which the roll channels gave with the heel taken as none, are learned again with it
     /// ([`HEEL_FORGET_SIGMA_RAD`]): a course weave near the rotation's frequency leaks its heel
-    /// into them by hundreds of arcsec.
+    /// into them by hundreds of arcsec. A ship that turns without heeling is never given the
+    /// state: its estimate would only scatter the roll channels' residuals.
     #[cold]
     #[inline(never)]
-    fn start_learning_heel(&mut self, m: &crate::correlation::Measurement) {
+    fn weigh_heel_evidence(&mut self, m: &crate::correlation::Measurement) {
         let x = self.kf.state();
         let mut z = m.turn_z;
         for j in 0..HEEL_STATE {
             z -= m.turn_row[j] * x[j];
         }
         let heel = z / m.turn_row[HEEL_STATE];
+        let n = (self.window.len() as u32 / 2).max(1);
+        self.heel_evidence.1 = self.heel_evidence.1.saturating_add(1).min(n);
+        let alpha = 1.0 / self.heel_evidence.1 as Real;
+        self.heel_evidence.0 += alpha * (heel - self.heel_evidence.0);
+        if self.heel_evidence.1 < n || self.heel_evidence.0.abs() <= HEEL_SIGNIFICANT_RAD {
+            return;
+        }
         let mut which = [false; STATES];
         let mut sigma = [HEEL_FORGET_SIGMA_RAD; STATES];
         which[HEEL_STATE] = true;
+        which[2] = true;
+        which[3] = true;
         sigma[HEEL_STATE] = HEEL_PRIOR_SIGMA_RAD;
-        if heel.abs() > HEEL_SIGNIFICANT_RAD {
-            which[2] = true;
-            which[3] = true;
-        }
         self.kf.forget(&which, &sigma);
+        self.forget_roll_information(&which);
     }
 
     /// The residual average's horizon, in updates of a pair: [`RESIDUAL_PERIODS`] periods of
@@ -827,6 +878,7 @@ impl<const CAP: usize> Windowed<CAP> {
     fn keep_clean_state(&mut self) {
         let c = &mut self.clean;
         c.kf.clone_from(&self.kf);
+        c.roll_information = self.roll_information;
         for (kept, p) in c.stats.iter_mut().zip(&self.pairs) {
             *kept = p.stats;
         }
@@ -836,6 +888,7 @@ impl<const CAP: usize> Windowed<CAP> {
     fn restore_clean_state(&mut self) {
         let c = &self.clean;
         self.kf = c.kf.clone();
+        self.roll_information = c.roll_information;
         for (p, kept) in self.pairs.iter_mut().zip(&c.stats) {
             p.stats = *kept;
         }
@@ -858,6 +911,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let prior = prior_sigma_rad(config, true);
         let forget: [bool; STATES] = core::array::from_fn(|i| changed.get(i).copied().unwrap_or(false));
         self.kf.forget(&forget, &prior);
+        self.forget_roll_information(&forget);
         let horizon = self.residual_horizon();
         for (pair, p) in self.pairs.iter_mut().enumerate() {
             let [a, b] = channels(pair);
@@ -948,15 +1002,61 @@ impl<const CAP: usize> Windowed<CAP> {
         // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
         let pair = pair.min(1);
         let [a, b] = channels(pair);
-        let p = self.kf.covariance();
         let widening = self.change.widening_rad();
+        let scaled = [self.scaled_variance(a), self.scaled_variance(b)];
         self.pairs[pair].refresh_report(
             config,
             self.window.bin(),
             self.window.len(),
-            [p[(a, a)], p[(b, b)]],
+            scaled,
             [widening[a], widening[b]],
         );
+    }
+
+    /// The variance of error `i`, each pair's share of the filter's covariance rescaled by that
+    /// pair's noise scale: `lambda_pitch (P_ii - C_ii) + lambda_roll C_ii`, `C = P I P` the roll
+    /// pair's share (`I` its information, [`Windowed::roll_information`]), within `[0, P_ii]`.
+    fn scaled_variance(&self, i: usize) -> Real {
+        let i = i.min(STATES - 1);
+        let p = self.kf.covariance();
+        let p_ii = p[(i, i)].larger(0.0);
+        let info = &self.roll_information;
+        let mut roll_share: Real = 0.0;
+        for j in 0..STATES {
+            let mut v: Real = 0.0;
+            for k in 0..STATES {
+                v += info[j][k] * p[(k, i)];
+            }
+            roll_share += p[(j, i)] * v;
+        }
+        let roll_share = roll_share.larger(0.0).smaller(p_ii);
+        self.pairs[0].noise_scale() * (p_ii - roll_share) + self.pairs[1].noise_scale() * roll_share
+    }
+
+    /// Adds a roll measurement's information `h h' / r` to [`Windowed::roll_information`].
+    fn add_roll_information(&mut self, h: &[Real; STATES], r: Real) {
+        if !(r > 0.0) {
+            return;
+        }
+        let inv_r = 1.0 / r;
+        for j in 0..STATES {
+            let hj = h[j] * inv_r;
+            for k in 0..STATES {
+                self.roll_information[j][k] += hj * h[k];
+            }
+        }
+    }
+
+    /// Forgets the roll pair's information on the states `which` (as the filter forgets them).
+    fn forget_roll_information(&mut self, which: &[bool; STATES]) {
+        for j in 0..STATES {
+            if which[j] {
+                for k in 0..STATES {
+                    self.roll_information[j][k] = 0.0;
+                    self.roll_information[k][j] = 0.0;
+                }
+            }
+        }
     }
 
     /// The rotation pattern was forgotten (a new one is being learned): the window lets go of the

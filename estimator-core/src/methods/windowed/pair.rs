@@ -14,6 +14,7 @@ use crate::correlation::STATES;
 use crate::math::{sqrt, Compare};
 use crate::Real;
 
+use super::long_run::LongRun;
 use super::{
     BIAS_SHARE_DRIFT, BIAS_SHARE_NOISE, LONG_HORIZONS, MIN_NOISE_SCALE, SPREAD_CLIP_SIGMAS,
     SPREAD_HORIZONS,
@@ -118,6 +119,8 @@ pub struct Pair {
     pub block_held: bool,
     /// The change detector's last block.
     pub last_block: LastBlock,
+    /// The long-run variance of the residuals ([`super::long_run`]).
+    pub long_run: LongRun,
 }
 
 impl Pair {
@@ -137,6 +140,7 @@ impl Pair {
             rows: [[0.0; STATES]; 2],
             held: false,
         },
+        long_run: LongRun::NEW,
     };
 
     /// Nothing learned: the gains of a uniform rotation at the equator, the prior's 1-sigma.
@@ -227,17 +231,27 @@ impl Pair {
             .clamp(0.0, 1.0);
     }
 
-    /// Refreshes what is reported of the pair's errors: each error's 1-sigma, the filter's
-    /// (`filter_variance`, the diagonal of its covariance for the pair's errors) rescaled by the
-    /// noise scale and widened by the residual check, the lag and the change detector's
-    /// `widening_rad`, and whether its channel's residual mean is beyond the check's bound (see
-    /// the module doc of [`super`]).
+    /// The factor applied to the part of the filter's covariance this pair's noise makes: the
+    /// larger of the noise scale and the long-run noise scale ([`super::long_run`]).
+    pub fn noise_scale(&self) -> Real {
+        if self.long_run.batches() >= super::long_run::CENTRED_FROM {
+            self.long_run.scale().larger(MIN_NOISE_SCALE)
+        } else {
+            self.stats.noise_scale.larger(self.long_run.scale())
+        }
+    }
+
+    /// Refreshes what is reported of the pair's errors: each error's 1-sigma, from
+    /// `scaled_variance` (the filter's variance of the pair's errors, each pair's share rescaled
+    /// by that pair's noise scale) widened by the residual check, the lag and the change
+    /// detector's `widening_rad`, and whether its channel's residual mean is beyond the check's
+    /// bound (see the module doc of [`super`]).
     pub fn refresh_report(
         &mut self,
         config: &Config,
         bin: u32,
         window_len: usize,
-        filter_variance: [Real; 2],
+        scaled_variance: [Real; 2],
         widening_rad: [Real; 2],
     ) {
         // The residual mean of a pair averages `count` updates of two entries each, of per-entry
@@ -273,8 +287,7 @@ impl Pair {
                 0.0
             };
             let m = model.larger(lag).larger(widening_rad[k]);
-            self.reported_sigma_rad[k] =
-                sqrt(self.stats.noise_scale * filter_variance[k].larger(0.0) + m * m);
+            self.reported_sigma_rad[k] = sqrt(scaled_variance[k].larger(0.0) + m * m);
             self.mismatch[k] = mismatch;
         }
     }
