@@ -539,7 +539,11 @@ mod tests {
             roll,
             pitch,
             a,
-            &[a.sin_rho_s, a.cos_rho_s, a.sin_rho, a.cos_rho],
+            &References {
+                channels: [a.sin_rho_s, a.cos_rho_s, a.sin_rho, a.cos_rho],
+                turn: 0.0,
+            },
+            0.0,
         )
     }
 

@@ -313,7 +313,7 @@ mod tests {
             .unwrap();
         }
         let before = kf.clone();
-        kf.forget(&[true, false, true, false], 2.0);
+        kf.forget(&[true, false, true, false], &[2.0; 4]);
         assert!(kf.covariance_is_spd());
         assert_eq!(kf.state(), before.state());
         for i in 0..4 {

@@ -228,7 +228,21 @@ pub const HEEL_LEARNED_VARIANCE_RAD2: Real = 4.0e-10;
 /// locked to the rotation, and would trade the heel for x3, x4).
 fn prior_sigma_rad(config: &Config, turning: bool) -> [Real; STATES] {
     let p = config.prior_sigma_rad;
-    [p, p, p, p, if turning { HEEL_PRIOR_SIGMA_RAD } else { 0.0 }]
+    let heel = if turning {
+        HEEL_PRIOR_SIGMA_RAD
+    } else {
+        HEEL_HELD_SIGMA_RAD
+    };
+    [p, p, p, p, heel]
+}
+
+/// The heel state's 1-sigma while it is held at 0, rad: next to nothing (0.002 arcsec of roll at a
+/// brisk turn), but not zero, so that the covariance stays positive definite.
+pub const HEEL_HELD_SIGMA_RAD: Real = 1.0e-9;
+
+/// Whether the heel state is being learned (its variance above the held one's).
+fn heel_learned(p: Real) -> bool {
+    p > 4.0 * HEEL_HELD_SIGMA_RAD * HEEL_HELD_SIGMA_RAD
 }
 use start::StartTaper;
 
@@ -632,7 +646,7 @@ impl<const CAP: usize> Windowed<CAP> {
                 && self.turning
                 && self.updates > 0
                 && !self.start.holds()
-                && self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] == 0.0
+                && !heel_learned(self.kf.covariance()[(HEEL_STATE, HEEL_STATE)])
                 && m.turn_row[HEEL_STATE] > 0.0
             {
                 self.weigh_heel_evidence(&m);
@@ -642,7 +656,7 @@ impl<const CAP: usize> Windowed<CAP> {
             // "Heel in turns" in the module doc of [`crate::correlation`]) and only it, x1..x4
             // taken as they are. Its products are roll times the rate of turn, whose mean square
             // is the row's last term.
-            if pair == ROLL_PAIR && m.turn_row[HEEL_STATE] > 0.0 && heel_variance > 0.0 {
+            if pair == ROLL_PAIR && m.turn_row[HEEL_STATE] > 0.0 && heel_learned(heel_variance) {
                 // The channel's terms in x1..x4 taken at their estimates, their uncertainty added
                 // to the measurement's: a measurement of the heel alone, which moves the other
                 // states only through their covariance with it.
@@ -1039,10 +1053,13 @@ impl<const CAP: usize> Windowed<CAP> {
             return;
         }
         let inv_r = 1.0 / r;
+        // The upper triangle, mirrored: symmetric by construction.
         for j in 0..STATES {
             let hj = h[j] * inv_r;
-            for k in 0..STATES {
-                self.roll_information[j][k] += hj * h[k];
+            for k in j..STATES {
+                let v = self.roll_information[j][k] + hj * h[k];
+                self.roll_information[j][k] = v;
+                self.roll_information[k][j] = v;
             }
         }
     }

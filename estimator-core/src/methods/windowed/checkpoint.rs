@@ -1,30 +1,36 @@
 //! The windowed method in a checkpoint image: what it learned, not its window. In order: updates
-//! (u32), the Kalman filter (`x` 4 `R`, `P` 16 `R` row-major), residual means (4 `R`), the pair the
-//! next update takes (u8: 0 pitch, 1 roll), residuals averaged per pair (2 x u32), channel gains
-//! (4 `R`), the per-product variances of the pitch and roll channels (2 `R`), the long means of
-//! the residual means (4 `R`) and of their powers (4 `R`), the residual means in the long
-//! averages per pair (2 x u32), the noise scale and the drift share per pair (2 + 2 `R`); then
-//! what the report and the change detector need: each error's reported 1-sigma (4 `R`), a flag
-//! byte (bits 0-3: each channel's residual mean beyond the check's bound; bits 4-5: the pitch and
-//! roll pair learning their errors again after a change; bits 6-7: the first windows' weights
-//! ([`super::start`]): 0 not in their bumps, 1 in them with no estimate held yet, 2 in them with
-//! the estimate of the last bump's end held), the estimate they are learned against, or, in the
-//! bumps, the one held (4 `R`; its 1-sigma is the reported one), the learned spread of each
-//! channel's residual (4 `R`) and the residuals learned into it per pair (2 x u32), and the change
-//! detector's part (`change/checkpoint.rs`). The window, the
-//! low-pass of its references, the entries since the last update and the detector's blocks are
-//! not kept: the next period of samples refills them (the window restarts, as after a long gap).
-//! The state the detector goes back to while a change builds up is the restored one.
+//! (u32), the Kalman filter (`x` 5 `R`, `P` 25 `R` row-major: x1..x4 and the heel in turns), the
+//! pair the next update takes (u8: 0 pitch, 1 roll), each pair's part (pitch, then roll: below),
+//! the roll pair's information (the upper triangle of `sum h h' / r`, 15 `R`, row by row), a flag
+//! byte (bits 0-1: the first windows' weights ([`super::start`]): 0 not in their bumps, 1 in them
+//! with no estimate held yet, 2 in them with the estimate of the last bump's end held; bit 2: the
+//! ship has turned), the estimate the errors are learned again against after a change, or, in
+//! the bumps, the one held (5 `R`; its 1-sigma is the reported one), and the change detector's
+//! part (`change/checkpoint.rs`).
+//!
+//! A pair's part ([`Pair`]'s kept fields): its residual means (2 `R`), residuals averaged (u32),
+//! the long means of the residual means (2 `R`) and of their powers (2 `R`), the residual means in
+//! the long averages (u32), the noise scale and the drift share (2 `R`), the channel gains
+//! (2 `R`), the per-product variance (`R`), the reported 1-sigma of its errors (2 `R`), a flag byte
+//! (bits 0-1: each channel's residual mean beyond the check's bound; bit 2: learning its errors
+//! again after a change), the learned spread of each channel's residual (2 `R`) and the residuals
+//! learned into it (u32).
+//!
+//! The window, the low-pass of its references, the entries since the last update, the
+//! detector's blocks and the batches of the long-run noise scale ([`super::long_run`]) are not
+//! kept: the next period of samples refills them (the window restarts, as after a long gap). The
+//! state the detector goes back to while a change builds up is the restored one.
 //!
 //! Checked: the Kalman filter (see [`crate::kalman`]); residual means and their long means within
 //! [`MAX_RESIDUAL`]; gains within `[0, 4]` (a gain is the magnitude of a window mean of products
 //! of sines and cosines, minus a product of two such means); the per-product variances within
 //! [`MAX_PRODUCT_VARIANCE_RAD2`]; powers and noise scales within [`MAX_NOISE_SCALE`]; drift shares
-//! within `[0, 1]`; the pair 0 or 1; the reported 1-sigma finite and not negative; the flag
-//! byte's bits 6-7 not both set; the estimate learned against within [`MAX_STATE`]; the spreads
-//! within [`MAX_RESIDUAL`]^2. The bumps begin again at the next full window after a restore, the
-//! estimate held meanwhile (an image of before the bumps has bits 6-7 zero: the filter's estimate
-//! is reported, as then).
+//! within `[0, 1]`; the pair 0 or 1; the reported 1-sigma finite and not negative; the roll
+//! information finite, its diagonal not negative; the flag byte's bits 0-1 not both set and no
+//! other bit but 2; the estimate learned against within [`MAX_STATE`]; the spreads within
+//! [`MAX_RESIDUAL`]^2. The bumps begin again at the next full window after a restore, the estimate
+//! held meanwhile (an image of before the bumps has bits 0-1 zero: the filter's estimate is
+//! reported, as then).
 
 use super::change::checkpoint::BlockVariance;
 use super::pair::Pair;
@@ -56,16 +62,20 @@ pub(crate) struct Learned {
     kf: ConstantStateKalman<Real, STATES>,
     next_pair: u8,
     pairs: [Pair; 2],
+    roll_information: [[Real; STATES]; STATES],
+    turning: bool,
     held_x_rad: [Real; STATES],
     change: BlockVariance,
     start: StartTaper,
 }
 
-/// What a restart keeps of a pair: all but the change detector's block in progress.
+/// What a restart keeps of a pair: all but the change detector's block in progress and the
+/// long-run batches.
 fn kept(p: &Pair) -> Pair {
     Pair {
         block_held: Pair::UNCONFIGURED.block_held,
         last_block: Pair::UNCONFIGURED.last_block,
+        long_run: Pair::UNCONFIGURED.long_run,
         ..*p
     }
 }
@@ -78,6 +88,8 @@ impl<const CAP: usize> Windowed<CAP> {
             kf: self.kf.clone(),
             next_pair: self.next_pair,
             pairs: [kept(&self.pairs[0]), kept(&self.pairs[1])],
+            roll_information: self.roll_information,
+            turning: self.turning,
             held_x_rad: self.held_x_rad,
             change: self.change.learned(),
             // What the image says of the weights: in the bumps or not, and whether one ended.
@@ -96,6 +108,8 @@ impl<const CAP: usize> Windowed<CAP> {
         self.kf = l.kf;
         self.next_pair = l.next_pair;
         self.pairs = l.pairs;
+        self.roll_information = l.roll_information;
+        self.turning = l.turning;
         self.held_x_rad = l.held_x_rad;
         self.change.keep_learned(l.change);
         // The window restarts: bumps begun go on at its next full window.
@@ -106,88 +120,98 @@ impl<const CAP: usize> Windowed<CAP> {
     }
 }
 
+/// The entries of the upper triangle of a `STATES` x `STATES` matrix.
+const UPPER: usize = STATES * (STATES + 1) / 2;
+
+/// A pair's kept fields (see the module doc).
+impl Stored for Pair {
+    const LEN: usize = 2 * R + 4 + 2 * R + 2 * R + 4 + 2 * R + 2 * R + R + 2 * R + 1 + 2 * R + 4;
+    type Context<'a> = ();
+
+    fn write(&self, w: &mut Writer<'_>) {
+        let s = &self.stats;
+        for v in s.mean_rad {
+            w.real(v);
+        }
+        w.u32(s.count);
+        for v in s.mean_long_rad.into_iter().chain(s.power) {
+            w.real(v);
+        }
+        w.u32(s.long_count);
+        for v in [s.noise_scale, s.drift_share]
+            .into_iter()
+            .chain(self.gains)
+            .chain([self.product_variance_rad2])
+            .chain(self.reported_sigma_rad)
+        {
+            w.real(v);
+        }
+        w.u8(u8::from(self.mismatch[0]) | u8::from(self.mismatch[1]) << 1 | u8::from(self.relearning) << 2);
+        for v in self.spread_rad2 {
+            w.real(v);
+        }
+        w.u32(self.spread_count);
+    }
+
+    fn read(r: &mut Reader<'_>, _: ()) -> Result<Pair, CheckpointError> {
+        let mut p = Pair::UNCONFIGURED;
+        let s = &mut p.stats;
+        s.mean_rad = [r.real(), r.real()];
+        s.count = r.u32();
+        s.mean_long_rad = [r.real(), r.real()];
+        s.power = [r.real(), r.real()];
+        s.long_count = r.u32();
+        s.noise_scale = r.real();
+        s.drift_share = r.real();
+        p.gains = [r.real(), r.real()];
+        p.product_variance_rad2 = r.real();
+        p.reported_sigma_rad = [r.real(), r.real()];
+        let bits = r.u8();
+        ensure(bits < 8, CheckpointError::InvalidValue(Part::Residuals))?;
+        p.mismatch = [bits & 1 != 0, bits & 2 != 0];
+        p.relearning = bits & 4 != 0;
+        p.spread_rad2 = [r.real(), r.real()];
+        p.spread_count = r.u32();
+        ensure(
+            residuals_in_range(&p),
+            CheckpointError::InvalidValue(Part::Residuals),
+        )?;
+        Ok(p)
+    }
+}
+
 /// Read with the largest variance allowed (see [`crate::checkpoint::MAX_VARIANCE`]).
 impl Stored for Learned {
     const LEN: usize = 4
         + ConstantStateKalman::<Real, STATES>::LEN
-        + 4 * R
         + 1
-        + 8
-        + 4 * R
-        + 2 * R
-        + 8 * R
-        + 8
-        + 4 * R
-        + 4 * R
+        + 2 * Pair::LEN
+        + UPPER * R
         + 1
         + STATES * R
-        + 4 * R
-        + 8
         + BlockVariance::LEN;
     type Context<'a> = f64;
 
     fn write(&self, w: &mut Writer<'_>) {
-        // Each quantity for both pairs (channels 0-3, pairs 0-1) before the next.
-        let [p, q] = &self.pairs;
         w.u32(self.updates);
         self.kf.write(w);
-        for v in p.stats.mean_rad.into_iter().chain(q.stats.mean_rad) {
-            w.real(v);
-        }
         w.u8(self.next_pair);
-        w.u32(p.stats.count);
-        w.u32(q.stats.count);
-        for v in p.gains.into_iter().chain(q.gains) {
-            w.real(v);
+        for p in &self.pairs {
+            p.write(w);
         }
-        w.real(p.product_variance_rad2);
-        w.real(q.product_variance_rad2);
-        for v in p
-            .stats
-            .mean_long_rad
-            .into_iter()
-            .chain(q.stats.mean_long_rad)
-        {
-            w.real(v);
+        for j in 0..STATES {
+            for k in j..STATES {
+                w.real(self.roll_information[j][k]);
+            }
         }
-        for v in p.stats.power.into_iter().chain(q.stats.power) {
-            w.real(v);
-        }
-        w.u32(p.stats.long_count);
-        w.u32(q.stats.long_count);
-        for v in [
-            p.stats.noise_scale,
-            q.stats.noise_scale,
-            p.stats.drift_share,
-            q.stats.drift_share,
-        ] {
-            w.real(v);
-        }
-        for v in p.reported_sigma_rad.into_iter().chain(q.reported_sigma_rad) {
-            w.real(v);
-        }
-        let bits = p
-            .mismatch
-            .iter()
-            .chain(&q.mismatch)
-            .chain([&p.relearning, &q.relearning])
-            .enumerate()
-            .fold(0u8, |b, (i, f)| b | (u8::from(*f) << i));
         let start = match self.start {
             StartTaper::Restarted { held } => 1 + u8::from(held),
             _ => 0,
         };
-        w.u8(bits | start << 6);
-        for v in self
-            .held_x_rad
-            .into_iter()
-            .chain(p.spread_rad2)
-            .chain(q.spread_rad2)
-        {
+        w.u8(start | u8::from(self.turning) << 2);
+        for v in self.held_x_rad {
             w.real(v);
         }
-        w.u32(p.spread_count);
-        w.u32(q.spread_count);
         self.change.write(w);
     }
 
@@ -199,78 +223,45 @@ impl Stored for Learned {
         let mut m = Learned {
             updates,
             kf,
-            next_pair: 0,
+            next_pair: r.u8(),
             pairs: [Pair::UNCONFIGURED; 2],
+            roll_information: [[0.0; STATES]; STATES],
+            turning: false,
             held_x_rad: [0.0; STATES],
             change: BlockVariance::default(),
             start: StartTaper::Fresh,
         };
-        let [p, q] = &mut m.pairs;
-        for v in p.stats.mean_rad.iter_mut().chain(&mut q.stats.mean_rad) {
-            *v = r.real();
-        }
-        m.next_pair = r.u8();
         ensure(
             m.next_pair <= 1,
             CheckpointError::InvalidValue(Part::Residuals),
         )?;
-        p.stats.count = r.u32();
-        q.stats.count = r.u32();
-        for v in p.gains.iter_mut().chain(&mut q.gains) {
-            *v = r.real();
+        for p in &mut m.pairs {
+            *p = Pair::read(r, ())?;
         }
-        p.product_variance_rad2 = r.real();
-        q.product_variance_rad2 = r.real();
-        for v in p
-            .stats
-            .mean_long_rad
-            .iter_mut()
-            .chain(&mut q.stats.mean_long_rad)
-        {
-            *v = r.real();
+        for j in 0..STATES {
+            for k in j..STATES {
+                let v = r.real();
+                m.roll_information[j][k] = v;
+                m.roll_information[k][j] = v;
+            }
         }
-        for v in p.stats.power.iter_mut().chain(&mut q.stats.power) {
-            *v = r.real();
-        }
-        p.stats.long_count = r.u32();
-        q.stats.long_count = r.u32();
-        p.stats.noise_scale = r.real();
-        q.stats.noise_scale = r.real();
-        p.stats.drift_share = r.real();
-        q.stats.drift_share = r.real();
-        for v in p
-            .reported_sigma_rad
-            .iter_mut()
-            .chain(&mut q.reported_sigma_rad)
-        {
-            *v = r.real();
-        }
+        ensure(
+            information_in_range(&m.roll_information),
+            CheckpointError::InvalidValue(Part::Residuals),
+        )?;
         let bits = r.u8();
-        p.mismatch = core::array::from_fn(|i| bits & (1 << i) != 0);
-        q.mismatch = core::array::from_fn(|i| bits & (1 << (2 + i)) != 0);
-        p.relearning = bits & (1 << 4) != 0;
-        q.relearning = bits & (1 << 5) != 0;
-        for v in m
-            .held_x_rad
-            .iter_mut()
-            .chain(&mut p.spread_rad2)
-            .chain(&mut q.spread_rad2)
-        {
-            *v = r.real();
-        }
-        p.spread_count = r.u32();
-        q.spread_count = r.u32();
-        m.change = BlockVariance::read(r, ())?;
-        m.start = match bits >> 6 {
+        m.start = match bits & 3 {
             0 => StartTaper::Fresh,
             1 => StartTaper::Restarted { held: false },
             2 => StartTaper::Restarted { held: true },
             _ => return Err(CheckpointError::InvalidValue(Part::Residuals)),
         };
-        ensure(
-            m.pairs.iter().all(residuals_in_range),
-            CheckpointError::InvalidValue(Part::Residuals),
-        )?;
+        ensure(bits < 8, CheckpointError::InvalidValue(Part::Residuals))?;
+        m.turning = bits & 4 != 0;
+        for v in &mut m.held_x_rad {
+            *v = r.real();
+        }
+        m.change = BlockVariance::read(r, ())?;
         let state = MAX_STATE as Real;
         ensure(
             all_within(&m.held_x_rad, -state, state),
@@ -280,9 +271,8 @@ impl Stored for Learned {
     }
 }
 
-/// Whether the residual statistics of a pair are finite and within their bounds. Out of line: 48
-/// bytes less flash than written into the reader above (the restore's stack is the same either
-/// way).
+/// Whether a pair's residual statistics are finite and within their bounds. Out of line: less
+/// flash than written into the reader (the restore's stack is the same either way).
 #[inline(never)]
 fn residuals_in_range(p: &Pair) -> bool {
     let residual = MAX_RESIDUAL as Real;
@@ -296,6 +286,14 @@ fn residuals_in_range(p: &Pair) -> bool {
         && all_within(&[s.drift_share], 0.0, 1.0)
         && all_within(&p.reported_sigma_rad, 0.0, Real::MAX)
         && all_within(&p.spread_rad2, 0.0, residual * residual)
+}
+
+/// Whether the roll pair's information is finite with a diagonal that is not negative.
+#[inline(never)]
+fn information_in_range(info: &[[Real; STATES]; STATES]) -> bool {
+    (0..STATES).all(|j| {
+        all_within(&info[j], -Real::MAX, Real::MAX) && info[j][j] >= 0.0
+    })
 }
 
 #[cfg(test)]
@@ -365,6 +363,10 @@ mod tests {
             Err(InvalidValue(Part::ChangeDetector))
         );
         assert!(with(&|m| m.pairs[0].relearning = true).is_ok());
+        assert_eq!(
+            with(&|m| m.roll_information[2][2] = -1.0),
+            Err(InvalidValue(Part::Residuals))
+        );
         // In the first windows' bumps, with an estimate held (flag bits 6-7).
         assert_eq!(
             with(&|m| m.start = StartTaper::Restarted { held: true }).map(|m| m.start),

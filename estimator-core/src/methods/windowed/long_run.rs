@@ -218,7 +218,7 @@ mod tests {
         let ripple = |updates: u32| {
             let mut r = LongRun::NEW;
             for k in 0..updates {
-                let v = 1.0e-5 * libm::sin(k as f64 * 2.0 * core::f64::consts::PI / 1000.0) as Real;
+                let v = 1.0e-4 * libm::sin(k as f64 * 2.0 * core::f64::consts::PI / 1000.0) as Real;
                 r.add([v, v], 240, 480, q);
             }
             r.scale()
