@@ -524,7 +524,8 @@ where
                 }
             }
         });
-        let mut items = rx.iter().flatten();
+        // The iterator owns the receiver: dropping it hangs up.
+        let mut items = rx.into_iter().flatten();
         let result = consume(&mut items);
         // Hang up before the reader thread is joined, so that it stops if `consume` stopped early.
         drop(items);
