@@ -607,8 +607,7 @@ mod tests {
 
     /// Rows lost: one here and there, and runs of 2 to 40, none among the learning stamps.
     fn lost(k: u64) -> bool {
-        (k > 40 && k % 97 == 0)
-            || (k > 40 && k % 101 == 0)
+        (k > 40 && (k.is_multiple_of(97) || k.is_multiple_of(101)))
             || (k % 1000 >= 500 && k % 1000 < 500 + 2 + (k / 1000) % 39)
     }
 
