@@ -283,7 +283,7 @@ impl<const CAP: usize> Estimator<CAP> {
         if !self.run.gate_open {
             return Some(Holdup::WaitingForSway);
         }
-        if self.run.grid.interval_s().is_none() {
+        if self.run.grid.placing_interval_s().is_none() {
             return Some(Holdup::SampleIntervalNotKnown);
         }
         if self.run.rotation.period_samples().is_none() {
@@ -331,7 +331,7 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// Processes one sample. On error nothing changes but the rejection counter.
     pub fn step(&mut self, sample: &Sample) -> Result<Output, SampleError> {
-        let placement = match sample
+        let placed = match sample
             .check()
             .and_then(|()| self.run.grid.place(sample.time_s))
         {
@@ -341,7 +341,8 @@ impl<const CAP: usize> Estimator<CAP> {
                 return Err(e);
             }
         };
-        self.run.grid.accept(sample.time_s, placement);
+        self.run.grid.accept(sample.time_s, placed);
+        let placement = placed.placement;
         self.run.counters.accepted = self.run.counters.accepted.saturating_add(1);
         if placement == Placement::ClockStep {
             self.run.counters.clock_steps = self.run.counters.clock_steps.saturating_add(1);
@@ -351,7 +352,7 @@ impl<const CAP: usize> Estimator<CAP> {
         if !self.run.gate_open && self.run.sway.opens(self.config.sway_gate_rad) {
             self.run.gate_open = true;
         }
-        let status = match self.run.grid.interval_s() {
+        let status = match self.run.grid.placing_interval_s() {
             Some(interval_s) if self.run.gate_open => {
                 self.feed(sample, &angles, placement, interval_s, sample.time_s)
             }

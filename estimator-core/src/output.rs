@@ -194,7 +194,8 @@ pub struct RotationSummary {
 pub enum Holdup {
     /// The sway gate is closed.
     WaitingForSway,
-    /// The sample interval is being learned from the time stamps.
+    /// The sample grid (its interval, unless pinned, and its phase) is being learned from the
+    /// time stamps.
     SampleIntervalNotKnown,
     /// The rotation pattern's period is being detected.
     RotationPeriodNotDetected,

@@ -16,7 +16,7 @@
 #include <stdint.h>
 
 // Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.
-#define RINS_CHECKPOINT_LEN 860
+#define RINS_CHECKPOINT_LEN 944
 
 // Bytes of a buffer that holds any estimates CSV row with its line end and NUL.
 #define RINS_ROW_MAX_LEN 1024

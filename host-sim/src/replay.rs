@@ -188,8 +188,9 @@ impl GridFollower {
         result: &Result<Output, SampleError>,
     ) -> Option<Placement> {
         result.as_ref().ok()?;
-        let placement = self.grid.place(time_s).ok()?;
-        self.grid.accept(time_s, placement);
+        let placed = self.grid.place(time_s).ok()?;
+        self.grid.accept(time_s, placed);
+        let placement = placed.placement;
         if placement == Placement::ClockStep {
             self.clock_steps = self.clock_steps.saturating_add(1);
         }

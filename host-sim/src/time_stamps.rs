@@ -106,8 +106,8 @@ pub fn format_utc(unix_s: f64) -> Option<String> {
 /// The interval a RINS logs its attitude at, s: 10 ms to 10 s.
 pub const PLAUSIBLE_INTERVAL_S: (f64, f64) = (0.01, 10.0);
 
-/// Steps whose median [`IntervalCheck`] judges (as the estimator learns from the first 8).
-pub const CHECKED_STEPS: usize = estimator_core::time_grid::LEARNING_STEPS;
+/// Steps whose median [`IntervalCheck`] judges.
+pub const CHECKED_STEPS: usize = 8;
 
 /// Why the stamps' interval makes no sense.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -135,10 +135,14 @@ pub enum IntervalError {
     },
     /// `--sample-interval` says one interval, the stamps another.
     #[error(
-        "--sample-interval {pinned_s} s contradicts the log's time stamps, which step by {shortest_s} s (the shortest of the first {CHECKED_STEPS} steps): \
-         every row would be off the grid; leave --sample-interval out (the interval is learned) or give {shortest_s}"
+        "--sample-interval {pinned_s} s contradicts the log's time stamps, which step by {step_s} s ({which} of the first {CHECKED_STEPS} steps): \
+         every row would be off the grid; leave --sample-interval out (the interval is learned) or give {step_s}"
     )]
-    ContradictsPinned { pinned_s: f64, shortest_s: f64 },
+    ContradictsPinned {
+        pinned_s: f64,
+        step_s: f64,
+        which: &'static str,
+    },
 }
 
 /// Watches the first steps of a log's stamps (rows as read, in order) and judges their median
@@ -201,8 +205,10 @@ const OTHER_UNITS: [(&str, &str, f64, &str); 6] = [
     ("days", "d", 86_400.0, " (write seconds in a time_s column)"),
 ];
 
-/// Judges the stamps' steps: their median against the plausible range, their shortest (the
-/// interval itself, whatever rows are lost) against the pinned interval.
+/// Judges the stamps' steps: their median against the plausible range and, with the interval
+/// pinned, against it: the shortest step (the interval itself, whatever rows are lost) must not be
+/// two pinned intervals or more, nor the median (robust to stamps jittered by up to nearly half an
+/// interval, whose shortest step may be a tenth of one) below 0.6 of one.
 pub fn judge(median_s: f64, shortest_s: f64, pinned_s: Option<f64>) -> Result<(), IntervalError> {
     let (lo, hi) = PLAUSIBLE_INTERVAL_S;
     let interval_s = round4(median_s);
@@ -228,11 +234,18 @@ pub fn judge(median_s: f64, shortest_s: f64, pinned_s: Option<f64>) -> Result<()
         });
     }
     if let Some(pinned_s) = pinned_s {
-        // The estimator snaps steps within a quarter of an interval to the grid.
-        if (shortest_s - pinned_s).abs() > estimator_core::time_grid::SNAP_TOLERANCE * pinned_s {
+        if shortest_s > 1.5 * pinned_s {
             return Err(IntervalError::ContradictsPinned {
                 pinned_s,
-                shortest_s: round4(shortest_s),
+                step_s: round4(shortest_s),
+                which: "the shortest",
+            });
+        }
+        if median_s < 0.6 * pinned_s {
+            return Err(IntervalError::ContradictsPinned {
+                pinned_s,
+                step_s: round4(median_s),
+                which: "the median",
             });
         }
     }
@@ -389,7 +402,8 @@ mod tests {
             e,
             IntervalError::ContradictsPinned {
                 pinned_s: 2.0,
-                shortest_s: 1.0
+                step_s: 1.0,
+                which: "the median"
             }
         );
         assert!(
@@ -402,6 +416,9 @@ mod tests {
             Ok(()),
             "within the grid's snap"
         );
+        // Stamps jittered by +-0.45 of the interval: steps from 0.1 to 1.9 intervals.
+        let jittered = (0..100).map(|k| f64::from(k) + 0.45 * if k % 2 == 0 { 1.0 } else { -1.0 });
+        assert_eq!(check(jittered, Some(1.0)), Ok(()));
         let half = check((0..100).map(f64::from), Some(0.5)).unwrap_err();
         assert!(
             matches!(half, IntervalError::ContradictsPinned { .. }),

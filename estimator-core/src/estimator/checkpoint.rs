@@ -383,7 +383,10 @@ mod tests {
                 Ok(Running::of(&est))
             );
             assert_eq!(written_and_read(&est.run.grid, &config), Ok(est.run.grid));
-            assert_eq!(written_and_read(&est.run.rotation, &config), Ok(est.run.rotation));
+            assert_eq!(
+                written_and_read(&est.run.rotation, &config),
+                Ok(est.run.rotation)
+            );
             assert_eq!(
                 written_and_read(&est.run.filler.fill_error(), ()),
                 Ok(est.run.filler.fill_error())

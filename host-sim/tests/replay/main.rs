@@ -9,5 +9,6 @@ mod binning_cost;
 mod checkpoint_roundtrip;
 mod coverage;
 mod gap_logs;
+mod jittered_stamps;
 mod real_logs;
 mod store_power_fail;

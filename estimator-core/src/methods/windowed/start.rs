@@ -37,7 +37,7 @@
 //! It ends when the first estimate is due: when the newest entry is 1.25 periods from the first
 //! entry of the window, less the rows the estimator has not yet turned into entries at that moment
 //! (the filler's delay, [`crate::gap_fill::DELAY`], and the stamps the sample interval is learned
-//! from, [`crate::time_grid::LEARNING_STEPS`] and one). At least a sixteenth of a period (a
+//! from, [`crate::time_grid::LEARNING_STAMPS`]). At least a sixteenth of a period (a
 //! pattern whose period is known late: its first estimate comes a sixteenth of a period after
 //! its first full window), at most a quarter. A window of bins (periods longer than the ring) starts
 //! empty when the period is known, so it has no earlier samples to take the first estimate
@@ -52,12 +52,12 @@
 //! included) takes equal weights at once.
 
 use crate::gap_fill::DELAY;
-use crate::time_grid::LEARNING_STEPS;
+use crate::time_grid::LEARNING_STAMPS;
 use crate::Real;
 
 /// Rows the estimator has not turned into window entries when a row arrives: the filler's delay
-/// and the stamps the interval is learned from (the first stamp and [`LEARNING_STEPS`] steps).
-pub const ROWS_BEHIND: u32 = DELAY + LEARNING_STEPS as u32 + 1;
+/// and the stamps the grid's interval and phase are learned from ([`LEARNING_STAMPS`]).
+pub const ROWS_BEHIND: u32 = DELAY + LEARNING_STAMPS as u32;
 
 /// The smallest weight a window is taken with (a bump's ends are 0): its variance 65,536 times a
 /// window's.
@@ -250,14 +250,14 @@ mod tests {
 
     #[test]
     fn the_first_bump_ends_when_the_first_estimate_is_due() {
-        // A 360-entry window from entry 0, first full at 372: due at 450 - ROWS_BEHIND.
+        // A 480-entry window from entry 0, first full at 492: due at 600 - ROWS_BEHIND.
         assert_eq!(
-            StartTaper::first_bump_len(0, 372, 360, 1),
-            450 - ROWS_BEHIND - 372
+            StartTaper::first_bump_len(0, 492, 480, 1),
+            600 - ROWS_BEHIND - 492
         );
         // Known late: a sixteenth of a period; early: at most a quarter.
         assert_eq!(StartTaper::first_bump_len(0, 440, 360, 1), 22);
-        assert_eq!(StartTaper::first_bump_len(0, 300, 360, 1), 90);
+        assert_eq!(StartTaper::first_bump_len(0, 280, 360, 1), 90);
         assert_eq!(StartTaper::first_bump_len(0, 1000, 360, 1), 22);
         // Bins: a sixteenth.
         assert_eq!(StartTaper::first_bump_len(0, 720, 720, 2), 45);
