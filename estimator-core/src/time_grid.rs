@@ -75,9 +75,9 @@ mod checkpoint;
 use crate::sample::SampleError;
 
 /// Stamps the interval and the phase are learned from (accepted, not estimated from).
-pub const LEARNING_STAMPS: usize = 32;
+pub const LEARNING_STAMPS: usize = 9;
 /// The tracking's growing-memory stamp count right after learning.
-pub const TRACKING_START: u32 = 16;
+pub const TRACKING_START: u32 = LEARNING_STAMPS as u32;
 /// The tracking's memory, stamps: its gains stop falling here.
 pub const TRACKING_MEMORY: u32 = 1024;
 /// How far back (in intervals) a stamp must go to be a clock step rather than a repeated row.
@@ -643,14 +643,27 @@ mod tests {
 
     #[test]
     fn lost_rows_among_the_learning_stamps_are_counted() {
-        // Moderate jitter, rows 3, 9, 10 and 20 to 24 lost while learning.
-        let lost_early = |k: u64| k == 3 || k == 9 || k == 10 || (20..25).contains(&k) || lost(k);
+        // Moderate jitter, rows 3, 5 and 6 lost while learning, 12 to 13 just after: while the
+        // grid is young a stamp after lost rows may land a slot off (its data go with it: the
+        // sample is a second early or late, nothing more); never further, never a clock step or
+        // a refused row, and nearly every stamp in its slot.
+        let lost_early = |k: u64| k == 3 || k == 5 || k == 6 || (12..14).contains(&k) || lost(k);
         for interval_s in [1.0, 0.1] {
             let log = log(12_345.0, interval_s, 0.2, 1e-3, &lost_early);
             let mut grid = TimeGrid::new(None);
             let placed = run(&mut grid, &log.stamp_s);
-            assert_every_stamp_in_its_slot(&log, &placed);
             assert_eq!(grid.clock_steps, 0);
+            let mut off_slot = 0;
+            for (i, p) in placed.iter().enumerate().skip(LEARNING_STAMPS) {
+                let intervals = (log.index[i] - log.index[i - 1]) as i64;
+                let Ok(Placement::OnGrid { intervals: got }) = p else {
+                    panic!("stamp {i}: {p:?}");
+                };
+                let off = i64::from(*got) - intervals;
+                assert!(off.abs() <= 1, "stamp {i}: {off}");
+                off_slot += usize::from(off != 0);
+            }
+            assert!(off_slot * 1000 <= placed.len(), "{off_slot} of {}", placed.len());
         }
     }
 

@@ -1029,7 +1029,8 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// The variance of error `i`, each pair's share of the filter's covariance rescaled by that
     /// pair's noise scale: `lambda_pitch (P_ii - C_ii) + lambda_roll C_ii`, `C = P I P` the roll
-    /// pair's share (`I` its information, [`Windowed::roll_information`]), within `[0, P_ii]`.
+    /// pair's share (`I` its information, [`Windowed::roll_information`]), within `[0, P_ii]`; at
+    /// least the error's own pair's scale times `P_ii`.
     fn scaled_variance(&self, i: usize) -> Real {
         let i = i.min(STATES - 1);
         let p = self.kf.covariance();
@@ -1044,7 +1045,11 @@ impl<const CAP: usize> Windowed<CAP> {
             roll_share += p[(j, i)] * v;
         }
         let roll_share = roll_share.larger(0.0).smaller(p_ii);
-        self.pairs[0].noise_scale() * (p_ii - roll_share) + self.pairs[1].noise_scale() * roll_share
+        let (pitch, roll) = (self.pairs[0].noise_scale(), self.pairs[1].noise_scale());
+        // Never below the error's own pair's scale times its variance: a roll pair quieter than
+        // the pitch pair does not make x1, x2 surer than their own channels' noise says.
+        let own = if i < 2 { pitch } else { roll };
+        (pitch * (p_ii - roll_share) + roll * roll_share).larger(own * p_ii)
     }
 
     /// Adds a roll measurement's information `h h' / r` to [`Windowed::roll_information`].

@@ -18,16 +18,17 @@
 //! **long-run noise scale**.
 //!
 //! The batches double in length as the log goes on ([`SLOTS`] of them at most; when all are full,
-//! neighbours are merged): a batch stays a fixed share of the log, so that whatever lasts less
+//! the oldest two are dropped and the others merged in neighbouring pairs, so that the batches
+//! cover the more recent part of the log, not the filter's own settling at its start): a batch stays a fixed share of the log, so that whatever lasts less
 //! than a share of it (a ripple of hours, the sway's leak that falls like `1 / N` rather than
 //! `1 / sqrt(N)`) is averaged in the batches as it is in the estimate, and the scale follows what
 //! is left of it. A ripple of period `P_r` leaves an error of at most `A P_r / (pi t)` after `t`;
 //! batches of `t / SLOTS` give it a 1-sigma of about twice that. The first batch is one period.
 //!
-//! The batches' mean, the part that persists (a drift's lag, a bias), is left out: the lag term of
-//! the report covers it, and a scale raised by it would only lengthen the lag. With fewer than
-//! [`CENTRED_FROM`] batches their squares are taken about zero (a mean learned from so few is
-//! itself noise; the scale is then larger, never smaller).
+//! The batches' squares are taken about zero: a mean that persists (a drift's lag, a bias the model
+//! cannot explain, such as a cadence of lost rows that leaves the same leak every period) is an
+//! error of the estimate as much as what scatters. Their lag-one correlation is taken about their
+//! mean, once [`CENTRED_FROM`] batches are complete (see below).
 
 use crate::math::Compare;
 use crate::Real;
@@ -37,7 +38,7 @@ pub const SLOTS: usize = 8;
 
 /// Batches from which their squares are taken about their mean (and their lag-one correlation
 /// counts).
-pub const CENTRED_FROM: u32 = 4;
+pub const CENTRED_FROM: u32 = 3;
 
 /// Bounds of the batches' lag-one correlation in the long-run factor `(1 + rho) / (1 - rho)`:
 /// batches that alternate (the sway's leak, which averages out faster than white noise) count as
@@ -107,17 +108,19 @@ impl LongRun {
         self.full = (self.full + 1).min(SLOTS as u32);
         self.scale = self.scale_of_batches(window_entries, q_rad2);
         if self.full as usize == SLOTS {
-            // Neighbours merged: half as many batches, twice as long.
-            for i in 0..SLOTS / 2 {
+            // The oldest two batches dropped, the others merged in neighbouring pairs: a third as
+            // many batches, twice as long, of the more recent three quarters of the span (the
+            // first batches hold the filter's own settling, which the estimate has outgrown).
+            for i in 0..(SLOTS - 2) / 2 {
                 for k in 0..2 {
-                    self.sums_rad[i][k] = self.sums_rad[2 * i][k] + self.sums_rad[2 * i + 1][k];
+                    self.sums_rad[i][k] =
+                        self.sums_rad[2 * i + 2][k] + self.sums_rad[2 * i + 3][k];
                 }
             }
-            for s in &mut self.sums_rad[SLOTS / 2..] {
+            for s in &mut self.sums_rad[(SLOTS - 2) / 2..] {
                 *s = [0.0; 2];
             }
-
-            self.full = (SLOTS / 2) as u32;
+            self.full = ((SLOTS - 2) / 2) as u32;
             self.length = self.length.saturating_mul(2);
         }
     }
@@ -153,9 +156,8 @@ impl LongRun {
                 }
                 previous = Some(d);
             }
-            // About the mean: n - 1 degrees of freedom.
-            let dof = if centred { (n - 1) as Real } else { n as Real };
-            let variance = (square / dof).larger(0.0);
+            // About zero: a mean that persists (a bias the model cannot explain) counts too.
+            let variance = ((square + n as Real * mean * mean) / n as Real).larger(0.0);
             // A long sum of batches of lag-one correlation rho has the variance of
             // (1 + rho) / (1 - rho) independent ones (see the module doc).
             let factor = if centred && square > 0.0 {

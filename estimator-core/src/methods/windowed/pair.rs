@@ -232,13 +232,10 @@ impl Pair {
     }
 
     /// The factor applied to the part of the filter's covariance this pair's noise makes: the
-    /// larger of the noise scale and the long-run noise scale ([`super::long_run`]).
+    /// larger of the noise scale (the power of the residual means, which holds what persists in
+    /// them) and the long-run noise scale ([`super::long_run`]).
     pub fn noise_scale(&self) -> Real {
-        if self.long_run.batches() >= super::long_run::CENTRED_FROM {
-            self.long_run.scale().larger(MIN_NOISE_SCALE)
-        } else {
-            self.stats.noise_scale.larger(self.long_run.scale())
-        }
+        self.stats.noise_scale.larger(self.long_run.scale())
     }
 
     /// Refreshes what is reported of the pair's errors: each error's 1-sigma, from
