@@ -485,8 +485,20 @@ impl CorrelationSums {
             let (c0, c1, ss, cs, pitch) = (m(0, t), m(1, t), m(4, t), m(5, t), m(7, a));
             out.z[0] = cov(m(8, at), pitch, c0);
             out.z[1] = cov(m(9, at), pitch, c1);
-            out.rows[0] = [cov(m(12, tt), c0, ss), -cov(m(13, tt), c0, cs), 0.0, 0.0, 0.0];
-            out.rows[1] = [cov(m(14, tt), c1, ss), -cov(m(15, tt), c1, cs), 0.0, 0.0, 0.0];
+            out.rows[0] = [
+                cov(m(12, tt), c0, ss),
+                -cov(m(13, tt), c0, cs),
+                0.0,
+                0.0,
+                0.0,
+            ];
+            out.rows[1] = [
+                cov(m(14, tt), c1, ss),
+                -cov(m(15, tt), c1, cs),
+                0.0,
+                0.0,
+                0.0,
+            ];
         } else {
             let (c2, c3, roll) = (m(2, t), m(3, t), m(6, a));
             let h = [m(16, tt), m(17, tt), m(18, tt), m(19, tt)];
@@ -517,7 +529,11 @@ impl CorrelationSums {
                 -cov(m(34, ut), turn_ref, h[1]),
                 cov(m(35, ut), turn_ref, h[2]),
                 -cov(m(36, ut), turn_ref, h[3]),
-                cov(m(37, inv_n / (RATE_COUNTS * RATE_COUNTS) as Real), turn_ref, rate),
+                cov(
+                    m(37, inv_n / (RATE_COUNTS * RATE_COUNTS) as Real),
+                    turn_ref,
+                    rate,
+                ),
             ];
         }
         Some(out)

@@ -508,13 +508,7 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         weight: u8,
     ) -> Pushed {
         if self.bin <= 1 {
-            let q = QuantizedSample::new(
-                s.roll_rad,
-                s.pitch_rad,
-                &s.angles,
-                reference,
-                turn_rate,
-            );
+            let q = QuantizedSample::new(s.roll_rad, s.pitch_rad, &s.angles, reference, turn_rate);
             let removed =
                 self.push_entry(s.index, q, FillCode::of(u32::from(s.fill_weight)), weight);
             return Pushed {

@@ -45,7 +45,9 @@
 //! (`alpha = 2 (2m - 1) / (m (m + 1))`, `beta = 6 / (m (m + 1))` at the `m`-th stamp), from
 //! `m =` [`TRACKING_START`] to [`TRACKING_MEMORY`], then held: the grid follows a clock that runs
 //! 0.1 % fast, or drifts, with a memory of about a thousand stamps, its phase error a few
-//! hundredths of the jitter. A pinned interval is never refined; its phase is.
+//! hundredths of the jitter. A pinned interval is the nominal one: the grid follows the clock
+//! with its own copy, kept within [`PINNED_INTERVAL_TOLERANCE`] of it (a recorder's clock that
+//! runs 1 % off is broken), and reports the pinned one.
 //!
 //! # Placing a stamp
 //! - In the next slot or `n >= 1` slots on: on the grid, `n - 1` samples missing;
@@ -55,6 +57,8 @@
 //!   accepted, counted, the grid re-anchored at it, and treated as a gap the window cannot
 //!   bridge. (With jitter near half an interval a jump by a fraction of an interval cannot be
 //!   told from jitter: the tracking follows it instead, a few stamps possibly one slot off.)
+//! - more than `u32::MAX` intervals on (136 years at 1 Hz, where the stamp's residual is lost in
+//!   the rounding): a clock jump, re-anchored at the stamp;
 //! - more than [`CLOCK_STEP_BACK_INTERVALS`] intervals before the previous accepted stamp: a clock
 //!   step backwards, accepted, counted, re-anchored and treated as a gap like a jump;
 //! - otherwise in a slot at or before the last accepted one: a repeated or out-of-order row,
@@ -82,6 +86,8 @@ pub const TRACKING_START: u32 = LEARNING_STAMPS as u32;
 pub const TRACKING_MEMORY: u32 = 1024;
 /// How far back (in intervals) a stamp must go to be a clock step rather than a repeated row.
 pub const CLOCK_STEP_BACK_INTERVALS: f64 = 2.0;
+/// How far the interval the grid follows may stray from a pinned one, as a fraction of it.
+pub const PINNED_INTERVAL_TOLERANCE: f32 = 0.01;
 /// Intervals after which the base time moves up to the grid's phase.
 pub const REBASE_INTERVALS: f32 = 1024.0;
 /// Largest offset from the grid's phase, in intervals, placed in single precision.
@@ -245,13 +251,20 @@ impl TimeGrid {
         if time_s > last {
             let e = rel64 - f64::from(self.lead32_s);
             let n = libm::round(e / t);
+            if n > f64::from(u32::MAX) {
+                // Beyond four billion intervals (136 years at 1 Hz) a stamp names no slot (its
+                // residual is lost in the rounding): a clock jump, re-anchored at the stamp.
+                return Ok(Placed {
+                    placement: Placement::ClockStep,
+                    rel_s: 0.0,
+                    residual_s: 0.0,
+                    fast: false,
+                    off: false,
+                    restart: false,
+                });
+            }
             if n >= 1.0 {
-                let intervals = if n > f64::from(u32::MAX) {
-                    u32::MAX
-                } else {
-                    n as u32
-                };
-                return Ok(self.on_grid(intervals, (e - n * t) as f32, rel64 as f32, false));
+                return Ok(self.on_grid(n as u32, (e - n * t) as f32, rel64 as f32, false));
             }
             let r1 = e - t;
             if r1.abs() <= (0.5 + f64::from(self.widening())) * t {
@@ -326,6 +339,18 @@ impl TimeGrid {
         let Some(last) = self.last_stamp_s else {
             return Ok(Placed::learning(0.0, true));
         };
+        // With the interval pinned, a stamp is judged against it while the phase is learned, as
+        // on the grid: far back, a clock step (learning starts again at it); less than half an
+        // interval on, a repeated row.
+        if let (true, Some(interval)) = (self.pinned, self.interval_s) {
+            let dt = time_s - last;
+            if dt < -CLOCK_STEP_BACK_INTERVALS * interval {
+                return Ok(Placed::learning(0.0, true));
+            }
+            if dt > 0.0 && dt < 0.5 * interval {
+                return Err(SampleError::IrregularTimeStep);
+            }
+        }
         if !(time_s > last) {
             return Err(SampleError::TimeNotIncreasing);
         }
@@ -413,6 +438,13 @@ impl TimeGrid {
         } else {
             beta * r / n as f32
         };
+        if let (true, Some(nominal)) = (self.pinned, self.interval_s) {
+            let nominal = nominal as f32;
+            self.interval32_s = self.interval32_s.clamp(
+                nominal * (1.0 - PINNED_INTERVAL_TOLERANCE),
+                nominal * (1.0 + PINNED_INTERVAL_TOLERANCE),
+            );
+        }
         let g = if m >= 256 {
             1.0 / 256.0
         } else {
@@ -438,10 +470,11 @@ impl TimeGrid {
         for (i, s) in steps.iter_mut().enumerate() {
             *s = x[i + 1] - x[i];
         }
-        let t0 = match self.interval_s {
-            Some(pinned) if self.pinned => pinned as f32,
-            _ => median(&mut steps.clone()),
+        let pinned = match self.interval_s {
+            Some(pinned) if self.pinned => Some(pinned as f32),
+            _ => None,
         };
+        let t0 = pinned.unwrap_or_else(|| median(&mut steps.clone()));
         let mut work = [0.0f32; LEARNING_STAMPS];
         let mut singles = 0;
         for s in steps.iter().filter(|s| **s < 1.5 * t0) {
@@ -460,7 +493,7 @@ impl TimeGrid {
                     libm::roundf(s / t0).max(1.0)
                 };
         }
-        let (mut a, mut t) = line(x, &k);
+        let (mut a, mut t) = line(x, &k, pinned);
         for _ in 0..3 {
             if !(t > 0.0 && t.is_finite()) {
                 break;
@@ -482,7 +515,7 @@ impl TimeGrid {
                 break;
             }
             k = k2;
-            (a, t) = line(x, &k);
+            (a, t) = line(x, &k, pinned);
         }
         if !(t > 0.0 && t.is_finite() && a.is_finite()) {
             let last = x[LEARNING_STAMPS - 1];
@@ -509,11 +542,15 @@ impl TimeGrid {
     }
 }
 
-/// The least-squares line `x = a + k t` through the points, `(a, t)`.
-fn line(x: &[f32; LEARNING_STAMPS], k: &[f32; LEARNING_STAMPS]) -> (f32, f32) {
+/// The least-squares line `x = a + k t` through the points, `(a, t)`; with the slope `pinned`,
+/// only `a` is fitted (the mean of `x - k t`).
+fn line(x: &[f32; LEARNING_STAMPS], k: &[f32; LEARNING_STAMPS], pinned: Option<f32>) -> (f32, f32) {
     let n = LEARNING_STAMPS as f32;
     let mk = k.iter().sum::<f32>() / n;
     let mx = x.iter().sum::<f32>() / n;
+    if let Some(t) = pinned {
+        return (mx - t * mk, t);
+    }
     let (mut skk, mut skx) = (0.0f32, 0.0f32);
     for i in 0..LEARNING_STAMPS {
         skk += (k[i] - mk) * (k[i] - mk);
@@ -663,7 +700,11 @@ mod tests {
                 assert!(off.abs() <= 1, "stamp {i}: {off}");
                 off_slot += usize::from(off != 0);
             }
-            assert!(off_slot * 1000 <= placed.len(), "{off_slot} of {}", placed.len());
+            assert!(
+                off_slot * 1000 <= placed.len(),
+                "{off_slot} of {}",
+                placed.len()
+            );
         }
     }
 

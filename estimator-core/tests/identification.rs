@@ -179,31 +179,32 @@ fn corrected_attitude_removes_the_oscillation() {
     assert!(after < 1.0, "oscillation RMS after {after:.3} arcsec");
 }
 
-/// The state budget: 29 KiB for the default capacity in the firmware's f32: the window's ring of
-/// 720 entries of 32 bytes (one period of up to 720 samples without bins, 22.5 KiB), the gap
+/// The state budget: 34 KiB for the default capacity in the firmware's f32: the window's ring of
+/// 720 entries of 36 bytes (one period of up to 720 samples without bins, 25.3 KiB; each entry
+/// holds the four products, the turn rate and its low-passed reference beside the attitude), the gap
 /// filler's delay line of 80 received samples (the taper's look-ahead of 31 rows, the five passed
 /// on last and room for rows that come in a burst, about 5 KiB), the filter, the change detector
-/// and the rest.
+/// and the rest (the two pairs' long-run batch means and the roll information matrix among it).
 ///
 /// What it protects: the estimator lives in the firmware's static RAM, whose budget is 64 KiB on
 /// the STM32F405 (`host-sim/tests/qemu/qemu_budgets.rs` checks it on the ELF, with the link's
 /// receive rings, the transmit queue and the checkpoint store's buffers beside the estimator).
-/// This bound keeps the estimator's share below half of it, so that the link's buffers can grow.
+/// This bound leaves 30 KiB of it to the link's buffers and the checkpoint store's, so that they can grow.
 /// The f64 build is a precision comparison on the host, with no RAM to fit: its limit only makes
 /// growth visible. It stores the same integer ring and every float twice as wide (the gap filler's
 /// delay line, the filter, the change detector's blocks and the clean state it goes back to are
-/// most of the floats): the f32 limit plus 5 KiB.
+/// most of the floats): the f32 limit plus 6 KiB.
 #[test]
-fn estimator_fits_in_29_kib() {
+fn estimator_fits_in_34_kib() {
     let size = core::mem::size_of::<Estimator>();
     println!(
         "size_of::<Estimator>() = {size} bytes; Real = {}",
         core::any::type_name::<Real>()
     );
     let budget = if cfg!(feature = "f64") {
-        34 * 1024
+        40 * 1024
     } else {
-        29 * 1024
+        34 * 1024
     };
     assert!(size <= budget, "{size} bytes");
 }

@@ -269,14 +269,6 @@ where
         interval_check.observe(line.row.time_s)?;
         let result = est.step(&sample_of(&line.row));
         count += 1;
-        if std::env::var("RINS_DEBUG_HEEL").is_ok() && [2000u64, 3000, 5000, 10000, 20000, 45000].contains(&(line.row.time_s as u64)) {
-            if let Some(w) = est.windowed() {
-                let x = w.filter().state();
-                let p = w.filter().covariance();
-                let pr = w.pairs();
-                eprintln!("DEBUG t {} x5 {:.5} lam_p {:.3}/{:.3}/{} lam_r {:.3}/{:.3}/{} sdP1 {:.3} sdP3 {:.3} sig {:?}", line.row.time_s, x[4], pr[0].stats.noise_scale, pr[0].long_run.scale(), pr[0].long_run.batches(), pr[1].stats.noise_scale, pr[1].long_run.scale(), pr[1].long_run.batches(), p[(0,0)].max(0.0).sqrt()*206264.8, p[(2,2)].max(0.0).sqrt()*206264.8, est.estimate().map(|e| e.sigma_rad.map(|s| (s as f64 * 206264.8 * 100.0).round() / 100.0)));
-            }
-        }
         if let Ok(out) = &result {
             final_status = Some(out.status);
             if let Some(change) = est.error_change().filter(|c| c.detected_s == out.time_s) {

@@ -680,7 +680,8 @@ impl<const CAP: usize> Windowed<CAP> {
             // weave near the rotation's frequency cannot tell it from x3, x4).
             let mut all_but_heel = [true; STATES];
             all_but_heel[HEEL_STATE] = false;
-            let learned = self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] < HEEL_LEARNED_VARIANCE_RAD2;
+            let learned =
+                self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] < HEEL_LEARNED_VARIANCE_RAD2;
             let updated = (!learned).then_some(&all_but_heel);
             for (k, ch) in channels(pair).into_iter().enumerate() {
                 match self.kf.update_masked(
@@ -923,7 +924,8 @@ impl<const CAP: usize> Windowed<CAP> {
         self.restore_clean_state();
         self.clean_state_due = false;
         let prior = prior_sigma_rad(config, true);
-        let forget: [bool; STATES] = core::array::from_fn(|i| changed.get(i).copied().unwrap_or(false));
+        let forget: [bool; STATES] =
+            core::array::from_fn(|i| changed.get(i).copied().unwrap_or(false));
         self.kf.forget(&forget, &prior);
         self.forget_roll_information(&forget);
         let horizon = self.residual_horizon();

@@ -146,7 +146,9 @@ impl Stored for Pair {
         {
             w.real(v);
         }
-        w.u8(u8::from(self.mismatch[0]) | u8::from(self.mismatch[1]) << 1 | u8::from(self.relearning) << 2);
+        w.u8(u8::from(self.mismatch[0])
+            | u8::from(self.mismatch[1]) << 1
+            | u8::from(self.relearning) << 2);
         for v in self.spread_rad2 {
             w.real(v);
         }
@@ -291,9 +293,7 @@ fn residuals_in_range(p: &Pair) -> bool {
 /// Whether the roll pair's information is finite with a diagonal that is not negative.
 #[inline(never)]
 fn information_in_range(info: &[[Real; STATES]; STATES]) -> bool {
-    (0..STATES).all(|j| {
-        all_within(&info[j], -Real::MAX, Real::MAX) && info[j][j] >= 0.0
-    })
+    (0..STATES).all(|j| all_within(&info[j], -Real::MAX, Real::MAX) && info[j][j] >= 0.0)
 }
 
 #[cfg(test)]
