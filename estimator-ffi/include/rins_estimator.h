@@ -16,7 +16,7 @@
 #include <stdint.h>
 
 // Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.
-#define RINS_CHECKPOINT_LEN 944
+#define RINS_CHECKPOINT_LEN 852
 
 // Bytes of a buffer that holds any estimates CSV row with its line end and NUL.
 #define RINS_ROW_MAX_LEN 1024
@@ -31,7 +31,7 @@
 // Bytes of memory an estimator needs, on every target (32- and 64-bit): at least
 // `rins_estimator_size()`, which is this build's exact figure. The library does not build
 // where its estimator would not fit.
-#define RINS_ESTIMATOR_SIZE 29696
+#define RINS_ESTIMATOR_SIZE 33280
 
 // Alignment of the estimator's memory, bytes (it holds `double`s).
 #define RINS_ESTIMATOR_ALIGN 8

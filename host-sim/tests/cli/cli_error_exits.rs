@@ -191,11 +191,11 @@ fn restamp(text: &str, mut f: impl FnMut(f64) -> f64) -> String {
     out
 }
 
-/// The sea log with every stamp moved by up to 0.45 s either way: its shortest step is well
-/// under 1 s, which a pinned 1 s interval refuses after 8 steps.
-fn jittered(text: &str) -> String {
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-    restamp(text, |t| t + rng.gen_range(-0.45..0.45))
+/// The sea log stamped at twice its rate (steps of 0.5 s), which a pinned 1 s interval refuses
+/// after the first steps: their median is below 0.6 of it (stamps jittered by up to 0.45 s
+/// either way are accepted).
+fn twice_the_rate(text: &str) -> String {
+    restamp(text, |t| 0.5 * t)
 }
 
 /// `text` gzip-compressed.
@@ -232,11 +232,11 @@ fn command_line<'a>(
 const CONTRADICTS: &str = "--sample-interval 1 s contradicts the log's time stamps";
 
 #[test]
-fn a_jittered_log_refused_by_the_pinned_interval_ends_at_once_with_every_method() {
+fn a_log_at_twice_the_rate_refused_by_the_pinned_interval_ends_at_once_with_every_method() {
     let dir = temp();
     let (_, text) = sea_log(dir.path(), "sea.csv", LONG_ROWS);
-    let log = dir.path().join("jittered.csv");
-    std::fs::write(&log, jittered(&text)).unwrap();
+    let log = dir.path().join("twice.csv");
+    std::fs::write(&log, twice_the_rate(&text)).unwrap();
     let out = dir.path().join("e.csv");
     for method in ["windowed", "traditional", "paper"] {
         let ended = run(
@@ -262,7 +262,7 @@ fn a_jittered_log_refused_by_the_pinned_interval_ends_at_once_with_every_method(
     assert!(!out.exists(), "nothing written");
     // Its first rows alone are refused the same way.
     let short = dir.path().join("short.csv");
-    std::fs::write(&short, first_rows(&jittered(&text), 400)).unwrap();
+    std::fs::write(&short, first_rows(&twice_the_rate(&text), 400)).unwrap();
     let args = ["estimate", path_str(&short), "--sample-interval", "1"];
     expect("400 rows", &run(dir.path(), &args), 1, &[CONTRADICTS]);
 }
@@ -353,13 +353,13 @@ fn a_long_log_refused_at_an_early_unreadable_row_with_strict_ends_at_once() {
 fn gzip_logs_refused_or_truncated_end_with_their_error() {
     let dir = temp();
     let (_, text) = sea_log(dir.path(), "sea.csv", LONG_ROWS);
-    let refused = dir.path().join("jittered.csv.gz");
-    std::fs::write(&refused, gzip(jittered(&text).as_bytes())).unwrap();
+    let refused = dir.path().join("twice.csv.gz");
+    std::fs::write(&refused, gzip(twice_the_rate(&text).as_bytes())).unwrap();
     let ended = run(
         dir.path(),
         &["estimate", path_str(&refused), "--sample-interval", "1"],
     );
-    expect("jittered gzip", &ended, 1, &[CONTRADICTS]);
+    expect("twice the rate, gzip", &ended, 1, &[CONTRADICTS]);
     let whole = gzip(text.as_bytes());
     for (name, len) in [("cut in its header", 20), ("cut halfway", whole.len() / 2)] {
         let cut = dir.path().join("cut.csv.gz");
@@ -409,24 +409,25 @@ fn standard_input_closed_early_or_held_open_ends() {
         Input::Bytes(cut),
     );
     expect("cut, strict", &ended, 1, &["short row"]);
-    // The jittered log refused, its writer still writing, or holding the pipe open with no more.
-    let jittered = jittered(&text);
+    // The log at twice the rate refused, its writer still writing, or holding the pipe open with
+    // no more.
+    let twice = twice_the_rate(&text);
     let pinned = ["estimate", "-", "--sample-interval", "1", "--out", "-"];
     let ended = run_in(
         dir.path(),
         &pinned,
         &[],
-        Input::Bytes(jittered.clone().into_bytes()),
+        Input::Bytes(twice.clone().into_bytes()),
     );
     expect(
-        "jittered",
+        "twice the rate",
         &ended,
         1,
         &[&format!("standard input: {CONTRADICTS}")],
     );
-    let held = first_rows(&jittered, 8000).into_bytes();
+    let held = first_rows(&twice, 8000).into_bytes();
     let ended = run_in(dir.path(), &pinned, &[], Input::BytesHeldOpen(held));
-    expect("jittered, held open", &ended, 1, &[CONTRADICTS]);
+    expect("twice the rate, held open", &ended, 1, &[CONTRADICTS]);
 }
 
 #[test]
