@@ -12,8 +12,10 @@
 //!
 //! which stays symmetric positive definite under rounding, unlike `P - K h' P`. `A = I - K h'` is a
 //! rank-one change of the identity, so the products are formed without building `A`:
-//! `D = A P = P - K b'` (with `b = P h`), then `A P A' = D - (D h) K'`, each `O(N^2)` instead of
-//! the `O(N^3)` of dense products. Together with the Newton square root of [`crate::math`], this
+//! `D = A P = P - K b'` (with `b = P h`), `D h = b - K (h' b)`, then
+//! `A P A' + r K K' = D - (D h) K' + r K K'`, term by term
+//! `P_ij - K_i b_j - (b_i - K_i h'b) K_j + r K_i K_j`: `O(N^2)` instead of the `O(N^3)` of dense
+//! products, in place, for any gain (the Schmidt "consider" update zeroes some of it). Together with the Newton square root of [`crate::math`], this
 //! is what brought the step on the Cortex-M4F within its instruction budget (measured by
 //! `host-sim/tests/qemu/qemu_budgets.rs`; the figures in docs/firmware.md). Only the upper triangle is computed; the lower one
 //! is its mirror, so the result is symmetric by construction. A measurement whose innovation variance is not positive and
@@ -30,6 +32,16 @@
 mod checkpoint;
 
 use nalgebra::{ArrayStorage, RealField, SMatrix, SVector};
+
+/// Whether every value is finite, from one sum (a NaN or an infinity anywhere makes it not
+/// finite; finite values whose sum overflows count as not finite too).
+fn sum_is_finite<T: RealField + Copy>(values: &[T]) -> bool {
+    let mut sum = T::zero();
+    for v in values {
+        sum += *v;
+    }
+    sum.is_finite()
+}
 
 /// Why a measurement was not applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -136,58 +148,102 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         gate: Option<(T, T)>,
         updated: Option<&[bool; N]>,
     ) -> Result<T, KalmanError> {
-        let h = SVector::<T, N>::from_column_slice(h);
-        if !z.is_finite() || !r.is_finite() || r < T::zero() || h.iter().any(|v| !v.is_finite()) {
+        self.update_leading::<N>(h, z, r, gate, updated)
+    }
+
+    /// [`ConstantStateKalman::update_masked`] on the leading `M` states only: the others
+    /// keep their estimates, their variances and their covariances, and enter the innovation
+    /// through their estimates alone. For states held at a negligible variance and uncorrelated
+    /// with the rest (a model term not yet excited), it is the full update less what rounds
+    /// away, at `(M / N)^2` of the cost (`M` a constant: the loops unrolled).
+    pub fn update_leading<const M: usize>(
+        &mut self,
+        h: &[T; N],
+        z: T,
+        r: T,
+        gate: Option<(T, T)>,
+        updated: Option<&[bool; N]>,
+    ) -> Result<T, KalmanError> {
+        let n = if M < N { M } else { N };
+        if !z.is_finite() || !r.is_finite() || r < T::zero() || !sum_is_finite(h) {
             return Err(KalmanError::NonFinite);
         }
-        let ph = self.p * h;
-        let hph = h.dot(&ph);
+        let mut ph = [T::zero(); N];
+        let mut hph = T::zero();
+        for i in 0..n {
+            let mut v = T::zero();
+            for j in 0..n {
+                v += self.p[(i, j)] * h[j];
+            }
+            ph[i] = v;
+            hph += h[i] * v;
+        }
         let s = hph + r;
         if !(s > T::zero()) || !s.is_finite() {
             return Err(KalmanError::Degenerate);
         }
-        let innovation = z - h.dot(&self.x);
+        let mut innovation = z;
+        for i in 0..N {
+            innovation -= h[i] * self.x[i];
+        }
         if let Some((spread, g)) = gate {
             if innovation * innovation > g * g * (hph + spread) {
                 return Err(KalmanError::Gated);
             }
         }
-        let mut k = ph / s;
         // The states not in `updated` keep their estimates (a Schmidt "consider" update: the
         // Joseph form below is the covariance of any gain).
-        if let Some(updated) = updated {
-            for i in 0..N {
-                if !updated[i] {
-                    k[i] = T::zero();
-                }
+        let inv_s = T::one() / s;
+        let mut k = [T::zero(); N];
+        for i in 0..n {
+            if updated.is_none_or(|u| u[i]) {
+                k[i] = ph[i] * inv_s;
             }
         }
-        // D = (I - k h') P = P - k b', b = P h = ph (P symmetric).
-        let mut d = self.p;
-        for i in 0..N {
-            for j in 0..N {
-                d[(i, j)] -= k[i] * ph[j];
-            }
+        // Joseph's form for any gain (module doc): D h = b - k (h' b), b = P h = ph (P
+        // symmetric); P+ = D - (D h) k' + r k k'. The new estimate first, then the covariance in
+        // place: the upper triangle written over the old one (each term reads only its own old
+        // value), the lower triangle still the old mirror, so that a result that is not finite
+        // (one sum each: a NaN or an infinity anywhere makes it not finite) is undone from it and
+        // the filter is left untouched.
+        let mut dh = [T::zero(); N];
+        for i in 0..n {
+            dh[i] = ph[i] - k[i] * hph;
         }
-        // P+ = D (I - k h')' + r k k' = D - (D h) k' + r k k', upper triangle mirrored.
-        let dh = d * h;
-        let mut p = SMatrix::<T, N, N>::zeros();
-        for i in 0..N {
-            for j in i..N {
-                let v = d[(i, j)] - dh[i] * k[j] + r * k[i] * k[j];
-                p[(i, j)] = v;
-                p[(j, i)] = v;
-            }
+        let mut x = [T::zero(); N];
+        let mut x_sum = innovation;
+        for i in 0..n {
+            x[i] = self.x[i] + k[i] * innovation;
+            x_sum += x[i];
         }
-        let x = self.x + k * innovation;
-        if !innovation.is_finite()
-            || x.iter().any(|v| !v.is_finite())
-            || p.iter().any(|v| !v.is_finite())
-        {
+        if !x_sum.is_finite() {
             return Err(KalmanError::NonFinite);
         }
-        self.x = x;
-        self.p = p;
+        let mut diagonal = [T::zero(); N];
+        let mut p_sum = T::zero();
+        for i in 0..n {
+            diagonal[i] = self.p[(i, i)];
+            for j in i..n {
+                let v = self.p[(i, j)] - k[i] * ph[j] - dh[i] * k[j] + r * k[i] * k[j];
+                self.p[(i, j)] = v;
+                p_sum += v;
+            }
+        }
+        if !p_sum.is_finite() {
+            for i in 0..n {
+                self.p[(i, i)] = diagonal[i];
+                for j in i + 1..n {
+                    self.p[(i, j)] = self.p[(j, i)];
+                }
+            }
+            return Err(KalmanError::NonFinite);
+        }
+        for i in 0..n {
+            self.x[i] = x[i];
+            for j in i + 1..n {
+                self.p[(j, i)] = self.p[(i, j)];
+            }
+        }
         Ok(innovation)
     }
 

@@ -439,11 +439,18 @@ impl TimeGrid {
             beta * r / n as f32
         };
         if let (true, Some(nominal)) = (self.pinned, self.interval_s) {
+            // Compared, not `clamp`ed: `clamp`'s check of its bounds is a panic path (and its
+            // message's float formatting 16 KB of flash).
             let nominal = nominal as f32;
-            self.interval32_s = self.interval32_s.clamp(
+            let (low, high) = (
                 nominal * (1.0 - PINNED_INTERVAL_TOLERANCE),
                 nominal * (1.0 + PINNED_INTERVAL_TOLERANCE),
             );
+            if self.interval32_s < low {
+                self.interval32_s = low;
+            } else if self.interval32_s > high {
+                self.interval32_s = high;
+            }
         }
         let g = if m >= 256 {
             1.0 / 256.0

@@ -290,9 +290,10 @@ pub struct Windowed<const CAP: usize> {
     next_pair: u8,
     /// What each channel pair learned beside the filter ([`pair`]): pitch, roll.
     pairs: [Pair; 2],
-    /// The information the roll pair's measurements gave the filter, `sum h h' / r` (symmetric):
-    /// the roll pair's share of the filter's covariance is about `P I P`, which its noise scale
-    /// rescales (see "The 1-sigma" in the module doc).
+    /// The information the roll pair's measurements gave the filter, `sum h h' / r` (symmetric;
+    /// its upper triangle `[j][k]`, `j <= k`, is kept, the lower one is not used): the roll
+    /// pair's share of the filter's covariance is about `P I P`, which its noise scale rescales
+    /// (see "The 1-sigma" in the module doc).
     roll_information: [[Real; STATES]; STATES],
     /// The detector of changes of the errors ([`change`]).
     change: ChangeDetector,
@@ -683,14 +684,19 @@ impl<const CAP: usize> Windowed<CAP> {
             let learned =
                 self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] < HEEL_LEARNED_VARIANCE_RAD2;
             let updated = (!learned).then_some(&all_but_heel);
+            // A heel held at its negligible variance (no turn has shown one) is left out of the
+            // update: x1..x4 alone, at two thirds of the cost.
+            let heel_active = heel_learned(self.kf.covariance()[(HEEL_STATE, HEEL_STATE)]);
             for (k, ch) in channels(pair).into_iter().enumerate() {
-                match self.kf.update_masked(
-                    &m.rows[ch],
-                    m.z[ch],
-                    r,
-                    gate.map(|g| (self.pairs[pair].spread_rad2[k], g)),
-                    updated,
-                ) {
+                let gate = gate.map(|g| (self.pairs[pair].spread_rad2[k], g));
+                let result = if heel_active {
+                    self.kf
+                        .update_masked(&m.rows[ch], m.z[ch], r, gate, updated)
+                } else {
+                    self.kf
+                        .update_leading::<HEEL_STATE>(&m.rows[ch], m.z[ch], r, gate, updated)
+                };
+                match result {
                     Ok(_) => {
                         applied = true;
                         if pair == ROLL_PAIR {
@@ -1037,14 +1043,16 @@ impl<const CAP: usize> Windowed<CAP> {
         let i = i.min(STATES - 1);
         let p = self.kf.covariance();
         let p_ii = p[(i, i)].larger(0.0);
+        // p_i' I p_i, p_i = P's column i, from I's upper triangle.
         let info = &self.roll_information;
         let mut roll_share: Real = 0.0;
         for j in 0..STATES {
-            let mut v: Real = 0.0;
-            for k in 0..STATES {
+            let pj = p[(j, i)];
+            let mut v: Real = 0.5 * info[j][j] * pj;
+            for k in j + 1..STATES {
                 v += info[j][k] * p[(k, i)];
             }
-            roll_share += p[(j, i)] * v;
+            roll_share += 2.0 * pj * v;
         }
         let roll_share = roll_share.larger(0.0).smaller(p_ii);
         let (pitch, roll) = (self.pairs[0].noise_scale(), self.pairs[1].noise_scale());
@@ -1060,13 +1068,11 @@ impl<const CAP: usize> Windowed<CAP> {
             return;
         }
         let inv_r = 1.0 / r;
-        // The upper triangle, mirrored: symmetric by construction.
+        // The upper triangle only: what reads it reads that (the lower one stays as it was).
         for j in 0..STATES {
             let hj = h[j] * inv_r;
             for k in j..STATES {
-                let v = self.roll_information[j][k] + hj * h[k];
-                self.roll_information[j][k] = v;
-                self.roll_information[k][j] = v;
+                self.roll_information[j][k] += hj * h[k];
             }
         }
     }

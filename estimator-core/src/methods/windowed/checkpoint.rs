@@ -242,9 +242,7 @@ impl Stored for Learned {
         }
         for j in 0..STATES {
             for k in j..STATES {
-                let v = r.real();
-                m.roll_information[j][k] = v;
-                m.roll_information[k][j] = v;
+                m.roll_information[j][k] = r.real();
             }
         }
         ensure(

@@ -184,13 +184,12 @@ impl LongRun {
             } else {
                 1.0
             };
-            // Less what chance gives white residuals over `n` batches (2.33 standard deviations
-            // of a chi-square's mean, `sqrt(2 / n)`): a scale that only chance raised above the
-            // model's stays with the power's (see the module doc).
-            let chance = CHANCE_SIGMAS * crate::math::sqrt(2.0 / n as Real);
-            scale = scale.larger(variance * factor / model - chance);
+            scale = scale.larger(variance * factor / model);
         }
-        scale
+        // Less what chance gives white residuals over `n` batches ([`CHANCE_SIGMAS`] standard
+        // deviations of a chi-square's mean, `sqrt(2 / n)`): a scale that only chance raised
+        // above the model's stays with the power's (see the module doc).
+        (scale - CHANCE_SIGMAS * crate::math::sqrt(2.0 / n as Real)).larger(0.0)
     }
 }
 
