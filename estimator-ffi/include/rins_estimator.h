@@ -213,7 +213,8 @@ typedef struct RinsConfig {
   // Start gate: estimation starts once the roll sway amplitude exceeds this, rad. Default 0:
   // off.
   float sway_gate_rad;
-  // Gaps of up to this many lost samples in a row are filled from their neighbours. Default 3.
+  // Gaps of up to this many lost samples in a row are filled from their neighbours. Default 2
+  // (at most 3; 0 fills none).
   uint32_t max_filled_gap_samples;
   // An error counts as converged once its 1-sigma is below this, rad. Default 1 arcsec.
   float converged_sigma_rad;

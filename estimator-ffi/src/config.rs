@@ -56,7 +56,8 @@ pub struct RinsConfig {
     /// Start gate: estimation starts once the roll sway amplitude exceeds this, rad. Default 0:
     /// off.
     pub sway_gate_rad: f32,
-    /// Gaps of up to this many lost samples in a row are filled from their neighbours. Default 3.
+    /// Gaps of up to this many lost samples in a row are filled from their neighbours. Default 2
+    /// (at most 3; 0 fills none).
     pub max_filled_gap_samples: u32,
     /// An error counts as converged once its 1-sigma is below this, rad. Default 1 arcsec.
     pub converged_sigma_rad: f32,

@@ -67,7 +67,7 @@ pub struct TuningArgs {
     #[arg(long, value_name = "ARCSEC")]
     pub traditional_drift_arcsec_per_sqrt_s: Option<f64>,
     /// Gaps of up to this many lost samples in a row are filled from their neighbours instead of
-    /// restarting the moving average (default: the core's, 3; 0 = never fill, at most 3).
+    /// restarting the moving average (default: the core's, 2; 0 = never fill, at most 3).
     #[arg(long, value_name = "N")]
     pub max_filled_gap_samples: Option<u32>,
     /// Windowed method: the smallest step of an installation error the change detector is sized

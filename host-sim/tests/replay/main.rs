@@ -11,4 +11,5 @@ mod coverage;
 mod gap_logs;
 mod jittered_stamps;
 mod real_logs;
+mod sea_day;
 mod store_power_fail;

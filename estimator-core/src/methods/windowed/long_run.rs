@@ -139,6 +139,8 @@ impl LongRun {
 
     /// The scale of the complete batches: the larger of the two channels' variance of a batch
     /// mean (about their mean, or zero while few) over the model's.
+    #[cold]
+    #[inline(never)]
     fn scale_of_batches(&self, window_entries: u32, q_rad2: Real) -> Real {
         let n = (self.full as usize).min(SLOTS);
         if n == 0 || !(q_rad2 > 0.0) {

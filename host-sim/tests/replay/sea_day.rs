@@ -1,0 +1,95 @@
+//! A ship's ordinary day, reduced lines of `bash scripts/sea-day-study.sh` (its figures in
+//! docs/sea-day-study.md): slow heel and trim, heel in turns and rows lost at a cadence that
+//! divides the rotation period, each on two seeds of 20,001 s of the sea scenario. What a
+//! navigator relies on: the 1-sigma holds (some error beyond 3 sigma on at most 1 % of the rows
+//! after the first estimate), and the estimate is never worse than the traditional baseline.
+//!
+//! What the study shows and these lines do not assert (not met): no row beyond 5 sigma (the first
+//! estimates on strong slow heel lie beyond it for one to two hundred rows), within 10 arcsec by
+//! 6,000 s on the heel and trim of the third line (about 9,500 s), within 10 arcsec from 1.25
+//! periods with heel in turns (each turn throws x3, x4 off for about a hundred seconds).
+
+use estimator_core::{Config, Method};
+use host_sim::compare::{compare_one, CompareRow};
+use host_sim::monte_carlo::Draw;
+use host_sim::scenario::ScenarioKind;
+
+const SEEDS: usize = 2;
+const DURATION_S: f64 = 20_001.0;
+
+fn sea(shape: impl FnOnce(&mut Draw)) -> Draw {
+    let mut d = Draw::new(ScenarioKind::Sea, 1);
+    d.duration_s = Some(DURATION_S);
+    shape(&mut d);
+    d
+}
+
+fn line(draw: &Draw, method: Method) -> CompareRow {
+    compare_one(draw, Config::with_method(method), SEEDS).unwrap()
+}
+
+/// Ours: at most 1 % of rows beyond 3 sigma, and at 20,000 s (p95 over the seeds) never worse
+/// than the traditional baseline; returns our p95 worst error at 20,000 s.
+fn honest_and_never_worse(name: &str, draw: &Draw) -> f64 {
+    let ours = line(draw, Method::Windowed);
+    let theirs = line(draw, Method::Traditional);
+    let h = &ours.honesty;
+    let beyond_3 = h.beyond_3_sigma_rows as f64 / h.rows.max(1) as f64;
+    // The column at 20,000 s (the first is 2,000 s).
+    let (a, b) = (ours.error_at_arcsec[1].1, theirs.error_at_arcsec[1].1);
+    println!(
+        "{name}: rows beyond 3 sigma {:.2} %, largest error/sigma {:.1}; p95 at 20000 s ours {a:.2}, traditional {b:.2} arcsec",
+        100.0 * beyond_3,
+        h.largest.map_or(f64::NAN, |l| l.ratio)
+    );
+    assert!(h.rows > 10_000, "{name}: {} rows judged", h.rows);
+    assert!(
+        beyond_3 <= 0.01,
+        "{name}: {:.2} % of rows beyond 3 sigma",
+        100.0 * beyond_3
+    );
+    assert!(
+        a <= b,
+        "{name}: {a:.2} arcsec against the traditional {b:.2}"
+    );
+    a
+}
+
+#[test]
+fn slow_heel_and_trim_keep_the_1_sigma_and_beat_the_traditional_baseline() {
+    let draw = sea(|d| {
+        d.ship_motion.slow_heel = vec![(0.3, 1200.0), (0.15, 2500.0)];
+        d.ship_motion.slow_trim = vec![(0.1, 1800.0)];
+    });
+    let error = honest_and_never_worse(
+        "heel 0.3 deg / 1200 s + 0.15 deg / 2500 s, trim 0.1 deg",
+        &draw,
+    );
+    // The study's 3.3 arcsec at 20,000 s (one seed), with room for the second seed.
+    assert!(error <= 6.0, "{error:.2} arcsec at 20000 s");
+}
+
+#[test]
+fn heel_in_turns_keeps_the_1_sigma_and_the_estimate() {
+    let draw = sea(|d| d.mismatch.heel_in_turns_deg = 3.0);
+    let error = honest_and_never_worse("heel in turns 3 deg", &draw);
+    // As without turns at 20,000 s: a few tenths of an arcsec.
+    assert!(error <= 0.5, "{error:.2} arcsec at 20000 s");
+}
+
+#[test]
+fn a_heel_that_follows_the_course_weave_keeps_the_1_sigma() {
+    let draw = sea(|d| d.ship_motion.heel_per_turn_rate_deg_per_deg_s = 4.0);
+    honest_and_never_worse("heel 4 deg per deg/s of turn rate", &draw);
+}
+
+#[test]
+fn rows_lost_at_a_cadence_that_divides_the_period_keep_the_1_sigma() {
+    let draw = sea(|d| {
+        d.rotation_period_s = Some(360.0);
+        d.recorder.gap_every_s = 60.0;
+        d.recorder.gap_rows = 3;
+    });
+    let error = honest_and_never_worse("3 rows lost every 60 s at 360 s", &draw);
+    assert!(error <= 1.0, "{error:.2} arcsec at 20000 s");
+}
