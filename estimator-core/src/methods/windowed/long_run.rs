@@ -235,7 +235,8 @@ mod tests {
             "white: {}",
             white.scale()
         );
-        // A bias the residuals keep counts in full: its square over the model's variance.
+        // A bias the residuals keep counts in full: its square over the model's variance (less
+        // what chance gives white residuals over the batches).
         let mut lag = LongRun::NEW;
         for _ in 0..(240 * 7) {
             lag.add([1.0e-4, -2.0e-4], 240, 480, q);
@@ -244,7 +245,8 @@ mod tests {
         // model variance smaller, and the same bias's share larger.
         let model = q / 480.0 * (2.0 / 3.0);
         // (Rounding aside: the batch means are sums of a few hundred terms.)
-        let expected = 4.0e-8 / model * (1.0 - 1e-6);
+        let chance = CHANCE_SIGMAS * libm::sqrt(2.0 / f64::from(lag.batches())) as Real;
+        let expected = 4.0e-8 / model * (1.0 - 1e-6) - chance;
         assert!(
             lag.scale() >= expected,
             "a constant: {} (at least {expected})",
