@@ -484,11 +484,14 @@ impl TimeGrid {
         let t0 = pinned.unwrap_or_else(|| median(&mut steps.clone()));
         let mut work = [0.0f32; LEARNING_STAMPS];
         let mut singles = 0;
+        // `get_mut` and the bounded count: no index the compiler cannot prove, no panic path.
         for s in steps.iter().filter(|s| **s < 1.5 * t0) {
-            work[singles] = (s - t0).abs();
-            singles += 1;
+            if let Some(w) = work.get_mut(singles) {
+                *w = (s - t0).abs();
+                singles += 1;
+            }
         }
-        let mad = median(&mut work[..singles]);
+        let mad = median(&mut work[..singles.min(LEARNING_STAMPS)]);
         let mut longest_single = (1.1 + 4.5 * mad / t0).clamp(1.25, 2.0);
         let mut k = [0.0f32; LEARNING_STAMPS];
         for i in 1..LEARNING_STAMPS {
@@ -571,16 +574,23 @@ fn line(x: &[f32; LEARNING_STAMPS], k: &[f32; LEARNING_STAMPS], pinned: Option<f
 fn median(v: &mut [f32]) -> f32 {
     for i in 1..v.len() {
         let mut j = i;
-        while j > 0 && v[j - 1] > v[j] {
-            v.swap(j - 1, j);
+        // A pair of neighbours by pattern, not by index: no bound left for the optimiser to prove.
+        while let Some([a, b]) = j.checked_sub(1).and_then(|k| v.get_mut(k..=j)) {
+            if *a <= *b {
+                break;
+            }
+            core::mem::swap(a, b);
             j -= 1;
         }
     }
+    // `get`, not indexing: the optimiser does not prove `n / 2 - 1 < n`, and an index it cannot
+    // prove leaves a panic path in the C library.
     let n = v.len();
+    let at = |i: usize| v.get(i).copied().unwrap_or(0.0);
     match n {
         0 => 0.0,
-        _ if n % 2 == 1 => v[n / 2],
-        _ => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+        _ if n % 2 == 1 => at(n / 2),
+        _ => 0.5 * (at(n / 2 - 1) + at(n / 2)),
     }
 }
 
