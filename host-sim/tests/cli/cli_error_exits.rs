@@ -1021,7 +1021,10 @@ fn stream_through_a_silent_closed_or_babbling_port_ends_with_its_error() {
             "silent",
             "no response from the firmware (read timed out)",
         ),
-        (Firmware::Hangs, "closed", "from the firmware's port: "),
+        // A port that closes is told by the read or by the write that meets it first
+        // ("... from the firmware's port: ..." or "cannot write to the firmware's port: ..."):
+        // which one is a matter of timing, both name the port.
+        (Firmware::Hangs, "closed", "the firmware's port: "),
         (Firmware::Babbles, "babbling", "bad frame from the firmware"),
     ] {
         let ended = stream_through(dir.path(), &log, firmware, &["--out", "e.csv"]);
