@@ -126,19 +126,6 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         self.update_masked(h, z, r, gate, None)
     }
 
-    /// [`ConstantStateKalman::update`] that moves only the states `updated`, the others taken as
-    /// they are (their uncertainty enters the innovation's variance and the covariance, not
-    /// their estimates).
-    pub fn update_states(
-        &mut self,
-        h: &[T; N],
-        z: T,
-        r: T,
-        updated: &[bool; N],
-    ) -> Result<T, KalmanError> {
-        self.update_masked(h, z, r, None, Some(updated))
-    }
-
     /// [`ConstantStateKalman::update_gated`] that moves only the states `updated` (all: `None`).
     pub fn update_masked(
         &mut self,

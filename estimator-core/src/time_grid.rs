@@ -135,6 +135,16 @@ pub struct Placed {
 }
 
 impl Placed {
+    /// A clock jump or a step backwards found on the long path: re-anchored at the stamp.
+    const CLOCK_STEP: Placed = Placed {
+        placement: Placement::ClockStep,
+        rel_s: 0.0,
+        residual_s: 0.0,
+        fast: false,
+        off: false,
+        restart: false,
+    };
+
     fn learning(rel_s: f32, restart: bool) -> Placed {
         Placed {
             placement: Placement::Learning,
@@ -254,14 +264,7 @@ impl TimeGrid {
             if n > f64::from(u32::MAX) {
                 // Beyond four billion intervals (136 years at 1 Hz) a stamp names no slot (its
                 // residual is lost in the rounding): a clock jump, re-anchored at the stamp.
-                return Ok(Placed {
-                    placement: Placement::ClockStep,
-                    rel_s: 0.0,
-                    residual_s: 0.0,
-                    fast: false,
-                    off: false,
-                    restart: false,
-                });
+                return Ok(Placed::CLOCK_STEP);
             }
             if n >= 1.0 {
                 return Ok(self.on_grid(n as u32, (e - n * t) as f32, rel64 as f32, false));
@@ -273,14 +276,7 @@ impl TimeGrid {
             return Err(SampleError::IrregularTimeStep);
         }
         if time_s < last - CLOCK_STEP_BACK_INTERVALS * t {
-            return Ok(Placed {
-                placement: Placement::ClockStep,
-                rel_s: 0.0,
-                residual_s: 0.0,
-                fast: false,
-                off: false,
-                restart: false,
-            });
+            return Ok(Placed::CLOCK_STEP);
         }
         Err(SampleError::TimeNotIncreasing)
     }

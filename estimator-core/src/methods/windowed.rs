@@ -469,11 +469,6 @@ impl<const CAP: usize> Windowed<CAP> {
         ]
     }
 
-    /// What each channel pair learned beside the filter: pitch, roll.
-    pub fn pairs(&self) -> &[Pair; 2] {
-        &self.pairs
-    }
-
     /// The detector of changes of the errors.
     pub fn change_detector(&self) -> &ChangeDetector {
         &self.change
