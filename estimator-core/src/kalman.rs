@@ -143,9 +143,6 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
     /// through their estimates alone. For states held at a negligible variance and uncorrelated
     /// with the rest (a model term not yet excited), it is the full update less what rounds
     /// away, at `(M / N)^2` of the cost (`M` a constant: the loops unrolled).
-    // One copy per state count, called: inlined at each of its call sites it took kilobytes of
-    // the firmware's flash for a dozen instructions of call a step.
-    #[inline(never)]
     pub fn update_leading<const M: usize>(
         &mut self,
         h: &[T; N],

@@ -682,7 +682,10 @@ impl<const CAP: usize> Windowed<CAP> {
             // A heel held at its negligible variance (no turn has shown one) is left out of the
             // update: x1..x4 alone, at two thirds of the cost.
             let heel_active = heel_learned(self.kf.covariance()[(HEEL_STATE, HEEL_STATE)]);
-            for (k, ch) in channels(pair).into_iter().enumerate() {
+            for k in 0..2 {
+                // The channel from its pair and rank, not read back from an array: below 4 as
+                // the optimiser sees it (no bound check left in the C library's step).
+                let ch = 2 * (pair & 1) + k;
                 let gate = gate.map(|g| (self.pairs[pair].spread_rad2[k], g));
                 let result = if heel_active {
                     self.kf

@@ -13,7 +13,7 @@ use crate::qemu_support::*;
 /// the image may take 116 KiB of them, 12 KiB kept as a margin so that a fix in the field never
 /// outgrows the region (which would move the checkpoint log). (It was 96 KiB with a 32 KiB margin
 /// until the heel in turns, the sample grid and the long-run noise scale took the image to
-/// 114 KB on the STM32F405: a margin given up, recorded in docs/firmware.md.) The firmware inlines
+/// 113 KB on the STM32F405: a margin given up, recorded in docs/firmware.md.) The firmware inlines
 /// little and builds its own crate at opt-level 2 (.cargo/config.toml, Cargo.toml). The
 /// mps2-an386 (4 MiB) is held to the same figure, so that growth shows on either board. Static RAM: half of the STM32F405's 128 KiB
 /// SRAM, the rest for the stack and room to grow.
