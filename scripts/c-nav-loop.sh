@@ -25,7 +25,7 @@ arm-none-eabi-gcc -std=c11 -O2 -Wall -Wextra -pedantic -Iestimator-ffi/include \
     -T examples/c/mps2-an386/link.ld -Wl,--gc-sections -Wl,-z,noexecstack -Wl,-Map="$DIR/nav_loop.map" \
     -o "$DIR/nav_loop.elf" examples/c/mps2-an386/startup.c examples/c/nav_loop.c \
     -lm -lc target/thumbv7em-none-eabihf/firmware/libestimator_ffi.a
-timeout 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -display none -monitor none -serial none \
+timeout 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -icount shift=0 -display none -monitor none -serial none \
     -semihosting-config enable=on,target=native -kernel "$DIR/nav_loop.elf" < /dev/null
 
 # Bytes of the sections a linker map says were taken from libestimator_ffi.a: flash (code,

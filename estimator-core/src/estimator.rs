@@ -329,6 +329,41 @@ impl<const CAP: usize> Estimator<CAP> {
         })
     }
 
+    /// The attitude of `sample` with eq (2)'s oscillation for the current estimate removed, without
+    /// stepping the estimator: what [`Estimator::step`] returns as [`Output::corrected`] for the
+    /// same sample and estimate, bit for bit, at the cost of eq (2) alone (the sines and cosines
+    /// of rho, rho - s and L and twelve products). For a navigation computer whose attitude comes
+    /// faster than the estimator's grid: every attitude sample is compensated with the estimate of
+    /// the last step, and only the grid's samples are stepped. The sample's time is not used (its
+    /// fields are checked as a step checks them).
+    ///
+    /// Returns [`CompensateError::NoEstimate`] before the filter's first measurement and
+    /// [`CompensateError::Rejected`] for a sample a step would refuse on its fields; the estimator
+    /// is never changed.
+    pub fn compensate(&self, sample: &Sample) -> Result<Attitude, CompensateError> {
+        sample.check().map_err(CompensateError::Rejected)?;
+        let estimate = self
+            .method
+            .estimate(&self.config)
+            .ok_or(CompensateError::NoEstimate)?;
+        let angles = Angles::new(
+            sample.rotation_rad,
+            sample.platform_rad,
+            self.latitude_sin_cos(sample.latitude_rad),
+        );
+        Ok(corrected(&angles, &sample.attitude, &estimate.x_rad))
+    }
+
+    /// `(sin L, cos L)` of `latitude_rad`: the step's cached values when the latitude is the one it
+    /// cached (so that [`Estimator::compensate`] computes what the step does, bit for bit).
+    fn latitude_sin_cos(&self, latitude_rad: Real) -> (Real, Real) {
+        if latitude_rad == self.run.latitude_trig.0 {
+            (self.run.latitude_trig.1, self.run.latitude_trig.2)
+        } else {
+            sin_cos(latitude_rad)
+        }
+    }
+
     /// Processes one sample. On error nothing changes but the rejection counter.
     pub fn step(&mut self, sample: &Sample) -> Result<Output, SampleError> {
         let placed = match sample
@@ -383,14 +418,7 @@ impl<const CAP: usize> Estimator<CAP> {
             sigma_rad: e.sigma_rad,
         });
         let corrected = match estimate {
-            Some(e) => {
-                let d = angles.oscillation(&e.x_rad);
-                Attitude {
-                    heading_rad: wrap_pi(sample.attitude.heading_rad - d.heading_rad),
-                    roll_rad: sample.attitude.roll_rad - d.roll_rad,
-                    pitch_rad: sample.attitude.pitch_rad - d.pitch_rad,
-                }
-            }
+            Some(e) => corrected(&angles, &sample.attitude, &e.x_rad),
             None => sample.attitude,
         };
         Ok(Output {
@@ -614,6 +642,35 @@ impl<const CAP: usize> Estimator<CAP> {
             sample.platform_rad,
             (self.run.latitude_trig.1, self.run.latitude_trig.2),
         )
+    }
+}
+
+/// `attitude` with eq (2)'s oscillation for `x_rad` at `angles` removed; the heading wrapped to
+/// [-pi, pi].
+fn corrected(angles: &Angles, attitude: &Attitude, x_rad: &[Real; 4]) -> Attitude {
+    let d = angles.oscillation(x_rad);
+    Attitude {
+        heading_rad: wrap_pi(attitude.heading_rad - d.heading_rad),
+        roll_rad: attitude.roll_rad - d.roll_rad,
+        pitch_rad: attitude.pitch_rad - d.pitch_rad,
+    }
+}
+
+/// Why [`Estimator::compensate`] returned no attitude.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CompensateError {
+    /// There is no estimate yet: the attitude is the RINS's own.
+    NoEstimate,
+    /// A field of the sample is one a step would refuse (NaN, infinite, out of range).
+    Rejected(SampleError),
+}
+
+impl core::fmt::Display for CompensateError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            CompensateError::NoEstimate => f.write_str("no estimate yet"),
+            CompensateError::Rejected(e) => write!(f, "sample refused: {e}"),
+        }
     }
 }
 

@@ -110,7 +110,7 @@ pub mod units;
 
 pub use code::UnknownCode;
 pub use config::{Config, ConfigError, Method};
-pub use estimator::Estimator;
+pub use estimator::{CompensateError, Estimator};
 pub use output::{
     Counters, ErrorChange, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status,
 };

@@ -275,6 +275,16 @@ typedef struct RinsOutput {
   float pitch_corrected_rad;
 } RinsOutput;
 
+// An attitude compensated by `rins_estimator_compensate`, rad.
+typedef struct RinsAttitude {
+  // Heading with eq (2)'s oscillation removed, rad, in [-pi, pi].
+  float heading_rad;
+  // Roll, corrected likewise, rad.
+  float roll_rad;
+  // Pitch, corrected likewise, rad.
+  float pitch_rad;
+} RinsAttitude;
+
 // What the estimator has counted since it was set up or reset (each saturates at 2^32 - 1).
 typedef struct RinsCounters {
   // Samples accepted.
@@ -387,6 +397,23 @@ RinsError rins_estimator_step(struct RinsEstimator *estimator,
 // time; `estimate` is null or points to a writable `RinsEstimate`.
 RinsError rins_estimator_estimate(const struct RinsEstimator *estimator,
                                   struct RinsEstimate *estimate);
+
+// Applies the current estimate to one attitude sample without stepping the estimator, for
+// attitude that comes faster than the estimator's grid (100-200 Hz): `*attitude` receives the
+// sample's heading, roll and pitch with eq (2)'s oscillation removed, rad (heading in
+// [-pi, pi]), exactly as `rins_estimator_step` corrects a sample it steps (bit for bit, for the
+// same sample and estimate). The sample's time is not used. `RINS_ERROR_NO_ESTIMATE` before the
+// filter's first measurement and `RINS_ERROR_SAMPLE_REJECTED` for a field a step would refuse
+// (NaN, infinite, out of range) write nothing; the estimator is never changed, so a program may
+// call it from a faster loop than the step's as long as no step runs at the same time.
+//
+// # Safety
+// `estimator` is null or a handle from `rins_estimator_init` that no call changes at the same
+// time; `sample` is null or points to a readable `RinsSample`; `attitude` is null or points to a
+// writable `RinsAttitude`.
+RinsError rins_estimator_compensate(const struct RinsEstimator *estimator,
+                                    const struct RinsSample *sample,
+                                    struct RinsAttitude *attitude);
 
 // The estimator's counters into `*counters`.
 //

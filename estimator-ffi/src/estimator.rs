@@ -9,11 +9,11 @@
 
 use crate::config::RinsConfig;
 use crate::error::{code, RinsError};
-use crate::output::{RinsEstimate, RinsOutput, RinsSample};
+use crate::output::{RinsAttitude, RinsEstimate, RinsOutput, RinsSample};
 use crate::pointer;
 use core::ffi::c_void;
 use core::mem::{align_of, size_of, MaybeUninit};
-use estimator_core::{Estimator, Sample};
+use estimator_core::{CompensateError, Estimator, Sample};
 
 /// Bytes of memory an estimator needs, on every target (32- and 64-bit): at least
 /// `rins_estimator_size()`, which is this build's exact figure. The library does not build
@@ -187,6 +187,44 @@ pub unsafe extern "C" fn rins_estimator_estimate(
         // SAFETY: checked; writable by the caller's promise.
         Some(e) => code(unsafe { pointer::write(estimate, RinsEstimate::from(&e)) }),
         None => RinsError::NoEstimate,
+    }
+}
+
+/// Applies the current estimate to one attitude sample without stepping the estimator, for
+/// attitude that comes faster than the estimator's grid (100-200 Hz): `*attitude` receives the
+/// sample's heading, roll and pitch with eq (2)'s oscillation removed, rad (heading in
+/// [-pi, pi]), exactly as `rins_estimator_step` corrects a sample it steps (bit for bit, for the
+/// same sample and estimate). The sample's time is not used. `RINS_ERROR_NO_ESTIMATE` before the
+/// filter's first measurement and `RINS_ERROR_SAMPLE_REJECTED` for a field a step would refuse
+/// (NaN, infinite, out of range) write nothing; the estimator is never changed, so a program may
+/// call it from a faster loop than the step's as long as no step runs at the same time.
+///
+/// # Safety
+/// `estimator` is null or a handle from `rins_estimator_init` that no call changes at the same
+/// time; `sample` is null or points to a readable `RinsSample`; `attitude` is null or points to a
+/// writable `RinsAttitude`.
+#[no_mangle]
+pub unsafe extern "C" fn rins_estimator_compensate(
+    estimator: *const RinsEstimator,
+    sample: *const RinsSample,
+    attitude: *mut RinsAttitude,
+) -> RinsError {
+    // SAFETY: the caller's promises.
+    let checked = unsafe {
+        (
+            estimator_ref_and_check(estimator, attitude),
+            pointer::read(sample),
+        )
+    };
+    let (est, sample) = match checked {
+        (Ok(est), Ok(sample)) => (est, sample),
+        (Err(e), _) | (_, Err(e)) => return e,
+    };
+    match est.compensate(&Sample::from(&sample)) {
+        // SAFETY: checked; writable by the caller's promise.
+        Ok(a) => code(unsafe { pointer::write(attitude, RinsAttitude::from(&a)) }),
+        Err(CompensateError::NoEstimate) => RinsError::NoEstimate,
+        Err(CompensateError::Rejected(_)) => RinsError::SampleRejected,
     }
 }
 

@@ -53,11 +53,11 @@ pub use checkpoint::{rins_estimator_checkpoint, rins_estimator_restore, RINS_CHE
 pub use config::{rins_config_check, rins_config_default, RinsConfig, RinsMethod};
 pub use error::{rins_error_name, RinsError};
 pub use estimator::{
-    rins_estimator_counters, rins_estimator_estimate, rins_estimator_init, rins_estimator_reset,
-    rins_estimator_size, rins_estimator_step, RinsCounters, RinsEstimator, RINS_ESTIMATOR_ALIGN,
-    RINS_ESTIMATOR_SIZE,
+    rins_estimator_compensate, rins_estimator_counters, rins_estimator_estimate,
+    rins_estimator_init, rins_estimator_reset, rins_estimator_size, rins_estimator_step,
+    RinsCounters, RinsEstimator, RINS_ESTIMATOR_ALIGN, RINS_ESTIMATOR_SIZE,
 };
-pub use output::{RinsEstimate, RinsField, RinsOutput, RinsSample, RinsStatus};
+pub use output::{RinsAttitude, RinsEstimate, RinsField, RinsOutput, RinsSample, RinsStatus};
 pub use text::{rins_format_header, rins_format_row, rins_parse_number, RINS_ROW_MAX_LEN};
 
 /// On a bare-metal target a panic ends the program through the C library's `abort()` (newlib and

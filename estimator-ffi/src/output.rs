@@ -42,6 +42,28 @@ impl From<&RinsSample> for Sample {
     }
 }
 
+/// An attitude compensated by `rins_estimator_compensate`, rad.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct RinsAttitude {
+    /// Heading with eq (2)'s oscillation removed, rad, in [-pi, pi].
+    pub heading_rad: f32,
+    /// Roll, corrected likewise, rad.
+    pub roll_rad: f32,
+    /// Pitch, corrected likewise, rad.
+    pub pitch_rad: f32,
+}
+
+impl From<&Attitude> for RinsAttitude {
+    fn from(a: &Attitude) -> RinsAttitude {
+        RinsAttitude {
+            heading_rad: a.heading_rad as f32,
+            roll_rad: a.roll_rad as f32,
+            pitch_rad: a.pitch_rad as f32,
+        }
+    }
+}
+
 /// The four installation errors x1..x4 and their 1-sigma, rad (multiply by
 /// `RINS_ARCSEC_PER_RAD` for arcsec).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

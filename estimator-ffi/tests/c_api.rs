@@ -545,3 +545,105 @@ fn the_headers_memory_constants_hold() {
         );
     }
 }
+
+fn compensate(handle: *const RinsEstimator, sample: &RinsSample) -> (RinsError, RinsAttitude) {
+    let mut out = RinsAttitude {
+        heading_rad: f32::MAX,
+        roll_rad: f32::MAX,
+        pitch_rad: f32::MAX,
+    };
+    // SAFETY: an initialised handle, a readable sample, a writable attitude.
+    let e = unsafe { rins_estimator_compensate(handle, sample, &mut out) };
+    (e, out)
+}
+
+/// `rins_estimator_compensate` between steps: nothing before the first estimate; then, for a
+/// sample just stepped, the step's own corrected attitude bit for bit; at 100 Hz between the
+/// steps, the sway alone is left (eq (2)'s oscillation of hundreds of arcsec removed to within the
+/// estimate's error); a bad sample, a null pointer or a foreign handle is refused and nothing is
+/// written; the estimator is never changed.
+#[test]
+fn compensate_applies_the_estimate_between_steps_and_changes_nothing() {
+    let mut block = Block::new(0);
+    let handle = init(&mut block, &defaults());
+    let no_change = RinsAttitude {
+        heading_rad: f32::MAX,
+        roll_rad: f32::MAX,
+        pitch_rad: f32::MAX,
+    };
+    assert_eq!(
+        compensate(handle, &row(0.0)),
+        (RinsError::NoEstimate, no_change)
+    );
+    let mut matched = 0;
+    for k in 0..2000 {
+        let sample = row(k as f64);
+        let (_, out) = step(handle, &sample);
+        let before = block.0.clone();
+        let (e, a) = compensate(handle, &sample);
+        if out.has_estimate {
+            assert_eq!(e, RinsError::Ok);
+            assert_eq!(
+                [a.heading_rad, a.roll_rad, a.pitch_rad].map(f32::to_bits),
+                [
+                    out.heading_corrected_rad,
+                    out.roll_corrected_rad,
+                    out.pitch_corrected_rad
+                ]
+                .map(f32::to_bits),
+                "at {k} s"
+            );
+            matched += 1;
+        } else {
+            assert_eq!((e, a), (RinsError::NoEstimate, no_change));
+        }
+        assert!(
+            block.0 == before,
+            "compensate changed the estimator at {k} s"
+        );
+    }
+    assert!(matched > 1000, "{matched}");
+    // 100 Hz between two steps: the sway is what remains.
+    for i in 0..100 {
+        let t = 1999.0 + 0.01 * i as f64;
+        let (e, a) = compensate(handle, &row(t));
+        assert_eq!(e, RinsError::Ok);
+        let roll_sway_rad = 3.0 * (TAU * t / 8.0).sin() * RAD_PER_DEG;
+        let pitch_sway_rad = (TAU * t / 11.0).sin() * RAD_PER_DEG;
+        // Within 5 arcsec (the estimate at 2,000 s is within 1): the oscillation is hundreds.
+        assert!(
+            rad_to_arcsec(a.roll_rad as f64 - roll_sway_rad).abs() < 5.0,
+            "{t}"
+        );
+        assert!(
+            rad_to_arcsec(a.pitch_rad as f64 - pitch_sway_rad).abs() < 5.0,
+            "{t}"
+        );
+    }
+    let mut bad = row(2000.0);
+    bad.roll_deg = 95.0;
+    assert_eq!(
+        compensate(handle, &bad),
+        (RinsError::SampleRejected, no_change)
+    );
+    let mut out = no_change;
+    // SAFETY: null pointers are refused before anything is read or written.
+    unsafe {
+        assert_eq!(
+            rins_estimator_compensate(null(), &row(1.0), &mut out),
+            RinsError::NullPointer
+        );
+        assert_eq!(
+            rins_estimator_compensate(handle, null(), &mut out),
+            RinsError::NullPointer
+        );
+        assert_eq!(
+            rins_estimator_compensate(handle, &row(1.0), null_mut()),
+            RinsError::NullPointer
+        );
+    }
+    let foreign = Block::new(0x5a);
+    // SAFETY: readable memory of the estimator's size that init never marked.
+    let e = unsafe { rins_estimator_compensate(foreign.0.as_ptr().cast(), &row(1.0), &mut out) };
+    assert_eq!((e, out), (RinsError::NotInitialised, no_change));
+}

@@ -503,3 +503,68 @@ fn clock_steps_are_counted() {
     est.step(&sample(3901.5, 3.0)).unwrap();
     assert_eq!(est.counters().clock_steps, 2);
 }
+
+/// Compensation between steps: before the first estimate it has none to apply; from then on, a
+/// sample compensated after its step comes back exactly as the step corrected it, bit for bit,
+/// and a sample at a time between the grid's (as a 100 Hz feed gives) has the oscillation of
+/// eq (2) removed to within the estimate's error; a bad sample is refused by its field and
+/// nothing changes.
+#[test]
+fn compensate_applies_the_current_estimate_without_stepping() {
+    let mut est: Estimator = Estimator::new(Config::default()).unwrap();
+    let first = sample(0.0, 3.0);
+    assert_eq!(est.compensate(&first), Err(CompensateError::NoEstimate));
+    let mut compensated = 0;
+    for k in 0..3000 {
+        let s = sample(k as f64, 3.0);
+        let out = est.step(&s).unwrap();
+        let before = est.clone();
+        match (out.estimate, est.compensate(&s)) {
+            (None, Err(CompensateError::NoEstimate)) => {}
+            (Some(_), Ok(a)) => {
+                compensated += 1;
+                assert_eq!(a.heading_rad.to_bits(), out.corrected.heading_rad.to_bits());
+                assert_eq!(a.roll_rad.to_bits(), out.corrected.roll_rad.to_bits());
+                assert_eq!(a.pitch_rad.to_bits(), out.corrected.pitch_rad.to_bits());
+            }
+            (e, c) => panic!("at {k} s: estimate {e:?}, compensate {c:?}"),
+        }
+        assert!(est == before, "compensate changed the estimator at {k} s");
+    }
+    assert!(compensated > 2000, "{compensated} samples compensated");
+    // Between the grid's samples: 100 samples in the next second, without their sway (the
+    // attitude is eq (2)'s oscillation alone): what remains is the estimate's error's share.
+    let error_sum_rad =
+        errors_arcsec(&est).iter().map(|e| e.abs()).sum::<f64>() / crate::units::ARCSEC_PER_RAD;
+    for i in 0..100 {
+        let t = 2999.0 + i as f64 * 0.01;
+        let mut s = sample(t, 0.0);
+        let sway = {
+            let mut zero = Signal::new([0.0; 4], 40.0);
+            zero.rotation_phase_rad = 0.3;
+            zero.platform_phase_rad = 1.1;
+            zero.heading_rad = 10.0 * RAD_PER_DEG;
+            zero.roll_sway_deg = 0.0;
+            zero.pitch_sway_phase_rad = 0.0;
+            zero.low_frequency_deg = 0.0;
+            zero.sample(t)
+        };
+        s.attitude.roll_rad -= sway.attitude.roll_rad;
+        s.attitude.pitch_rad -= sway.attitude.pitch_rad;
+        let a = est.compensate(&s).unwrap();
+        // Eq (2)'s rows times the estimate's errors: each entry of a row is at most 1 in size.
+        let bound = error_sum_rad as Real + 1e-9;
+        assert!(a.roll_rad.abs() <= bound, "roll {} at {t} s", a.roll_rad);
+        assert!(a.pitch_rad.abs() <= bound, "pitch {} at {t} s", a.pitch_rad);
+    }
+    let before = est.clone();
+    let mut bad = sample(3000.0, 3.0);
+    bad.attitude.pitch_rad = Real::NAN;
+    assert_eq!(
+        est.compensate(&bad),
+        Err(CompensateError::Rejected(SampleError::NonFinite(
+            Field::Pitch
+        )))
+    );
+    assert!(est == before);
+}
