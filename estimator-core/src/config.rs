@@ -103,6 +103,30 @@ pub struct Config {
     /// changed are learned again from the next window on (see [`crate::methods::windowed`],
     /// "Changes of the errors"). Default 20 arcsec; 0 turns detection off.
     pub change_detection_step_rad: Real,
+    /// Known values of the installation errors (a dockside or factory calibration, or what an
+    /// earlier run learned): the filter starts from them, and they are reported (and compensate
+    /// the attitude) from the first sample, before the first measurement; the measurements then
+    /// refine them. Default `None`: nothing known, the filter starts from zero with
+    /// [`Config::prior_sigma_rad`] and there is no estimate before its first measurement.
+    pub prior: Option<Prior>,
+    /// How long before the row's time its rotation angle was measured, s (the attitude is taken at
+    /// the row's time): the rotation angle is carried forward by this much at the rate of the
+    /// last two samples on the grid, `rho + (d rho / d t) S`. At 0.75 deg/s (480 s a turn) a lag
+    /// of 0.2 s left uncorrected is a phase error of 0.15 deg in eq (2)'s rotation terms. Default
+    /// 0; at most [`MAX_ANGLE_LATENCY_S`].
+    pub angle_latency_s: f64,
+}
+
+/// The largest [`Config::angle_latency_s`], s.
+pub const MAX_ANGLE_LATENCY_S: f64 = 1.0;
+
+/// Known values of the four installation errors and their 1-sigma, rad ([`Config::prior`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prior {
+    /// x1..x4, rad; each at most 1 rad in size.
+    pub x_rad: [Real; 4],
+    /// Their 1-sigma, rad: positive, at most [`Config::prior_sigma_rad`].
+    pub sigma_rad: [Real; 4],
 }
 
 impl Default for Config {
@@ -121,6 +145,8 @@ impl Default for Config {
             converged_sigma_rad: arcsec_to_rad(1.0) as Real,
             rotation_period_tolerance: 0.01,
             change_detection_step_rad: arcsec_to_rad(20.0) as Real,
+            prior: None,
+            angle_latency_s: 0.0,
         }
     }
 }
@@ -357,6 +383,45 @@ impl Config {
                 self.rotation_period_tolerance,
                 AtMost(0.5),
             );
+        }
+        if !(self.angle_latency_s >= 0.0) {
+            return fail("angle_latency_s", self.angle_latency_s as Real, NonNegative);
+        }
+        if !(self.angle_latency_s <= MAX_ANGLE_LATENCY_S) {
+            return fail(
+                "angle_latency_s",
+                self.angle_latency_s as Real,
+                AtMost(MAX_ANGLE_LATENCY_S),
+            );
+        }
+        if let Some(prior) = &self.prior {
+            const X: [&str; 4] = [
+                "prior.x_rad[0]",
+                "prior.x_rad[1]",
+                "prior.x_rad[2]",
+                "prior.x_rad[3]",
+            ];
+            const SIGMA: [&str; 4] = [
+                "prior.sigma_rad[0]",
+                "prior.sigma_rad[1]",
+                "prior.sigma_rad[2]",
+                "prior.sigma_rad[3]",
+            ];
+            for i in 0..4 {
+                if !(prior.x_rad[i].abs() <= 1.0) {
+                    return fail(X[i], prior.x_rad[i], AtMost(1.0));
+                }
+                let s = prior.sigma_rad[i];
+                if !(s > 0.0 && s.is_finite()) {
+                    return fail(SIGMA[i], s, Positive);
+                }
+                if !(s <= self.prior_sigma_rad) {
+                    return fail(SIGMA[i], s, AtMost(self.prior_sigma_rad as f64));
+                }
+                if !(s * s > 0.0) {
+                    return fail(SIGMA[i], s, SquareUnderflows);
+                }
+            }
         }
         Ok(())
     }

@@ -125,6 +125,12 @@ struct RunState {
     counters: Counters,
     /// The last change of the errors the windowed method declared.
     error_change: Option<ErrorChange>,
+    /// The rotation angle of the last accepted sample, rad, and the rate of the rotation angle
+    /// over the last step on the grid, rad/s: what carries a lagging rotation angle forward
+    /// ([`Config::angle_latency_s`]; neither is kept while the latency is 0). Not in the
+    /// checkpoint: after a restore the rate is learned again from the first two samples.
+    last_rotation_rad: Option<Real>,
+    rotation_rate_rad_s: Real,
 }
 
 impl RunState {
@@ -146,6 +152,8 @@ impl RunState {
             rejected: RejectCounts::ZERO,
             counters: Counters::ZERO,
             error_change: None,
+            last_rotation_rad: None,
+            rotation_rate_rad_s: 0.0,
         }
     }
 }
@@ -346,12 +354,49 @@ impl<const CAP: usize> Estimator<CAP> {
             .method
             .estimate(&self.config)
             .ok_or(CompensateError::NoEstimate)?;
+        let sample = &self.carried(sample);
         let angles = Angles::new(
             sample.rotation_rad,
             sample.platform_rad,
             self.latitude_sin_cos(sample.latitude_rad),
         );
         Ok(corrected(&angles, &sample.attitude, &estimate.x_rad))
+    }
+
+    /// `sample` with its rotation angle carried forward over [`Config::angle_latency_s`] at the
+    /// rate of the last step on the grid (`rho + rate S`, wrapped to [-pi, pi)): the angle at the
+    /// row's time, when the attitude was taken. The rate is the change of the angle over the
+    /// last one or two grid intervals (the grid's interval, not the stamps: jittered stamps would
+    /// make it jitter); across a longer gap or a clock step the last rate is kept. A latency of 0
+    /// returns the sample as it is.
+    fn carry_rotation(&mut self, sample: &Sample, placement: Placement) -> Sample {
+        if self.config.angle_latency_s == 0.0 {
+            return *sample;
+        }
+        if let (Some(last), Placement::OnGrid { intervals }, Some(interval_s)) = (
+            self.run.last_rotation_rad,
+            placement,
+            self.run.grid.placing_interval_s(),
+        ) {
+            if (1..=2).contains(&intervals) {
+                self.run.rotation_rate_rad_s = wrap_pi(sample.rotation_rad - last)
+                    / (f64::from(intervals) * interval_s) as Real;
+            }
+        }
+        self.run.last_rotation_rad = Some(sample.rotation_rad);
+        self.carried(sample)
+    }
+
+    /// `sample` with its rotation angle carried forward at the last rate (see
+    /// [`Estimator::carry_rotation`]); unchanged while the latency is 0.
+    fn carried(&self, sample: &Sample) -> Sample {
+        let mut s = *sample;
+        if self.config.angle_latency_s != 0.0 {
+            s.rotation_rad = wrap_pi(
+                s.rotation_rad + self.run.rotation_rate_rad_s * self.config.angle_latency_s as Real,
+            );
+        }
+        s
     }
 
     /// `(sin L, cos L)` of `latitude_rad`: the step's cached values when the latitude is the one it
@@ -378,6 +423,8 @@ impl<const CAP: usize> Estimator<CAP> {
         };
         self.run.grid.accept(sample.time_s, placed);
         let placement = placed.placement;
+        let carried = self.carry_rotation(sample, placement);
+        let sample = &carried;
         self.run.counters.accepted = self.run.counters.accepted.saturating_add(1);
         if placement == Placement::ClockStep {
             self.run.counters.clock_steps = self.run.counters.clock_steps.saturating_add(1);

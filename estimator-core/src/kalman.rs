@@ -90,6 +90,13 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         }
     }
 
+    /// State `mean` with a diagonal prior covariance `sigma^2`.
+    pub fn with_mean(mean: [T; N], prior_sigma: [T; N]) -> Self {
+        let mut kf = Self::new(prior_sigma);
+        kf.x = SVector::from(mean);
+        kf
+    }
+
     /// A filter with states `x` and covariance columns `p` (for constants: the estimator's
     /// unconfigured state, test fixtures).
     pub const fn from_parts(x: [T; N], p: [[T; N]; N]) -> Self {

@@ -109,7 +109,7 @@ pub mod time_grid;
 pub mod units;
 
 pub use code::UnknownCode;
-pub use config::{Config, ConfigError, Method};
+pub use config::{Config, ConfigError, Method, Prior};
 pub use estimator::{CompensateError, Estimator};
 pub use output::{
     Counters, ErrorChange, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status,

@@ -181,11 +181,20 @@ impl<const CAP: usize> MethodState<CAP> {
             mismatch: false,
             relearning: false,
         };
-        match self {
+        let estimate = match self {
             MethodState::Windowed(m) => m.estimate(config),
             #[cfg(feature = "paper-method")]
             MethodState::Paper(m) => m.estimate().map(plain),
             MethodState::Traditional(m) => m.estimate().map(plain),
-        }
+        };
+        // Before the first measurement: the known values, if the configuration has them.
+        estimate.or_else(|| {
+            config.prior.map(|p| MethodEstimate {
+                x_rad: p.x_rad,
+                sigma_rad: p.sigma_rad,
+                mismatch: false,
+                relearning: false,
+            })
+        })
     }
 }

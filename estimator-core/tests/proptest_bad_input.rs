@@ -463,6 +463,8 @@ prop_compose! {
             converged_sigma_rad: converged,
             rotation_period_tolerance: period_tol,
             change_detection_step_rad: change,
+            prior: None,
+            angle_latency_s: 0.0,
         }
     }
 }

@@ -16,7 +16,7 @@
 #include <stdint.h>
 
 // Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.
-#define RINS_CHECKPOINT_LEN 852
+#define RINS_CHECKPOINT_LEN 892
 
 // Bytes of a buffer that holds any estimates CSV row with its line end and NUL.
 #define RINS_ROW_MAX_LEN 1024
@@ -224,6 +224,18 @@ typedef struct RinsConfig {
   // method): a larger step is reported as `RINS_STATUS_ERRORS_CHANGED` and learned again.
   // Default 20 arcsec; 0 turns detection off.
   float change_detection_step_rad;
+  // Known values of x1..x4, rad (a calibration, or what an earlier run learned), used when
+  // `prior_x_sigma_rad` is set: the filter starts from them and they are reported, and
+  // compensate the attitude, from the first sample. Default zeros.
+  float prior_x_rad[4];
+  // The 1-sigma of `prior_x_rad`, rad, each positive and at most `prior_sigma_rad`; all four 0
+  // (the default): nothing known, the filter starts from zero and reports nothing before its
+  // first measurement.
+  float prior_x_sigma_rad[4];
+  // How long before the sample's time its rotation angle was measured, s, 0 to 1 (the
+  // attitude taken at the sample's time): the angle is carried forward at the rotation's rate.
+  // Default 0.
+  double angle_latency_s;
 } RinsConfig;
 
 // One sample as the RINS outputs it, in the units of the attitude log (`docs/log-format.md`):

@@ -4,7 +4,7 @@
 use crate::error::{code, RinsError};
 use crate::pointer;
 use estimator_core::estimator::DEFAULT_CAPACITY;
-use estimator_core::{Config, Method, Real};
+use estimator_core::{Config, Method, Prior, Real};
 
 /// Which identification method runs (the value of `RinsConfig.method`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,6 +67,18 @@ pub struct RinsConfig {
     /// method): a larger step is reported as `RINS_STATUS_ERRORS_CHANGED` and learned again.
     /// Default 20 arcsec; 0 turns detection off.
     pub change_detection_step_rad: f32,
+    /// Known values of x1..x4, rad (a calibration, or what an earlier run learned), used when
+    /// `prior_x_sigma_rad` is set: the filter starts from them and they are reported, and
+    /// compensate the attitude, from the first sample. Default zeros.
+    pub prior_x_rad: [f32; 4],
+    /// The 1-sigma of `prior_x_rad`, rad, each positive and at most `prior_sigma_rad`; all four 0
+    /// (the default): nothing known, the filter starts from zero and reports nothing before its
+    /// first measurement.
+    pub prior_x_sigma_rad: [f32; 4],
+    /// How long before the sample's time its rotation angle was measured, s, 0 to 1 (the
+    /// attitude taken at the sample's time): the angle is carried forward at the rotation's rate.
+    /// Default 0.
+    pub angle_latency_s: f64,
 }
 
 /// A period or interval of the C struct: 0 stands for "not pinned".
@@ -94,6 +106,9 @@ impl From<&Config> for RinsConfig {
             converged_sigma_rad: c.converged_sigma_rad as f32,
             rotation_period_tolerance: c.rotation_period_tolerance as f32,
             change_detection_step_rad: c.change_detection_step_rad as f32,
+            prior_x_rad: c.prior.map_or([0.0; 4], |p| p.x_rad.map(|v| v as f32)),
+            prior_x_sigma_rad: c.prior.map_or([0.0; 4], |p| p.sigma_rad.map(|v| v as f32)),
+            angle_latency_s: c.angle_latency_s,
         }
     }
 }
@@ -124,6 +139,11 @@ impl RinsConfig {
             converged_sigma_rad: self.converged_sigma_rad as Real,
             rotation_period_tolerance: self.rotation_period_tolerance as Real,
             change_detection_step_rad: self.change_detection_step_rad as Real,
+            prior: (self.prior_x_sigma_rad != [0.0; 4]).then(|| Prior {
+                x_rad: self.prior_x_rad.map(|v| v as Real),
+                sigma_rad: self.prior_x_sigma_rad.map(|v| v as Real),
+            }),
+            angle_latency_s: self.angle_latency_s,
         };
         config.check(DEFAULT_CAPACITY)?;
         Ok(config)

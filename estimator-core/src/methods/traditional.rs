@@ -28,7 +28,10 @@ impl Traditional {
     /// Fresh state with the prior covariance.
     pub fn new(config: &Config) -> Self {
         Traditional {
-            kf: ConstantStateKalman::new([config.prior_sigma_rad; 4]),
+            kf: match config.prior {
+                Some(p) => ConstantStateKalman::with_mean(p.x_rad, p.sigma_rad),
+                None => ConstantStateKalman::new([config.prior_sigma_rad; 4]),
+            },
             updates: 0,
         }
     }

@@ -422,14 +422,32 @@ impl<const CAP: usize> Windowed<CAP> {
     pub fn reset(&mut self, config: &Config) {
         self.window.reset();
         self.reference = ReferenceFilter::default();
-        self.kf = ConstantStateKalman::new(prior_sigma_rad(config, false));
+        let sigma = prior_sigma_rad(config, false);
+        let mean = config.prior.map_or([0.0; 4], |p| p.x_rad);
+        self.kf = match config.prior {
+            Some(p) => ConstantStateKalman::with_mean(
+                [mean[0], mean[1], mean[2], mean[3], 0.0],
+                [
+                    p.sigma_rad[0],
+                    p.sigma_rad[1],
+                    p.sigma_rad[2],
+                    p.sigma_rad[3],
+                    sigma[4],
+                ],
+            ),
+            None => ConstantStateKalman::new(sigma),
+        };
         self.updates = 0;
         self.entries_since_update = 0;
         self.next_pair = 0;
         self.pairs = [Pair::new(config); 2];
+        if let Some(p) = config.prior {
+            self.pairs[0].reported_sigma_rad = [p.sigma_rad[0], p.sigma_rad[1]];
+            self.pairs[1].reported_sigma_rad = [p.sigma_rad[2], p.sigma_rad[3]];
+        }
         self.roll_information = [[0.0; STATES]; STATES];
         self.change = ChangeDetector::NEW;
-        self.held_x_rad = [0.0; STATES];
+        self.held_x_rad = [mean[0], mean[1], mean[2], mean[3], 0.0];
         self.changed_entries = 0;
         self.gated = 0;
         self.entries_since_hold = u32::MAX;
