@@ -57,7 +57,7 @@ pub fn method_label(m: Method) -> &'static str {
 }
 
 /// Estimator tuning from the command line: the traditional baseline's noise and gap bridging.
-#[derive(Clone, Copy, Debug, Default, clap::Args)]
+#[derive(Clone, Debug, Default, clap::Args)]
 pub struct TuningArgs {
     /// Traditional baseline: 1-sigma of raw roll/pitch about eq (2), deg (default: the core's,
     /// 3/sqrt(2) deg, the RMS of a 3 deg sway).
@@ -75,6 +75,22 @@ pub struct TuningArgs {
     /// followed only as slowly as the filter's memory allows).
     #[arg(long, value_name = "ARCSEC")]
     pub change_detection_arcsec: Option<f64>,
+    /// Known values of x1..x4, arcsec (a dockside or factory calibration, or the final estimates of
+    /// an earlier run): the estimator starts from them and reports them, and compensates with
+    /// them, from the first row, before its first measurement; the log then refines them. Needs
+    /// --prior-sigma-arcsec.
+    #[arg(long, value_name = "X1,X2,X3,X4", value_delimiter = ',')]
+    pub prior_arcsec: Option<Vec<f64>>,
+    /// The 1-sigma of --prior-arcsec, arcsec: one value for all four errors or four values; each
+    /// positive and at most 1000 arcsec.
+    #[arg(long, value_name = "S or S1,S2,S3,S4", value_delimiter = ',')]
+    pub prior_sigma_arcsec: Option<Vec<f64>>,
+    /// How long before each row's time its rotation angle was measured, s (the attitude taken at
+    /// the row's time), 0 to 1: the rotation angle is carried forward at the rotation's rate
+    /// (default 0). At 0.75 deg/s a lag of 0.2 s left unset costs about 0.8 arcsec on errors of a
+    /// few hundred (docs/interface.md).
+    #[arg(long, value_name = "S")]
+    pub angle_latency_s: Option<f64>,
 }
 
 impl TuningArgs {
@@ -93,12 +109,52 @@ impl TuningArgs {
         if let Some(a) = self.change_detection_arcsec {
             c.change_detection_step_rad = arcsec_to_rad(a) as Real;
         }
+        if let Some(s) = self.angle_latency_s {
+            c.angle_latency_s = s;
+        }
+        c.prior = self.prior();
         c
+    }
+
+    /// The prior of --prior-arcsec and --prior-sigma-arcsec, when both are given with their counts
+    /// of values (4, and 1 or 4).
+    fn prior(&self) -> Option<estimator_core::Prior> {
+        let (x, s) = (
+            self.prior_arcsec.as_ref()?,
+            self.prior_sigma_arcsec.as_ref()?,
+        );
+        let sigma: [f64; 4] = match s.as_slice() {
+            [one] => [*one; 4],
+            [a, b, c, d] => [*a, *b, *c, *d],
+            _ => return None,
+        };
+        let x: [f64; 4] = x.as_slice().try_into().ok()?;
+        Some(estimator_core::Prior {
+            x_rad: x.map(|v| arcsec_to_rad(v) as Real),
+            sigma_rad: sigma.map(|v| arcsec_to_rad(v) as Real),
+        })
     }
 
     /// [`TuningArgs::config`], checked by the core; the error names the parameter, its value, its
     /// bound and the option that set it.
     pub fn checked_config(&self, method: Method) -> anyhow::Result<Config> {
+        match (&self.prior_arcsec, &self.prior_sigma_arcsec) {
+            (Some(_), None) => anyhow::bail!(
+                "--prior-arcsec needs --prior-sigma-arcsec (how well the values are known)"
+            ),
+            (None, Some(_)) => {
+                anyhow::bail!("--prior-sigma-arcsec needs --prior-arcsec (the values it is for)")
+            }
+            (Some(x), _) if x.len() != 4 => anyhow::bail!(
+                "--prior-arcsec takes four values, x1..x4 in arcsec, not {}",
+                x.len()
+            ),
+            (Some(_), Some(s)) if s.len() != 1 && s.len() != 4 => anyhow::bail!(
+                "--prior-sigma-arcsec takes one value for all four errors or four values, not {}",
+                s.len()
+            ),
+            _ => {}
+        }
         let c = self.config(method);
         if let Err(e) = crate::replay::HostEstimator::new(c) {
             let option = match e {
@@ -118,6 +174,15 @@ impl TuningArgs {
                     name: "change_detection_step_rad",
                     ..
                 } => " (set by --change-detection-arcsec, arcsec)",
+                estimator_core::ConfigError::Parameter {
+                    name: "angle_latency_s",
+                    ..
+                } => " (set by --angle-latency-s, s)",
+                estimator_core::ConfigError::Parameter { name, .. }
+                    if name.starts_with("prior.") =>
+                {
+                    " (set by --prior-arcsec and --prior-sigma-arcsec, arcsec; shown in rad)"
+                }
                 _ => "",
             };
             anyhow::bail!("invalid estimator configuration: {e}{option}");
@@ -420,6 +485,57 @@ pub struct ShipMotionArgs {
     /// starboard heels to port).
     #[arg(long, value_name = "DEG_PER_DEG_S", default_value_t = 0.0)]
     pub heel_per_turn_rate: f64,
+    #[command(flatten)]
+    pub interface: InterfaceArgs,
+}
+
+/// How the generated RINS's interface departs from the model (`generate`, `run`, `compare`,
+/// `monte-carlo`): what docs/interface.md measures.
+#[derive(Clone, Copy, Debug, Default, PartialEq, clap::Args)]
+pub struct InterfaceArgs {
+    /// RINS interface: the logged rotation angle was measured this long before the row's time, s
+    /// (0 to 1).
+    #[arg(
+        long = "log-angle-latency-s",
+        id = "log_angle_latency_s",
+        value_name = "S",
+        default_value_t = 0.0
+    )]
+    pub angle_latency_s: f64,
+    /// RINS interface: the rotation encoder's zero is off by this much, deg (the logged angle is
+    /// the true one plus this).
+    #[arg(long, value_name = "DEG", default_value_t = 0.0)]
+    pub encoder_offset_deg: f64,
+    /// RINS interface: a gyro bias fixed in the rotating sensor assembly, deg/h (horizontal; it
+    /// tilts roll and pitch by its integral, an oscillation locked to the rotation angle).
+    #[arg(long, value_name = "DEG_PER_H", default_value_t = 0.0)]
+    pub rotating_gyro_bias_deg_h: f64,
+}
+
+impl InterfaceArgs {
+    /// Puts the interface's departures into `m`, checked.
+    pub fn apply(&self, m: &mut crate::scenario::Mismatch) -> anyhow::Result<()> {
+        anyhow::ensure!(
+            (0.0..=1.0).contains(&self.angle_latency_s),
+            "--log-angle-latency-s must be within 0 to 1 s, got {}",
+            self.angle_latency_s
+        );
+        anyhow::ensure!(
+            self.encoder_offset_deg.is_finite() && self.encoder_offset_deg.abs() <= 360.0,
+            "--encoder-offset-deg must be within +-360 deg, got {}",
+            self.encoder_offset_deg
+        );
+        anyhow::ensure!(
+            self.rotating_gyro_bias_deg_h.is_finite()
+                && self.rotating_gyro_bias_deg_h.abs() <= 10.0,
+            "--rotating-gyro-bias-deg-h must be within +-10 deg/h, got {}",
+            self.rotating_gyro_bias_deg_h
+        );
+        m.angle_latency_s = self.angle_latency_s;
+        m.encoder_offset_deg = self.encoder_offset_deg;
+        m.rotating_gyro_bias_deg_h = self.rotating_gyro_bias_deg_h;
+        Ok(())
+    }
 }
 
 impl ShipMotionArgs {
@@ -447,6 +563,7 @@ impl ShipMotionArgs {
     pub fn apply(&self, p: &mut ScenarioParams) -> anyhow::Result<()> {
         p.ship_motion = self.settings()?.motion(p.seed);
         p.mismatch.heel_in_turns_deg = self.heel_in_turns_deg()?;
+        self.interface.apply(&mut p.mismatch)?;
         Ok(())
     }
 }

@@ -272,7 +272,9 @@ impl SpreadArgs {
             low_frequency_rate_error: self.lowfreq_rate_error,
             coloured_noise_arcsec: self.coloured_noise_arcsec,
             heel_in_turns_deg: self.motion.heel_in_turns_deg()?,
+            ..Mismatch::default()
         };
+        self.motion.interface.apply(&mut d.mismatch)?;
         d.ship_motion = self.motion.settings()?;
         d.check()?;
         Ok(d)

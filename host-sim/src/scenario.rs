@@ -94,6 +94,22 @@ pub struct Mismatch {
     /// standard-rate turn). Truth files without it: no turns.
     #[serde(default)]
     pub heel_in_turns_deg: f64,
+    /// The RINS's interface: how long before the row's time its rotation angle was measured, s
+    /// (the logged angle is the one at `t - S`; eq (2) acts with the angle at `t`). Truth files
+    /// without it: 0.
+    #[serde(default)]
+    pub angle_latency_s: f64,
+    /// The RINS's interface: the rotation encoder's zero off the angle eq (2) counts from, deg
+    /// (the logged angle is the true one plus this). Truth files without it: 0.
+    #[serde(default)]
+    pub encoder_offset_deg: f64,
+    /// A gyro bias fixed in the rotating sensor assembly, deg/h: horizontal, along the axis at
+    /// the rotation angle, it tilts the attitude by its integral, roll by `b cos(rho)` and pitch
+    /// by `b sin(rho)` integrated over time (the Earth rate's coupling left out): on a one-way
+    /// rotation an oscillation of `b / omega` locked to the rotation angle. Truth files without
+    /// it: 0.
+    #[serde(default)]
+    pub rotating_gyro_bias_deg_h: f64,
 }
 
 /// Course change of each turn of [`Mismatch::heel_in_turns_deg`], deg.
@@ -582,6 +598,8 @@ pub struct Samples<'a> {
     /// True rotation period (nominal with the period error), s.
     period_s: f64,
     north_rate_rad_s: f64,
+    /// The roll and pitch the rotating gyro bias has tilted the attitude by so far, rad.
+    gyro_tilt_rad: [f64; 2],
     k: usize,
     n: usize,
 }
@@ -629,6 +647,7 @@ impl<'a> Samples<'a> {
             gm,
             period_s: p.rotation_period_s * (1.0 + p.mismatch.rotation_period_error),
             north_rate_rad_s: p.speed_m_s * (p.course_deg * RAD_PER_DEG).cos() / EARTH_RADIUS_M,
+            gyro_tilt_rad: [0.0; 2],
             k: 0,
             n: (p.duration_s / p.sample_interval_s).floor() as usize,
         }
@@ -663,9 +682,25 @@ impl Iterator for Samples<'_> {
         let x: [f64; 4] = core::array::from_fn(|i| arcsec_to_rad(x_arcsec[i]));
         // The angle actually applied: the scheme at the true period, plus the angle jitter. Eq (2)
         // is evaluated at it and the log reports it.
-        let rho = p.rotation_phase_deg * RAD_PER_DEG
-            + p.scheme.rho_rad(t, self.period_s)
-            + self.jitter.sample(&mut self.rng);
+        let jitter = self.jitter.sample(&mut self.rng);
+        let rho = p.rotation_phase_deg * RAD_PER_DEG + p.scheme.rho_rad(t, self.period_s) + jitter;
+        // What the log reports: the angle measured the latency before, off by the encoder's zero.
+        let logged_rho =
+            if p.mismatch.angle_latency_s == 0.0 && p.mismatch.encoder_offset_deg == 0.0 {
+                rho
+            } else {
+                p.rotation_phase_deg * RAD_PER_DEG
+                    + p.scheme
+                        .rho_rad(t - p.mismatch.angle_latency_s, self.period_s)
+                    + jitter
+                    + p.mismatch.encoder_offset_deg * RAD_PER_DEG
+            };
+        let gyro_tilt = self.gyro_tilt_rad;
+        if p.mismatch.rotating_gyro_bias_deg_h != 0.0 {
+            let b_rad_s = p.mismatch.rotating_gyro_bias_deg_h * RAD_PER_DEG / 3600.0;
+            self.gyro_tilt_rad[0] += b_rad_s * rho.cos() * p.sample_interval_s;
+            self.gyro_tilt_rad[1] += b_rad_s * rho.sin() * p.sample_interval_s;
+        }
         let s = p.platform_phase_deg * RAD_PER_DEG + EARTH_RATE_RAD_PER_S * t;
         let lat = p.latitude_deg * RAD_PER_DEG + self.north_rate_rad_s * t;
         let (weave_deg, weave_rate_deg_s) = weave(p.heading_weave_rate_deg_s, t);
@@ -695,12 +730,17 @@ impl Iterator for Samples<'_> {
             if self.gm_sigma > 0.0 {
                 self.gm[axis] = self.gm_a * self.gm[axis] + self.gm_drive.sample(&mut self.rng);
             }
-            let err_rad = osc[axis] + low + self.white.sample(&mut self.rng) + self.gm[axis];
+            let tilt = match axis {
+                1 => gyro_tilt[0],
+                2 => gyro_tilt[1],
+                _ => 0.0,
+            };
+            let err_rad = osc[axis] + low + self.white.sample(&mut self.rng) + self.gm[axis] + tilt;
             out[axis] = true_att[axis] + err_rad / RAD_PER_DEG;
         }
         let row = Row {
             time_s: t,
-            rotation_deg: (rho / RAD_PER_DEG).rem_euclid(360.0),
+            rotation_deg: (logged_rho / RAD_PER_DEG).rem_euclid(360.0),
             platform_deg: (s / RAD_PER_DEG).rem_euclid(360.0),
             latitude_deg: lat / RAD_PER_DEG,
             heading_deg: out[0].rem_euclid(360.0),

@@ -9,6 +9,7 @@ mod cli_errors;
 mod cli_flash_life;
 mod cli_generate;
 mod cli_inputs;
+mod cli_interface;
 mod cli_outputs;
 mod cli_report;
 mod cli_restart;
