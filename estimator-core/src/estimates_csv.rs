@@ -8,7 +8,12 @@
 //! - `x*_arcsec`, `sigma*_arcsec`: 4 decimals, empty while there is no estimate;
 //! - `status`: [`crate::Status::name`], or `rejected_<reason>` with [`RejectReason::name`] for an input
 //!   row the core rejected;
-//! - `*_corrected_deg`: 9 decimals (heading in [-180, 180]); empty on a rejected row.
+//! - `*_corrected_deg`: 9 decimals (heading in [-180, 180]); empty on a rejected row;
+//! - the latched alarms and the residuals' level ([`crate::Health`]), empty on a rejected row:
+//!   `changes`, `window_restarts`, `rejected` as integers, `last_change_s` with 6 decimals (empty
+//!   before the first change), `mismatch_s` with 3, `residual_pitch_arcsec`,
+//!   `residual_roll_arcsec`, `noise_scale_pitch`, `noise_scale_roll` with 4 (empty until the
+//!   windowed method's first measurement, and for the other methods).
 //!
 //! A rejected row carries the estimate held on board at that moment: a rejected sample leaves
 //! the estimator untouched, so that is [`crate::Estimator::estimate`] (the estimate of the last
@@ -24,13 +29,13 @@
     clippy::panic
 )]
 
-use crate::output::{Estimate, Output};
+use crate::output::{Estimate, Health, Output};
 use crate::sample::RejectReason;
 use crate::units::{rad_to_arcsec, RAD_PER_DEG};
 use core::fmt::{self, Write};
 
 /// The estimates CSV header (no line end).
-pub const HEADER: &str = "time_s,x1_arcsec,x2_arcsec,x3_arcsec,x4_arcsec,sigma1_arcsec,sigma2_arcsec,sigma3_arcsec,sigma4_arcsec,status,heading_corrected_deg,roll_corrected_deg,pitch_corrected_deg";
+pub const HEADER: &str = "time_s,x1_arcsec,x2_arcsec,x3_arcsec,x4_arcsec,sigma1_arcsec,sigma2_arcsec,sigma3_arcsec,sigma4_arcsec,status,heading_corrected_deg,roll_corrected_deg,pitch_corrected_deg,changes,last_change_s,window_restarts,rejected,mismatch_s,residual_pitch_arcsec,residual_roll_arcsec,noise_scale_pitch,noise_scale_roll";
 /// Prefix of the status of a rejected row.
 pub const REJECTED_PREFIX: &str = "rejected_";
 
@@ -38,9 +43,12 @@ pub const REJECTED_PREFIX: &str = "rejected_";
 /// row. The widest row: a time of `-f64::MAX` (309 digits, 6 decimals, a sign: 317 bytes), eight
 /// estimates of `-f32::MAX` rad in arcsec (44 digits, 4 decimals, a sign: 50 bytes each), the
 /// longest status name (22 bytes), three corrected angles of `-f32::MAX` rad in degrees (41
-/// digits, 9 decimals, a sign: 52 bytes each), 12 commas and the line end: 908 bytes (checked by
-/// `the_widest_row_fits`). A typical row takes about 130.
-pub const MAX_ROW_LEN: usize = 1024;
+/// digits, 9 decimals, a sign: 52 bytes each), three counts of `u32::MAX` (10 bytes each), a last
+/// change at `-f64::MAX` (317 bytes), `mismatch_s` of `u32::MAX` samples of 10 s (15 bytes), two
+/// residual levels of `-f32::MAX` rad in arcsec and two noise scales of `f32::MAX` (50 and 44
+/// bytes each), 21 commas and the line end: 1,467 bytes (checked by `the_widest_row_fits`). A
+/// typical row takes about 190.
+pub const MAX_ROW_LEN: usize = 2048;
 
 /// Writes the row of a step's output (no line end).
 pub fn write_output<W: Write>(w: &mut W, out: &Output) -> fmt::Result {
@@ -52,6 +60,41 @@ pub fn write_output<W: Write>(w: &mut W, out: &Output) -> fmt::Result {
     for v in [c.heading_rad, c.roll_rad, c.pitch_rad] {
         w.write_char(',')?;
         write_fixed(w, f64::from(v) / RAD_PER_DEG, 9)?;
+    }
+    write_health(w, &out.health)
+}
+
+/// The latched alarms and the residuals' level: nine cells, each after its comma.
+fn write_health<W: Write>(w: &mut W, h: &Health) -> fmt::Result {
+    w.write_char(',')?;
+    write_digits(w, u64::from(h.changes_detected), 1)?;
+    w.write_char(',')?;
+    if let Some(t) = h.last_change_s {
+        write_time(w, t)?;
+    }
+    for n in [h.window_restarts, h.rejected] {
+        w.write_char(',')?;
+        write_digits(w, u64::from(n), 1)?;
+    }
+    w.write_char(',')?;
+    write_fixed(w, h.mismatch_s, 3)?;
+    match h.residual_rad {
+        Some(r) => {
+            for v in r {
+                w.write_char(',')?;
+                write_fixed(w, rad_to_arcsec(f64::from(v)), 4)?;
+            }
+        }
+        None => w.write_str(",,")?,
+    }
+    match h.noise_scale {
+        Some(s) => {
+            for v in s {
+                w.write_char(',')?;
+                write_fixed(w, f64::from(v), 4)?;
+            }
+        }
+        None => w.write_str(",,")?,
     }
     Ok(())
 }
@@ -69,7 +112,7 @@ pub fn write_rejected<W: Write>(
     w.write_char(',')?;
     w.write_str(REJECTED_PREFIX)?;
     w.write_str(reason.name())?;
-    w.write_str(",,,")
+    w.write_str(",,,,,,,,,,,,")
 }
 
 fn write_estimate<W: Write>(w: &mut W, estimate: Option<&Estimate>) -> fmt::Result {
@@ -211,6 +254,7 @@ mod tests {
                 roll_rad: -0.25,
                 pitch_rad: 0.125,
             },
+            health: Health::NONE,
         }
     }
 
@@ -228,20 +272,40 @@ mod tests {
         };
         assert_eq!(
             row(|w| write_output(w, &output(0.0, None))),
-            "0.000000,,,,,,,,,warming_up,28.647889757,-14.323944878,7.161972439"
+            "0.000000,,,,,,,,,warming_up,28.647889757,-14.323944878,7.161972439,0,,0,0,0.000,,,,"
+        );
+        let mut later = output(2.0, Some(e));
+        later.health = Health {
+            changes_detected: 2,
+            last_change_s: Some(1234.5),
+            window_restarts: 3,
+            rejected: 4,
+            mismatch_s: 60.0,
+            residual_rad: Some([arcsec_to_rad(0.5) as Real, arcsec_to_rad(1.25) as Real]),
+            noise_scale: Some([1.0, 2.5]),
+        };
+        let latched = row(|w| write_output(w, &later));
+        assert!(
+            latched.ends_with(",estimating,28.647889757,-14.323944878,7.161972439,2,1234.500000,3,4,60.000,0.5000,1.2500,1.0000,2.5000"),
+            "{latched}"
         );
         let with = row(|w| write_output(w, &output(1.0, Some(e))));
         assert!(with.starts_with("1.000000,200.0000,-150.0000,300.0000,-250.0000,1.0000,2.0000,3.0000,4.0000,estimating,"), "{with}");
         let rejected = row(|w| write_rejected(w, 2.0, RejectReason::NonFinite, Some(&e)));
         assert!(
             rejected.starts_with("2.000000,200.0000,")
-                && rejected.ends_with(",rejected_non_finite,,,"),
+                && rejected.ends_with(",rejected_non_finite,,,,,,,,,,,,"),
             "{rejected}"
         );
         assert_eq!(
             row(|w| write_rejected(w, f64::NAN, RejectReason::NonFinite, None)),
-            "NaN,,,,,,,,,rejected_non_finite,,,"
+            "NaN,,,,,,,,,rejected_non_finite,,,,,,,,,,,,"
         );
+        // As many cells as the header names, on every kind of row.
+        let cells = HEADER.split(',').count();
+        for r in [&with, &latched, &rejected] {
+            assert_eq!(r.split(',').count(), cells, "{r}");
+        }
     }
 
     #[test]
@@ -263,6 +327,15 @@ mod tests {
                 heading_rad: -Real::MAX,
                 roll_rad: -Real::MAX,
                 pitch_rad: -Real::MAX,
+            },
+            health: Health {
+                changes_detected: u32::MAX,
+                last_change_s: Some(-f64::MAX),
+                window_restarts: u32::MAX,
+                rejected: u32::MAX,
+                mismatch_s: f64::from(u32::MAX) * 10.0,
+                residual_rad: Some([-Real::MAX; 2]),
+                noise_scale: Some([Real::MAX; 2]),
             },
         };
         let accepted = row(|w| write_output(w, &out));

@@ -39,7 +39,7 @@ use crate::math::{sin_cos, wrap_pi};
 use crate::methods::windowed::change::Alarm;
 use crate::methods::MethodState;
 use crate::output::{
-    Counters, ErrorChange, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status,
+    Counters, ErrorChange, Estimate, Health, Holdup, Output, RejectCounts, RotationSummary, Status,
 };
 use crate::rotation_pattern::{Limits, PatternEvent, RotationFault, RotationMonitor};
 use crate::sample::{Attitude, Sample, SampleError};
@@ -329,6 +329,28 @@ impl<const CAP: usize> Estimator<CAP> {
         self.run.error_change
     }
 
+    /// The latched alarms and the residuals' level now ([`Output::health`]).
+    pub fn health(&self) -> Health {
+        let c = &self.run.counters;
+        let interval_s = self.run.grid.interval_s().unwrap_or(0.0);
+        let (residual_rad, noise_scale) = match &self.method {
+            MethodState::Windowed(m) if m.estimate(&self.config).is_some() => {
+                let (r, s) = m.pair_levels();
+                (Some(r), Some(s))
+            }
+            _ => (None, None),
+        };
+        Health {
+            changes_detected: c.changes_detected,
+            last_change_s: self.run.error_change.map(|e| e.detected_s),
+            window_restarts: c.window_restarts,
+            rejected: self.run.rejected.total(),
+            mismatch_s: f64::from(c.mismatch_samples) * interval_s,
+            residual_rad,
+            noise_scale,
+        }
+    }
+
     /// The current estimate, if any.
     pub fn estimate(&self) -> Option<Estimate> {
         self.method.estimate(&self.config).map(|e| Estimate {
@@ -464,6 +486,10 @@ impl<const CAP: usize> Estimator<CAP> {
             x_rad: e.x_rad,
             sigma_rad: e.sigma_rad,
         });
+        if status == Status::ModelMismatch {
+            self.run.counters.mismatch_samples =
+                self.run.counters.mismatch_samples.saturating_add(1);
+        }
         let corrected = match estimate {
             Some(e) => corrected(&angles, &sample.attitude, &e.x_rad),
             None => sample.attitude,
@@ -473,6 +499,7 @@ impl<const CAP: usize> Estimator<CAP> {
             status,
             estimate,
             corrected,
+            health: self.health(),
         })
     }
 
@@ -609,6 +636,7 @@ impl<const CAP: usize> Estimator<CAP> {
         // The run's first block began `run_blocks` blocks of half a window before this update.
         let entry_s = feed.interval_s * f64::from(self.rotation().samples_per_entry);
         let window_s = entry_s * self.method.window_len() as f64;
+        self.run.counters.changes_detected = self.run.counters.changes_detected.saturating_add(1);
         self.run.error_change = Some(ErrorChange {
             detected_s: stamp_s,
             seen_since_s: stamp_s - f64::from(alarm.run_blocks) * 0.5 * window_s,

@@ -112,7 +112,7 @@ pub use code::UnknownCode;
 pub use config::{Config, ConfigError, Method, Prior};
 pub use estimator::{CompensateError, Estimator};
 pub use output::{
-    Counters, ErrorChange, Estimate, Holdup, Output, RejectCounts, RotationSummary, Status,
+    Counters, ErrorChange, Estimate, Health, Holdup, Output, RejectCounts, RotationSummary, Status,
 };
 pub use rotation_pattern::PatternKind;
 pub use rotation_pattern::RotationFault;

@@ -113,6 +113,47 @@ pub struct Output {
     /// The sample's attitude minus eq (2)'s oscillation for the current estimate (unchanged while
     /// there is none). Heading wrapped to [-pi, pi].
     pub corrected: Attitude,
+    /// What has happened since the estimator was made or reset, latched, and the residuals' level
+    /// now: what a loop that polls only now and then needs to know.
+    pub health: Health,
+}
+
+/// The latched alarms and the residuals' level, in every step's output ([`Output::health`]).
+/// Counts and times hold until a reset (the rejections even past it), so a loop that reads only
+/// now and then misses nothing: a change declared and learned again between two reads still
+/// shows in `changes_detected` and `last_change_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Health {
+    /// Changes of the installation errors declared (status `errors_changed`).
+    pub changes_detected: u32,
+    /// The time stamp of the sample at which the last change was declared, s.
+    pub last_change_s: Option<f64>,
+    /// Restarts of the moving average (gaps too long to fill, clock steps, rotation faults).
+    pub window_restarts: u32,
+    /// Samples rejected, every reason ([`crate::Estimator::rejected`] has them by reason).
+    pub rejected: u32,
+    /// Time spent in status `model_mismatch`, s (samples in it times the sample interval).
+    pub mismatch_s: f64,
+    /// Windowed method, once the filter has measured: the residual level of each channel pair
+    /// (pitch: x1, x2; roll: x3, x4), the larger of its two channels' residual means, rad: what
+    /// the model-mismatch check compares with its bound.
+    pub residual_rad: Option<[Real; 2]>,
+    /// Windowed method, once the filter has measured: the factor by which each pair's learned
+    /// noise widens the filter's variance in the reported 1-sigma (1: white noise as configured).
+    pub noise_scale: Option<[Real; 2]>,
+}
+
+impl Health {
+    /// Nothing happened, no residuals yet.
+    pub const NONE: Health = Health {
+        changes_detected: 0,
+        last_change_s: None,
+        window_restarts: 0,
+        rejected: 0,
+        mismatch_s: 0.0,
+        residual_rad: None,
+        noise_scale: None,
+    };
 }
 
 /// A change of the installation errors the residuals showed (windowed method, see
@@ -164,6 +205,10 @@ pub struct Counters {
     pub window_restarts: u32,
     /// Clock jumps and steps backwards in the time stamps.
     pub clock_steps: u32,
+    /// Changes of the installation errors declared.
+    pub changes_detected: u32,
+    /// Samples whose status was `model_mismatch`.
+    pub mismatch_samples: u32,
 }
 
 impl Counters {
@@ -173,6 +218,8 @@ impl Counters {
         filled: 0,
         window_restarts: 0,
         clock_steps: 0,
+        changes_detected: 0,
+        mismatch_samples: 0,
     };
 }
 

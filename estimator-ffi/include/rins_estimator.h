@@ -16,10 +16,10 @@
 #include <stdint.h>
 
 // Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.
-#define RINS_CHECKPOINT_LEN 892
+#define RINS_CHECKPOINT_LEN 900
 
 // Bytes of a buffer that holds any estimates CSV row with its line end and NUL.
-#define RINS_ROW_MAX_LEN 1024
+#define RINS_ROW_MAX_LEN 2048
 
 // Arcseconds in one radian (x_rad * RINS_ARCSEC_PER_RAD: arcsec).
 #define RINS_ARCSEC_PER_RAD 206264.80624709636
@@ -265,6 +265,31 @@ typedef struct RinsEstimate {
   float sigma_rad[4];
 } RinsEstimate;
 
+// What has happened since the estimator was set up or reset, latched, and the residuals' level
+// now: a loop that reads only now and then misses nothing (a change declared and learned again
+// between two reads still shows in `changes_detected` and `last_change_s`). The counts saturate
+// at 2^32 - 1; `rejected` is not cleared by `rins_estimator_reset`.
+typedef struct RinsHealth {
+  // Changes of the installation errors declared (`RINS_STATUS_ERRORS_CHANGED`).
+  uint32_t changes_detected;
+  // The time stamp of the sample at which the last change was declared, s; NaN before the
+  // first.
+  double last_change_s;
+  // Restarts of the moving average (gaps too long to fill, clock steps, rotation faults).
+  uint32_t window_restarts;
+  // Samples rejected, every reason.
+  uint32_t rejected;
+  // Time spent in `RINS_STATUS_MODEL_MISMATCH`, s.
+  double mismatch_s;
+  // The residual level of each channel pair (pitch: x1, x2; roll: x3, x4), rad: the larger of
+  // the pair's two residual means, what the model-mismatch check bounds. NaN until the windowed
+  // method's first measurement, and for the other methods.
+  float residual_rad[2];
+  // The factor by which each pair's learned noise widens the filter's variance in the reported
+  // 1-sigma (1: white noise as configured). NaN as `residual_rad`.
+  float noise_scale[2];
+} RinsHealth;
+
 // What one step returns, for an accepted sample and for a rejected one alike.
 typedef struct RinsOutput {
   // The sample's time, s, as given.
@@ -285,6 +310,8 @@ typedef struct RinsOutput {
   float roll_corrected_rad;
   // The sample's pitch, corrected likewise, rad. NaN on a rejected sample.
   float pitch_corrected_rad;
+  // The latched alarms and the residuals' level after this sample (also on a rejected one).
+  struct RinsHealth health;
 } RinsOutput;
 
 // An attitude compensated by `rins_estimator_compensate`, rad.

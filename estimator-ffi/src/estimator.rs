@@ -158,7 +158,7 @@ pub unsafe extern "C" fn rins_estimator_step(
     let (out, result) = match est.step(&Sample::from(&sample)) {
         Ok(out) => (RinsOutput::accepted(&out), RinsError::Ok),
         Err(e) => (
-            RinsOutput::rejected(sample.time_s, &e, est.estimate().as_ref()),
+            RinsOutput::rejected(sample.time_s, &e, est.estimate().as_ref(), &est.health()),
             RinsError::SampleRejected,
         ),
     };

@@ -57,7 +57,9 @@ pub use estimator::{
     rins_estimator_init, rins_estimator_reset, rins_estimator_size, rins_estimator_step,
     RinsCounters, RinsEstimator, RINS_ESTIMATOR_ALIGN, RINS_ESTIMATOR_SIZE,
 };
-pub use output::{RinsAttitude, RinsEstimate, RinsField, RinsOutput, RinsSample, RinsStatus};
+pub use output::{
+    RinsAttitude, RinsEstimate, RinsField, RinsHealth, RinsOutput, RinsSample, RinsStatus,
+};
 pub use text::{rins_format_header, rins_format_row, rins_parse_number, RINS_ROW_MAX_LEN};
 
 /// On a bare-metal target a panic ends the program through the C library's `abort()` (newlib and

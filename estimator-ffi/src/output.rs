@@ -2,8 +2,8 @@
 //! status, the estimate with its 1-sigma and the corrected attitude in the core's radians.
 
 use estimator_core::{
-    Attitude, Estimate, Field, Output, Real, RejectReason, RotationFault, Sample, SampleError,
-    Status,
+    Attitude, Estimate, Field, Health, Output, Real, RejectReason, RotationFault, Sample,
+    SampleError, Status,
 };
 
 /// One sample as the RINS outputs it, in the units of the attitude log (`docs/log-format.md`):
@@ -268,6 +268,66 @@ pub struct RinsOutput {
     pub roll_corrected_rad: f32,
     /// The sample's pitch, corrected likewise, rad. NaN on a rejected sample.
     pub pitch_corrected_rad: f32,
+    /// The latched alarms and the residuals' level after this sample (also on a rejected one).
+    pub health: RinsHealth,
+}
+
+/// What has happened since the estimator was set up or reset, latched, and the residuals' level
+/// now: a loop that reads only now and then misses nothing (a change declared and learned again
+/// between two reads still shows in `changes_detected` and `last_change_s`). The counts saturate
+/// at 2^32 - 1; `rejected` is not cleared by `rins_estimator_reset`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct RinsHealth {
+    /// Changes of the installation errors declared (`RINS_STATUS_ERRORS_CHANGED`).
+    pub changes_detected: u32,
+    /// The time stamp of the sample at which the last change was declared, s; NaN before the
+    /// first.
+    pub last_change_s: f64,
+    /// Restarts of the moving average (gaps too long to fill, clock steps, rotation faults).
+    pub window_restarts: u32,
+    /// Samples rejected, every reason.
+    pub rejected: u32,
+    /// Time spent in `RINS_STATUS_MODEL_MISMATCH`, s.
+    pub mismatch_s: f64,
+    /// The residual level of each channel pair (pitch: x1, x2; roll: x3, x4), rad: the larger of
+    /// the pair's two residual means, what the model-mismatch check bounds. NaN until the windowed
+    /// method's first measurement, and for the other methods.
+    pub residual_rad: [f32; 2],
+    /// The factor by which each pair's learned noise widens the filter's variance in the reported
+    /// 1-sigma (1: white noise as configured). NaN as `residual_rad`.
+    pub noise_scale: [f32; 2],
+}
+
+impl From<&Health> for RinsHealth {
+    fn from(h: &Health) -> RinsHealth {
+        RinsHealth {
+            changes_detected: h.changes_detected,
+            last_change_s: h.last_change_s.unwrap_or(f64::NAN),
+            window_restarts: h.window_restarts,
+            rejected: h.rejected,
+            mismatch_s: h.mismatch_s,
+            residual_rad: h
+                .residual_rad
+                .map_or([f32::NAN; 2], |r| r.map(|v| v as f32)),
+            noise_scale: h.noise_scale.map_or([f32::NAN; 2], |s| s.map(|v| v as f32)),
+        }
+    }
+}
+
+impl From<&RinsHealth> for Health {
+    fn from(h: &RinsHealth) -> Health {
+        let pair = |v: [f32; 2]| (!v[0].is_nan()).then(|| v.map(|x| x as Real));
+        Health {
+            changes_detected: h.changes_detected,
+            last_change_s: (!h.last_change_s.is_nan()).then_some(h.last_change_s),
+            window_restarts: h.window_restarts,
+            rejected: h.rejected,
+            mismatch_s: h.mismatch_s,
+            residual_rad: pair(h.residual_rad),
+            noise_scale: pair(h.noise_scale),
+        }
+    }
 }
 
 impl RinsOutput {
@@ -286,11 +346,17 @@ impl RinsOutput {
             heading_corrected_rad: out.corrected.heading_rad as f32,
             roll_corrected_rad: out.corrected.roll_rad as f32,
             pitch_corrected_rad: out.corrected.pitch_rad as f32,
+            health: RinsHealth::from(&out.health),
         }
     }
 
     /// The output of a sample rejected at `time_s` for `error`, with the estimate `held`.
-    pub fn rejected(time_s: f64, error: &SampleError, held: Option<&Estimate>) -> RinsOutput {
+    pub fn rejected(
+        time_s: f64,
+        error: &SampleError,
+        held: Option<&Estimate>,
+        health: &Health,
+    ) -> RinsOutput {
         RinsOutput {
             time_s,
             status: RinsStatus::from(error.reason()),
@@ -300,6 +366,7 @@ impl RinsOutput {
             heading_corrected_rad: f32::NAN,
             roll_corrected_rad: f32::NAN,
             pitch_corrected_rad: f32::NAN,
+            health: RinsHealth::from(health),
         }
     }
 

@@ -11,10 +11,10 @@ use core::ffi::c_char;
 use core::fmt::{self, Write};
 use core::ptr::addr_of;
 use estimator_core::estimates_csv::{write_output, write_rejected, HEADER, MAX_ROW_LEN};
-use estimator_core::{Attitude, Estimate, Output, Real};
+use estimator_core::{Attitude, Estimate, Health, Output, Real};
 
 /// Bytes of a buffer that holds any row of the estimates CSV, with its line end and the
-/// terminating NUL (a row is about 130 bytes; the widest possible, of extreme values, 908).
+/// terminating NUL (a row is about 190 bytes; the widest possible, of extreme values, 1,467).
 pub const RINS_ROW_MAX_LEN: usize = MAX_ROW_LEN;
 
 /// Writes into a byte buffer; refuses what does not fit.
@@ -120,6 +120,7 @@ pub unsafe extern "C" fn rins_format_row(
                     status,
                     estimate: row.estimate,
                     corrected: row.corrected,
+                    health: row.health,
                 },
             ),
             Err(reason) => write_rejected(w, row.time_s, reason, row.estimate.as_ref()),
@@ -133,6 +134,7 @@ struct Row {
     status: RinsStatus,
     estimate: Option<Estimate>,
     corrected: Attitude,
+    health: Health,
 }
 
 /// Reads the `RinsOutput` at `output` field by field, its enum and `bool` as the integers the C
@@ -144,7 +146,7 @@ unsafe fn read_output(output: *const RinsOutput) -> Result<Row, RinsError> {
     pointer::check(output)?;
     // SAFETY: checked non-null and aligned, readable by the caller's promise; every field is
     // read as a type valid for any bit pattern (`RinsEstimate` holds `f32`s only).
-    let (time_s, status, has_estimate, estimate, corrected) = unsafe {
+    let (time_s, status, has_estimate, estimate, corrected, health) = unsafe {
         (
             addr_of!((*output).time_s).read(),
             addr_of!((*output).status).cast::<u32>().read(),
@@ -155,6 +157,7 @@ unsafe fn read_output(output: *const RinsOutput) -> Result<Row, RinsError> {
                 addr_of!((*output).roll_corrected_rad).read(),
                 addr_of!((*output).pitch_corrected_rad).read(),
             ],
+            addr_of!((*output).health).read(),
         )
     };
     let status = RinsStatus::from_code(status).ok_or(RinsError::InvalidArgument)?;
@@ -173,6 +176,7 @@ unsafe fn read_output(output: *const RinsOutput) -> Result<Row, RinsError> {
             roll_rad: roll,
             pitch_rad: pitch,
         },
+        health: Health::from(&health),
     })
 }
 
@@ -248,7 +252,7 @@ pub(crate) fn write_message(buffer: &mut [u8], message: fmt::Arguments) {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::indexing_slicing)]
     use super::*;
-    use crate::output::{RinsEstimate, RinsField};
+    use crate::output::{RinsEstimate, RinsField, RinsHealth};
     use core::ffi::CStr;
     use core::ptr::{null, null_mut};
 
@@ -327,6 +331,15 @@ mod tests {
             heading_corrected_rad: 0.5,
             roll_corrected_rad: -0.01,
             pitch_corrected_rad: 0.02,
+            health: RinsHealth {
+                changes_detected: 1,
+                last_change_s: 7200.0,
+                window_restarts: 2,
+                rejected: 3,
+                mismatch_s: 40.0,
+                residual_rad: [1e-6, 2e-6],
+                noise_scale: [1.0, 1.5],
+            },
         }
     }
 
@@ -339,6 +352,7 @@ mod tests {
             status: estimator_core::Status::Estimating,
             estimate: out.estimate(),
             corrected: out.corrected(),
+            health: estimator_core::Health::from(&out.health),
         };
         write_output(&mut expected, &core).unwrap();
         expected.push('\n');
@@ -357,7 +371,7 @@ mod tests {
         assert_eq!(e, RinsError::Ok);
         assert!(
             text.starts_with("1.000000,206.2648,")
-                && text.ends_with(",rejected_time_not_increasing,,,\n"),
+                && text.ends_with(",rejected_time_not_increasing,,,,,,,,,,,,\n"),
             "{text}"
         );
         // One byte short: refused, an empty string left.

@@ -282,6 +282,7 @@ mod tests {
                 roll_rad: -0.01,
                 pitch_rad: 0.02,
             },
+            health: estimator_core::Health::NONE,
         }
     }
 
@@ -302,12 +303,12 @@ mod tests {
         assert_eq!(lines[0], HEADER);
         assert_eq!(
             lines[1],
-            "0.000000,,,,,,,,,warming_up,28.647889757,-0.572957782,1.145915565"
+            "0.000000,,,,,,,,,warming_up,28.647889757,-0.572957782,1.145915565,0,,0,0,0.000,,,,"
         );
         assert!(lines[2].starts_with("1.000000,200.0000,-150.0000,300.0000,-250.0000,1.0000,2.0000,3.0000,4.0000,estimating,"), "{}", lines[2]);
         assert!(
             lines[3].starts_with("2.000000,200.0000,")
-                && lines[3].ends_with(",rejected_non_finite,,,"),
+                && lines[3].ends_with(",rejected_non_finite,,,,,,,,,,,,"),
             "{}",
             lines[3]
         );
@@ -326,13 +327,13 @@ mod tests {
         let text = format!("{HEADER}\n0.0,,,,,,,,,warming_up,1,2\n");
         let err = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap_err();
         assert!(err.to_string().starts_with("e.csv:2: short row"), "{err}");
-        let text = format!("{HEADER}\n0.0,1,2,3,,,,,,estimating,1,2,3\n");
+        let text = format!("{HEADER}\n0.0,1,2,3,,,,,,estimating,1,2,3,0,,0,0,0.000,,,,\n");
         let err = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap_err();
         assert_eq!(
             err.to_string(),
             "e.csv:2: x4_arcsec: empty while the rest of its group is not"
         );
-        let text = format!("{HEADER}\n0.0,1,2,3,x,,,,,estimating,1,2,3\n");
+        let text = format!("{HEADER}\n0.0,1,2,3,x,,,,,estimating,1,2,3,0,,0,0,0.000,,,,\n");
         let err = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap_err();
         assert!(err.to_string().starts_with("e.csv:2: x4_arcsec: "), "{err}");
         let err = read_estimates_from(Path::new("e.csv"), "time_s,x1\n".as_bytes()).unwrap_err();
@@ -343,7 +344,7 @@ mod tests {
 
     #[test]
     fn comments_blank_lines_byte_order_mark_and_carriage_returns_are_read_past() {
-        let text = format!("\u{feff}# written by a test\n\n{HEADER}\r\n# a comment\n0.000000,,,,,,,,,warming_up,28.6,-0.5,1.1\r\n\n");
+        let text = format!("\u{feff}# written by a test\n\n{HEADER}\r\n# a comment\n0.000000,,,,,,,,,warming_up,28.6,-0.5,1.1,0,,0,0,0.000,,,,\r\n\n");
         let rows = read_estimates_from(Path::new("e.csv"), text.as_bytes()).unwrap();
         assert_eq!(rows.len(), 1);
         assert_eq!(rows[0].status, "warming_up");

@@ -1085,6 +1085,7 @@ mod tests {
                 roll_rad: 0.0,
                 pitch_rad: 0.0,
             },
+            health: estimator_core::Health::NONE,
         })
     }
 

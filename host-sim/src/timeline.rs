@@ -436,6 +436,7 @@ mod tests {
                 roll_rad: -(arcsec_to_rad(roll_removed_arcsec) as Real),
                 pitch_rad: 0.0,
             },
+            health: estimator_core::Health::NONE,
         })
     }
 

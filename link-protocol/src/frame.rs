@@ -237,6 +237,16 @@ mod tests {
                 roll_rad: -0.01,
                 pitch_rad: 0.02,
             },
+            // Every field at its longest encoding.
+            health: estimator_core::Health {
+                changes_detected: u32::MAX,
+                last_change_s: Some(1.5e9),
+                window_restarts: u32::MAX,
+                rejected: u32::MAX,
+                mismatch_s: 4.0e10,
+                residual_rad: Some([1e-5, 2e-5]),
+                noise_scale: Some([1.5, 30.0]),
+            },
         };
         let counters = Counters {
             bad_frames: [u32::MAX; 5],
@@ -405,7 +415,7 @@ mod tests {
             }),
             [0x00, 0x06, 0xac, 0x02, 0x03, 0x60, 0x52, 0x00].to_vec()
         );
-        // The firmware's boot announcement (protocol 5), unnumbered: M = 00 03 05.
+        // The firmware's boot announcement (protocol 6), unnumbered: M = 00 03 06.
         let ready = Numbered {
             seq: UNNUMBERED,
             message: Response::Ready {
@@ -413,11 +423,11 @@ mod tests {
             },
         };
         let bytes = postcard::to_slice(&ready, &mut raw).unwrap().to_vec();
-        assert_eq!(bytes, [0x00, 0x03, 0x05]);
-        assert_eq!(crate::crc::crc16(&bytes), 0xc96a);
+        assert_eq!(bytes, [0x00, 0x03, 0x06]);
+        assert_eq!(crate::crc::crc16(&bytes), 0xf909);
         assert_eq!(
             frame_of(&ready),
-            [0x00, 0x01, 0x05, 0x03, 0x05, 0x6a, 0xc9, 0x00].to_vec()
+            [0x00, 0x01, 0x05, 0x03, 0x06, 0x09, 0xf9, 0x00].to_vec()
         );
         // No sample frame is longer than 43 bytes: 5 + 33 + 2 bytes COBS-encoded into at most 41.
         assert!(
@@ -444,7 +454,7 @@ mod tests {
             seq: u32::MAX,
             message: Response::Step(step_reply()),
         };
-        assert_eq!(postcard::to_slice(&step, &mut raw).unwrap().len(), 111);
+        assert_eq!(postcard::to_slice(&step, &mut raw).unwrap().len(), 161);
         assert!(frame_of(&status).len() - 2 <= MAX_RESPONSE_ENCODED);
     }
 
@@ -590,7 +600,7 @@ mod tests {
         let ready = body(&frame_of(&Response::Ready {
             protocol_version: crate::PROTOCOL_VERSION,
         }));
-        assert_eq!(ready, [0x05, 0x03, 0x05, 0xf9, 0x18]);
+        assert_eq!(ready, [0x05, 0x03, 0x06, 0x9a, 0x28]);
         for cut in 0..ready.len() {
             let mut part = ready[..cut].to_vec();
             assert_eq!(

@@ -156,14 +156,14 @@ const GOLDEN_SAMPLE: &str =
     "000207010101011ff017f54035fa8ebc507756bd6f64893ff2d3c6bf1fc929bed8e9973d0b6a00";
 const GOLDEN_RESET: &str = "00050801878400";
 const GOLDEN_READ_STATUS: &str = "0006ac0202414200";
-const GOLDEN_READY: &str = "00010503056ac900";
+const GOLDEN_READY: &str = "000105030609f900";
 const GOLDEN_LAST_SEQ: &str = "0009ffffffff0f01df8400";
 
 #[test]
-fn golden_frames_are_the_bytes_of_protocol_version_5() {
+fn golden_frames_are_the_bytes_of_protocol_version_6() {
     assert_eq!(
         crate::PROTOCOL_VERSION,
-        5,
+        6,
         "a new protocol version needs new golden frames (see this module's doc)"
     );
     let frames = golden();

@@ -55,7 +55,7 @@
 //! // Firmware to host: the boot announcement, unnumbered, 8 bytes on the wire.
 //! let ready = Numbered { seq: UNNUMBERED, message: Response::Ready { protocol_version: PROTOCOL_VERSION } };
 //! let n = encode_frame(&ready, &mut frame)?;
-//! assert_eq!(frame[..n], [0x00, 0x01, 0x05, 0x03, 0x05, 0x6a, 0xc9, 0x00]);
+//! assert_eq!(frame[..n], [0x00, 0x01, 0x05, 0x03, 0x06, 0x09, 0xf9, 0x00]);
 //! let mut host_rx = FrameAccumulator::<MAX_RESPONSE_ENCODED>::new();
 //! let responses = frame[..n]
 //!     .iter()
@@ -90,16 +90,17 @@ pub use accumulator::FrameAccumulator;
 pub use blocking_writer::BlockingWriter;
 pub use frame::{decode_frame, encode_frame, encode_response_frame, EncodeError, FrameError};
 pub use message::{
-    ClockSource, Counters, EstimateMsg, LinkCounters, Numbered, RejectedReply, Request, ResetCause,
-    Response, SampleMsg, StatusReply, StepReply, UNNUMBERED,
+    ClockSource, Counters, EstimateMsg, HealthMsg, LinkCounters, Numbered, RejectedReply, Request,
+    ResetCause, Response, SampleMsg, StatusReply, StepReply, UNNUMBERED,
 };
 
 /// Version of this protocol, reported in [`StatusReply::protocol_version`]. 5: every frame's
 /// message is [`Numbered`] (a sequence number before it), `Status` appends the receive path's
 /// [`LinkCounters`], the reset cause and the clock source, and the request `Hang` (variant 3, test
 /// builds only) exists, and `Step`'s status may be 10 (a change of the installation errors
-/// declared) (docs/link-protocol.md, Versioning).
-pub const PROTOCOL_VERSION: u8 = 5;
+/// declared) (docs/link-protocol.md, Versioning). 6: `Step` appends the output's latched alarms
+/// and residuals' level ([`HealthMsg`]).
+pub const PROTOCOL_VERSION: u8 = 6;
 
 /// Largest COBS-encoded request the firmware accepts (without the two 0x00 delimiters). The largest
 /// request, a sample, encodes to 36 bytes; anything longer than this is counted as oversized.

@@ -9,7 +9,8 @@
 //! Variants are only ever appended, never reordered.
 
 use estimator_core::{
-    Attitude, Estimate, Field, Output, Real, RejectReason, Sample, SampleError, Status, UnknownCode,
+    Attitude, Estimate, Field, Health, Output, Real, RejectReason, Sample, SampleError, Status,
+    UnknownCode,
 };
 use serde::{Deserialize, Serialize};
 
@@ -135,6 +136,46 @@ impl From<&EstimateMsg> for Estimate {
     }
 }
 
+/// [`estimator_core::Health`]: the latched alarms and the residuals' level of a step.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+pub struct HealthMsg {
+    pub changes_detected: u32,
+    pub last_change_s: Option<f64>,
+    pub window_restarts: u32,
+    pub rejected: u32,
+    pub mismatch_s: f64,
+    pub residual_rad: Option<[Real; 2]>,
+    pub noise_scale: Option<[Real; 2]>,
+}
+
+impl From<&Health> for HealthMsg {
+    fn from(h: &Health) -> Self {
+        HealthMsg {
+            changes_detected: h.changes_detected,
+            last_change_s: h.last_change_s,
+            window_restarts: h.window_restarts,
+            rejected: h.rejected,
+            mismatch_s: h.mismatch_s,
+            residual_rad: h.residual_rad,
+            noise_scale: h.noise_scale,
+        }
+    }
+}
+
+impl From<&HealthMsg> for Health {
+    fn from(h: &HealthMsg) -> Self {
+        Health {
+            changes_detected: h.changes_detected,
+            last_change_s: h.last_change_s,
+            window_restarts: h.window_restarts,
+            rejected: h.rejected,
+            mismatch_s: h.mismatch_s,
+            residual_rad: h.residual_rad,
+            noise_scale: h.noise_scale,
+        }
+    }
+}
+
 /// Bad frames by [`FrameError`] code (`as u8`) and rejected samples by [`RejectReason`] code,
 /// since boot (they survive `Reset`; saturating).
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -180,6 +221,8 @@ pub struct StepReply {
     /// [`StatusReply::cost_counter_hz`]).
     pub step_cost_ticks: u32,
     pub counters: Counters,
+    /// The output's latched alarms and residuals' level.
+    pub health: HealthMsg,
 }
 
 impl StepReply {
@@ -194,6 +237,7 @@ impl StepReply {
             corrected_pitch_rad: output.corrected.pitch_rad,
             step_cost_ticks,
             counters,
+            health: HealthMsg::from(&output.health),
         }
     }
 
@@ -208,6 +252,7 @@ impl StepReply {
                 roll_rad: self.corrected_roll_rad,
                 pitch_rad: self.corrected_pitch_rad,
             },
+            health: Health::from(&self.health),
         })
     }
 }

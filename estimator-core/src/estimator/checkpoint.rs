@@ -19,7 +19,8 @@
 //! the last rotation fault (u8: 0 none, else the [`Status::code`](crate::Status::code) of that
 //! fault) and the sample time it began at (f64, zero without a fault), the sway monitor (see
 //! `sway_gate/checkpoint.rs`), rejected counts ([`RejectReason::ALL`] x u32), counters (accepted,
-//! filled, window restarts, clock steps: u32 each), the last change of the errors declared
+//! filled, window restarts, clock steps, changes detected, samples in model mismatch: u32 each),
+//! the last change of the errors declared
 //! (optional: the sample time it was declared at and the time the residuals showed it from, f64
 //! each, and the errors learned again, a u8 with bits 0-3 for x1..x4).
 //!
@@ -250,7 +251,7 @@ impl Stored for Running {
         + 8
         + SwayMonitor::LEN
         + RejectReason::ALL.len() * 4
-        + 4 * 4
+        + 6 * 4
         + (1 + 8 + 8 + 1);
     type Context<'a> = ();
 
@@ -273,7 +274,14 @@ impl Stored for Running {
             w.u32(n);
         }
         let c = &self.counters;
-        for n in [c.accepted, c.filled, c.window_restarts, c.clock_steps] {
+        for n in [
+            c.accepted,
+            c.filled,
+            c.window_restarts,
+            c.clock_steps,
+            c.changes_detected,
+            c.mismatch_samples,
+        ] {
             w.u32(n);
         }
         let zero = ErrorChange {
@@ -325,6 +333,8 @@ impl Stored for Running {
             filled: r.u32(),
             window_restarts: r.u32(),
             clock_steps: r.u32(),
+            changes_detected: r.u32(),
+            mismatch_samples: r.u32(),
         };
         let error_change = r.option(Part::Estimator, |r| Ok((r.f64(), r.f64(), r.u8())))?;
         if let Some((detected_s, seen_since_s, bits)) = error_change {

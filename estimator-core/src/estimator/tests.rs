@@ -470,6 +470,13 @@ fn a_step_of_the_errors_is_declared_reported_and_learned_again() {
     assert!(rows
         .iter()
         .all(|r| r.0 >= 12_000.0 || r.1 != Status::ErrorsChanged));
+    // Latched: long after the `errors_changed` rows, every output still says that a change was
+    // declared, and when.
+    let health = est.health();
+    assert_eq!(health.changes_detected, 1);
+    assert_eq!(health.last_change_s, Some(change.detected_s));
+    assert_eq!(health.window_restarts, 0);
+    assert!(health.residual_rad.is_some() && health.noise_scale.is_some());
 
     // Detection off: nothing declared, and 2,000 s after the step x2 is still off by more than
     // 10 arcsec (the filter's memory is the whole log).
@@ -479,6 +486,10 @@ fn a_step_of_the_errors_is_declared_reported_and_learned_again() {
     };
     let (rows, est) = stepped_run(off, step);
     assert_eq!(est.error_change(), None);
+    assert_eq!(
+        (est.health().changes_detected, est.health().last_change_s),
+        (0, None)
+    );
     assert!(rows.iter().all(|r| r.1 != Status::ErrorsChanged));
     let at_14000 = rows[14_000].2.unwrap();
     assert!(at_14000[1].abs() > 10.0, "{at_14000:?}");

@@ -476,6 +476,14 @@ impl<const CAP: usize> Windowed<CAP> {
         ]
     }
 
+    /// Each pair's residual level (the larger of its two channels' residual means, rad) and its
+    /// noise scale ([`pair::Pair::noise_scale`]): pitch pair (x1, x2) first, then roll (x3, x4).
+    pub fn pair_levels(&self) -> ([Real; 2], [Real; 2]) {
+        let level = |p: &Pair| p.stats.mean_rad[0].abs().larger(p.stats.mean_rad[1].abs());
+        let [p, r] = &self.pairs;
+        ([level(p), level(r)], [p.noise_scale(), r.noise_scale()])
+    }
+
     /// Each error's reported 1-sigma, rad, as its pair last refreshed it.
     fn reported_sigma_rad(&self) -> [Real; 4] {
         let [p, r] = &self.pairs;

@@ -170,3 +170,66 @@ fn known_values_are_reported_from_the_first_row_and_learned_past() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The alarm columns latch: on a log with two outages and a slow heel that ends in
+/// `model_mismatch`, the counts never go down, the window restarts are counted, and `mismatch_s`
+/// on each row is the number of `model_mismatch` rows so far times the interval; the residual
+/// levels and noise scales appear with the first estimate.
+#[test]
+fn the_alarm_columns_latch_and_agree_with_the_rows() {
+    let dir = temp_dir("cli-alarms");
+    let log = dir.join("heel.csv");
+    host_sim_ok(&[
+        "generate",
+        "--scenario",
+        "sea",
+        "--seed",
+        "3",
+        "--duration",
+        "8000",
+        "--outages",
+        "2",
+        "--slow-heel-deg",
+        "0.5",
+        "--slow-heel-period-s",
+        "900",
+        "--out",
+        path_str(&log),
+    ]);
+    let est = dir.join("heel.est.csv");
+    host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&est)]);
+    let text = std::fs::read_to_string(&est).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (status, restarts, mismatch, residual, scale, x1) = (
+        col("status"),
+        col("window_restarts"),
+        col("mismatch_s"),
+        col("residual_roll_arcsec"),
+        col("noise_scale_roll"),
+        col("x1_arcsec"),
+    );
+    let (mut in_mismatch, mut last_restarts) = (0u32, 0u32);
+    for line in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells.len(), header.len(), "{line}");
+        if cells[status] == "model_mismatch" {
+            in_mismatch += 1;
+        }
+        let r: u32 = cells[restarts].parse().unwrap();
+        assert!(r >= last_restarts, "{line}");
+        last_restarts = r;
+        let m: f64 = cells[mismatch].parse().unwrap();
+        assert_eq!(m, f64::from(in_mismatch), "{line}");
+        // Residual level and noise scale from the first estimate on, never before.
+        assert_eq!(cells[residual].is_empty(), cells[x1].is_empty(), "{line}");
+        assert_eq!(cells[scale].is_empty(), cells[x1].is_empty(), "{line}");
+    }
+    assert!(in_mismatch > 0, "the slow heel ends in model_mismatch");
+    assert!(
+        last_restarts >= 2,
+        "two outages restart the window: {last_restarts}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
