@@ -3,7 +3,7 @@
 //! # The store
 //! A key-value log of the `sequential-storage` crate ([`MapStorage`]) over every sector the board
 //! gives it ([`crate::flash_layout`]), with one key: each save appends the core's checkpoint image
-//! ([`Estimator::checkpoint`], 860 bytes with its own magic, version and CRC-32) as a new item, and
+//! ([`Estimator::checkpoint`], 900 bytes with its own magic, version and CRC-32) as a new item, and
 //! a restore reads the newest. Pages (sectors) are used in turn: a sector is erased only when the
 //! log has gone round to it, so every sector is erased once per `sectors x items a sector holds`
 //! saves (wear levelling), and a save that does not open a new sector only programs (no erase).
