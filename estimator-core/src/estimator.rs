@@ -332,7 +332,12 @@ impl<const CAP: usize> Estimator<CAP> {
     /// The latched alarms and the residuals' level now ([`Output::health`]).
     pub fn health(&self) -> Health {
         let c = &self.run.counters;
-        let interval_s = self.run.grid.interval_s().unwrap_or(0.0);
+        // Double-precision arithmetic is a library call on the Cortex-M4F: none while nothing
+        // was in mismatch (nearly every step).
+        let mismatch_s = match c.mismatch_samples {
+            0 => 0.0,
+            n => f64::from(n) * self.run.grid.interval_s().unwrap_or(0.0),
+        };
         let (residual_rad, noise_scale) = match &self.method {
             MethodState::Windowed(m) if m.estimate(&self.config).is_some() => {
                 let (r, s) = m.pair_levels();
@@ -345,7 +350,7 @@ impl<const CAP: usize> Estimator<CAP> {
             last_change_s: self.run.error_change.map(|e| e.detected_s),
             window_restarts: c.window_restarts,
             rejected: self.run.rejected.total(),
-            mismatch_s: f64::from(c.mismatch_samples) * interval_s,
+            mismatch_s,
             residual_rad,
             noise_scale,
         }
@@ -392,7 +397,7 @@ impl<const CAP: usize> Estimator<CAP> {
     /// make it jitter); across a longer gap or a clock step the last rate is kept. A latency of 0
     /// returns the sample as it is.
     fn carry_rotation(&mut self, sample: &Sample, placement: Placement) -> Sample {
-        if self.config.angle_latency_s == 0.0 {
+        if !self.latency_set() {
             return *sample;
         }
         if let (Some(last), Placement::OnGrid { intervals }, Some(interval_s)) = (
@@ -413,12 +418,18 @@ impl<const CAP: usize> Estimator<CAP> {
     /// [`Estimator::carry_rotation`]); unchanged while the latency is 0.
     fn carried(&self, sample: &Sample) -> Sample {
         let mut s = *sample;
-        if self.config.angle_latency_s != 0.0 {
+        if self.latency_set() {
             s.rotation_rad = wrap_pi(
                 s.rotation_rad + self.run.rotation_rate_rad_s * self.config.angle_latency_s as Real,
             );
         }
         s
+    }
+
+    /// Whether a latency is configured: its bits, not a double-precision comparison (a library call
+    /// on the Cortex-M4F, on every step).
+    fn latency_set(&self) -> bool {
+        self.config.angle_latency_s.to_bits() << 1 != 0
     }
 
     /// `(sin L, cos L)` of `latitude_rad`: the step's cached values when the latitude is the one it
