@@ -356,6 +356,35 @@ impl<const CAP: usize> Estimator<CAP> {
         }
     }
 
+    /// The current estimate as a record every later version reads ([`crate::learned`]), with the
+    /// time of the last sample; `None` while there is no estimate.
+    pub fn learned_errors(&self) -> Option<crate::learned::LearnedErrors> {
+        let e = self.estimate()?;
+        Some(crate::learned::LearnedErrors {
+            time_s: self.run.grid.last_stamp_s().unwrap_or(0.0),
+            x_rad: e.x_rad.map(|x| x as f32),
+            sigma_rad: e.sigma_rad.map(|s| s as f32),
+        })
+    }
+
+    /// Starts afresh from a record of learned errors, as from known values: the configuration's
+    /// prior becomes the record's ([`crate::learned::LearnedErrors::prior`]), everything else is
+    /// forgotten (as [`Estimator::reset`]), and the record's estimate is reported, and compensates,
+    /// from the next sample. For a build that refused a checkpoint of another version.
+    pub fn start_from_learned(
+        &mut self,
+        learned: &crate::learned::LearnedErrors,
+    ) -> Result<(), ConfigError> {
+        let config = Config {
+            prior: Some(learned.prior(self.config.prior_sigma_rad)),
+            ..self.config
+        };
+        let rejected = self.run.rejected;
+        self.reinit(config)?;
+        self.run.rejected = rejected;
+        Ok(())
+    }
+
     /// The current estimate, if any.
     pub fn estimate(&self) -> Option<Estimate> {
         self.method.estimate(&self.config).map(|e| Estimate {

@@ -96,6 +96,7 @@ pub mod estimator;
 pub mod gap_fill;
 pub mod installation;
 pub mod kalman;
+pub mod learned;
 pub mod math;
 pub mod methods;
 pub mod moving_average;

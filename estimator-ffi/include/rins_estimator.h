@@ -18,6 +18,9 @@
 // Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.
 #define RINS_CHECKPOINT_LEN 900
 
+// Bytes of a learned-errors record: the buffer rins_estimator_learned needs.
+#define RINS_LEARNED_LEN 52
+
 // Bytes of a buffer that holds any estimates CSV row with its line end and NUL.
 #define RINS_ROW_MAX_LEN 2048
 
@@ -372,6 +375,37 @@ RinsError rins_estimator_checkpoint(const struct RinsEstimator *estimator,
 RinsError rins_estimator_restore(struct RinsEstimator *estimator,
                                  const uint8_t *buffer,
                                  size_t len);
+
+// Writes the learned errors (the estimate, its 1-sigma and the last sample's time) as a small
+// record whose layout every later version of the library reads (`docs/interface.md`), into
+// `buffer` (`capacity` bytes, at least `RINS_LEARNED_LEN`), and its length into `*written`. Save it
+// beside the checkpoint: a later build that refuses the checkpoint (another format version)
+// starts from it with `rins_estimator_start_from_learned`. `RINS_ERROR_NO_ESTIMATE` before the
+// first estimate and `RINS_ERROR_BUFFER_TOO_SMALL` write nothing. The estimator is not changed.
+//
+// # Safety
+// `estimator` is null or a handle from `rins_estimator_init` that no call changes at the same
+// time; `buffer` is null or points to `capacity` writable bytes; `written` is null or points to a
+// writable `size_t`.
+RinsError rins_estimator_learned(const struct RinsEstimator *estimator,
+                                 uint8_t *buffer,
+                                 size_t capacity,
+                                 size_t *written);
+
+// Starts the estimator afresh from a learned-errors record (`len` bytes at `buffer`, as
+// `rins_estimator_learned` of this or an earlier version wrote it): as from known values, the
+// record's estimate is reported, and compensates the attitude, from the next sample, with a
+// 1-sigma of at least 1 arcsec, and the log refines it; everything else learned is forgotten (as
+// `rins_estimator_reset`). For a program whose `rins_estimator_restore` refused its checkpoint
+// with `RINS_ERROR_CHECKPOINT_INCOMPATIBLE` after a software update.
+// `RINS_ERROR_CHECKPOINT_CORRUPT` (not a record, damaged, values out of bounds) changes nothing.
+//
+// # Safety
+// `estimator` is null or a handle from `rins_estimator_init` that no other call uses at the same
+// time; `buffer` is null or points to `len` readable bytes.
+RinsError rins_estimator_start_from_learned(struct RinsEstimator *estimator,
+                                            const uint8_t *buffer,
+                                            size_t len);
 
 // Fills `*config` with the defaults (the paper's setting; `docs/method.md`).
 //

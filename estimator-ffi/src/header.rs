@@ -25,6 +25,11 @@ fn generate(crate_dir: &Path) -> String {
             RINS_CHECKPOINT_LEN.to_string(),
         ),
         (
+            "Bytes of a learned-errors record: the buffer rins_estimator_learned needs.",
+            "RINS_LEARNED_LEN",
+            crate::RINS_LEARNED_LEN.to_string(),
+        ),
+        (
             "Bytes of a buffer that holds any estimates CSV row with its line end and NUL.",
             "RINS_ROW_MAX_LEN",
             RINS_ROW_MAX_LEN.to_string(),

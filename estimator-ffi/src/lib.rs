@@ -49,7 +49,10 @@ pub mod text;
 #[cfg(test)]
 mod header;
 
-pub use checkpoint::{rins_estimator_checkpoint, rins_estimator_restore, RINS_CHECKPOINT_LEN};
+pub use checkpoint::{
+    rins_estimator_checkpoint, rins_estimator_learned, rins_estimator_restore,
+    rins_estimator_start_from_learned, RINS_CHECKPOINT_LEN, RINS_LEARNED_LEN,
+};
 pub use config::{rins_config_check, rins_config_default, RinsConfig, RinsMethod};
 pub use error::{rins_error_name, RinsError};
 pub use estimator::{

@@ -647,3 +647,67 @@ fn compensate_applies_the_estimate_between_steps_and_changes_nothing() {
     let e = unsafe { rins_estimator_compensate(foreign.0.as_ptr().cast(), &row(1.0), &mut out) };
     assert_eq!((e, out), (RinsError::NotInitialised, no_change));
 }
+
+/// The learned-errors record through the C API: nothing before an estimate; after 2,000 s a
+/// record that starts a fresh estimator (as a later build would after refusing the checkpoint)
+/// with the same estimate at its first sample; a damaged record changes nothing.
+#[test]
+fn a_learned_record_starts_another_estimator_from_the_estimate() {
+    let mut block = Block::new(0);
+    let handle = init(&mut block, &defaults());
+    let mut record = vec![0u8; RINS_LEARNED_LEN];
+    let mut written = 0;
+    // SAFETY: an initialised handle, RINS_LEARNED_LEN writable bytes, a writable size.
+    let e =
+        unsafe { rins_estimator_learned(handle, record.as_mut_ptr(), record.len(), &mut written) };
+    assert_eq!((e, written), (RinsError::NoEstimate, 0));
+    for k in 0..2000 {
+        step(handle, &row(k as f64));
+    }
+    // SAFETY: as above; then one byte short.
+    unsafe {
+        assert_eq!(
+            rins_estimator_learned(
+                handle,
+                record.as_mut_ptr(),
+                RINS_LEARNED_LEN - 1,
+                &mut written
+            ),
+            RinsError::BufferTooSmall
+        );
+        assert_eq!(
+            rins_estimator_learned(handle, record.as_mut_ptr(), record.len(), &mut written),
+            RinsError::Ok
+        );
+    }
+    assert_eq!(written, RINS_LEARNED_LEN);
+    let mut estimate = RinsEstimate::default();
+    // SAFETY: an initialised handle, a writable estimate.
+    assert_eq!(
+        unsafe { rins_estimator_estimate(handle, &mut estimate) },
+        RinsError::Ok
+    );
+    let mut other_block = Block::new(0);
+    let other = init(&mut other_block, &defaults());
+    let mut damaged = record.clone();
+    damaged[20] ^= 4;
+    let before = other_block.0.clone();
+    // SAFETY: an initialised handle, readable bytes.
+    let e = unsafe { rins_estimator_start_from_learned(other, damaged.as_ptr(), damaged.len()) };
+    assert_eq!(e, RinsError::CheckpointCorrupt);
+    assert!(
+        other_block.0 == before,
+        "a damaged record changed the estimator"
+    );
+    // SAFETY: as above.
+    let e = unsafe { rins_estimator_start_from_learned(other, record.as_ptr(), record.len()) };
+    assert_eq!(e, RinsError::Ok);
+    let (_, out) = step(other, &row(2000.0));
+    assert!(out.has_estimate);
+    assert_eq!(out.estimate.x_rad, estimate.x_rad);
+    for i in 0..4 {
+        let off = rad_to_arcsec(f64::from(out.estimate.x_rad[i])) - X_ARCSEC[i];
+        assert!(off.abs() < 1.0, "x{} off by {off} arcsec", i + 1);
+        assert!(rad_to_arcsec(f64::from(out.estimate.sigma_rad[i])) >= 1.0 - 1e-4);
+    }
+}

@@ -2,9 +2,13 @@
 //!
 //! # The store
 //! A key-value log of the `sequential-storage` crate ([`MapStorage`]) over every sector the board
-//! gives it ([`crate::flash_layout`]), with one key: each save appends the core's checkpoint image
-//! ([`Estimator::checkpoint`], 900 bytes with its own magic, version and CRC-32) as a new item, and
-//! a restore reads the newest. Pages (sectors) are used in turn: a sector is erased only when the
+//! gives it ([`crate::flash_layout`]), with one key: each save appends one item, the learned
+//! errors' record ([`estimator_core::learned`], 52 bytes, a layout every later version reads)
+//! followed by the core's checkpoint image ([`Estimator::checkpoint`], 900 bytes with its own
+//! magic, version and CRC-32), and a restore reads the newest. A build that refuses the image
+//! (another format version: a software update) starts from the record instead
+//! ([`Restored::Learned`]), so that compensation goes on across the update; an item without a
+//! record (an older build's) is the image alone. Pages (sectors) are used in turn: a sector is erased only when the
 //! log has gone round to it, so every sector is erased once per `sectors x items a sector holds`
 //! saves (wear levelling), and a save that does not open a new sector only programs (no erase).
 //!
@@ -36,6 +40,7 @@ use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_futures::block_on;
 use embedded_storage::nor_flash::NorFlash;
 use estimator_core::checkpoint::{CheckpointError, CHECKPOINT_LEN};
+use estimator_core::learned::{LearnedErrors, LEARNED_LEN, LEARNED_MAGIC};
 use estimator_core::Estimator;
 use sequential_storage::cache::{Cache, Uncached};
 use sequential_storage::map::{MapConfig, MapStorage};
@@ -47,9 +52,12 @@ include!(concat!(env!("OUT_DIR"), "/checkpoint_interval.rs"));
 /// The map's one key.
 const CHECKPOINT_KEY: u8 = 0;
 
-/// Bytes of the store's working buffer: the key and an image, rounded up to the largest flash
+/// Bytes of an item: the learned errors' record and the checkpoint image.
+pub const ITEM_BYTES: usize = LEARNED_LEN + CHECKPOINT_LEN;
+
+/// Bytes of the store's working buffer: the key and an item, rounded up to the largest flash
 /// word `sequential-storage` supports (32 bytes).
-pub const BUFFER_BYTES: usize = (1 + CHECKPOINT_LEN).div_ceil(32) * 32;
+pub const BUFFER_BYTES: usize = (1 + ITEM_BYTES).div_ceil(32) * 32;
 
 /// The log's cache: none (every operation reads the page states from flash; the region is small
 /// and memory-mapped, so a save spends well under a millisecond reading).
@@ -108,13 +116,21 @@ pub enum Restored {
     /// The newest image was refused by the core (another format version, a foreign image); the
     /// estimator is unchanged, and the next save replaces the image.
     Refused(CheckpointError),
+    /// The newest image is of another format version (another build wrote it), and the estimator
+    /// started from the learned errors saved with it ([`Estimator::start_from_learned`]): it
+    /// reports them, and compensates with them, from the first sample. The time of the record's
+    /// last sample and the version the image was refused for.
+    Learned {
+        time_s: f64,
+        refused: CheckpointError,
+    },
 }
 
 /// The store's working memory, which the caller provides (a static in the firmware, so that
 /// neither buffer is on the stack): the log's item buffer and the image being saved.
 pub struct StoreBuffers {
     item: [u8; BUFFER_BYTES],
-    image: [u8; CHECKPOINT_LEN],
+    image: [u8; ITEM_BYTES],
 }
 
 impl StoreBuffers {
@@ -122,7 +138,7 @@ impl StoreBuffers {
     pub const fn new() -> Self {
         StoreBuffers {
             item: [0; BUFFER_BYTES],
-            image: [0; CHECKPOINT_LEN],
+            image: [0; ITEM_BYTES],
         }
     }
 }
@@ -191,12 +207,7 @@ impl<'b, F: NorFlash> CheckpointStore<'b, F> {
         let restored = match found {
             None => Restored::Nothing,
             Some([]) => Restored::Forgotten,
-            Some(image) => match estimator.restore(image) {
-                Ok(()) => Restored::Image {
-                    time_s: estimator.last_sample_time_s(),
-                },
-                Err(e) => Restored::Refused(e),
-            },
+            Some(item) => restore_item(estimator, item),
         };
         self.time_s = match restored {
             Restored::Image { time_s } => time_s,
@@ -205,12 +216,21 @@ impl<'b, F: NorFlash> CheckpointStore<'b, F> {
         Ok(restored)
     }
 
-    /// Appends the estimator's image to the log.
+    /// Appends the estimator's learned errors and image to the log (the record only while there is
+    /// an estimate; an item without one is the image alone).
     pub fn save<const CAP: usize>(&mut self, estimator: &Estimator<CAP>) -> Result<(), StoreError> {
         let StoreBuffers { item, image } = &mut *self.buffers;
-        estimator
-            .checkpoint(image)
+        let start = match estimator.learned_errors() {
+            Some(learned) => {
+                image[..LEARNED_LEN].copy_from_slice(&learned.encode());
+                LEARNED_LEN
+            }
+            None => 0,
+        };
+        let written = estimator
+            .checkpoint(&mut image[start..])
             .map_err(|_| StoreError::Storage)?;
+        let image = &image[..start + written];
         block_on(
             self.map
                 .store_item::<&[u8]>(item, &CHECKPOINT_KEY, &&image[..]),
@@ -229,6 +249,43 @@ impl<'b, F: NorFlash> CheckpointStore<'b, F> {
         )?;
         self.time_s = None;
         Ok(())
+    }
+}
+
+/// What an item of the log restores into `estimator`: the item is the learned errors' record (of
+/// any layout version) followed by a checkpoint image, or an image alone (an older build's). The
+/// image restored, [`Restored::Image`]; refused as another build's (another format version, float
+/// width or image length, a method this build lacks) with a record beside it, the estimator
+/// started from the record, [`Restored::Learned`]; otherwise [`Restored::Refused`], the estimator
+/// unchanged.
+pub fn restore_item<const CAP: usize>(estimator: &mut Estimator<CAP>, item: &[u8]) -> Restored {
+    // The record first (any version's layout), the image after it; an item that does
+    // not start with a record is an image alone.
+    let learned = item
+        .starts_with(&LEARNED_MAGIC)
+        .then(|| LearnedErrors::decode(item).ok())
+        .flatten();
+    let image = match learned {
+        Some((_, len)) => item.get(len..).unwrap_or(&[]),
+        None => item,
+    };
+    match (estimator.restore(image), learned) {
+        (Ok(()), _) => Restored::Image {
+            time_s: estimator.last_sample_time_s(),
+        },
+        (
+            Err(
+                refused @ (CheckpointError::Version { .. }
+                | CheckpointError::RealWidthMismatch(_)
+                | CheckpointError::LengthMismatch { .. }
+                | CheckpointError::UnknownMethod(_)),
+            ),
+            Some((record, _)),
+        ) if estimator.start_from_learned(&record).is_ok() => Restored::Learned {
+            time_s: record.time_s,
+            refused,
+        },
+        (Err(e), _) => Restored::Refused(e),
     }
 }
 

@@ -12,4 +12,5 @@ mod gap_logs;
 mod jittered_stamps;
 mod real_logs;
 mod sea_day;
+mod store_across_versions;
 mod store_power_fail;

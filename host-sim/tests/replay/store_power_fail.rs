@@ -57,6 +57,9 @@ fn restored<const S: usize, const W: usize>(flash: &mut FlashModel<S, W>) -> Opt
         }
         Restored::Nothing | Restored::Forgotten => None,
         Restored::Refused(e) => panic!("the store gave the core an image it refused: {e}"),
+        Restored::Learned { refused, .. } => {
+            panic!("the store gave the core an image of another version: {refused}")
+        }
     }
 }
 
