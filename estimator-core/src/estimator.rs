@@ -358,6 +358,8 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// The current estimate as a record every later version reads ([`crate::learned`]), with the
     /// time of the last sample; `None` while there is no estimate.
+    // The casts are the f64 build's; in the default build `Real` is f32 already.
+    #[allow(clippy::unnecessary_cast)]
     pub fn learned_errors(&self) -> Option<crate::learned::LearnedErrors> {
         let e = self.estimate()?;
         Some(crate::learned::LearnedErrors {

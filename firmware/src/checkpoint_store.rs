@@ -220,21 +220,23 @@ impl<'b, F: NorFlash> CheckpointStore<'b, F> {
     /// an estimate; an item without one is the image alone).
     pub fn save<const CAP: usize>(&mut self, estimator: &Estimator<CAP>) -> Result<(), StoreError> {
         let StoreBuffers { item, image } = &mut *self.buffers;
-        let start = match estimator.learned_errors() {
+        // The record in front (when there is an estimate), the image after it: `image` holds
+        // both (`ITEM_BYTES`).
+        let (record, rest) = image.split_at_mut(LEARNED_LEN);
+        let written = match estimator.learned_errors() {
             Some(learned) => {
-                image[..LEARNED_LEN].copy_from_slice(&learned.encode());
+                record.copy_from_slice(&learned.encode());
                 LEARNED_LEN
+                    + estimator
+                        .checkpoint(rest)
+                        .map_err(|_| StoreError::Storage)?
             }
-            None => 0,
+            None => estimator
+                .checkpoint(image)
+                .map_err(|_| StoreError::Storage)?,
         };
-        let written = estimator
-            .checkpoint(&mut image[start..])
-            .map_err(|_| StoreError::Storage)?;
-        let image = &image[..start + written];
-        block_on(
-            self.map
-                .store_item::<&[u8]>(item, &CHECKPOINT_KEY, &&image[..]),
-        )?;
+        let saved = image.get(..written).ok_or(StoreError::Storage)?;
+        block_on(self.map.store_item::<&[u8]>(item, &CHECKPOINT_KEY, &saved))?;
         self.saved = self.saved.saturating_add(1);
         self.time_s = estimator.last_sample_time_s();
         Ok(())

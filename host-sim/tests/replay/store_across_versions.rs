@@ -73,7 +73,7 @@ fn an_image_of_another_version_starts_the_estimator_from_the_learned_errors() {
         // compensating the attitude as the old build's estimate did.
         let out = next.step(&rest[0]).unwrap();
         let e = out.estimate.expect("an estimate at the first sample");
-        assert_eq!(e.x_rad.map(|x| x as f32), learned.x_rad);
+        assert_eq!(e.x_rad, learned.x_rad);
         assert!(e.sigma_rad.iter().all(|s| *s >= LEARNED_MIN_SIGMA_RAD));
         let mut old = est.clone();
         let out_old = old.step(&rest[0]).unwrap();
