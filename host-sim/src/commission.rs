@@ -146,8 +146,8 @@ pub struct Fit {
     pub residual_power_arcsec2: Option<f64>,
     /// Mean square of the measurement's period means over the same periods, arcsec^2.
     pub measurement_power_arcsec2: Option<f64>,
-    /// The heading regressed on eq (2)'s heading oscillation for the fit's estimate over the same
-    /// periods, and its standard error: 1 when the heading carries that oscillation, -1 when it
+    /// The heading regressed on eq (2)'s heading oscillation for the fit's estimate over every
+    /// period from the first estimate, and its standard error: 1 when the heading carries that oscillation, -1 when it
     /// carries its opposite (the errors' sign wrong), 0 when neither.
     pub heading_agreement: Option<(f64, f64)>,
 }
@@ -280,7 +280,9 @@ impl Accumulator {
                 .sum();
             Some(sum / later.len() as f64)
         };
-        let moments: Vec<(f64, f64)> = later.iter().map(Period::heading_moments).collect();
+        // The heading's sign does not grow with the log, as the misfit does: every period from the
+        // first estimate counts.
+        let moments: Vec<(f64, f64)> = self.periods.iter().map(Period::heading_moments).collect();
         let variance: f64 = moments.iter().map(|m| m.1).sum();
         // A standard error needs a few periods' coefficients.
         let heading_agreement =
@@ -422,7 +424,7 @@ fn heading_opposes(f: &Fit) -> bool {
     matches!(f.heading_agreement, Some((c, se)) if (c + 1.0).abs() < 0.5 && -c > HEADING_SIGMAS * se)
 }
 
-/// Periods a fit's heading coefficient needs (in the later half of its periods) to be given.
+/// Periods a fit's heading coefficient needs to be given.
 pub const MIN_HEADING_PERIODS: usize = 3;
 
 /// Standard errors from zero the heading's coefficient needs to count (see [`Fit::heading_agreement`];
