@@ -3,8 +3,8 @@
 //! `estimate`'s does.
 //!
 //! The lengths are the shortest at which `bash scripts/commission-study.sh` (20 seeds) found every
-//! verdict right with a margin: at sea 3,000 s (every wrong fit at least 42 times the right one's
-//! unexplained share, the decision asks 10), on the paper scenario 2,500 s (37; and at least
+//! verdict right with a margin: at sea 3,000 s (every wrong fit at least 25 times the right one's
+//! unexplained share, the decision asks 10), on the paper scenario 2,500 s (35; and at least
 //! 3 periods for the heading to tell roll-negated from pitch-negated).
 
 use crate::common::{host_sim, path_str, temp_dir};
