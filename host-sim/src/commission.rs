@@ -5,8 +5,8 @@
 //! conventions changed (an angle negated, roll and pitch exchanged, the rotation angle read as
 //! radians). Each replay runs the core's windowed method to the end of the log, as `estimate`
 //! does (the evidence grows with the log, below; a fit keeps 72 bytes a rotation period, and the
-//! seven fits of a 47,340 s sea log take 0.15 s); the replays run side by side (rayon), a batch
-//! of rows at a time.
+//! seven fits together take about as long as one `estimate` of the log: docs/interface.md); the
+//! replays run side by side (rayon), a batch of rows at a time.
 //!
 //! # The evidence: the unexplained share each fit leaves
 //! Each fit's post-fit residual `z - H x` of its four correlation channels
@@ -19,8 +19,8 @@
 //! errors' sign, a phase their mix), but not as the platform angle turns at the Earth rate: the
 //! misfit grows with the angle's span, so the later half of the log holds it at its largest, and
 //! the first periods, which hold the filter's own settling, are left out. The median, not the
-//! mean: a turn's transient lifts a few periods, not the log (with the mean, sea logs with turns
-//! heeling 3 deg were undecided; with the median they are told, docs/interface.md).
+//! mean: a turn's transient lifts a few periods, not the log (sea logs with turns heeling 3 deg
+//! are told: docs/interface.md).
 //!
 //! The **measurement power** is the same of the measurement `z` itself, and the decision compares
 //! the **unexplained share**, the residual power over the measurement power, among the fits that
