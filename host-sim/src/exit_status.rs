@@ -6,7 +6,8 @@
 //! | 1 | failed (the reason on standard error): a file cannot be read or written, a log refused (bad header, `--strict`, time stamps that make no sense), an option out of range; no output is replaced |
 //! | 2 | the command line cannot be parsed (clap's usage error) |
 //! | 3 | no row of the log could be read (every row unreadable, or none); nothing written |
-//! | 4 | rows were read but no estimate was reached by the end of the log (the reason on standard error); the estimates and the report are written |
+//! | 4 | rows were read but no estimate was reached by the end of the log (the reason on standard error); the estimates and the report are written; `commission`: its fits too close to tell (or none reached an estimate) |
+//! | 5 | `commission`: a variant of the log's conventions fits better than the log as it is |
 //!
 //! The text of [`HELP`] goes into `--help`; `docs/log-format.md` has the same table.
 
@@ -18,7 +19,9 @@ pub const HELP: &str = "Exit status:
   1  failed (reason on standard error); no output replaced
   2  the command line cannot be parsed
   3  no row of the log could be read; nothing written
-  4  rows read but no estimate reached (reason on standard error); outputs written";
+  4  rows read but no estimate reached (reason on standard error); outputs written;
+     commission: the fits too close to tell
+  5  commission: a variant of the log's conventions fits better than the log as it is";
 
 /// A run that ended without an estimate: not a failure of the tool, but a script must tell it
 /// from a run with one.
@@ -30,6 +33,12 @@ pub enum RunEnd {
     /// Rows were read, but the estimator reached no estimate.
     #[error("no estimate: {reason}")]
     NoEstimate { reason: String },
+    /// `commission`: the log's fits cannot tell its conventions (too close, or no fit).
+    #[error("conventions undecided: {reason}")]
+    Undecided { reason: String },
+    /// `commission`: a variant of the log's conventions fits better than the log as it is.
+    #[error("a variant of the log's conventions fits better than the log as it is: {variants}")]
+    VariantFitsBetter { variants: String },
 }
 
 impl RunEnd {
@@ -49,7 +58,8 @@ impl RunEnd {
     pub fn status(&self) -> i32 {
         match self {
             RunEnd::NothingRead { .. } => 3,
-            RunEnd::NoEstimate { .. } => 4,
+            RunEnd::NoEstimate { .. } | RunEnd::Undecided { .. } => 4,
+            RunEnd::VariantFitsBetter { .. } => 5,
         }
     }
 }
@@ -82,7 +92,11 @@ pub fn report(error: &anyhow::Error) -> (String, i32) {
     let text = message(error);
     match error.downcast_ref::<RunEnd>() {
         // Not an error: the outputs are written; the reason is told as it is.
-        Some(end @ RunEnd::NoEstimate { .. }) => (text, end.status()),
+        Some(
+            end @ (RunEnd::NoEstimate { .. }
+            | RunEnd::Undecided { .. }
+            | RunEnd::VariantFitsBetter { .. }),
+        ) => (text, end.status()),
         Some(end) => (format!("error: {text}"), end.status()),
         None => (format!("error: {text}"), 1),
     }

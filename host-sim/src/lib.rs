@@ -1,6 +1,7 @@
 //! host-sim: the std side of the project. Generates scenarios, replays logs through the same
 //! `estimator-core` the firmware runs, and reports.
 pub mod cli_args;
+pub mod commission;
 pub mod compare;
 pub mod estimates_csv;
 pub mod exit_status;

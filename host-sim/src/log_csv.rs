@@ -502,8 +502,10 @@ impl<R: Read> Iterator for LogReader<R> {
     }
 }
 
-/// Rows parsed ahead by [`read_ahead`]'s thread, per batch.
-const READ_AHEAD_BATCH: usize = 4096;
+/// Rows parsed ahead by [`read_ahead`]'s thread, per batch: a consumer that stops at the end of
+/// a batch of this many items (or of a divisor of it) never waits on rows the reader has not yet
+/// handed over.
+pub const READ_AHEAD_BATCH: usize = 4096;
 /// Batches that may wait in [`read_ahead`]'s channel.
 const READ_AHEAD_DEPTH: usize = 4;
 

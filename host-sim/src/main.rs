@@ -61,6 +61,25 @@ enum Command {
     /// stalls a save causes and the flash life.
     #[command(after_help = EXIT_HELP)]
     FlashLife(host_sim::flash_life::FlashLifeArgs),
+    /// Whether a log's conventions fit the model of eq (2): fits the log as it is and under each
+    /// variant of its conventions (rotation, platform, roll or pitch negated, roll and pitch
+    /// exchanged, rotation in radians) and tells which fits best, with the residual power of each.
+    /// docs/interface.md.
+    #[command(after_help = host_sim::commission::HELP)]
+    Commission(CommissionArgs),
+}
+
+#[derive(clap::Args, Debug)]
+struct CommissionArgs {
+    /// Attitude log (CSV, plain or gzip, `-` for standard input; format: docs/log-format.md).
+    log: PathBuf,
+    /// Refuse the log at its first unreadable row (default: skip it, count it, report its line).
+    #[arg(long)]
+    strict: bool,
+    #[command(flatten)]
+    tuning: TuningArgs,
+    #[command(flatten)]
+    timing: TimingArgs,
 }
 
 #[derive(clap::Args, Debug)]
@@ -328,6 +347,7 @@ fn main() {
         Command::Compare(a) => cmd_compare(a),
         Command::Stream(a) => host_sim::stream::run(a),
         Command::FlashLife(a) => host_sim::flash_life::run(a),
+        Command::Commission(a) => cmd_commission(a),
     };
     if let Err(e) = result {
         // The reader went away: stop quietly, as command-line tools do.
@@ -370,6 +390,24 @@ fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
 /// Tells each unreadable row skipped (the first few) on standard error.
 fn warn_row(e: &LogError) {
     eprintln!("warning: {e} (row skipped)");
+}
+
+fn cmd_commission(a: &CommissionArgs) -> anyhow::Result<()> {
+    use host_sim::commission::{fit_variants, format_report, run_end, verdict, Variant};
+    a.timing.check()?;
+    let config = a.timing.pin(a.tuning.checked_config(Method::Windowed)?);
+    let fits = fit_variants(&a.log, config, a.strict, &Variant::ALL)?;
+    if let Some(as_is) = fits.first() {
+        for e in &as_is.replay.unreadable.first {
+            warn_row(e);
+        }
+    }
+    let verdict = verdict(&fits);
+    let mut out = std::io::stdout().lock();
+    write!(out, "{}", format_report(&log_name(&a.log), &fits, &verdict))?;
+    out.flush()?;
+    run_end(&fits, &verdict)?;
+    Ok(())
 }
 
 fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {

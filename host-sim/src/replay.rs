@@ -60,15 +60,16 @@ pub enum ReplayError {
     Checkpoint { time_s: f64, message: String },
 }
 
-/// Checkpoints the estimator, drops it and restores a fresh one from the bytes.
-fn restart(est: HostEstimator, time_s: f64) -> Result<HostEstimator, ReplayError> {
+/// Checkpoints the estimator and restores a fresh one from the bytes (which the caller puts in its
+/// place, dropping the old one).
+fn restart(est: &HostEstimator, time_s: f64) -> Result<HostEstimator, ReplayError> {
     let fail = |e: estimator_core::checkpoint::CheckpointError| ReplayError::Checkpoint {
         time_s,
         message: e.to_string(),
     };
     let mut buf = vec![0u8; HostEstimator::CHECKPOINT_LEN];
     let n = est.checkpoint(&mut buf).map_err(fail)?;
-    // `est` was moved in and is gone after this function: only the bytes carry the state.
+    // Only the bytes carry the state into the new estimator.
     HostEstimator::from_checkpoint(&buf[..n]).map_err(fail)
 }
 
@@ -242,12 +243,12 @@ where
 /// stops the replay before any estimate). After the first row at or after each of `restart_at_s`
 /// (ascending) the estimator is checkpointed, dropped and restored from the bytes: a power cut
 /// right after a save. The estimates go on from the checkpoint's while the window refills (see
-/// `estimator_core::checkpoint`).
+/// `estimator_core::checkpoint`). [`Replayer`] does the same a row at a time.
 pub fn replay_each<I, F>(
     rows: I,
     config: Config,
     restart_at_s: &[f64],
-    mut filter: RowFilter,
+    filter: RowFilter,
     warn: &mut dyn FnMut(&LogError),
     mut each: F,
 ) -> Result<Replay, ReplayError>
@@ -255,54 +256,109 @@ where
     I: IntoIterator<Item = Result<LogLine, LogError>>,
     F: FnMut(&StepView) -> Result<(), ReplayError>,
 {
-    let mut est = HostEstimator::new(config).map_err(ReplayError::Config)?;
-    let mut next_restart = 0;
-    let mut count = 0u64;
-    let mut final_status = None;
-    let mut error_changes = Vec::new();
-    let mut interval_check = IntervalCheck::new(config.sample_interval_s);
-    let mut grid = GridFollower::new(&config);
+    let mut replayer = Replayer::new(config, restart_at_s, filter)?;
     for item in rows {
-        let Some(line) = filter.admit(item, warn)? else {
-            continue;
+        replayer.push(item, warn, &mut each)?;
+    }
+    Ok(replayer.finish())
+}
+
+/// [`replay_each`] a row at a time, for a caller that hands the same rows to several replays.
+pub struct Replayer<'a> {
+    est: HostEstimator,
+    restart_at_s: &'a [f64],
+    next_restart: usize,
+    count: u64,
+    final_status: Option<estimator_core::Status>,
+    error_changes: Vec<ErrorChange>,
+    interval_check: IntervalCheck,
+    grid: GridFollower,
+    filter: RowFilter,
+}
+
+impl<'a> Replayer<'a> {
+    /// A fresh estimator of `config`; `restart_at_s` and `filter` as for [`replay_each`].
+    pub fn new(
+        config: Config,
+        restart_at_s: &'a [f64],
+        filter: RowFilter,
+    ) -> Result<Replayer<'a>, ReplayError> {
+        Ok(Replayer {
+            est: HostEstimator::new(config).map_err(ReplayError::Config)?,
+            restart_at_s,
+            next_restart: 0,
+            count: 0,
+            final_status: None,
+            error_changes: Vec::new(),
+            interval_check: IntervalCheck::new(config.sample_interval_s),
+            grid: GridFollower::new(&config),
+            filter,
+        })
+    }
+
+    /// One item of the log: stepped and handed to `each`, or skipped (unreadable, `warn` told),
+    /// or the error that ends the replay.
+    pub fn push<F>(
+        &mut self,
+        item: Result<LogLine, LogError>,
+        warn: &mut dyn FnMut(&LogError),
+        each: &mut F,
+    ) -> Result<(), ReplayError>
+    where
+        F: FnMut(&StepView) -> Result<(), ReplayError>,
+    {
+        let Some(line) = self.filter.admit(item, warn)? else {
+            return Ok(());
         };
-        interval_check.observe(line.row.time_s)?;
-        let result = est.step(&sample_of(&line.row));
-        count += 1;
+        self.interval_check.observe(line.row.time_s)?;
+        let result = self.est.step(&sample_of(&line.row));
+        self.count += 1;
         if let Ok(out) = &result {
-            final_status = Some(out.status);
-            if let Some(change) = est.error_change().filter(|c| c.detected_s == out.time_s) {
-                error_changes.push(change);
+            self.final_status = Some(out.status);
+            if let Some(change) = self
+                .est
+                .error_change()
+                .filter(|c| c.detected_s == out.time_s)
+            {
+                self.error_changes.push(change);
             }
         }
-        let placement = grid.follow(line.row.time_s, &result);
+        let placement = self.grid.follow(line.row.time_s, &result);
         each(&StepView {
             line: &line,
             result: &result,
             placement,
-            estimator: &est,
+            estimator: &self.est,
         })?;
         let mut due = false;
-        while next_restart < restart_at_s.len() && line.row.time_s >= restart_at_s[next_restart] {
-            next_restart += 1;
+        while self.next_restart < self.restart_at_s.len()
+            && line.row.time_s >= self.restart_at_s[self.next_restart]
+        {
+            self.next_restart += 1;
             due = true;
         }
         if due {
-            est = restart(est, line.row.time_s)?;
+            self.est = restart(&self.est, line.row.time_s)?;
+        }
+        Ok(())
+    }
+
+    /// What the replay produced.
+    pub fn finish(self) -> Replay {
+        let est = &self.est;
+        Replay {
+            rows: self.count,
+            rejected: est.rejected(),
+            counters: est.counters(),
+            final_estimate: est.estimate(),
+            final_status: self.final_status,
+            sample_interval_s: est.sample_interval_s(),
+            rotation: est.rotation(),
+            holdup: est.progress(),
+            error_changes: self.error_changes,
+            unreadable: self.filter,
         }
     }
-    Ok(Replay {
-        rows: count,
-        rejected: est.rejected(),
-        counters: est.counters(),
-        final_estimate: est.estimate(),
-        final_status,
-        sample_interval_s: est.sample_interval_s(),
-        rotation: est.rotation(),
-        holdup: est.progress(),
-        error_changes,
-        unreadable: filter,
-    })
 }
 
 #[cfg(test)]
