@@ -242,6 +242,30 @@ impl<'b, F: NorFlash> CheckpointStore<'b, F> {
         Ok(())
     }
 
+    /// Appends `item` as it stands: a learned-errors record and an image of any build, or an image
+    /// alone ([`restore_item`] reads either). [`CheckpointStore::save`] builds the item from an
+    /// estimator; a tool that moves a store from one build to another, or a test that plays
+    /// another build, writes one directly. At most [`ITEM_BYTES`] bytes.
+    pub fn save_item(&mut self, item: &[u8]) -> Result<(), StoreError> {
+        let image = self
+            .buffers
+            .image
+            .get_mut(..item.len())
+            .ok_or(StoreError::Storage)?;
+        image.copy_from_slice(item);
+        let StoreBuffers {
+            item: buffer,
+            image,
+        } = &mut *self.buffers;
+        let saved = image.get(..item.len()).ok_or(StoreError::Storage)?;
+        block_on(
+            self.map
+                .store_item::<&[u8]>(buffer, &CHECKPOINT_KEY, &saved),
+        )?;
+        self.saved = self.saved.saturating_add(1);
+        Ok(())
+    }
+
     /// Appends an invalidation: once it returns, no image is left to restore, whatever power cut
     /// follows. On a flash error the older image may still be restored.
     pub fn invalidate(&mut self) -> Result<(), StoreError> {

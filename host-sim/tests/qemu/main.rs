@@ -12,6 +12,7 @@ mod qemu_port;
 mod qemu_power_cut;
 mod qemu_report;
 mod qemu_restart;
+mod qemu_software_update;
 mod qemu_stale_state;
 mod qemu_support;
 mod qemu_watchdog;
