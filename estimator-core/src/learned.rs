@@ -98,30 +98,33 @@ impl LearnedErrors {
     /// Reads a record of any version from the start of `bytes` (which may go on past it), and
     /// returns it with its length; nothing else is read.
     pub fn decode(bytes: &[u8]) -> Result<(LearnedErrors, usize), LearnedError> {
-        let head = bytes.get(..8).ok_or(LearnedError::TooShort)?;
-        if head[..4] != LEARNED_MAGIC {
+        let word = |o: usize| -> Option<[u8; 4]> { bytes.get(o..o + 4)?.try_into().ok() };
+        let head = word(0).zip(word(4)).ok_or(LearnedError::TooShort)?;
+        if head.0 != LEARNED_MAGIC {
             return Err(LearnedError::NotARecord);
         }
-        let version = u16::from_le_bytes([head[4], head[5]]);
-        let len = usize::from(u16::from_le_bytes([head[6], head[7]]));
+        let version = u16::from_le_bytes([head.1[0], head.1[1]]);
+        let len = usize::from(u16::from_le_bytes([head.1[2], head.1[3]]));
         if version == 0 || len < LEARNED_LEN {
             return Err(LearnedError::UnknownLayout);
         }
-        let record = bytes.get(..len).ok_or(LearnedError::TooShort)?;
-        let (body, crc) = record.split_at(len - 4);
-        if crc32(body) != u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]) {
+        let body = bytes.get(..len - 4).ok_or(LearnedError::TooShort)?;
+        let crc = word(len - 4).ok_or(LearnedError::TooShort)?;
+        if crc32(body) != u32::from_le_bytes(crc) {
             return Err(LearnedError::Crc);
         }
-        let f32_at =
-            |o: usize| f32::from_le_bytes([body[o], body[o + 1], body[o + 2], body[o + 3]]);
-        let mut time = [0u8; 8];
-        time.copy_from_slice(&body[8..16]);
+        // Every word below lies within the CRC-checked body (`len` is at least `LEARNED_LEN`).
+        let f32_at = |o: usize| f32::from_le_bytes(word(o).unwrap_or([0xFF; 4]));
+        let (lo, hi) = (word(8).unwrap_or_default(), word(12).unwrap_or_default());
+        let time_s = f64::from_bits(
+            u64::from(u32::from_le_bytes(lo)) | (u64::from(u32::from_le_bytes(hi)) << 32),
+        );
         let learned = LearnedErrors {
-            time_s: f64::from_le_bytes(time),
-            x_rad: core::array::from_fn(|i| f32_at(16 + 4 * i)),
-            sigma_rad: core::array::from_fn(|i| f32_at(32 + 4 * i)),
+            time_s,
+            x_rad: [f32_at(16), f32_at(20), f32_at(24), f32_at(28)],
+            sigma_rad: [f32_at(32), f32_at(36), f32_at(40), f32_at(44)],
         };
-        let valid = learned.time_s.is_finite()
+        let valid = time_s.is_finite()
             && learned.x_rad.iter().all(|x| x.abs() <= 1.0)
             && learned.sigma_rad.iter().all(|s| *s > 0.0 && s.is_finite());
         if !valid {

@@ -55,14 +55,8 @@ impl Persistence {
                 found,
                 expected
             ),
-            Ok(Restored::Learned { time_s, refused: CheckpointError::Version { found, expected } }) => defmt::warn!(
-                "checkpoint of format version {=u16} refused (this firmware reads {=u16}): started from the learned errors of {=f64} s",
-                found,
-                expected,
-                time_s
-            ),
             Ok(Restored::Learned { time_s, .. }) => defmt::warn!(
-                "checkpoint of another build refused: started from the learned errors of {=f64} s",
+                "checkpoint of another version refused: started from the learned errors of {=f64} s",
                 time_s
             ),
             Ok(Restored::Refused(_)) => defmt::warn!("checkpoint refused by the core (damaged or foreign), starting afresh"),
