@@ -339,6 +339,14 @@ typedef struct RinsCounters {
   uint32_t window_restarts;
   // Clock jumps and steps backwards in the time stamps.
   uint32_t clock_steps;
+  // Samples rejected, by reason, in the order of the `RINS_STATUS_REJECTED_...` codes (index =
+  // code - 128): non-finite, latitude out of range, angle out of range, time not increasing,
+  // irregular time step.
+  uint32_t rejected_by_reason[5];
+  // Changes of the installation errors declared (`RINS_STATUS_ERRORS_CHANGED`).
+  uint32_t changes_detected;
+  // Samples whose status was `RINS_STATUS_MODEL_MISMATCH`.
+  uint32_t mismatch_samples;
 } RinsCounters;
 
 #ifdef __cplusplus

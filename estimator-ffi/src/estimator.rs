@@ -242,6 +242,14 @@ pub struct RinsCounters {
     pub window_restarts: u32,
     /// Clock jumps and steps backwards in the time stamps.
     pub clock_steps: u32,
+    /// Samples rejected, by reason, in the order of the `RINS_STATUS_REJECTED_...` codes (index =
+    /// code - 128): non-finite, latitude out of range, angle out of range, time not increasing,
+    /// irregular time step.
+    pub rejected_by_reason: [u32; 5],
+    /// Changes of the installation errors declared (`RINS_STATUS_ERRORS_CHANGED`).
+    pub changes_detected: u32,
+    /// Samples whose status was `RINS_STATUS_MODEL_MISMATCH`.
+    pub mismatch_samples: u32,
 }
 
 /// The estimator's counters into `*counters`.
@@ -266,6 +274,9 @@ pub unsafe extern "C" fn rins_estimator_counters(
         filled: c.filled,
         window_restarts: c.window_restarts,
         clock_steps: c.clock_steps,
+        rejected_by_reason: est.rejected().0,
+        changes_detected: c.changes_detected,
+        mismatch_samples: c.mismatch_samples,
     };
     // SAFETY: checked; writable by the caller's promise.
     code(unsafe { pointer::write(counters, value) })

@@ -395,6 +395,7 @@ fn a_rejected_sample_says_why_and_changes_nothing() {
         RinsError::Ok
     );
     assert_eq!((counters.accepted, counters.rejected), (1501, 5));
+    assert_eq!(counters.rejected_by_reason.iter().sum::<u32>(), 5);
 }
 
 #[test]
@@ -519,6 +520,8 @@ fn reset_forgets_what_was_learnt_and_keeps_the_rejections() {
         counters,
         RinsCounters {
             rejected: 1,
+            // The one rejection, a non-finite field, by its reason (index = code - 128).
+            rejected_by_reason: [1, 0, 0, 0, 0],
             ..RinsCounters::default()
         }
     );

@@ -809,6 +809,7 @@ mod tests {
                 holdup: None,
                 error_changes: vec![],
                 unreadable: RowFilter::new(false),
+                health: estimator_core::Health::NONE,
             },
             periods: 8,
             residual_power_arcsec2: unexplained,

@@ -519,6 +519,7 @@ fn print_summary(
         r.final_status
             .map_or("none (no row accepted)", |s| s.name())
     )?;
+    writeln!(w, "  {}", host_sim::replay::describe_health(&r.health))?;
     match (r.final_estimate, r.holdup) {
         (Some(e), holdup) => {
             for i in 0..4 {

@@ -42,6 +42,8 @@ pub struct Replay {
     pub error_changes: Vec<ErrorChange>,
     /// Rows that could not be read and were skipped (with the first few, for the report).
     pub unreadable: RowFilter,
+    /// The latched alarms and the residuals' level at the end.
+    pub health: estimator_core::Health,
 }
 
 /// Why a replay stopped.
@@ -263,6 +265,36 @@ where
     Ok(replayer.finish())
 }
 
+/// One line of the latched alarms and the residuals' level (the estimates CSV's last columns):
+/// `alarms: 1 change declared (the last at 12000 s), 2 window restarts, 0 rejected, 120 s in
+/// model_mismatch; residual level pitch 0.041 / roll 0.073 arcsec, noise scale 1.00 / 1.25`.
+pub fn describe_health(h: &estimator_core::Health) -> String {
+    let plural = |n: u32, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+    let mut s = format!(
+        "alarms: {}",
+        plural(h.changes_detected, "change declared", "changes declared")
+    );
+    if let Some(t) = h.last_change_s {
+        s.push_str(&format!(" (the last at {t} s)"));
+    }
+    s.push_str(&format!(
+        ", {}, {} rejected, {} s in model_mismatch",
+        plural(h.window_restarts, "window restart", "window restarts"),
+        h.rejected,
+        h.mismatch_s
+    ));
+    if let (Some(r), Some(k)) = (h.residual_rad, h.noise_scale) {
+        s.push_str(&format!(
+            "; residual level pitch {:.3} / roll {:.3} arcsec, noise scale {:.2} / {:.2}",
+            estimator_core::units::rad_to_arcsec(f64::from(r[0])),
+            estimator_core::units::rad_to_arcsec(f64::from(r[1])),
+            k[0],
+            k[1]
+        ));
+    }
+    s
+}
+
 /// [`replay_each`] a row at a time, for a caller that hands the same rows to several replays.
 pub struct Replayer<'a> {
     est: HostEstimator,
@@ -357,6 +389,7 @@ impl<'a> Replayer<'a> {
             holdup: est.progress(),
             error_changes: self.error_changes,
             unreadable: self.filter,
+            health: est.health(),
         }
     }
 }

@@ -197,7 +197,7 @@ fn the_alarm_columns_latch_and_agree_with_the_rows() {
         path_str(&log),
     ]);
     let est = dir.join("heel.est.csv");
-    host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&est)]);
+    let summary = host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&est)]);
     let text = std::fs::read_to_string(&est).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -231,5 +231,10 @@ fn the_alarm_columns_latch_and_agree_with_the_rows() {
         last_restarts >= 2,
         "two outages restart the window: {last_restarts}"
     );
+    // The summary says the same.
+    let alarms = format!(
+        "alarms: 0 changes declared, {last_restarts} window restarts, 0 rejected, {in_mismatch} s in model_mismatch; residual level pitch "
+    );
+    assert!(summary.contains(&alarms), "{summary}");
     let _ = std::fs::remove_dir_all(&dir);
 }
