@@ -10,7 +10,13 @@
 //!   86400; default 300), written to `OUT_DIR/checkpoint_interval.rs` for the library's
 //!   `checkpoint_store.rs` (for the host too: `host-sim flash-life` takes its default from it);
 //! - the STM32F405's crystal: `RINS_HSE_HZ` (the HSE frequency in Hz, 4 to 26 MHz as the part
-//!   allows; default 8 MHz), written to `OUT_DIR/board_clock.rs` for `board/stm32f405.rs`.
+//!   allows; default 8 MHz), written to `OUT_DIR/board_clock.rs` for `board/stm32f405.rs`;
+//! - the estimator's configuration beyond the defaults, written to `OUT_DIR/estimator_config.rs`
+//!   for the library's `estimator_config.rs`: `RINS_ANGLE_LATENCY_MS` (how long before each
+//!   sample's time its rotation angle was read, whole milliseconds 0 to 1000; default 0) and known
+//!   values of the installation errors, `RINS_PRIOR_ARCSEC` (`x1,x2,x3,x4`) with
+//!   `RINS_PRIOR_SIGMA_ARCSEC` (one 1-sigma or four, each above 0 and at most 1000 arcsec; both or
+//!   neither).
 use std::path::PathBuf;
 
 /// The checkpoint interval's environment variable, its default and its bounds, s.
@@ -42,8 +48,77 @@ fn setting(var: &str, default: u32, range: std::ops::RangeInclusive<u32>, what: 
     }
 }
 
+/// The comma-separated numbers in `var` (`None` if unset); fails the build on anything else.
+fn numbers(var: &str) -> Option<Vec<f64>> {
+    println!("cargo:rerun-if-env-changed={var}");
+    let value = std::env::var_os(var)?;
+    let parsed: Option<Vec<f64>> = value.to_str().and_then(|v| {
+        v.split(',')
+            .map(|x| x.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+            .collect()
+    });
+    match parsed {
+        Some(v) => Some(v),
+        None => {
+            eprintln!("{var}={value:?}: comma-separated finite numbers expected");
+            std::process::exit(1);
+        }
+    }
+}
+
+/// The estimator's settings beyond the defaults (see the module doc), as Rust source.
+fn estimator_config() -> String {
+    let latency_ms = setting(
+        "RINS_ANGLE_LATENCY_MS",
+        0,
+        0..=1000,
+        "the rotation angle's latency, milliseconds,",
+    );
+    let prior = match (
+        numbers("RINS_PRIOR_ARCSEC"),
+        numbers("RINS_PRIOR_SIGMA_ARCSEC"),
+    ) {
+        (None, None) => "None".to_string(),
+        (Some(x), Some(s)) => {
+            let sigma = match s.as_slice() {
+                [one] => vec![*one; 4],
+                _ => s.clone(),
+            };
+            let ok = x.len() == 4
+                && x.iter().all(|v| v.abs() <= 200_000.0)
+                && sigma.len() == 4
+                && sigma.iter().all(|v| *v > 0.0 && *v <= 1000.0);
+            if !ok {
+                eprintln!(
+                    "RINS_PRIOR_ARCSEC={x:?} RINS_PRIOR_SIGMA_ARCSEC={s:?}: four values x1..x4 in arcsec and one 1-sigma or four, each above 0 and at most 1000 arcsec"
+                );
+                std::process::exit(1);
+            }
+            format!(
+                "Some(([{:?}, {:?}, {:?}, {:?}], [{:?}, {:?}, {:?}, {:?}]))",
+                x[0], x[1], x[2], x[3], sigma[0], sigma[1], sigma[2], sigma[3]
+            )
+        }
+        _ => {
+            eprintln!(
+                "RINS_PRIOR_ARCSEC and RINS_PRIOR_SIGMA_ARCSEC go together: set both or neither"
+            );
+            std::process::exit(1);
+        }
+    };
+    format!(
+        "/// How long before each sample's time its rotation angle was read, s (`RINS_ANGLE_LATENCY_MS` at build time, default 0).\n\
+         pub const ANGLE_LATENCY_S: f64 = {:?};\n\
+         /// Known values of x1..x4 and their 1-sigma, arcsec (`RINS_PRIOR_ARCSEC`, `RINS_PRIOR_SIGMA_ARCSEC` at build time; default none).\n\
+         pub const PRIOR_ARCSEC: Option<([f64; 4], [f64; 4])> = {prior};\n",
+        f64::from(latency_ms) / 1000.0
+    )
+}
+
 fn main() {
     let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    std::fs::write(out.join("estimator_config.rs"), estimator_config())
+        .expect("write estimator_config.rs");
     let interval_s = setting(
         INTERVAL_VAR,
         INTERVAL_DEFAULT_S,

@@ -34,6 +34,7 @@ extern crate std;
 
 pub mod checkpoint_store;
 pub mod dma_ring;
+pub mod estimator_config;
 pub mod flash_layout;
 pub mod interrupt_ring;
 pub mod request_receiver;

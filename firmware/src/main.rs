@@ -40,7 +40,7 @@ use core::mem::MaybeUninit;
 #[cfg(target_os = "none")]
 use cortex_m_rt::entry;
 #[cfg(target_os = "none")]
-use estimator_core::{Config, Estimator};
+use estimator_core::Estimator;
 #[cfg(all(target_os = "none", feature = "checkpoint"))]
 use firmware::checkpoint_store::{StoreBuffers, CHECKPOINT_INTERVAL_S};
 #[cfg(all(target_os = "none", feature = "test-hang"))]
@@ -79,8 +79,8 @@ fn main() -> ! {
     static mut ESTIMATOR: MaybeUninit<Estimator> = MaybeUninit::uninit();
     // SAFETY: `main` runs once and is the only code that names ESTIMATOR.
     let slot = unsafe { &mut *core::ptr::addr_of_mut!(ESTIMATOR) };
-    let Ok(estimator) = Estimator::init_in(slot, Config::default()) else {
-        defmt::error!("default configuration rejected by the core");
+    let Ok(estimator) = Estimator::init_in(slot, firmware::estimator_config::config()) else {
+        defmt::error!("the build's configuration rejected by the core");
         board::fatal()
     };
     // The checkpoint store on the board's flash, and the newest checkpoint restored from it. Its

@@ -321,9 +321,12 @@ pub struct StreamSummary {
 }
 
 /// Whether the firmware holds an estimator state: samples accepted since its last reset, or a
-/// checkpoint (restored at boot or saved since).
+/// checkpoint (restored at boot or saved since). An estimate alone, before any sample and without
+/// a checkpoint, is known values the firmware starts from (set at build time, or the learned
+/// errors of a checkpoint of another version): a log streamed into it starts from them, as
+/// `host-sim estimate --prior-arcsec` does.
 pub fn holds_state(s: &StatusReply) -> bool {
-    s.accepted > 0 || s.checkpoint_time_s.is_some() || s.estimate.is_some()
+    s.accepted > 0 || s.checkpoint_time_s.is_some()
 }
 
 fn describe_state(s: &StatusReply) -> String {

@@ -6,6 +6,7 @@
 
 mod qemu_budgets;
 mod qemu_checkpoint_interval;
+mod qemu_configured;
 mod qemu_e2e;
 mod qemu_faults;
 mod qemu_port;
