@@ -4,6 +4,7 @@ use crate::estimates_csv::EstimatesWriter;
 use crate::log_csv::{LogError, LogLine, RowFilter};
 use crate::scenario::Row;
 use crate::time_stamps::{IntervalCheck, IntervalError};
+use estimator_core::binning::{BinIntervalError, Binner};
 use estimator_core::time_grid::{Placement, TimeGrid};
 use estimator_core::{
     Config, ConfigError, Counters, ErrorChange, Estimator, Holdup, Output, Real, RejectCounts,
@@ -25,7 +26,7 @@ pub struct Step {
 /// What a replay produced, besides the rows it handed on (nothing per row is kept).
 #[derive(Clone, Debug)]
 pub struct Replay {
-    /// Rows stepped (accepted or rejected by the core).
+    /// Rows stepped (accepted or rejected by the core); with binning, the bins stepped.
     pub rows: u64,
     pub rejected: RejectCounts,
     /// Samples accepted, lost samples filled, restarts of the moving average, clock steps.
@@ -42,6 +43,46 @@ pub struct Replay {
     pub error_changes: Vec<ErrorChange>,
     /// Rows that could not be read and were skipped (with the first few, for the report).
     pub unreadable: RowFilter,
+    /// What binning did, when the rows were binned (`--bin-interval-s`).
+    pub binning: Option<BinningSummary>,
+}
+
+/// What binning did to a log's rows (`--bin-interval-s`, [`estimator_core::binning`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BinningSummary {
+    /// The bin interval, s.
+    pub interval_s: f64,
+    /// Rows read and given to the binner.
+    pub rows: u64,
+    /// Bins averaged and stepped.
+    pub bins: u64,
+    /// Rows the binner refused (non-finite, out of range, time not increasing), by reason: they
+    /// are in no bin and have no estimates row.
+    pub refused: RejectCounts,
+}
+
+impl BinningSummary {
+    /// For people: `400000 rows averaged into 2000 bins of 1 s (0 rows refused)`, the reasons of
+    /// refused rows named.
+    pub fn describe(&self) -> String {
+        let refused = self.refused.total();
+        let reasons = if refused == 0 {
+            String::new()
+        } else {
+            let named: Vec<String> = estimator_core::RejectReason::ALL
+                .iter()
+                .filter(|r| self.refused.of(**r) > 0)
+                .map(|r| format!("{} {}", r.name(), self.refused.of(*r)))
+                .collect();
+            format!(": {}", named.join(", "))
+        };
+        format!(
+            "{} rows averaged into {} bins of {} s ({refused} rows refused{reasons})",
+            self.rows,
+            self.bins,
+            significant_4(self.interval_s)
+        )
+    }
 }
 
 /// Why a replay stopped.
@@ -51,6 +92,8 @@ pub enum ReplayError {
     Log(#[from] LogError),
     #[error("invalid estimator configuration: {0}")]
     Config(ConfigError),
+    #[error("invalid --bin-interval-s: {0}")]
+    BinInterval(BinIntervalError),
     #[error("cannot write estimates")]
     Write(#[from] std::io::Error),
     /// The log's time stamps step by an interval that makes no sense.
@@ -61,15 +104,16 @@ pub enum ReplayError {
 }
 
 /// Checkpoints the estimator, drops it and restores a fresh one from the bytes.
-fn restart(est: HostEstimator, time_s: f64) -> Result<HostEstimator, ReplayError> {
+fn restart(est: &mut HostEstimator, time_s: f64) -> Result<(), ReplayError> {
     let fail = |e: estimator_core::checkpoint::CheckpointError| ReplayError::Checkpoint {
         time_s,
         message: e.to_string(),
     };
     let mut buf = vec![0u8; HostEstimator::CHECKPOINT_LEN];
     let n = est.checkpoint(&mut buf).map_err(fail)?;
-    // `est` was moved in and is gone after this function: only the bytes carry the state.
-    HostEstimator::from_checkpoint(&buf[..n]).map_err(fail)
+    // The old estimator is dropped by the assignment: only the bytes carry the state.
+    *est = HostEstimator::from_checkpoint(&buf[..n]).map_err(fail)?;
+    Ok(())
 }
 
 /// A learned value for people, to 4 significant digits (the learned values carry the recorder's
@@ -118,6 +162,20 @@ pub fn describe_error_change(c: &ErrorChange) -> String {
         c.seen_since_s,
         which.join(", ")
     )
+}
+
+/// A sample as a log row, in degrees (a binned sample's row, for the reports).
+pub fn row_of(sample: &Sample) -> Row {
+    let deg = |rad: Real| (rad as f64).to_degrees();
+    Row {
+        time_s: sample.time_s,
+        rotation_deg: deg(sample.rotation_rad),
+        platform_deg: deg(sample.platform_rad),
+        latitude_deg: deg(sample.latitude_rad),
+        heading_deg: deg(sample.attitude.heading_rad),
+        roll_deg: deg(sample.attitude.roll_rad),
+        pitch_deg: deg(sample.attitude.pitch_rad),
+    }
 }
 
 /// The core's sample for a log row.
@@ -223,7 +281,7 @@ where
     replay_each(
         rows,
         config,
-        &[],
+        &ReplayOptions::default(),
         RowFilter::new(true),
         &mut |_| {},
         |view| {
@@ -235,18 +293,100 @@ where
     )
 }
 
+/// How [`replay_each`] takes the rows, besides the estimator's configuration.
+#[derive(Clone, Debug, Default)]
+pub struct ReplayOptions {
+    /// Checkpoint, drop and restore the estimator after the first row at or after each of these
+    /// times (ascending).
+    pub restart_at_s: Vec<f64>,
+    /// Average the rows into bins of this interval, s, and step the estimator once a bin
+    /// ([`estimator_core::binning`]); the estimator's sample interval is then pinned to it.
+    pub bin_interval_s: Option<f64>,
+}
+
+/// The estimator and what a replay keeps of its steps.
+struct Stepper {
+    est: HostEstimator,
+    next_restart: usize,
+    count: u64,
+    final_status: Option<estimator_core::Status>,
+    error_changes: Vec<ErrorChange>,
+    grid: GridFollower,
+}
+
+impl Stepper {
+    /// Steps `sample` (the sample of `line`, or its bin's average), hands the result to `each`
+    /// and restarts the estimator from a checkpoint when one of `restart_at_s` is due.
+    fn step<F>(
+        &mut self,
+        line: &LogLine,
+        sample: &Sample,
+        restart_at_s: &[f64],
+        each: &mut F,
+    ) -> Result<(), ReplayError>
+    where
+        F: FnMut(&StepView) -> Result<(), ReplayError>,
+    {
+        let result = self.est.step(sample);
+        self.count += 1;
+        if let Ok(out) = &result {
+            self.final_status = Some(out.status);
+            if let Some(change) = self
+                .est
+                .error_change()
+                .filter(|c| c.detected_s == out.time_s)
+            {
+                self.error_changes.push(change);
+            }
+        }
+        let placement = self.grid.follow(line.row.time_s, &result);
+        each(&StepView {
+            line,
+            result: &result,
+            placement,
+            estimator: &self.est,
+        })?;
+        let mut due = false;
+        while self.next_restart < restart_at_s.len()
+            && line.row.time_s >= restart_at_s[self.next_restart]
+        {
+            self.next_restart += 1;
+            due = true;
+        }
+        if due {
+            restart(&mut self.est, line.row.time_s)?;
+        }
+        Ok(())
+    }
+}
+
+/// A bin's average as the line the replay hands on: the averaged row, numbered with the bin's
+/// last line.
+fn binned_line(sample: &Sample, last_line: usize) -> LogLine {
+    LogLine {
+        line: last_line,
+        row: row_of(sample),
+    }
+}
+
 /// Steps the estimator through `rows` as they come and hands each row and its result to `each`
 /// (which writes it, reports it...); nothing per row is kept. Unreadable rows go through `filter`
 /// (skipped and counted, `warn` told; or refused when strict). The first stamps are checked
 /// ([`IntervalCheck`]: an interval that makes no sense for a RINS, or contradicts the pinned one,
-/// stops the replay before any estimate). After the first row at or after each of `restart_at_s`
-/// (ascending) the estimator is checkpointed, dropped and restored from the bytes: a power cut
-/// right after a save. The estimates go on from the checkpoint's while the window refills (see
-/// `estimator_core::checkpoint`).
+/// stops the replay before any estimate). After the first row at or after each of
+/// `options.restart_at_s` (ascending) the estimator is checkpointed, dropped and restored from the
+/// bytes: a power cut right after a save. The estimates go on from the checkpoint's while the
+/// window refills (see `estimator_core::checkpoint`).
+///
+/// With `options.bin_interval_s` the rows (at any rate up to 200 Hz) are averaged into bins of
+/// that interval ([`Binner`]) and the estimator, its interval pinned to the bins', steps once a
+/// bin, each bin's average handed to `each` as a row stamped at the bin's centre; the last bin is
+/// stepped at the end of the rows. A row the binner refuses is counted
+/// ([`BinningSummary::refused`]) and is in no bin.
 pub fn replay_each<I, F>(
     rows: I,
-    config: Config,
-    restart_at_s: &[f64],
+    mut config: Config,
+    options: &ReplayOptions,
     mut filter: RowFilter,
     warn: &mut dyn FnMut(&LogError),
     mut each: F,
@@ -255,53 +395,77 @@ where
     I: IntoIterator<Item = Result<LogLine, LogError>>,
     F: FnMut(&StepView) -> Result<(), ReplayError>,
 {
-    let mut est = HostEstimator::new(config).map_err(ReplayError::Config)?;
-    let mut next_restart = 0;
-    let mut count = 0u64;
-    let mut final_status = None;
-    let mut error_changes = Vec::new();
-    let mut interval_check = IntervalCheck::new(config.sample_interval_s);
-    let mut grid = GridFollower::new(&config);
+    let restart_at_s = &options.restart_at_s;
+    let mut binner = options
+        .bin_interval_s
+        .map(Binner::new)
+        .transpose()
+        .map_err(ReplayError::BinInterval)?;
+    let mut interval_check = match &binner {
+        Some(b) => {
+            config.sample_interval_s = Some(b.interval_s());
+            IntervalCheck::binned(b.interval_s())
+        }
+        None => IntervalCheck::new(config.sample_interval_s),
+    };
+    let mut stepper = Stepper {
+        est: HostEstimator::new(config).map_err(ReplayError::Config)?,
+        next_restart: 0,
+        count: 0,
+        final_status: None,
+        error_changes: Vec::new(),
+        grid: GridFollower::new(&config),
+    };
+    let mut binning = binner.as_ref().map(|b| BinningSummary {
+        interval_s: b.interval_s(),
+        rows: 0,
+        bins: 0,
+        refused: RejectCounts::ZERO,
+    });
+    // The line of the last row in the bin being filled.
+    let mut bin_last_line = 0;
     for item in rows {
         let Some(line) = filter.admit(item, warn)? else {
             continue;
         };
         interval_check.observe(line.row.time_s)?;
-        let result = est.step(&sample_of(&line.row));
-        count += 1;
-        if let Ok(out) = &result {
-            final_status = Some(out.status);
-            if let Some(change) = est.error_change().filter(|c| c.detected_s == out.time_s) {
-                error_changes.push(change);
+        let (Some(binner), Some(binning)) = (binner.as_mut(), binning.as_mut()) else {
+            stepper.step(&line, &sample_of(&line.row), restart_at_s, &mut each)?;
+            continue;
+        };
+        binning.rows += 1;
+        match binner.push(&sample_of(&line.row)) {
+            Err(e) => binning.refused.count(e.reason()),
+            Ok(done) => {
+                if let Some(average) = done {
+                    binning.bins += 1;
+                    let bin_line = binned_line(&average, bin_last_line);
+                    stepper.step(&bin_line, &average, restart_at_s, &mut each)?;
+                }
+                bin_last_line = line.line;
             }
         }
-        let placement = grid.follow(line.row.time_s, &result);
-        each(&StepView {
-            line: &line,
-            result: &result,
-            placement,
-            estimator: &est,
-        })?;
-        let mut due = false;
-        while next_restart < restart_at_s.len() && line.row.time_s >= restart_at_s[next_restart] {
-            next_restart += 1;
-            due = true;
-        }
-        if due {
-            est = restart(est, line.row.time_s)?;
-        }
     }
+    if let (Some(average), Some(binning)) =
+        (binner.as_mut().and_then(Binner::finish), binning.as_mut())
+    {
+        binning.bins += 1;
+        let bin_line = binned_line(&average, bin_last_line);
+        stepper.step(&bin_line, &average, restart_at_s, &mut each)?;
+    }
+    let est = &stepper.est;
     Ok(Replay {
-        rows: count,
+        rows: stepper.count,
         rejected: est.rejected(),
         counters: est.counters(),
         final_estimate: est.estimate(),
-        final_status,
+        final_status: stepper.final_status,
         sample_interval_s: est.sample_interval_s(),
         rotation: est.rotation(),
         holdup: est.progress(),
-        error_changes,
+        error_changes: stepper.error_changes,
         unreadable: filter,
+        binning,
     })
 }
 
