@@ -1,10 +1,11 @@
 //! Replays an attitude log through the core, row by row, writing the estimates CSV.
 
+use crate::binned_lines::{BinnedLines, BinningSummary};
 use crate::estimates_csv::EstimatesWriter;
 use crate::log_csv::{LogError, LogLine, RowFilter};
 use crate::scenario::Row;
 use crate::time_stamps::{IntervalCheck, IntervalError};
-use estimator_core::binning::{BinIntervalError, Binner};
+use estimator_core::binning::BinIntervalError;
 use estimator_core::time_grid::{Placement, TimeGrid};
 use estimator_core::{
     Config, ConfigError, Counters, ErrorChange, Estimator, Holdup, Output, Real, RejectCounts,
@@ -45,44 +46,6 @@ pub struct Replay {
     pub unreadable: RowFilter,
     /// What binning did, when the rows were binned (`--bin-interval-s`).
     pub binning: Option<BinningSummary>,
-}
-
-/// What binning did to a log's rows (`--bin-interval-s`, [`estimator_core::binning`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BinningSummary {
-    /// The bin interval, s.
-    pub interval_s: f64,
-    /// Rows read and given to the binner.
-    pub rows: u64,
-    /// Bins averaged and stepped.
-    pub bins: u64,
-    /// Rows the binner refused (non-finite, out of range, time not increasing), by reason: they
-    /// are in no bin and have no estimates row.
-    pub refused: RejectCounts,
-}
-
-impl BinningSummary {
-    /// For people: `400000 rows averaged into 2000 bins of 1 s (0 rows refused)`, the reasons of
-    /// refused rows named.
-    pub fn describe(&self) -> String {
-        let refused = self.refused.total();
-        let reasons = if refused == 0 {
-            String::new()
-        } else {
-            let named: Vec<String> = estimator_core::RejectReason::ALL
-                .iter()
-                .filter(|r| self.refused.of(**r) > 0)
-                .map(|r| format!("{} {}", r.name(), self.refused.of(*r)))
-                .collect();
-            format!(": {}", named.join(", "))
-        };
-        format!(
-            "{} rows averaged into {} bins of {} s ({refused} rows refused{reasons})",
-            self.rows,
-            self.bins,
-            significant_4(self.interval_s)
-        )
-    }
 }
 
 /// Why a replay stopped.
@@ -360,12 +323,25 @@ impl Stepper {
     }
 }
 
-/// A bin's average as the line the replay hands on: the averaged row, numbered with the bin's
-/// last line.
-fn binned_line(sample: &Sample, last_line: usize) -> LogLine {
-    LogLine {
-        line: last_line,
-        row: row_of(sample),
+/// A log's rows as they come, or averaged into bins ([`BinnedLines`]).
+// One a replay, held on the stack while it runs: the binned variant's size costs nothing.
+#[allow(clippy::large_enum_variant)]
+enum Lines<I> {
+    Plain(I),
+    Binned(BinnedLines<I>),
+}
+
+impl<I> Iterator for Lines<I>
+where
+    I: Iterator<Item = Result<LogLine, LogError>>,
+{
+    type Item = Result<LogLine, LogError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        match self {
+            Lines::Plain(rows) => rows.next(),
+            Lines::Binned(bins) => bins.next(),
+        }
     }
 }
 
@@ -379,9 +355,9 @@ fn binned_line(sample: &Sample, last_line: usize) -> LogLine {
 /// window refills (see `estimator_core::checkpoint`).
 ///
 /// With `options.bin_interval_s` the rows (at any rate up to 200 Hz) are averaged into bins of
-/// that interval ([`Binner`]) and the estimator, its interval pinned to the bins', steps once a
-/// bin, each bin's average handed to `each` as a row stamped at the bin's centre; the last bin is
-/// stepped at the end of the rows. A row the binner refuses is counted
+/// that interval ([`BinnedLines`]) and the estimator, its interval pinned to the bins', steps once
+/// a bin, each bin's average handed to `each` as a row stamped at the bin's centre; the last bin
+/// is stepped at the end of the rows. A row the binner refuses is counted
 /// ([`BinningSummary::refused`]) and is in no bin.
 pub fn replay_each<I, F>(
     rows: I,
@@ -396,18 +372,18 @@ where
     F: FnMut(&StepView) -> Result<(), ReplayError>,
 {
     let restart_at_s = &options.restart_at_s;
-    let mut binner = options
-        .bin_interval_s
-        .map(Binner::new)
-        .transpose()
-        .map_err(ReplayError::BinInterval)?;
-    let mut interval_check = match &binner {
-        Some(b) => {
-            config.sample_interval_s = Some(b.interval_s());
-            IntervalCheck::binned(b.interval_s())
+    let mut lines = match options.bin_interval_s {
+        Some(bin_s) => {
+            config.sample_interval_s = Some(bin_s);
+            let bins =
+                BinnedLines::new(rows.into_iter(), bin_s).map_err(ReplayError::BinInterval)?;
+            Lines::Binned(bins)
         }
-        None => IntervalCheck::new(config.sample_interval_s),
+        None => Lines::Plain(rows.into_iter()),
     };
+    // A binned log's stamps are checked as they are binned; its bins are one interval apart.
+    let binned = matches!(lines, Lines::Binned(_));
+    let mut interval_check = IntervalCheck::new(config.sample_interval_s);
     let mut stepper = Stepper {
         est: HostEstimator::new(config).map_err(ReplayError::Config)?,
         next_restart: 0,
@@ -416,43 +392,24 @@ where
         error_changes: Vec::new(),
         grid: GridFollower::new(&config),
     };
-    let mut binning = binner.as_ref().map(|b| BinningSummary {
-        interval_s: b.interval_s(),
-        rows: 0,
-        bins: 0,
-        refused: RejectCounts::ZERO,
-    });
-    // The line of the last row in the bin being filled.
-    let mut bin_last_line = 0;
-    for item in rows {
+    for item in lines.by_ref() {
         let Some(line) = filter.admit(item, warn)? else {
             continue;
         };
-        interval_check.observe(line.row.time_s)?;
-        let (Some(binner), Some(binning)) = (binner.as_mut(), binning.as_mut()) else {
-            stepper.step(&line, &sample_of(&line.row), restart_at_s, &mut each)?;
-            continue;
-        };
-        binning.rows += 1;
-        match binner.push(&sample_of(&line.row)) {
-            Err(e) => binning.refused.count(e.reason()),
-            Ok(done) => {
-                if let Some(average) = done {
-                    binning.bins += 1;
-                    let bin_line = binned_line(&average, bin_last_line);
-                    stepper.step(&bin_line, &average, restart_at_s, &mut each)?;
-                }
-                bin_last_line = line.line;
-            }
+        if !binned {
+            interval_check.observe(line.row.time_s)?;
         }
+        stepper.step(&line, &sample_of(&line.row), restart_at_s, &mut each)?;
     }
-    if let (Some(average), Some(binning)) =
-        (binner.as_mut().and_then(Binner::finish), binning.as_mut())
-    {
-        binning.bins += 1;
-        let bin_line = binned_line(&average, bin_last_line);
-        stepper.step(&bin_line, &average, restart_at_s, &mut each)?;
-    }
+    let binning = match &mut lines {
+        Lines::Binned(bins) => {
+            if let Some(e) = bins.take_interval_error() {
+                return Err(e.into());
+            }
+            Some(bins.summary())
+        }
+        Lines::Plain(_) => None,
+    };
     let est = &stepper.est;
     Ok(Replay {
         rows: stepper.count,
