@@ -11,7 +11,7 @@
 //!
 //! [`RowFilter`]: crate::log_csv::RowFilter
 
-use crate::log_csv::{LogError, LogLine};
+use crate::log_csv::{LogError, LogLine, LogLines};
 use crate::replay::{row_of, sample_of, significant_4};
 use crate::time_stamps::{IntervalCheck, IntervalError};
 use estimator_core::binning::{BinIntervalError, Binner};
@@ -149,6 +149,75 @@ where
                     return Some(Ok(out));
                 }
             }
+        }
+    }
+}
+
+impl<I: LogLines> LogLines for BinnedLines<I> {
+    fn bytes_read(&self) -> u64 {
+        self.inner.bytes_read()
+    }
+}
+
+/// A log's rows as they come, or averaged into bins (`--bin-interval-s`): what `estimate` and
+/// `stream` read.
+// One a run, held while it runs: the binned variant's size costs nothing.
+#[allow(clippy::large_enum_variant)]
+pub enum Lines<I> {
+    Plain(I),
+    Binned(BinnedLines<I>),
+}
+
+impl<I> Lines<I> {
+    /// The rows of `inner`, averaged into bins of `bin_interval_s` when given.
+    pub fn new(inner: I, bin_interval_s: Option<f64>) -> Result<Lines<I>, BinIntervalError> {
+        Ok(match bin_interval_s {
+            Some(bin_s) => Lines::Binned(BinnedLines::new(inner, bin_s)?),
+            None => Lines::Plain(inner),
+        })
+    }
+
+    /// Whether the rows are binned.
+    pub fn is_binned(&self) -> bool {
+        matches!(self, Lines::Binned(_))
+    }
+
+    /// What binning did so far, when binned.
+    pub fn binning(&self) -> Option<BinningSummary> {
+        match self {
+            Lines::Binned(bins) => Some(bins.summary()),
+            Lines::Plain(_) => None,
+        }
+    }
+
+    /// The error that ended binned rows early ([`BinnedLines::take_interval_error`]).
+    pub fn take_interval_error(&mut self) -> Option<IntervalError> {
+        match self {
+            Lines::Binned(bins) => bins.take_interval_error(),
+            Lines::Plain(_) => None,
+        }
+    }
+}
+
+impl<I> Iterator for Lines<I>
+where
+    I: Iterator<Item = Result<LogLine, LogError>>,
+{
+    type Item = Result<LogLine, LogError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        match self {
+            Lines::Plain(rows) => rows.next(),
+            Lines::Binned(bins) => bins.next(),
+        }
+    }
+}
+
+impl<I: LogLines> LogLines for Lines<I> {
+    fn bytes_read(&self) -> u64 {
+        match self {
+            Lines::Plain(rows) => rows.bytes_read(),
+            Lines::Binned(bins) => bins.bytes_read(),
         }
     }
 }

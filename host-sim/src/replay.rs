@@ -1,6 +1,6 @@
 //! Replays an attitude log through the core, row by row, writing the estimates CSV.
 
-use crate::binned_lines::{BinnedLines, BinningSummary};
+use crate::binned_lines::{BinningSummary, Lines};
 use crate::estimates_csv::EstimatesWriter;
 use crate::log_csv::{LogError, LogLine, RowFilter};
 use crate::scenario::Row;
@@ -323,28 +323,6 @@ impl Stepper {
     }
 }
 
-/// A log's rows as they come, or averaged into bins ([`BinnedLines`]).
-// One a replay, held on the stack while it runs: the binned variant's size costs nothing.
-#[allow(clippy::large_enum_variant)]
-enum Lines<I> {
-    Plain(I),
-    Binned(BinnedLines<I>),
-}
-
-impl<I> Iterator for Lines<I>
-where
-    I: Iterator<Item = Result<LogLine, LogError>>,
-{
-    type Item = Result<LogLine, LogError>;
-
-    fn next(&mut self) -> Option<Self::Item> {
-        match self {
-            Lines::Plain(rows) => rows.next(),
-            Lines::Binned(bins) => bins.next(),
-        }
-    }
-}
-
 /// Steps the estimator through `rows` as they come and hands each row and its result to `each`
 /// (which writes it, reports it...); nothing per row is kept. Unreadable rows go through `filter`
 /// (skipped and counted, `warn` told; or refused when strict). The first stamps are checked
@@ -355,7 +333,7 @@ where
 /// window refills (see `estimator_core::checkpoint`).
 ///
 /// With `options.bin_interval_s` the rows (at any rate up to 200 Hz) are averaged into bins of
-/// that interval ([`BinnedLines`]) and the estimator, its interval pinned to the bins', steps once
+/// that interval ([`crate::binned_lines::BinnedLines`]) and the estimator, its interval pinned to the bins', steps once
 /// a bin, each bin's average handed to `each` as a row stamped at the bin's centre; the last bin
 /// is stepped at the end of the rows. A row the binner refuses is counted
 /// ([`BinningSummary::refused`]) and is in no bin.
@@ -372,17 +350,13 @@ where
     F: FnMut(&StepView) -> Result<(), ReplayError>,
 {
     let restart_at_s = &options.restart_at_s;
-    let mut lines = match options.bin_interval_s {
-        Some(bin_s) => {
-            config.sample_interval_s = Some(bin_s);
-            let bins =
-                BinnedLines::new(rows.into_iter(), bin_s).map_err(ReplayError::BinInterval)?;
-            Lines::Binned(bins)
-        }
-        None => Lines::Plain(rows.into_iter()),
-    };
+    let mut lines =
+        Lines::new(rows.into_iter(), options.bin_interval_s).map_err(ReplayError::BinInterval)?;
+    if let Some(bin_s) = options.bin_interval_s {
+        config.sample_interval_s = Some(bin_s);
+    }
     // A binned log's stamps are checked as they are binned; its bins are one interval apart.
-    let binned = matches!(lines, Lines::Binned(_));
+    let binned = lines.is_binned();
     let mut interval_check = IntervalCheck::new(config.sample_interval_s);
     let mut stepper = Stepper {
         est: HostEstimator::new(config).map_err(ReplayError::Config)?,
@@ -401,15 +375,10 @@ where
         }
         stepper.step(&line, &sample_of(&line.row), restart_at_s, &mut each)?;
     }
-    let binning = match &mut lines {
-        Lines::Binned(bins) => {
-            if let Some(e) = bins.take_interval_error() {
-                return Err(e.into());
-            }
-            Some(bins.summary())
-        }
-        Lines::Plain(_) => None,
-    };
+    if let Some(e) = lines.take_interval_error() {
+        return Err(e.into());
+    }
+    let binning = lines.binning();
     let est = &stepper.est;
     Ok(Replay {
         rows: stepper.count,

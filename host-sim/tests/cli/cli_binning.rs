@@ -1,7 +1,9 @@
 //! Attitude at the navigation rate: a 200 Hz log (`generate --sample-interval 0.005`) read with
 //! `estimate --bin-interval-s 1` estimates as the same log averaged to 1 s by a navigator, and near
 //! the truth; without the option such a log is refused with the option named; bad rows in a
-//! binned log are refused, counted, and leave the bins as they were.
+//! binned log are refused, counted, and leave the bins as they were. (`stream --bin-interval-s`
+//! bins through the same code: its tests with a stand-in firmware are in
+//! `host-sim/src/stream/push.rs`.)
 
 use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
 use host_sim::estimates_csv::read_estimates;
@@ -182,6 +184,20 @@ fn binning_is_asked_for_its_range_checked_and_bad_rows_left_out() {
     for bad in ["0.05", "11", "nan"] {
         refused(
             &["estimate", path_str(&log), "--bin-interval-s", bad],
+            &["--bin-interval-s must be between 0.1 and 10 s"],
+        );
+        // `stream` refuses it before it opens the port.
+        refused(
+            &[
+                "stream",
+                "--port",
+                "/nonexistent/port",
+                path_str(&log),
+                "--out",
+                path_str(&est),
+                "--bin-interval-s",
+                bad,
+            ],
             &["--bin-interval-s must be between 0.1 and 10 s"],
         );
     }
