@@ -96,6 +96,7 @@ fn a_200_hz_log_binned_to_1_s_estimates_as_its_own_1_s_average() {
     let truth = truth_arcsec(&log);
 
     let binned_est = dir.join("binned.est.csv");
+    let report = dir.join("report");
     let summary = host_sim_ok(&[
         "estimate",
         path_str(&log),
@@ -103,11 +104,18 @@ fn a_200_hz_log_binned_to_1_s_estimates_as_its_own_1_s_average() {
         "1",
         "--out",
         path_str(&binned_est),
+        "--report",
+        path_str(&report),
     ]);
+    let binned = "400000 rows averaged into 2000 bins of 1 s (0 rows refused)";
     assert!(
-        summary.contains("binned: 400000 rows averaged into 2000 bins of 1 s (0 rows refused)")
-            && summary.contains("sample interval 1 s"),
+        summary.contains(&format!("binned: {binned}")) && summary.contains("sample interval 1 s"),
         "{summary}"
+    );
+    let page = std::fs::read_to_string(report.join("report.html")).unwrap();
+    assert!(
+        page.contains(binned),
+        "the report page says what was binned"
     );
 
     let rows: Vec<Row> = read_log(&log).unwrap().iter().map(|l| l.row).collect();
