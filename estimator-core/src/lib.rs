@@ -16,7 +16,8 @@
 //!   the rotation pattern (period, shape, health): [`rotation_pattern`];
 //! - eqs (13)-(18), the Kalman filter: [`kalman`], used by the three methods in [`methods`];
 //! - input checks: [`sample`]; the sway gate: [`sway_gate`]; what one step reports: [`output`];
-//!   how it all fits together: [`estimator`].
+//!   how it all fits together: [`estimator`];
+//! - attitude at the navigation rate (100-200 Hz) averaged into the grid's bins: [`binning`].
 //!
 //! For tests and tools, with the `synthetic` feature: RINS output for known errors (`synthetic`).
 //!
@@ -87,6 +88,7 @@ pub type Real = f32;
 #[cfg(feature = "f64")]
 pub type Real = f64;
 
+pub mod binning;
 pub mod checkpoint;
 pub mod code;
 pub mod config;

@@ -345,6 +345,10 @@ pub fn parse_schemes(text: &str) -> Result<SchemeList, String> {
 pub const ROTATION_PERIOD_RANGE_S: (f64, f64) = (60.0, 3600.0);
 /// Accepted sample intervals, s.
 pub const SAMPLE_INTERVAL_RANGE_S: (f64, f64) = (0.1, 10.0);
+/// Sample intervals `generate` writes a log at, s: down to 5 ms, a navigation computer's 200 Hz,
+/// for `estimate --bin-interval-s` (a log faster than [`SAMPLE_INTERVAL_RANGE_S`] is estimated
+/// only binned).
+pub const GENERATED_INTERVAL_RANGE_S: (f64, f64) = (0.005, 10.0);
 
 /// Rotation period and sample interval. They shape a generated log, and they pin the estimator's
 /// configuration; this group is the one place where the command line sets the core's timing.
@@ -355,8 +359,10 @@ pub struct TimingArgs {
     /// angle.
     #[arg(long, value_name = "S")]
     pub rotation_period: Option<f64>,
-    /// Interval between the log's rows, s (0.1-10). Generating: the log's (default 1). Estimating
-    /// a log (`estimate`): pins the estimator's interval instead of learning it from the stamps.
+    /// Interval between the log's rows, s (0.1-10). Generating: the log's (default 1; `generate`
+    /// also 0.005 to 0.1, a navigation computer's rate, for `estimate --bin-interval-s`).
+    /// Estimating a log (`estimate`): pins the estimator's interval instead of learning it from
+    /// the stamps.
     #[arg(long, value_name = "S")]
     pub sample_interval: Option<f64>,
 }
@@ -364,6 +370,11 @@ pub struct TimingArgs {
 impl TimingArgs {
     /// Checks the ranges.
     pub fn check(&self) -> anyhow::Result<()> {
+        self.check_within(SAMPLE_INTERVAL_RANGE_S)
+    }
+
+    /// Checks the ranges, the sample interval against `interval_range_s`.
+    pub fn check_within(&self, interval_range_s: (f64, f64)) -> anyhow::Result<()> {
         if let Some(t) = self.rotation_period {
             let (lo, hi) = ROTATION_PERIOD_RANGE_S;
             anyhow::ensure!(
@@ -372,7 +383,7 @@ impl TimingArgs {
             );
         }
         if let Some(d) = self.sample_interval {
-            let (lo, hi) = SAMPLE_INTERVAL_RANGE_S;
+            let (lo, hi) = interval_range_s;
             anyhow::ensure!(
                 d.is_finite() && (lo..=hi).contains(&d),
                 "--sample-interval must be between {lo} and {hi} s, got {d}"
@@ -588,21 +599,37 @@ impl LogShapeArgs {
             p,
             self.scheme,
             &self.timing,
+            SAMPLE_INTERVAL_RANGE_S,
+            &self.recorder.settings(),
+            p.seed,
+        )
+    }
+
+    /// [`LogShapeArgs::apply`] for a log only written (`generate`): its interval may be as short
+    /// as [`GENERATED_INTERVAL_RANGE_S`] allows.
+    pub fn apply_generated(&self, p: &mut ScenarioParams) -> anyhow::Result<()> {
+        apply_shape(
+            p,
+            self.scheme,
+            &self.timing,
+            GENERATED_INTERVAL_RANGE_S,
             &self.recorder.settings(),
             p.seed,
         )
     }
 }
 
-/// Sets a scenario's scheme, timing and recording (outages drawn from `outage_seed`), checked.
+/// Sets a scenario's scheme, timing (its interval within `interval_range_s`) and recording
+/// (outages drawn from `outage_seed`), checked.
 pub fn apply_shape(
     p: &mut ScenarioParams,
     scheme: RotationScheme,
     timing: &TimingArgs,
+    interval_range_s: (f64, f64),
     recorder: &RecorderSettings,
     outage_seed: u64,
 ) -> anyhow::Result<()> {
-    timing.check()?;
+    timing.check_within(interval_range_s)?;
     p.scheme = scheme;
     if let Some(t) = timing.rotation_period {
         p.rotation_period_s = t;
@@ -696,6 +723,7 @@ mod tests {
             &mut p,
             RotationScheme::EightPosition,
             &timing,
+            SAMPLE_INTERVAL_RANGE_S,
             &RecorderSettings::default(),
             1,
         )
@@ -705,6 +733,7 @@ mod tests {
             &mut p,
             RotationScheme::FourPosition,
             &timing,
+            SAMPLE_INTERVAL_RANGE_S,
             &RecorderSettings::default(),
             1,
         )

@@ -810,6 +810,7 @@ mod tests {
                 error_changes: vec![],
                 unreadable: RowFilter::new(false),
                 health: estimator_core::Health::NONE,
+                binning: None,
             },
             periods: 8,
             residual_power_arcsec2: unexplained,

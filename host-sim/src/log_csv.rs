@@ -442,6 +442,18 @@ impl<R: Read> LogReader<R> {
     }
 }
 
+/// A log's rows as they are read, and how far into the file the reading is (for progress).
+pub trait LogLines: Iterator<Item = Result<LogLine, LogError>> {
+    /// Bytes of the file read so far.
+    fn bytes_read(&self) -> u64;
+}
+
+impl<R: Read> LogLines for LogReader<R> {
+    fn bytes_read(&self) -> u64 {
+        LogReader::bytes_read(self)
+    }
+}
+
 impl<R: Read> Iterator for LogReader<R> {
     type Item = Result<LogLine, LogError>;
 

@@ -120,6 +120,12 @@ struct EstimateArgs {
     tuning: TuningArgs,
     #[command(flatten)]
     timing: TimingArgs,
+    /// Average the log's rows (any rate up to 200 Hz: a navigation computer's attitude) into bins
+    /// of S s (0.1-10) aligned to multiples of S, and step the estimator once a bin with the
+    /// average, stamped at the bin's centre: the estimator's interval is S, and the estimates CSV
+    /// has one row per bin (docs/interface.md, "Attitude at the navigation rate").
+    #[arg(long, value_name = "S")]
+    bin_interval_s: Option<f64>,
     /// Checkpoint the estimator after the rows at these times, drop it and restore a fresh one
     /// from the bytes, as after a power cut right after a save: the estimates go on from the
     /// checkpoint's while the window refills (docs/reliability.md).
@@ -362,7 +368,7 @@ fn main() {
 
 fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
     let mut params = a.overrides.params(a.scenario.into(), a.seed)?;
-    a.shape.apply(&mut params)?;
+    a.shape.apply_generated(&mut params)?;
     a.motion.apply(&mut params)?;
     // Row by row from the generator through the recorder into the file: nothing held in memory.
     let mut recorder = Recorder::new(&params.recording, params.seed, params.sample_interval_s);
@@ -423,6 +429,19 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
     );
     restart_at.sort_by(f64::total_cmp);
     a.timing.check()?;
+    if let Some(bin_s) = a.bin_interval_s {
+        let (lo, hi) = estimator_core::binning::BIN_INTERVAL_RANGE_S;
+        anyhow::ensure!(
+            bin_s.is_finite() && (lo..=hi).contains(&bin_s),
+            "--bin-interval-s must be between {lo} and {hi} s, got {bin_s}"
+        );
+        if let Some(d) = a.timing.sample_interval {
+            anyhow::ensure!(
+                d == bin_s,
+                "--sample-interval {d} contradicts --bin-interval-s {bin_s}: the estimator's interval is the bins'; leave --sample-interval out"
+            );
+        }
+    }
     if let Some(dir) = &a.report {
         host_sim::trial_report::check_dir(dir, &inputs_of(&a.log))?;
     }
@@ -431,6 +450,7 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
         restart_at_s: restart_at.clone(),
         strict: a.strict,
         timeline: a.report.is_some(),
+        bin_interval_s: a.bin_interval_s,
     };
     let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
     let rows = truth
@@ -479,9 +499,14 @@ fn no_estimate_end(r: &Replay) -> anyhow::Result<()> {
     if r.final_estimate.is_some() {
         return Ok(());
     }
-    let reason = match r.holdup {
-        Some(h) => format!("{h} at the end of the log"),
-        None => format!("no row accepted ({} rejected)", r.rejected.total()),
+    let reason = match (r.holdup, r.binning) {
+        (Some(h), _) => format!("{h} at the end of the log"),
+        (None, Some(b)) => format!(
+            "no bin accepted ({} rejected; {} rows refused by the binning)",
+            r.rejected.total(),
+            b.refused.total()
+        ),
+        (None, None) => format!("no row accepted ({} rejected)", r.rejected.total()),
     };
     Err(RunEnd::NoEstimate { reason }.into())
 }
@@ -499,9 +524,11 @@ fn print_summary(
         log.display().to_string()
     };
     let c = &r.counters;
+    // With binning the estimator stepped once a bin (the rows are counted on the next line).
+    let rows = if r.binning.is_some() { "bins" } else { "rows" };
     writeln!(
         w,
-        "{log}: method {}: {} rows, {} accepted, {} filled (lost samples interpolated), {} window restarts, {} clock steps; estimates in {out}",
+        "{log}: method {}: {} {rows}, {} accepted, {} filled (lost samples interpolated), {} window restarts, {} clock steps; estimates in {out}",
         method.name(),
         r.rows,
         c.accepted,
@@ -509,6 +536,9 @@ fn print_summary(
         c.window_restarts,
         c.clock_steps
     )?;
+    if let Some(b) = &r.binning {
+        writeln!(w, "  binned: {}", b.describe())?;
+    }
     writeln!(w, "  {}", host_sim::replay::pattern_summary(r))?;
     for change in &r.error_changes {
         writeln!(w, "  {}", host_sim::replay::describe_error_change(change))?;
@@ -544,7 +574,7 @@ fn print_summary(
         .collect();
     writeln!(
         w,
-        "  rejected rows: {} ({})",
+        "  rejected {rows}: {} ({})",
         r.rejected.total(),
         reasons.join(", ")
     )?;
@@ -627,6 +657,7 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
             restart_at_s: vec![],
             strict: true,
             timeline,
+            bin_interval_s: None,
         };
         let mut steps = Vec::with_capacity(generated.rows.len());
         let rows = TruthRows::Generated {

@@ -6,7 +6,7 @@ use crate::estimates_csv::EstimatesWriter;
 use crate::exit_status::RunEnd;
 use crate::log_csv::{self, is_stdio, read_ahead, LogError, RowFilter, TruthFile};
 use crate::output_file::{check_not_input, Input, OutputFile};
-use crate::replay::{replay_each, Replay, ReplayError, StepView};
+use crate::replay::{replay_each, Replay, ReplayError, ReplayOptions, StepView};
 use crate::report::{Report, ReportBuilder, TruthRows};
 use crate::scenario::{generate, Generated};
 use crate::timeline::{Timeline, TimelineRow};
@@ -128,6 +128,10 @@ pub struct EstimateOptions {
     pub strict: bool,
     /// Keep a [`Timeline`] for a report.
     pub timeline: bool,
+    /// Average the rows (any rate up to 200 Hz) into bins of this interval, s, and step the
+    /// estimator once a bin, its interval pinned to the bins' (`--bin-interval-s`,
+    /// [`estimator_core::binning`]): the estimates CSV then has one row per bin.
+    pub bin_interval_s: Option<f64>,
 }
 
 /// Reads the log as it goes, replays it, writes the estimates CSV to `out` (`-`: standard output)
@@ -155,7 +159,10 @@ pub fn estimate_log(
         replay_each(
             lines,
             options.config,
-            &options.restart_at_s,
+            &ReplayOptions {
+                restart_at_s: options.restart_at_s.clone(),
+                bin_interval_s: options.bin_interval_s,
+            },
             RowFilter::new(options.strict),
             warn,
             |view| {
@@ -186,7 +193,8 @@ pub fn estimate_log(
         }
         other => other.into(),
     })?;
-    if replay.rows == 0 {
+    let rows_read = replay.binning.map_or(replay.rows, |b| b.rows);
+    if rows_read == 0 {
         // Nothing to write: an earlier estimates file stays as it was.
         return Err(RunEnd::nothing_read(
             &log_name(log),

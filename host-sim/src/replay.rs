@@ -1,9 +1,11 @@
 //! Replays an attitude log through the core, row by row, writing the estimates CSV.
 
+use crate::binned_lines::{BinningSummary, Lines};
 use crate::estimates_csv::EstimatesWriter;
 use crate::log_csv::{LogError, LogLine, RowFilter};
 use crate::scenario::Row;
 use crate::time_stamps::{IntervalCheck, IntervalError};
+use estimator_core::binning::BinIntervalError;
 use estimator_core::time_grid::{Placement, TimeGrid};
 use estimator_core::{
     Config, ConfigError, Counters, ErrorChange, Estimator, Holdup, Output, Real, RejectCounts,
@@ -25,7 +27,7 @@ pub struct Step {
 /// What a replay produced, besides the rows it handed on (nothing per row is kept).
 #[derive(Clone, Debug)]
 pub struct Replay {
-    /// Rows stepped (accepted or rejected by the core).
+    /// Rows stepped (accepted or rejected by the core); with binning, the bins stepped.
     pub rows: u64,
     pub rejected: RejectCounts,
     /// Samples accepted, lost samples filled, restarts of the moving average, clock steps.
@@ -44,6 +46,8 @@ pub struct Replay {
     pub unreadable: RowFilter,
     /// The latched alarms and the residuals' level at the end.
     pub health: estimator_core::Health,
+    /// What binning did, when the rows were binned (`--bin-interval-s`).
+    pub binning: Option<BinningSummary>,
 }
 
 /// Why a replay stopped.
@@ -53,6 +57,8 @@ pub enum ReplayError {
     Log(#[from] LogError),
     #[error("invalid estimator configuration: {0}")]
     Config(ConfigError),
+    #[error("invalid --bin-interval-s: {0}")]
+    BinInterval(BinIntervalError),
     #[error("cannot write estimates")]
     Write(#[from] std::io::Error),
     /// The log's time stamps step by an interval that makes no sense.
@@ -121,6 +127,20 @@ pub fn describe_error_change(c: &ErrorChange) -> String {
         c.seen_since_s,
         which.join(", ")
     )
+}
+
+/// A sample as a log row, in degrees (a binned sample's row, for the reports).
+pub fn row_of(sample: &Sample) -> Row {
+    let deg = |rad: Real| (rad as f64).to_degrees();
+    Row {
+        time_s: sample.time_s,
+        rotation_deg: deg(sample.rotation_rad),
+        platform_deg: deg(sample.platform_rad),
+        latitude_deg: deg(sample.latitude_rad),
+        heading_deg: deg(sample.attitude.heading_rad),
+        roll_deg: deg(sample.attitude.roll_rad),
+        pitch_deg: deg(sample.attitude.pitch_rad),
+    }
 }
 
 /// The core's sample for a log row.
@@ -226,7 +246,7 @@ where
     replay_each(
         rows,
         config,
-        &[],
+        &ReplayOptions::default(),
         RowFilter::new(true),
         &mut |_| {},
         |view| {
@@ -242,14 +262,20 @@ where
 /// (which writes it, reports it...); nothing per row is kept. Unreadable rows go through `filter`
 /// (skipped and counted, `warn` told; or refused when strict). The first stamps are checked
 /// ([`IntervalCheck`]: an interval that makes no sense for a RINS, or contradicts the pinned one,
-/// stops the replay before any estimate). After the first row at or after each of `restart_at_s`
-/// (ascending) the estimator is checkpointed, dropped and restored from the bytes: a power cut
-/// right after a save. The estimates go on from the checkpoint's while the window refills (see
-/// `estimator_core::checkpoint`). [`Replayer`] does the same a row at a time.
+/// stops the replay before any estimate). After the first row at or after each of
+/// `options.restart_at_s` (ascending) the estimator is checkpointed, dropped and restored from the
+/// bytes: a power cut right after a save. The estimates go on from the checkpoint's while the
+/// window refills (see `estimator_core::checkpoint`). [`Replayer`] does the same a row at a time.
+///
+/// With `options.bin_interval_s` the rows (at any rate up to 200 Hz) are averaged into bins of
+/// that interval ([`crate::binned_lines::BinnedLines`]) and the estimator, its interval pinned to
+/// the bins', steps once a bin, each bin's average handed to `each` as a row stamped at the bin's
+/// centre; the last bin is stepped at the end of the rows. A row the binner refuses is counted
+/// ([`BinningSummary::refused`]) and is in no bin.
 pub fn replay_each<I, F>(
     rows: I,
-    config: Config,
-    restart_at_s: &[f64],
+    mut config: Config,
+    options: &ReplayOptions,
     filter: RowFilter,
     warn: &mut dyn FnMut(&LogError),
     mut each: F,
@@ -258,11 +284,23 @@ where
     I: IntoIterator<Item = Result<LogLine, LogError>>,
     F: FnMut(&StepView) -> Result<(), ReplayError>,
 {
-    let mut replayer = Replayer::new(config, restart_at_s, filter)?;
-    for item in rows {
+    let mut lines =
+        Lines::new(rows.into_iter(), options.bin_interval_s).map_err(ReplayError::BinInterval)?;
+    if let Some(bin_s) = options.bin_interval_s {
+        config.sample_interval_s = Some(bin_s);
+    }
+    let mut replayer = Replayer::new(config, &options.restart_at_s, filter)?;
+    // A binned log's stamps are checked as they are binned; its bins are one interval apart.
+    replayer.check_stamps = !lines.is_binned();
+    for item in lines.by_ref() {
         replayer.push(item, warn, &mut each)?;
     }
-    Ok(replayer.finish())
+    if let Some(e) = lines.take_interval_error() {
+        return Err(e.into());
+    }
+    let mut replay = replayer.finish();
+    replay.binning = lines.binning();
+    Ok(replay)
 }
 
 /// One line of the latched alarms and the residuals' level (the estimates CSV's last columns):
@@ -295,6 +333,17 @@ pub fn describe_health(h: &estimator_core::Health) -> String {
     s
 }
 
+/// How [`replay_each`] takes the rows, besides the estimator's configuration.
+#[derive(Clone, Debug, Default)]
+pub struct ReplayOptions {
+    /// Checkpoint, drop and restore the estimator after the first row at or after each of these
+    /// times (ascending).
+    pub restart_at_s: Vec<f64>,
+    /// Average the rows into bins of this interval, s, and step the estimator once a bin
+    /// ([`estimator_core::binning`]); the estimator's sample interval is then pinned to it.
+    pub bin_interval_s: Option<f64>,
+}
+
 /// [`replay_each`] a row at a time, for a caller that hands the same rows to several replays.
 pub struct Replayer<'a> {
     est: HostEstimator,
@@ -304,6 +353,9 @@ pub struct Replayer<'a> {
     final_status: Option<estimator_core::Status>,
     error_changes: Vec<ErrorChange>,
     interval_check: IntervalCheck,
+    /// Whether the rows' stamps are checked here (not when they were binned: the binning checks
+    /// them, and its bins are one interval apart).
+    check_stamps: bool,
     grid: GridFollower,
     filter: RowFilter,
 }
@@ -323,6 +375,7 @@ impl<'a> Replayer<'a> {
             final_status: None,
             error_changes: Vec::new(),
             interval_check: IntervalCheck::new(config.sample_interval_s),
+            check_stamps: true,
             grid: GridFollower::new(&config),
             filter,
         })
@@ -342,7 +395,9 @@ impl<'a> Replayer<'a> {
         let Some(line) = self.filter.admit(item, warn)? else {
             return Ok(());
         };
-        self.interval_check.observe(line.row.time_s)?;
+        if self.check_stamps {
+            self.interval_check.observe(line.row.time_s)?;
+        }
         let result = self.est.step(&sample_of(&line.row));
         self.count += 1;
         if let Ok(out) = &result {
@@ -390,6 +445,7 @@ impl<'a> Replayer<'a> {
             error_changes: self.error_changes,
             unreadable: self.filter,
             health: est.health(),
+            binning: None,
         }
     }
 }

@@ -26,9 +26,10 @@ pub mod link;
 pub mod push;
 pub mod qemu;
 
+use crate::binned_lines::{BinningSummary, Lines};
 use crate::estimates_csv::EstimatesWriter;
 use crate::exit_status::RunEnd;
-use crate::log_csv::{is_stdio, LogLine, LogReader, RowFilter};
+use crate::log_csv::{is_stdio, LogLine, LogLines, LogReader, RowFilter};
 use crate::output_file::{check_not_input, Input, OutputFile};
 use crate::pipeline::{default_estimates_path, inputs_of, load_truth, log_name, truth_rows};
 use crate::replay::{sample_of, GridFollower};
@@ -45,7 +46,7 @@ use link_protocol::{
 };
 use push::{stream_log_push, PushOptions};
 use qemu::{Machine, Qemu};
-use std::io::{IsTerminal, Read, Write};
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -116,6 +117,12 @@ pub struct StreamArgs {
     /// Write plots and a self-contained report.html of the stream into DIR (created if missing).
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
+    /// Average the log's rows (any rate up to 200 Hz) into bins of S s (0.1-10) and send the
+    /// firmware one sample a bin, the average stamped at the bin's centre, as `estimate
+    /// --bin-interval-s` steps its estimator (docs/interface.md, "Attitude at the navigation
+    /// rate"); the firmware learns the interval S from the bins' stamps.
+    #[arg(long, value_name = "S")]
+    pub bin_interval_s: Option<f64>,
 }
 
 /// The firmware, wherever it runs.
@@ -459,9 +466,9 @@ impl Drop for Progress {
 /// per row; `each` sees every row and its answer. Unreadable rows go through `filter` (skipped and
 /// counted, or refused when strict); stamps whose interval makes no sense are refused
 /// ([`IntervalCheck`]).
-pub fn stream_log<R: Read, W: Write>(
+pub fn stream_log<L: LogLines, W: Write>(
     target: &mut Target,
-    lines: &mut LogReader<R>,
+    lines: &mut L,
     mut filter: RowFilter,
     resume_after_s: Option<f64>,
     writer: &mut EstimatesWriter<W>,
@@ -548,7 +555,18 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     if let Some(dir) = &args.report {
         crate::trial_report::create_dir(dir)?;
     }
-    let mut lines = LogReader::open(&args.log)?;
+    if let Some(bin_s) = args.bin_interval_s {
+        let (lo, hi) = estimator_core::binning::BIN_INTERVAL_RANGE_S;
+        anyhow::ensure!(
+            bin_s.is_finite() && (lo..=hi).contains(&bin_s),
+            "--bin-interval-s must be between {lo} and {hi} s, got {bin_s}"
+        );
+    }
+    let reader = LogReader::open(&args.log)?;
+    // Read before the reader is wrapped: whether the log is gzip.
+    let gzip_log = reader.is_gzip();
+    let mut lines = Lines::new(reader, args.bin_interval_s)
+        .map_err(|e| anyhow::anyhow!("invalid --bin-interval-s: {e}"))?;
     let plain_size = (!is_stdio(&args.log))
         .then(|| std::fs::metadata(&args.log).ok())
         .flatten()
@@ -580,7 +598,7 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let mut writer = EstimatesWriter::new(OutputFile::create(&out)?)
         .with_context(|| format!("{}:0: cannot write", out.display()))?;
     // A gzip log's size says nothing of its rows: no time left then.
-    let gzip = plain_size.is_some() && lines.is_gzip();
+    let gzip = plain_size.is_some() && gzip_log;
     let total = if gzip { None } else { plain_size };
     // The report's record of the answers: the truth beside the log, the grid from the stamps.
     let truth = args
@@ -638,6 +656,10 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
             &mut each,
         )?
     };
+    if let Some(e) = lines.take_interval_error() {
+        // Rows too slow for the bins (or not a RINS's rate): refused as an unbinned stream's are.
+        return Err(e.into());
+    }
     if summary.rows == 0 {
         // Nothing to write: an earlier estimates file stays as it was.
         return Err(RunEnd::nothing_read(
@@ -654,7 +676,15 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     if let Some(qemu) = target.qemu.take() {
         qemu.finish()?;
     }
-    print_summary(&mut info, &args.log, &out, &what, &summary, &target)?;
+    print_summary(
+        &mut info,
+        &args.log,
+        &out,
+        &what,
+        &summary,
+        lines.binning(),
+        &target,
+    )?;
     if let (Some(dir), Some(tl)) = (&args.report, &timeline) {
         let interval_s = grid.interval_s().unwrap_or(1.0);
         let report = judge.map(|j| j.finish(interval_s));
@@ -684,6 +714,7 @@ fn print_summary(
     out: &Path,
     what: &str,
     s: &StreamSummary,
+    binning: Option<BinningSummary>,
     target: &Target,
 ) -> std::io::Result<()> {
     let st = &s.final_status;
@@ -704,6 +735,9 @@ fn print_summary(
         s.wall.as_secs_f64(),
         s.rows as f64 / s.wall.as_secs_f64().max(1e-9),
     )?;
+    if let Some(b) = binning {
+        writeln!(w, "  binned: {}", b.describe())?;
+    }
     if s.unreadable.skipped > 0 {
         let lines: Vec<String> = s
             .unreadable

@@ -17,6 +17,12 @@
 //! column says give intervals outside that range (1000 "s" for milliseconds in `time_s`), and a
 //! `--sample-interval` that contradicts the stamps makes every row a clock step: both are caught
 //! after the first 8 steps, before any estimate is made, and told with their likely cause.
+//!
+//! A log at the navigation rate (100-200 Hz) read with `--bin-interval-s S` is averaged into bins
+//! of S s before the estimator sees it (`estimator_core::binning`): its stamps may then step by
+//! as little as 5 ms ([`BINNED_INTERVAL_S`]), and by no more than one bin
+//! ([`IntervalCheck::binned`]). Without the option a log whose stamps step by 5 to 10 ms is
+//! refused with that option named ([`IntervalError::NavigationRate`]).
 
 use jiff::civil::DateTime;
 use jiff::tz::TimeZone;
@@ -106,33 +112,58 @@ pub fn format_utc(unix_s: f64) -> Option<String> {
 /// The interval a RINS logs its attitude at, s: 10 ms to 10 s.
 pub const PLAUSIBLE_INTERVAL_S: (f64, f64) = (0.01, 10.0);
 
+/// The interval of a log whose rows are binned (`--bin-interval-s`), s: 5 ms (200 Hz, a
+/// navigation computer's attitude) to 10 s.
+pub const BINNED_INTERVAL_S: (f64, f64) = (0.005, 10.0);
+
+/// How far below 5 ms, relatively, the median step of a 200 Hz log may lie: stamps in Unix
+/// seconds carry 0.24 us of rounding (the `f64`'s resolution at 1.7e9 s), a recorder's clock a
+/// little of its own.
+const NAVIGATION_RATE_TOLERANCE: f64 = 0.01;
+
 /// Steps whose median [`IntervalCheck`] judges.
 pub const CHECKED_STEPS: usize = 8;
 
 /// Why the stamps' interval makes no sense.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum IntervalError {
-    /// The stamps step by more than 10 s or less than 10 ms, and another unit explains it.
+    /// The stamps step by more than 10 s or less than 10 ms (5 ms when binned: `shortest_s`),
+    /// and another unit explains it.
     #[error(
-        "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every 0.01 to 10 s: \
+        "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every {shortest_s} to 10 s: \
          they look like {unit} ({interval_s} {unit_short} a row is {as_seconds} s){hint}"
     )]
     WrongUnit {
         interval_s: f64,
+        shortest_s: f64,
         unit: &'static str,
         unit_short: &'static str,
         as_seconds: f64,
         hint: &'static str,
     },
-    /// The stamps step by more than 10 s or less than 10 ms, and no unit explains it.
+    /// The stamps step by more than 10 s or less than 10 ms (5 ms when binned: `shortest_s`),
+    /// and no unit explains it.
     #[error(
-        "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every 0.01 to 10 s: \
+        "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every {shortest_s} to 10 s: \
          {cause}"
     )]
     Implausible {
         interval_s: f64,
+        shortest_s: f64,
         cause: &'static str,
     },
+    /// The stamps step by 5 to 10 ms, a navigation computer's rate, and the log is not binned.
+    #[error(
+        "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every 0.01 to 10 s \
+         to the estimator: attitude at the navigation rate (up to 200 Hz) is averaged into its grid with --bin-interval-s S (0.1 to 10, e.g. 1)"
+    )]
+    NavigationRate { interval_s: f64 },
+    /// The stamps of a binned log step by more than one bin: bins would be left empty.
+    #[error(
+        "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), more than --bin-interval-s {bin_s} s: \
+         most bins would be empty; give a --bin-interval-s of at least {interval_s} s, or leave it out for a log at the grid's rate"
+    )]
+    SlowerThanBins { interval_s: f64, bin_s: f64 },
     /// `--sample-interval` says one interval, the stamps another.
     #[error(
         "--sample-interval {pinned_s} s contradicts the log's time stamps, which step by {step_s} s ({which} of the first {CHECKED_STEPS} steps): \
@@ -150,6 +181,8 @@ pub enum IntervalError {
 #[derive(Clone, Debug)]
 pub struct IntervalCheck {
     pinned_s: Option<f64>,
+    /// The bin interval of a binned log, s.
+    bin_s: Option<f64>,
     last_s: Option<f64>,
     steps: Vec<f64>,
     done: bool,
@@ -160,9 +193,20 @@ impl IntervalCheck {
     pub fn new(pinned_s: Option<f64>) -> IntervalCheck {
         IntervalCheck {
             pinned_s,
+            bin_s: None,
             last_s: None,
             steps: Vec::with_capacity(CHECKED_STEPS),
             done: false,
+        }
+    }
+
+    /// For a log averaged into bins of `bin_s` (`--bin-interval-s`): its stamps may step by 5 ms
+    /// to 10 s ([`BINNED_INTERVAL_S`]) but by no more than `bin_s`; the estimator's interval is
+    /// the bins', so no pinned interval is checked against the rows.
+    pub fn binned(bin_s: f64) -> IntervalCheck {
+        IntervalCheck {
+            bin_s: Some(bin_s),
+            ..IntervalCheck::new(None)
         }
     }
 
@@ -182,7 +226,10 @@ impl IntervalCheck {
         self.steps.sort_by(f64::total_cmp);
         let n = self.steps.len();
         let median = 0.5 * (self.steps[n / 2 - 1] + self.steps[n / 2]);
-        judge(median, self.steps[0], self.pinned_s)
+        match self.bin_s {
+            None => judge(median, self.steps[0], self.pinned_s),
+            Some(bin_s) => judge_binned(median, bin_s),
+        }
     }
 }
 
@@ -205,34 +252,19 @@ const OTHER_UNITS: [(&str, &str, f64, &str); 6] = [
     ("days", "d", 86_400.0, " (write seconds in a time_s column)"),
 ];
 
-/// Judges the stamps' steps: their median against the plausible range and, with the interval
-/// pinned, against it: the shortest step (the interval itself, whatever rows are lost) must not be
+/// Judges the stamps' steps: their median against the plausible range (a median of 5 to 10 ms,
+/// a navigation computer's rate, is told to bin the log: [`IntervalError::NavigationRate`]) and,
+/// with the interval pinned, against it: the shortest step (the interval itself, whatever rows are lost) must not be
 /// two pinned intervals or more, nor the median (robust to stamps jittered by up to nearly half an
 /// interval, whose shortest step may be a tenth of one) below 0.6 of one.
 pub fn judge(median_s: f64, shortest_s: f64, pinned_s: Option<f64>) -> Result<(), IntervalError> {
-    let (lo, hi) = PLAUSIBLE_INTERVAL_S;
     let interval_s = round4(median_s);
-    if !(lo..=hi).contains(&median_s) {
-        // The unit that makes the step a RINS's interval, the nearest to the usual 1 s.
-        let unit = OTHER_UNITS
-            .iter()
-            .map(|&(name, short, s_per_unit, hint)| (name, short, median_s * s_per_unit, hint))
-            .filter(|&(.., s, _)| (lo..=hi).contains(&s))
-            .min_by(|a, b| a.2.log10().abs().total_cmp(&b.2.log10().abs()));
-        return Err(match unit {
-            Some((unit, unit_short, as_seconds, hint)) => {
-                IntervalError::WrongUnit { interval_s, unit, unit_short, as_seconds: round4(as_seconds), hint }
-            }
-            None if median_s > hi => IntervalError::Implausible {
-                interval_s,
-                cause: "the log may have been thinned out (every n-th row kept), or the time column is not a time",
-            },
-            None => IntervalError::Implausible {
-                interval_s,
-                cause: "the stamps may have too few digits (rounded), or the time column is not a time",
-            },
-        });
+    let (nav_lo, _) = BINNED_INTERVAL_S;
+    let (lo, _) = PLAUSIBLE_INTERVAL_S;
+    if (nav_lo * (1.0 - NAVIGATION_RATE_TOLERANCE)..lo).contains(&median_s) {
+        return Err(IntervalError::NavigationRate { interval_s });
     }
+    judge_range(median_s, PLAUSIBLE_INTERVAL_S)?;
     if let Some(pinned_s) = pinned_s {
         if shortest_s > 1.5 * pinned_s {
             return Err(IntervalError::ContradictsPinned {
@@ -248,6 +280,53 @@ pub fn judge(median_s: f64, shortest_s: f64, pinned_s: Option<f64>) -> Result<()
                 which: "the median",
             });
         }
+    }
+    Ok(())
+}
+
+/// Judges the median step of a log averaged into bins of `bin_s`: within [`BINNED_INTERVAL_S`]
+/// (down to 1 % below 5 ms),
+/// and at most one bin (a step of a bin and a little more, stamps jittered, still fills most
+/// bins; at 1.5 bins and more every other bin would be empty).
+pub fn judge_binned(median_s: f64, bin_s: f64) -> Result<(), IntervalError> {
+    let (lo, hi) = BINNED_INTERVAL_S;
+    if !(lo * (1.0 - NAVIGATION_RATE_TOLERANCE)..=hi).contains(&median_s) {
+        judge_range(median_s, BINNED_INTERVAL_S)?;
+    }
+    if median_s > 1.01 * bin_s {
+        return Err(IntervalError::SlowerThanBins {
+            interval_s: round4(median_s),
+            bin_s,
+        });
+    }
+    Ok(())
+}
+
+/// The median step against the range `(lo, hi)`, naming the likely cause when outside.
+fn judge_range(median_s: f64, (lo, hi): (f64, f64)) -> Result<(), IntervalError> {
+    let interval_s = round4(median_s);
+    if !(lo..=hi).contains(&median_s) {
+        // The unit that makes the step a RINS's interval, the nearest to the usual 1 s.
+        let unit = OTHER_UNITS
+            .iter()
+            .map(|&(name, short, s_per_unit, hint)| (name, short, median_s * s_per_unit, hint))
+            .filter(|&(.., s, _)| (lo..=hi).contains(&s))
+            .min_by(|a, b| a.2.log10().abs().total_cmp(&b.2.log10().abs()));
+        return Err(match unit {
+            Some((unit, unit_short, as_seconds, hint)) => {
+                IntervalError::WrongUnit { interval_s, shortest_s: lo, unit, unit_short, as_seconds: round4(as_seconds), hint }
+            }
+            None if median_s > hi => IntervalError::Implausible {
+                interval_s,
+                shortest_s: lo,
+                cause: "the log may have been thinned out (every n-th row kept), or the time column is not a time",
+            },
+            None => IntervalError::Implausible {
+                interval_s,
+                shortest_s: lo,
+                cause: "the stamps may have too few digits (rounded), or the time column is not a time",
+            },
+        });
     }
     Ok(())
 }
@@ -392,6 +471,50 @@ mod tests {
             matches!(rounded, IntervalError::Implausible { .. })
                 && rounded.to_string().contains("too few digits"),
             "{rounded}"
+        );
+    }
+
+    #[test]
+    fn the_navigation_rate_is_read_only_when_binned() {
+        // In Unix seconds the steps are 5 ms +- 0.24 us of rounding, their median a little below.
+        let rate_200_hz = || (0..100).map(|k| 1.7e9 + 0.005 * f64::from(k));
+        let e = check(rate_200_hz(), None).unwrap_err();
+        assert_eq!(e, IntervalError::NavigationRate { interval_s: 0.005 });
+        assert_eq!(
+            check((0..100).map(|k| 0.005 * f64::from(k)), None),
+            Err(IntervalError::NavigationRate { interval_s: 0.005 })
+        );
+        assert!(
+            e.to_string().contains("a RINS logs every 0.01 to 10 s")
+                && e.to_string().contains("--bin-interval-s"),
+            "{e}"
+        );
+        fn binned(stamps: impl Iterator<Item = f64>, bin_s: f64) -> Result<(), IntervalError> {
+            let mut c = IntervalCheck::binned(bin_s);
+            stamps.into_iter().try_for_each(|t| c.observe(t))
+        }
+        assert_eq!(binned(rate_200_hz(), 1.0), Ok(()));
+        assert_eq!(binned(rate_200_hz(), 0.1), Ok(()));
+        assert_eq!(
+            binned((0..100).map(f64::from), 1.0),
+            Ok(()),
+            "1 Hz in 1 s bins"
+        );
+        // 400 Hz is below what a binned log may step by; a 2 s log leaves every other 1 s bin empty.
+        let fast = binned((0..100).map(|k| 0.0025 * f64::from(k)), 1.0).unwrap_err();
+        assert!(
+            matches!(fast, IntervalError::Implausible { shortest_s, .. } if shortest_s == 0.005)
+                || matches!(fast, IntervalError::WrongUnit { shortest_s, .. } if shortest_s == 0.005),
+            "{fast:?}"
+        );
+        assert!(fast.to_string().contains("every 0.005 to 10 s"), "{fast}");
+        let slow = binned((0..100).map(|k| 2.0 * f64::from(k)), 1.0).unwrap_err();
+        assert_eq!(
+            slow,
+            IntervalError::SlowerThanBins {
+                interval_s: 2.0,
+                bin_s: 1.0
+            }
         );
     }
 

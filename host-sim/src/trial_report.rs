@@ -224,6 +224,10 @@ pub fn write_replay_report(
         ("window restarts".into(), c.window_restarts.to_string()),
         ("clock steps".into(), c.clock_steps.to_string()),
     ];
+    if let Some(b) = &r.binning {
+        // The rows above are the bins the estimator stepped.
+        rows.insert(2, ("binned".into(), b.describe()));
+    }
     rows.extend(timeline_facts(tl));
     let learned = vec![
         (

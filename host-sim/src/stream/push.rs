@@ -6,13 +6,13 @@
 use super::cost::CostStats;
 use super::{answer_of, describe_exit, LinkSummary, Progress, StreamSummary, Target};
 use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{LogLine, LogReader, RowFilter};
+use crate::log_csv::{LogLine, LogLines, RowFilter};
 use crate::replay::sample_of;
 use anyhow::{bail, Context};
 use estimator_core::{Output, SampleError};
 use link_protocol::{Request, ResetCause, Response, SampleMsg, StatusReply, MAX_SAMPLE_FRAME};
 use std::collections::VecDeque;
-use std::io::{Read, Write};
+use std::io::Write;
 use std::time::{Duration, Instant};
 
 /// How `--push` sends.
@@ -155,9 +155,9 @@ impl Push {
 /// checkpoint) and carries on. Rows whose answer never came are counted as lost and left out of
 /// the estimates; a final status request settles every sample sent before it.
 #[allow(clippy::too_many_arguments)]
-pub fn stream_log_push<R: Read, W: Write>(
+pub fn stream_log_push<L: LogLines, W: Write>(
     target: &mut Target,
-    lines: &mut LogReader<R>,
+    lines: &mut L,
     mut filter: RowFilter,
     resume_after_s: Option<f64>,
     writer: &mut EstimatesWriter<W>,
@@ -247,6 +247,8 @@ fn realtime_due(start: Instant, first_s: &mut Option<f64>, time_s: f64) -> Optio
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::binned_lines::Lines;
+    use crate::log_csv::LogReader;
     use crate::stream::cost::CostUnit;
     use crate::stream::link::FirmwareLink;
     use estimator_core::SampleError;
@@ -369,6 +371,18 @@ mod tests {
         restart_after: Option<u32>,
         window: usize,
     ) -> (StreamSummary, String, String) {
+        push_binned(times, None, realtime, drop, restart_after, window)
+    }
+
+    /// The same with the rows averaged into bins of `bin_interval_s` when given.
+    fn push_binned(
+        times: &[String],
+        bin_interval_s: Option<f64>,
+        realtime: bool,
+        drop: Vec<u32>,
+        restart_after: Option<u32>,
+        window: usize,
+    ) -> (StreamSummary, String, String) {
         let (host_end, firmware_end) = UnixStream::pair().unwrap();
         std::thread::spawn(move || fake_firmware(firmware_end, drop, restart_after));
         let reader = host_end.try_clone().unwrap();
@@ -387,10 +401,11 @@ mod tests {
         for t in times {
             csv.push_str(&format!("{t},10,20,30,40,1,2\n"));
         }
-        let mut lines = LogReader::new(
+        let reader = LogReader::new(
             Path::new("test.csv"),
             std::io::Cursor::new(csv.into_bytes()),
         );
+        let mut lines = Lines::new(reader, bin_interval_s).unwrap();
         let mut writer = EstimatesWriter::new(Vec::new()).unwrap();
         let mut info = Vec::new();
         let options = PushOptions {
@@ -490,6 +505,61 @@ mod tests {
         let wall = start.elapsed().as_secs_f64();
         assert_eq!((summary.link.answered, summary.link.lost), (7, 0));
         assert!(wall < 5.0, "7 rows 0.2 s of log apart took {wall} s");
+    }
+
+    #[test]
+    fn rows_at_200_hz_binned_are_pushed_one_sample_a_bin() {
+        // 5 s at 200 Hz in bins of 1 s: 5 samples sent, stamped at the bins' centres.
+        let times: Vec<String> = (0..1000u32)
+            .map(|k| (f64::from(k) * 0.005).to_string())
+            .collect();
+        let (summary, pushed, _) = push_binned(&times, Some(1.0), false, vec![], None, 4);
+        assert_eq!((summary.link.sent, summary.link.answered), (5, 5));
+        let stamps: Vec<f64> = pushed
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').next().unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(stamps, [0.5, 1.5, 2.5, 3.5, 4.5]);
+        // The same one request at a time (`stream` without --push).
+        let (host_end, firmware_end) = UnixStream::pair().unwrap();
+        std::thread::spawn(move || fake_firmware(firmware_end, vec![], None));
+        let reader = host_end.try_clone().unwrap();
+        reader
+            .set_read_timeout(Some(Duration::from_millis(100)))
+            .unwrap();
+        let mut target = Target {
+            link: FirmwareLink::new(Box::new(reader), Box::new(host_end), Duration::from_secs(5)),
+            qemu: None,
+            unit: CostUnit::BoardCycles { counter_hz: 1 },
+            boot_status: status(ResetCause::PowerOn),
+        };
+        let mut csv = String::from(
+            "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n",
+        );
+        for t in &times {
+            csv.push_str(&format!("{t},10,20,30,40,1,2\n"));
+        }
+        let reader = LogReader::new(Path::new("t.csv"), std::io::Cursor::new(csv.into_bytes()));
+        let mut lines = Lines::new(reader, Some(1.0)).unwrap();
+        let mut writer = EstimatesWriter::new(Vec::new()).unwrap();
+        let summary = crate::stream::stream_log(
+            &mut target,
+            &mut lines,
+            RowFilter::new(true),
+            None,
+            &mut writer,
+            None,
+            &mut |_, _| {},
+        )
+        .unwrap();
+        assert_eq!(summary.rows, 5);
+        assert_eq!(lines.binning().map(|b| (b.rows, b.bins)), Some((1000, 5)));
+        let out = String::from_utf8(writer.finish().unwrap()).unwrap();
+        assert_eq!(
+            out, pushed,
+            "one request at a time, the same answers as pushed"
+        );
     }
 
     #[test]

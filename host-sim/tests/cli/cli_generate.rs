@@ -239,8 +239,9 @@ fn scheme_needs_room_for_its_moves_and_ranges_are_checked() {
             "--rotation-period must be between 60 and 3600",
         ),
         (
-            &["--sample-interval", "0.05"][..],
-            "--sample-interval must be between 0.1 and 10",
+            // Down to 200 Hz, for `estimate --bin-interval-s` (cli_binning.rs).
+            &["--sample-interval", "0.004"][..],
+            "--sample-interval must be between 0.005 and 10",
         ),
         (
             &["--drop-fraction", "1"][..],

@@ -4,6 +4,7 @@
 //! One test program of modules, one per area, linked once; `cargo test --release -p host-sim --test
 //! cli MODULE` runs one module.
 
+mod cli_binning;
 mod cli_commission;
 mod cli_error_exits;
 mod cli_errors;
