@@ -550,6 +550,9 @@ fn print_summary(
             .map_or("none (no row accepted)", |s| s.name())
     )?;
     writeln!(w, "  {}", host_sim::replay::describe_health(&r.health))?;
+    if let Some(limit) = host_sim::replay::describe_limit(&r.health) {
+        writeln!(w, "  {limit}")?;
+    }
     match (r.final_estimate, r.holdup) {
         (Some(e), holdup) => {
             for i in 0..4 {

@@ -344,6 +344,37 @@ pub struct ReplayOptions {
     pub bin_interval_s: Option<f64>,
 }
 
+/// A channel pair's noise scale at and beyond which the summary names the limit the log sets
+/// ([`describe_limit`]): its errors' 1-sigma widened at least twofold over the white noise's.
+pub const LIMIT_NOISE_SCALE: f32 = 4.0;
+
+/// The limit the log sets, when a channel pair's residuals hold more than the configured white
+/// noise gives (its noise scale at least [`LIMIT_NOISE_SCALE`]): which pair, by how much, the
+/// likely causes, and that the pair's 1-sigma already carries it. `None` on a log whose residuals
+/// are the model's, and before the first estimate.
+pub fn describe_limit(h: &estimator_core::Health) -> Option<String> {
+    let s = h.noise_scale?;
+    let over: Vec<String> = [("pitch pair (x1, x2)", s[0]), ("roll pair (x3, x4)", s[1])]
+        .iter()
+        .filter(|(_, k)| *k >= LIMIT_NOISE_SCALE)
+        .map(|(pair, k)| {
+            format!(
+                "the {pair} {k:.0} times (its 1-sigma widened {:.1}-fold)",
+                k.sqrt()
+            )
+        })
+        .collect();
+    if over.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "limit: the residuals hold more than the white noise the model gives, {}: a slow heel or \
+         trim, rows lost at a cadence, or another disturbance near the rotation frequency, which \
+         attitude alone does not tell from the installation errors; the 1-sigma above includes it",
+        over.join(", ")
+    ))
+}
+
 /// [`replay_each`] a row at a time, for a caller that hands the same rows to several replays.
 pub struct Replayer<'a> {
     est: HostEstimator,

@@ -223,7 +223,19 @@ pub fn write_replay_report(
         ("lost samples filled".into(), c.filled.to_string()),
         ("window restarts".into(), c.window_restarts.to_string()),
         ("clock steps".into(), c.clock_steps.to_string()),
+        (
+            "alarms".into(),
+            crate::replay::describe_health(&r.health)
+                .trim_start_matches("alarms: ")
+                .to_string(),
+        ),
     ];
+    if let Some(limit) = crate::replay::describe_limit(&r.health) {
+        rows.push((
+            "limit".into(),
+            limit.trim_start_matches("limit: ").to_string(),
+        ));
+    }
     if let Some(b) = &r.binning {
         // The rows above are the bins the estimator stepped.
         rows.insert(2, ("binned".into(), b.describe()));

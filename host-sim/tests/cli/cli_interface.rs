@@ -63,6 +63,11 @@ fn a_lagging_rotation_angle_costs_accuracy_unless_the_latency_is_set() {
         worst_off(first_and_last_arcsec(&est).1, truth_arcsec(log))
     };
     let on_exact = run(&exact, &[]);
+    // A clean sea log sets no limit beyond the white noise.
+    let clean_est = dir.join("clean.est.csv");
+    let clean = host_sim_ok(&["estimate", path_str(&exact), "--out", path_str(&clean_est)]);
+    assert!(clean.contains("alarms: 0 changes declared"), "{clean}");
+    assert!(!clean.contains("limit:"), "{clean}");
     let set = run(&late, &["--angle-latency-s", "0.2"]);
     let unset = run(&late, &[]);
     assert!(on_exact < 0.5, "{on_exact}");
@@ -236,5 +241,11 @@ fn the_alarm_columns_latch_and_agree_with_the_rows() {
         "alarms: 0 changes declared, {last_restarts} window restarts, 0 rejected, {in_mismatch} s in model_mismatch; residual level pitch "
     );
     assert!(summary.contains(&alarms), "{summary}");
+    // A slow heel of 0.5 deg at 900 s: the summary names the limit it sets on the roll pair.
+    assert!(
+        summary.contains("limit: the residuals hold more than the white noise the model gives")
+            && summary.contains("the roll pair (x3, x4)"),
+        "{summary}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
