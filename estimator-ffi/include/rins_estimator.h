@@ -18,6 +18,9 @@
 // Bytes of a checkpoint image: the buffer rins_estimator_checkpoint needs.
 #define RINS_CHECKPOINT_LEN 900
 
+// Bytes of a RinsBinner.
+#define RINS_BINNER_SIZE 256
+
 // Bytes of a learned-errors record: the buffer rins_estimator_learned needs.
 #define RINS_LEARNED_LEN 52
 
@@ -192,6 +195,33 @@ typedef uint32_t RinsMethod;
 // handle `rins_estimator_init` returns.
 typedef struct RinsEstimator RinsEstimator;
 
+// A binner in memory the caller provides (a static, a member of its own state, a local):
+// opaque, set up by `rins_binner_init`.
+typedef struct RinsBinner {
+  // The binner's state, and a mark that `rins_binner_init` set it up.
+  uint64_t opaque[32];
+} RinsBinner;
+
+// One sample as the RINS outputs it, in the units of the attitude log (`docs/log-format.md`):
+// degrees, seconds. Turned into the core's sample exactly as `host-sim` turns a log row into one
+// (rotation, platform and heading wrapped to [-180, 180) in double precision, then radians).
+typedef struct RinsSample {
+  // Sample time, s, strictly increasing (Unix, GPS or any other origin).
+  double time_s;
+  // Rotation angle of the sensor assembly (the paper's rho), deg, wrapped or not.
+  double rotation_deg;
+  // Platform angle (the paper's s), deg, wrapped or not.
+  double platform_deg;
+  // Latitude, deg, inside (-90, 90).
+  double latitude_deg;
+  // Heading as the RINS outputs it, deg.
+  double heading_deg;
+  // Roll as the RINS outputs it, deg.
+  double roll_deg;
+  // Pitch as the RINS outputs it, deg.
+  double pitch_deg;
+} RinsSample;
+
 // The estimator's settings. Fill it with `rins_config_default`, then change what differs.
 // Angles in radians, times in seconds. `docs/method.md` explains each; the bounds are checked by
 // `rins_config_check` (and by `rins_estimator_init`).
@@ -240,26 +270,6 @@ typedef struct RinsConfig {
   // Default 0.
   double angle_latency_s;
 } RinsConfig;
-
-// One sample as the RINS outputs it, in the units of the attitude log (`docs/log-format.md`):
-// degrees, seconds. Turned into the core's sample exactly as `host-sim` turns a log row into one
-// (rotation, platform and heading wrapped to [-180, 180) in double precision, then radians).
-typedef struct RinsSample {
-  // Sample time, s, strictly increasing (Unix, GPS or any other origin).
-  double time_s;
-  // Rotation angle of the sensor assembly (the paper's rho), deg, wrapped or not.
-  double rotation_deg;
-  // Platform angle (the paper's s), deg, wrapped or not.
-  double platform_deg;
-  // Latitude, deg, inside (-90, 90).
-  double latitude_deg;
-  // Heading as the RINS outputs it, deg.
-  double heading_deg;
-  // Roll as the RINS outputs it, deg.
-  double roll_deg;
-  // Pitch as the RINS outputs it, deg.
-  double pitch_deg;
-} RinsSample;
 
 // The four installation errors x1..x4 and their 1-sigma, rad (multiply by
 // `RINS_ARCSEC_PER_RAD` for arcsec).
@@ -352,6 +362,39 @@ typedef struct RinsCounters {
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// Sets up `*binner` for bins of `bin_interval_s` (0.1 to 10 s, the estimator's grid interval;
+// bins aligned to its multiples). `RINS_ERROR_INVALID_CONFIG` for an interval out of range;
+// nothing written on any error. Calling it again starts afresh.
+//
+// # Safety
+// `binner` is null or points to a writable `RinsBinner`.
+RinsError rins_binner_init(struct RinsBinner *binner,
+                           double bin_interval_s);
+
+// Takes one attitude sample (at any rate, up to 200 Hz). When it opens a later bin, the average
+// of the bin before it (stamped at the bin's centre) goes into `*binned` and `*ready` is true:
+// step the estimator with it. Otherwise `*ready` is false and `*binned` is not written.
+// `RINS_ERROR_SAMPLE_REJECTED` for a field a step would refuse or a time not after the last
+// one: the binner is unchanged, `*ready` false.
+//
+// # Safety
+// `binner` is null or a `RinsBinner` set up by `rins_binner_init` that no other call uses at the
+// same time; `sample` is null or points to a readable `RinsSample`; `binned` and `ready` are null
+// or point to a writable `RinsSample` and `bool`.
+RinsError rins_binner_push(struct RinsBinner *binner,
+                           const struct RinsSample *sample,
+                           struct RinsSample *binned,
+                           bool *ready);
+
+// The average of the bin being filled, if it holds a sample (at the end of a log): into
+// `*binned`, `*ready` true; otherwise `*ready` false. The binner is then empty.
+//
+// # Safety
+// As for `rins_binner_push`.
+RinsError rins_binner_finish(struct RinsBinner *binner,
+                             struct RinsSample *binned,
+                             bool *ready);
 
 // Writes what a restart needs (the configuration, the filter and what it learned of noise and
 // drift, the sample interval and rotation pattern, health, counters, the last sample's time;

@@ -25,6 +25,11 @@ fn generate(crate_dir: &Path) -> String {
             RINS_CHECKPOINT_LEN.to_string(),
         ),
         (
+            "Bytes of a RinsBinner.",
+            "RINS_BINNER_SIZE",
+            crate::RINS_BINNER_SIZE.to_string(),
+        ),
+        (
             "Bytes of a learned-errors record: the buffer rins_estimator_learned needs.",
             "RINS_LEARNED_LEN",
             crate::RINS_LEARNED_LEN.to_string(),

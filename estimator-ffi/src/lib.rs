@@ -38,6 +38,7 @@
 #[cfg(not(target_os = "none"))]
 extern crate std;
 
+pub mod binning;
 pub mod checkpoint;
 pub mod config;
 pub mod error;
@@ -49,6 +50,9 @@ pub mod text;
 #[cfg(test)]
 mod header;
 
+pub use binning::{
+    rins_binner_finish, rins_binner_init, rins_binner_push, RinsBinner, RINS_BINNER_SIZE,
+};
 pub use checkpoint::{
     rins_estimator_checkpoint, rins_estimator_learned, rins_estimator_restore,
     rins_estimator_start_from_learned, RINS_CHECKPOINT_LEN, RINS_LEARNED_LEN,

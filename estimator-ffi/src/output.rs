@@ -9,7 +9,7 @@ use estimator_core::{
 /// One sample as the RINS outputs it, in the units of the attitude log (`docs/log-format.md`):
 /// degrees, seconds. Turned into the core's sample exactly as `host-sim` turns a log row into one
 /// (rotation, platform and heading wrapped to [-180, 180) in double precision, then radians).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub struct RinsSample {
     /// Sample time, s, strictly increasing (Unix, GPS or any other origin).

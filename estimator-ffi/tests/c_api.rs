@@ -714,3 +714,98 @@ fn a_learned_record_starts_another_estimator_from_the_estimate() {
         assert!(rad_to_arcsec(f64::from(out.estimate.sigma_rad[i])) >= 1.0 - 1e-4);
     }
 }
+
+/// Attitude at 200 Hz through `rins_binner_push` into the estimator: one averaged sample a
+/// second, stepped, gives the estimates of the same samples binned by the core's `Binner` and
+/// stepped as `host-sim estimate --bin-interval-s 1` steps them (bit for bit), and finds the
+/// errors; a bad sample is refused and changes nothing; a binner not set up is refused.
+#[test]
+fn a_binner_feeds_200_hz_attitude_into_the_grid() {
+    let mut binner = RinsBinner { opaque: [0; 32] };
+    let (mut binned, mut ready) = (RinsSample::default(), false);
+    // SAFETY: a writable binner and outputs; a readable sample.
+    unsafe {
+        assert_eq!(
+            rins_binner_push(&mut binner, &row(0.0), &mut binned, &mut ready),
+            RinsError::NotInitialised
+        );
+        assert_eq!(
+            rins_binner_init(&mut binner, 0.01),
+            RinsError::InvalidConfig
+        );
+        assert_eq!(rins_binner_init(&mut binner, 1.0), RinsError::Ok);
+    }
+    let mut block = Block::new(0);
+    let handle = init(&mut block, &defaults());
+    let mut core_binner = estimator_core::binning::Binner::new(1.0).unwrap();
+    let mut core_est: Estimator = Estimator::new(Config::default()).unwrap();
+    let mut steps = 0;
+    for k in 0..2000 * 200 {
+        let t = k as f64 * 0.005;
+        let sample = row(t);
+        // SAFETY: as above.
+        let e = unsafe { rins_binner_push(&mut binner, &sample, &mut binned, &mut ready) };
+        assert_eq!(e, RinsError::Ok);
+        let core_done = core_binner.push(&Sample::from_degrees(
+            sample.time_s,
+            sample.rotation_deg,
+            sample.platform_deg,
+            sample.latitude_deg,
+            sample.heading_deg,
+            sample.roll_deg,
+            sample.pitch_deg,
+        ));
+        let core_done = core_done.unwrap();
+        assert_eq!(ready, core_done.is_some(), "at {t} s");
+        if let Some(s) = core_done {
+            let deg = |rad: estimator_core::Real| f64::from(rad).to_degrees();
+            let expected = core_est
+                .step(&Sample::from_degrees(
+                    s.time_s,
+                    deg(s.rotation_rad),
+                    deg(s.platform_rad),
+                    deg(s.latitude_rad),
+                    deg(s.attitude.heading_rad),
+                    deg(s.attitude.roll_rad),
+                    deg(s.attitude.pitch_rad),
+                ))
+                .unwrap();
+            let (_, out) = step(handle, &binned);
+            assert_eq!(out.time_s, expected.time_s);
+            assert_eq!(
+                out.estimate.x_rad.map(f32::to_bits),
+                expected
+                    .estimate
+                    .map_or([0.0; 4], |e| e.x_rad.map(|v| v as f32))
+                    .map(f32::to_bits)
+            );
+            steps += 1;
+        }
+        if k == 1000 {
+            // A repeated time: refused, nothing changes.
+            let before = binner.opaque;
+            // SAFETY: as above.
+            let e = unsafe { rins_binner_push(&mut binner, &sample, &mut binned, &mut ready) };
+            assert_eq!((e, ready), (RinsError::SampleRejected, false));
+            assert_eq!(binner.opaque, before);
+        }
+    }
+    assert_eq!(steps, 1999, "one sample a second, the last bin still open");
+    let mut estimate = RinsEstimate::default();
+    // SAFETY: an initialised handle, a writable estimate.
+    assert_eq!(
+        unsafe { rins_estimator_estimate(handle, &mut estimate) },
+        RinsError::Ok
+    );
+    for i in 0..4 {
+        let off = rad_to_arcsec(f64::from(estimate.x_rad[i])) - X_ARCSEC[i];
+        assert!(off.abs() < 1.0, "x{} off by {off} arcsec", i + 1);
+    }
+    // SAFETY: as above: the last bin at the end.
+    assert_eq!(
+        unsafe { rins_binner_finish(&mut binner, &mut binned, &mut ready) },
+        RinsError::Ok
+    );
+    assert!(ready);
+    assert_eq!(binned.time_s, 1999.5);
+}
