@@ -776,7 +776,7 @@ fn a_binner_feeds_200_hz_attitude_into_the_grid() {
                 out.estimate.x_rad.map(f32::to_bits),
                 expected
                     .estimate
-                    .map_or([0.0; 4], |e| e.x_rad.map(|v| v as f32))
+                    .map_or([0.0; 4], |e| e.x_rad)
                     .map(f32::to_bits)
             );
             steps += 1;
