@@ -27,6 +27,9 @@
 # Usage: bash scripts/test-all.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Nothing reads the terminal: cargo's compiler probes (`rustc -`) and every tool get an empty
+# standard input, whatever the caller's is.
+exec < /dev/null
 
 log() { printf "\n== %s (at %d s)\n" "$*" "$SECONDS"; }
 
