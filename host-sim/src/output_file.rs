@@ -7,6 +7,10 @@
 //! behind (the temporary file is deleted when dropped). The rename is atomic on one file system,
 //! so a reader sees the old file or the new one, never a part.
 //!
+//! A target that exists and is not a regular file (`/dev/null`, a named pipe, a terminal, the
+//! `/dev/stdout` of a shell) is written to directly, as it is: renaming a file over it would
+//! replace the device or the pipe with a file (as root, `/dev/null` itself).
+//!
 //! No input is ever an output: [`check_not_input`] refuses an output that is the log being read
 //! or its truth file (the same file by device and inode when both exist, else the same path).
 
@@ -19,6 +23,20 @@ use tempfile::NamedTempFile;
 
 /// The name that stands for standard output.
 pub const STDOUT: &str = "-";
+
+/// Whether `target` exists and is not a regular file (a device, a named pipe, a socket): written
+/// to directly, never replaced (see the module doc).
+fn is_special(target: &Path) -> bool {
+    std::fs::metadata(target).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
+/// `target` opened for writing as it is (a device or a pipe: nothing created, nothing renamed).
+fn open_special(target: &Path) -> anyhow::Result<std::fs::File> {
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(target)
+        .with_context(|| format!("{}:0: cannot write", target.display()))
+}
 
 /// A temporary file beside `target` (same directory, hidden name ending like the target's, so
 /// that writers which go by the extension, as the PNG encoder does, see it).
@@ -67,6 +85,9 @@ pub fn write_via_temp(
     target: &Path,
     write: impl FnOnce(&Path) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
+    if is_special(target) {
+        return write(target);
+    }
     let temp = temp_beside(target)?;
     write(temp.path())?;
     persist(temp, target)
@@ -74,6 +95,11 @@ pub fn write_via_temp(
 
 /// Writes `bytes` to `target` (see the module doc).
 pub fn write_bytes(target: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    if is_special(target) {
+        return open_special(target)?
+            .write_all(bytes)
+            .with_context(|| format!("{}:0: cannot write", target.display()));
+    }
     let mut temp = temp_beside(target)?;
     temp.write_all(bytes)
         .with_context(|| format!("{}:0: cannot write", target.display()))?;
@@ -83,6 +109,8 @@ pub fn write_bytes(target: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 enum Sink {
     Stdout(BufWriter<std::io::StdoutLock<'static>>),
     File(BufWriter<NamedTempFile>),
+    /// A device or a pipe, written as it is.
+    Special(BufWriter<std::fs::File>),
 }
 
 /// An output written as it goes: standard output for `-`, else a temporary file beside the
@@ -97,6 +125,8 @@ impl OutputFile {
     pub fn create(target: &Path) -> anyhow::Result<OutputFile> {
         let sink = if target.as_os_str() == STDOUT {
             Sink::Stdout(BufWriter::with_capacity(1 << 16, std::io::stdout().lock()))
+        } else if is_special(target) {
+            Sink::Special(BufWriter::with_capacity(1 << 16, open_special(target)?))
         } else {
             Sink::File(BufWriter::with_capacity(1 << 16, temp_beside(target)?))
         };
@@ -113,6 +143,9 @@ impl OutputFile {
             Sink::Stdout(mut w) => w
                 .flush()
                 .with_context(|| "standard output: cannot write".to_string()),
+            Sink::Special(mut w) => w
+                .flush()
+                .with_context(|| format!("{}:0: cannot write", target.display())),
             Sink::File(w) => {
                 let temp = w
                     .into_inner()
@@ -129,6 +162,7 @@ impl Write for OutputFile {
         match &mut self.sink {
             Sink::Stdout(w) => w.write(buf),
             Sink::File(w) => w.write(buf),
+            Sink::Special(w) => w.write(buf),
         }
     }
 
@@ -136,6 +170,7 @@ impl Write for OutputFile {
         match &mut self.sink {
             Sink::Stdout(w) => w.write_all(buf),
             Sink::File(w) => w.write_all(buf),
+            Sink::Special(w) => w.write_all(buf),
         }
     }
 
@@ -143,6 +178,7 @@ impl Write for OutputFile {
         match &mut self.sink {
             Sink::Stdout(w) => w.flush(),
             Sink::File(w) => w.flush(),
+            Sink::Special(w) => w.flush(),
         }
     }
 }

@@ -289,3 +289,41 @@ fn the_defmt_log_is_never_an_input_and_a_failed_run_keeps_the_earlier_one() {
     assert_eq!(std::fs::read_dir(&scratch).unwrap().count(), 0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An output that is not a regular file (a named pipe here; `/dev/null`, a terminal) is written
+/// to as it is: the estimates go through the pipe, byte for byte those of a file, and the pipe is
+/// still a pipe afterwards. (A file renamed over it would replace the pipe, or, as root,
+/// `/dev/null` itself.)
+#[test]
+fn an_output_that_is_a_pipe_is_written_through_not_replaced() {
+    use std::io::Read;
+    use std::os::unix::fs::FileTypeExt;
+    let dir = temp_dir("out-fifo");
+    let log = paper(&dir, 1500);
+    let file = dir.join("est.csv");
+    host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&file)]);
+    let fifo = dir.join("est.fifo");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success(), "mkfifo");
+    // The reader: it opens the pipe (blocking until the writer does) and reads to the end.
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            std::fs::File::open(&fifo)
+                .unwrap()
+                .read_to_end(&mut bytes)
+                .unwrap();
+            bytes
+        })
+    };
+    host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&fifo)]);
+    let still_a_pipe = std::fs::symlink_metadata(&fifo)
+        .unwrap()
+        .file_type()
+        .is_fifo();
+    assert!(still_a_pipe, "the named pipe was replaced by a file");
+    let through = reader.join().unwrap();
+    assert_eq!(through, std::fs::read(&file).unwrap());
+    let _ = std::fs::remove_dir_all(&dir);
+}
