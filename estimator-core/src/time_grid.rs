@@ -275,7 +275,10 @@ impl TimeGrid {
             }
             return Err(SampleError::IrregularTimeStep);
         }
-        if time_s < last - CLOCK_STEP_BACK_INTERVALS * t {
+        // The step back itself, not `last - 2 t`: two stamps near each other subtract exactly,
+        // where `last - 2 t` rounds at large stamps (beyond 1.8e16 s, where stamps are 4 s
+        // apart, a stamp 4 s back was refused as not increasing).
+        if last - time_s > CLOCK_STEP_BACK_INTERVALS * t {
             return Ok(Placed::CLOCK_STEP);
         }
         Err(SampleError::TimeNotIncreasing)
