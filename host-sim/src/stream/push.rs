@@ -374,6 +374,36 @@ mod tests {
         push_binned(times, None, realtime, drop, restart_after, window)
     }
 
+    /// A target on the fake firmware (`drop`, `restart_after` as [`fake_firmware`] takes them).
+    fn fake_target(drop: Vec<u32>, restart_after: Option<u32>) -> Target {
+        let (host_end, firmware_end) = UnixStream::pair().unwrap();
+        std::thread::spawn(move || fake_firmware(firmware_end, drop, restart_after));
+        let reader = host_end.try_clone().unwrap();
+        reader
+            .set_read_timeout(Some(Duration::from_millis(100)))
+            .unwrap();
+        Target {
+            link: FirmwareLink::new(Box::new(reader), Box::new(host_end), Duration::from_secs(5)),
+            qemu: None,
+            unit: CostUnit::BoardCycles { counter_hz: 1 },
+            boot_status: status(ResetCause::PowerOn),
+        }
+    }
+
+    /// A log of constant rows stamped `times`, as the reader reads it.
+    fn log_of(times: &[String]) -> LogReader<std::io::Cursor<Vec<u8>>> {
+        let mut csv = String::from(
+            "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n",
+        );
+        for t in times {
+            csv.push_str(&format!("{t},10,20,30,40,1,2\n"));
+        }
+        LogReader::new(
+            Path::new("test.csv"),
+            std::io::Cursor::new(csv.into_bytes()),
+        )
+    }
+
     /// The same with the rows averaged into bins of `bin_interval_s` when given.
     fn push_binned(
         times: &[String],
@@ -383,29 +413,8 @@ mod tests {
         restart_after: Option<u32>,
         window: usize,
     ) -> (StreamSummary, String, String) {
-        let (host_end, firmware_end) = UnixStream::pair().unwrap();
-        std::thread::spawn(move || fake_firmware(firmware_end, drop, restart_after));
-        let reader = host_end.try_clone().unwrap();
-        reader
-            .set_read_timeout(Some(Duration::from_millis(100)))
-            .unwrap();
-        let mut target = Target {
-            link: FirmwareLink::new(Box::new(reader), Box::new(host_end), Duration::from_secs(5)),
-            qemu: None,
-            unit: CostUnit::BoardCycles { counter_hz: 1 },
-            boot_status: status(ResetCause::PowerOn),
-        };
-        let mut csv = String::from(
-            "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n",
-        );
-        for t in times {
-            csv.push_str(&format!("{t},10,20,30,40,1,2\n"));
-        }
-        let reader = LogReader::new(
-            Path::new("test.csv"),
-            std::io::Cursor::new(csv.into_bytes()),
-        );
-        let mut lines = Lines::new(reader, bin_interval_s).unwrap();
+        let mut target = fake_target(drop, restart_after);
+        let mut lines = Lines::new(log_of(times), bin_interval_s).unwrap();
         let mut writer = EstimatesWriter::new(Vec::new()).unwrap();
         let mut info = Vec::new();
         let options = PushOptions {
@@ -522,26 +531,8 @@ mod tests {
             .collect();
         assert_eq!(stamps, [0.5, 1.5, 2.5, 3.5, 4.5]);
         // The same one request at a time (`stream` without --push).
-        let (host_end, firmware_end) = UnixStream::pair().unwrap();
-        std::thread::spawn(move || fake_firmware(firmware_end, vec![], None));
-        let reader = host_end.try_clone().unwrap();
-        reader
-            .set_read_timeout(Some(Duration::from_millis(100)))
-            .unwrap();
-        let mut target = Target {
-            link: FirmwareLink::new(Box::new(reader), Box::new(host_end), Duration::from_secs(5)),
-            qemu: None,
-            unit: CostUnit::BoardCycles { counter_hz: 1 },
-            boot_status: status(ResetCause::PowerOn),
-        };
-        let mut csv = String::from(
-            "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n",
-        );
-        for t in &times {
-            csv.push_str(&format!("{t},10,20,30,40,1,2\n"));
-        }
-        let reader = LogReader::new(Path::new("t.csv"), std::io::Cursor::new(csv.into_bytes()));
-        let mut lines = Lines::new(reader, Some(1.0)).unwrap();
+        let mut target = fake_target(vec![], None);
+        let mut lines = Lines::new(log_of(&times), Some(1.0)).unwrap();
         let mut writer = EstimatesWriter::new(Vec::new()).unwrap();
         let summary = crate::stream::stream_log(
             &mut target,
