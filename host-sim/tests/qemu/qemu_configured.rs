@@ -43,38 +43,19 @@ fn mps2_an386_built_with_a_latency_and_known_values_estimates_as_the_host_config
             ("RINS_PRIOR_SIGMA_ARCSEC", "20"),
         ],
     );
-    let (estimate, streamed) = (dir.join("estimate.csv"), dir.join("stream.csv"));
-    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
-    host_sim(&[
-        "estimate",
-        &s(&log),
-        "--out",
-        &s(&estimate),
-        "--angle-latency-s",
-        "0.2",
-        "--prior-arcsec",
-        &prior,
-        "--prior-sigma-arcsec",
-        "20",
-    ]);
-    let out = host_sim(&[
-        "stream",
-        "--qemu",
-        &s(&elf),
-        "--machine",
-        board.machine().name(),
-        &s(&log),
-        "--out",
-        &s(&streamed),
-    ]);
-    println!("{out}");
-    assert_stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
+    let streamed = stream_and_compare_with_estimate(
         board,
+        &elf,
+        &dir,
         &log,
-        &streamed,
-        &estimate,
-        truth.x_arcsec,
-        &out,
+        &[
+            "--angle-latency-s",
+            "0.2",
+            "--prior-arcsec",
+            &prior,
+            "--prior-sigma-arcsec",
+            "20",
+        ],
         false,
     );
     // The known values from the first row on.

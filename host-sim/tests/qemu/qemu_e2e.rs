@@ -7,7 +7,6 @@
 //! half of `qemu_restart`, which checks them the same way.
 
 use crate::qemu_support::*;
-use host_sim::log_csv::{read_truth, truth_path};
 
 #[test]
 fn reciprocating_log_with_2_percent_loss_and_jittered_unix_stamps_pushed_through_mps2_an386_is_byte_identical(
@@ -34,34 +33,7 @@ fn reciprocating_log_with_2_percent_loss_and_jittered_unix_stamps_pushed_through
             "0.02",
         ],
     );
-    let (estimate, streamed) = (dir.join("estimate.csv"), dir.join("stream.csv"));
-    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
-    host_sim(&["estimate", &s(&log), "--out", &s(&estimate)]);
-    let elf = firmware_elf(board);
-    let out = host_sim(&[
-        "stream",
-        "--qemu",
-        &s(&elf),
-        "--machine",
-        board.machine().name(),
-        &s(&log),
-        "--out",
-        &s(&streamed),
-        "--push",
-    ]);
-    println!("{out}");
-    let truth = read_truth(&truth_path(&log))
-        .unwrap()
-        .expect("generate writes the truth");
-    assert_stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
-        board,
-        &log,
-        &streamed,
-        &estimate,
-        truth.x_arcsec,
-        &out,
-        true,
-    );
+    stream_and_compare_with_estimate(board, &firmware_elf(board), &dir, &log, &[], true);
 }
 
 /// Stamps set on receipt, on the board: a sea log whose stamps are jittered by up to +-0.45 s of
@@ -86,34 +58,7 @@ fn stamps_jittered_by_045_of_the_interval_pushed_through_stm32f405_are_byte_iden
             "0.45",
         ],
     );
-    let (estimate, streamed) = (dir.join("estimate.csv"), dir.join("stream.csv"));
-    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
-    host_sim(&["estimate", &s(&log), "--out", &s(&estimate)]);
-    let elf = firmware_elf(board);
-    let out = host_sim(&[
-        "stream",
-        "--qemu",
-        &s(&elf),
-        "--machine",
-        board.machine().name(),
-        &s(&log),
-        "--out",
-        &s(&streamed),
-        "--push",
-    ]);
-    println!("{out}");
-    let truth = read_truth(&truth_path(&log))
-        .unwrap()
-        .expect("generate writes the truth");
-    assert_stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
-        board,
-        &log,
-        &streamed,
-        &estimate,
-        truth.x_arcsec,
-        &out,
-        true,
-    );
+    stream_and_compare_with_estimate(board, &firmware_elf(board), &dir, &log, &[], true);
 }
 
 /// The same at 10 Hz on mps2-an386: stamps jittered by up to +-0.045 s of their 0.1 s interval,
@@ -137,32 +82,5 @@ fn a_10_hz_log_with_stamps_jittered_by_045_of_the_interval_pushed_through_mps2_a
             "0.045",
         ],
     );
-    let (estimate, streamed) = (dir.join("estimate.csv"), dir.join("stream.csv"));
-    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
-    host_sim(&["estimate", &s(&log), "--out", &s(&estimate)]);
-    let elf = firmware_elf(board);
-    let out = host_sim(&[
-        "stream",
-        "--qemu",
-        &s(&elf),
-        "--machine",
-        board.machine().name(),
-        &s(&log),
-        "--out",
-        &s(&streamed),
-        "--push",
-    ]);
-    println!("{out}");
-    let truth = read_truth(&truth_path(&log))
-        .unwrap()
-        .expect("generate writes the truth");
-    assert_stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
-        board,
-        &log,
-        &streamed,
-        &estimate,
-        truth.x_arcsec,
-        &out,
-        true,
-    );
+    stream_and_compare_with_estimate(board, &firmware_elf(board), &dir, &log, &[], true);
 }

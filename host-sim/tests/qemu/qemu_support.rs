@@ -273,6 +273,53 @@ pub fn stack_peaks(stdout: &str) -> (u64, u64, u64) {
     (boot, service, size)
 }
 
+/// Runs `host-sim estimate` on the generated `log` (in `dir`, its truth beside it) with
+/// `estimate_args` and streams it through `board`'s image `elf` (`--push` when `pushed`), then
+/// asserts what [`assert_stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth`]
+/// does. Returns the streamed estimates CSV's path.
+pub fn stream_and_compare_with_estimate(
+    board: Board,
+    elf: &Path,
+    dir: &Path,
+    log: &Path,
+    estimate_args: &[&str],
+    pushed: bool,
+) -> PathBuf {
+    let (estimate, streamed) = (dir.join("estimate.csv"), dir.join("stream.csv"));
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let mut args = vec!["estimate".to_string(), s(log), "--out".into(), s(&estimate)];
+    args.extend(estimate_args.iter().map(|a| a.to_string()));
+    host_sim(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let mut args = vec![
+        "stream".to_string(),
+        "--qemu".into(),
+        s(elf),
+        "--machine".into(),
+        board.machine().name().into(),
+        s(log),
+        "--out".into(),
+        s(&streamed),
+    ];
+    if pushed {
+        args.push("--push".into());
+    }
+    let out = host_sim(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    println!("{out}");
+    let truth = host_sim::log_csv::read_truth(&host_sim::log_csv::truth_path(log))
+        .unwrap()
+        .expect("generate writes the truth");
+    assert_stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
+        board,
+        log,
+        &streamed,
+        &estimate,
+        truth.x_arcsec,
+        &out,
+        pushed,
+    );
+    streamed
+}
+
 /// Checks a `host-sim stream` run through `board` (its estimates CSV `streamed`, its stdout
 /// `stdout`, the log it streamed `log`) against `host-sim estimate`'s CSV `expected` of a log
 /// that starts with the same rows (the same log, or a longer one it was cut from): the streamed
