@@ -51,15 +51,16 @@ unsafe fn binner_mut<'a>(binner: *mut RinsBinner) -> Result<&'a mut Binner, Rins
 /// The core's sample as the C side's, in degrees: what `rins_estimator_step` turns back into the
 /// same sample (`host-sim estimate --bin-interval-s` makes the same round trip).
 fn in_degrees(s: &Sample) -> RinsSample {
-    let deg = |rad: estimator_core::Real| f64::from(rad).to_degrees();
+    let [time_s, rotation_deg, platform_deg, latitude_deg, heading_deg, roll_deg, pitch_deg] =
+        s.to_degrees();
     RinsSample {
-        time_s: s.time_s,
-        rotation_deg: deg(s.rotation_rad),
-        platform_deg: deg(s.platform_rad),
-        latitude_deg: deg(s.latitude_rad),
-        heading_deg: deg(s.attitude.heading_rad),
-        roll_deg: deg(s.attitude.roll_rad),
-        pitch_deg: deg(s.attitude.pitch_rad),
+        time_s,
+        rotation_deg,
+        platform_deg,
+        latitude_deg,
+        heading_deg,
+        roll_deg,
+        pitch_deg,
     }
 }
 

@@ -758,16 +758,10 @@ fn a_binner_feeds_200_hz_attitude_into_the_grid() {
         let core_done = core_done.unwrap();
         assert_eq!(ready, core_done.is_some(), "at {t} s");
         if let Some(s) = core_done {
-            let deg = |rad: estimator_core::Real| f64::from(rad).to_degrees();
+            let [t, rotation, platform, latitude, heading, roll, pitch] = s.to_degrees();
             let expected = core_est
                 .step(&Sample::from_degrees(
-                    s.time_s,
-                    deg(s.rotation_rad),
-                    deg(s.platform_rad),
-                    deg(s.latitude_rad),
-                    deg(s.attitude.heading_rad),
-                    deg(s.attitude.roll_rad),
-                    deg(s.attitude.pitch_rad),
+                    t, rotation, platform, latitude, heading, roll, pitch,
                 ))
                 .unwrap();
             let (_, out) = step(handle, &binned);

@@ -131,15 +131,16 @@ pub fn describe_error_change(c: &ErrorChange) -> String {
 
 /// A sample as a log row, in degrees (a binned sample's row, for the reports).
 pub fn row_of(sample: &Sample) -> Row {
-    let deg = |rad: Real| (rad as f64).to_degrees();
+    let [time_s, rotation_deg, platform_deg, latitude_deg, heading_deg, roll_deg, pitch_deg] =
+        sample.to_degrees();
     Row {
-        time_s: sample.time_s,
-        rotation_deg: deg(sample.rotation_rad),
-        platform_deg: deg(sample.platform_rad),
-        latitude_deg: deg(sample.latitude_rad),
-        heading_deg: deg(sample.attitude.heading_rad),
-        roll_deg: deg(sample.attitude.roll_rad),
-        pitch_deg: deg(sample.attitude.pitch_rad),
+        time_s,
+        rotation_deg,
+        platform_deg,
+        latitude_deg,
+        heading_deg,
+        roll_deg,
+        pitch_deg,
     }
 }
 
