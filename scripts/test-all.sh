@@ -18,6 +18,8 @@
 #   5. the gates: `cargo fmt --all --check`; clippy with -D warnings on the host (every crate, all
 #      targets, in release) and on the firmware (each board), the link code and the C library, which deny every
 #      panicking construct (the workspace's lints, `[workspace.lints]`, apply to every crate);
+#      the API docs, `RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps` (a broken
+#      intra-doc link, or an undocumented public item of a library crate, fails);
 #   5b. the C examples: examples/c/replay.c on a short log with every kind of bad row, built with
 #      the host's cc and with arm-none-eabi-gcc for a Cortex-M4F run in QEMU, both estimates
 #      CSVs byte-identical to `host-sim estimate`'s (scripts/c-example.sh); the 1 Hz navigation
@@ -104,7 +106,7 @@ cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-d
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405
 cargo build -p firmware --target thumbv7em-none-eabihf --profile firmware
 
-log "gates: rustfmt, and clippy with every warning an error (host, all targets; the firmware for each board, the link and the C library for the target)"
+log "gates: rustfmt, clippy with every warning an error (host, all targets; the firmware for each board, the link and the C library for the target), and the API docs"
 # Clippy also enforces what the firmware, link-protocol, estimator-ffi and estimator-core deny in
 # their sources: unwrap_used, expect_used, indexing_slicing, panic (no panicking path on the link or
 # through the C API); the workspace's [workspace.lints] apply to every crate.
@@ -115,6 +117,9 @@ cargo clippy --workspace --all-targets --release --features host-sim/bench -- -D
 cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware -- -D warnings
 cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405 -- -D warnings
 cargo clippy -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware -- -D warnings
+# Every library crate has #![warn(missing_docs)]; with -D warnings an undocumented public item or a
+# link that does not resolve fails here.
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 
 log "the C library: examples/c/replay.c on the host and on a Cortex-M4F in QEMU, byte-identical to host-sim estimate"
 # A 1500 s sea log with Unix stamps, jitter and lost rows, then everything a trial's export may

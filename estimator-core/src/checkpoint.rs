@@ -57,11 +57,11 @@
 //! | 1 | `R` |
 //! | 1 | method code ([`Method`] `as u8`) |
 //! | 4 | total length including the CRC (= [`CHECKPOINT_LEN`]) |
-//! | ... | the parts, in the order and with the lengths of [`crate::estimator::checkpoint`]'s layout |
+//! | ... | the parts, in the order and with the lengths of the layout in `estimator/checkpoint.rs` |
 //! | ... | zero padding to a multiple of 4 |
 //! | 4 | CRC-32 ([`crc32`]) of all bytes before it |
 //!
-//! The parts, each written, read and checked next to its type by its [`Stored`] implementation
+//! The parts, each written, read and checked next to its type by its `Stored` implementation
 //! (the fields of each, in order, are listed in that file): the configuration
 //! (`config/checkpoint.rs`), the estimator's own running state (`estimator/checkpoint.rs`), the
 //! sample grid (`time_grid/checkpoint.rs`), the rotation monitor (`rotation_pattern/checkpoint.rs`),
@@ -71,7 +71,7 @@
 //! bumped.
 //!
 //! This module is the format only (the header and CRC: `image.rs`; the byte reader and writer:
-//! `wire.rs`; the errors, the bounds and the [`Stored`] trait: here); it knows no part.
+//! `wire.rs`; the errors, the bounds and the `Stored` trait: here); it knows no part.
 
 pub(crate) mod image;
 #[cfg(test)]

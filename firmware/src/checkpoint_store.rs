@@ -322,7 +322,7 @@ fn marked(byte: u8) -> bool {
 }
 
 /// Erases again the sectors a power cut left half-erased, and returns how many. The log keeps a
-/// sector's state in its first and last byte ([`marked`]): both unmarked is an erased ("open")
+/// sector's state in its first and last byte (marked: at least four of its bits programmed): both unmarked is an erased ("open")
 /// sector, first marked and last unmarked the one being filled ("partial"). The log erases a
 /// sector only just after it has marked the sector before it partial, so a torn erase shows as
 /// - an "open" sector with any byte not erased: erased again (whatever else it holds is a torn

@@ -519,7 +519,7 @@ impl<R: Read> Iterator for LogReader<R> {
 /// handed over.
 pub const READ_AHEAD_BATCH: usize = 4096;
 /// Batches that may wait in [`read_ahead`]'s channel.
-const READ_AHEAD_DEPTH: usize = 4;
+pub const READ_AHEAD_DEPTH: usize = 4;
 
 /// One item of a log, as [`LogReader`] gives it.
 type LogItem = Result<LogLine, LogError>;

@@ -149,7 +149,7 @@ impl Push {
     }
 }
 
-/// Streams like [`stream_log`], but sends without waiting for each answer ([`PushOptions`]).
+/// Streams like [`crate::stream::stream_log`], but sends without waiting for each answer ([`PushOptions`]).
 /// Answers are matched to their requests by number. A `Ready` in the middle (the firmware
 /// restarted: watchdog, power) is counted; the host asks for the status (reset cause, restored
 /// checkpoint) and carries on. Rows whose answer never came are counted as lost and left out of
