@@ -12,7 +12,8 @@
 #      test's build);
 #   3. estimator-core again with the `f64` feature (the precision comparison's other side): its unit
 #      tests, the identification against known errors and the checkpoints, which the feature
-#      changes (float width, state size, image length);
+#      changes (float width, state size, image length); link-protocol without the `test-hang`
+#      feature that host-sim's tests turn on (the production wire, where `Hang` is a bad frame);
 #   4. the firmware build for the target: mps2-an386 with and without its checkpoint feature, and
 #      the STM32F405 (their budgets are checked by host-sim's qemu_budgets test);
 #   5. the gates: `cargo fmt --all --check`; clippy with -D warnings on the host (every crate, all
@@ -98,6 +99,8 @@ cargo test --workspace --release
 
 log "estimator-core with f64: its unit tests, the identification and the checkpoints (what the feature changes)"
 cargo test --release -p estimator-core --features f64 --lib --test identification --test checkpoint_roundtrip
+log "link-protocol without its test-hang feature (the workspace's tests turn it on): Hang's bytes are a bad frame"
+cargo test --release -p link-protocol
 
 log "firmware build for thumbv7em-none-eabihf (mps2-an386 default, without its checkpoint feature; STM32F405)"
 # Built in step 2's background; these find them built (the default image again after the QEMU

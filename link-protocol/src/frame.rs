@@ -294,6 +294,7 @@ mod tests {
             Request::Sample(sample()),
             Request::Reset,
             Request::ReadStatus,
+            #[cfg(feature = "test-hang")]
             Request::Hang,
         ];
         for r in requests {
@@ -408,12 +409,20 @@ mod tests {
             }),
             [0x00, 0x05, 0x03, 0x02, 0x1e, 0x68, 0x00].to_vec()
         );
+        // `Hang`, number 300: decoded only with the `test-hang` feature, a bad message without.
+        let hang = [0x00, 0x06, 0xac, 0x02, 0x03, 0x60, 0x52, 0x00];
+        #[cfg(feature = "test-hang")]
         assert_eq!(
             frame_of(&Numbered {
                 seq: 300,
                 message: Request::Hang
             }),
-            [0x00, 0x06, 0xac, 0x02, 0x03, 0x60, 0x52, 0x00].to_vec()
+            hang.to_vec()
+        );
+        #[cfg(not(feature = "test-hang"))]
+        assert_eq!(
+            decode_frame::<Numbered<Request>>(&mut body(&hang)),
+            Err(FrameError::Message)
         );
         // The firmware's boot announcement (protocol 6), unnumbered: M = 00 03 06.
         let ready = Numbered {

@@ -44,10 +44,12 @@ pub enum Request {
     Reset,
     /// (2) Answered by [`Response::Status`].
     ReadStatus,
-    /// (3) Only for the watchdog test: a firmware built with its `test-hang` feature stops its
-    /// main loop for good (it no longer feeds the watchdog), so the watchdog must reset it. Every
-    /// other build treats it as no request: dropped, counted as a `message` bad frame, never
-    /// answered.
+    /// (3) Only for the watchdog test, and only with this crate's `test-hang` feature (which the
+    /// firmware's `test-hang` feature and host-sim's tests turn on): a firmware built with it
+    /// stops its main loop for good (it no longer feeds the watchdog), so the watchdog must reset
+    /// it. Without the feature the variant does not exist: its bytes fail to decode, and the
+    /// firmware counts them as a `message` bad frame and never answers.
+    #[cfg(feature = "test-hang")]
     Hang,
 }
 

@@ -1,11 +1,11 @@
-//! Panics and hard faults: log what happened (defmt), then [`crate::board::fatal`] (exit under
+//! Panics and hard faults: log what happened (defmt), then [`super::board::fatal`] (exit under
 //! QEMU, reset on a board). Nothing that arrives on the link is meant to get here: the receive,
 //! decode, step and reply path has no unwrap, expect or indexing (denied by clippy in `main.rs`).
 
 use core::panic::PanicInfo;
 use cortex_m_rt::{exception, ExceptionFrame};
 
-use crate::board;
+use super::board;
 
 #[panic_handler]
 fn panic(info: &PanicInfo) -> ! {

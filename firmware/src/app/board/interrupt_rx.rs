@@ -3,7 +3,10 @@
 //! the handler's end is kept here for the handler ([`push`]), the main loop's end is the
 //! [`RingReceiver`] that [`init`] returns.
 
-use core::ptr::addr_of_mut;
+use core::cell::RefCell;
+
+use cortex_m::interrupt::Mutex;
+use static_cell::ConstStaticCell;
 
 use firmware::interrupt_ring::{InterruptRing, RingReader, RingWriter};
 use firmware::rx_stats::{LineErrors, RxStats};
@@ -11,36 +14,31 @@ use firmware::{Received, INTERRUPT_RX_RING_ENTRIES};
 use link_protocol::LinkCounters;
 
 static STATS: RxStats = RxStats::new();
-static mut RING: InterruptRing<INTERRUPT_RX_RING_ENTRIES> = InterruptRing::new();
+/// The ring, taken once by [`init`].
+static RING: ConstStaticCell<InterruptRing<INTERRUPT_RX_RING_ENTRIES>> =
+    ConstStaticCell::new(InterruptRing::new());
 /// The handler's end of the ring; `None` until [`init`].
-static mut WRITER: Option<RingWriter<'static>> = None;
+static WRITER: Mutex<RefCell<Option<RingWriter<'static>>>> = Mutex::new(RefCell::new(None));
 
 /// Splits the ring: its writer for the receive interrupt handler, its reader returned. Call once,
 /// before the receive interrupt is enabled (returns `None` if called again).
 pub fn init() -> Option<RingReceiver> {
-    // SAFETY: the receive interrupt is not enabled yet, so nothing else touches WRITER or RING;
-    // a second call is refused before either is touched again.
-    unsafe {
-        let writer = &mut *addr_of_mut!(WRITER);
-        if writer.is_some() {
-            return None;
-        }
-        let ring = &mut *addr_of_mut!(RING);
-        let (w, reader) = ring.split(&STATS);
-        *writer = Some(w);
-        Some(RingReceiver { reader })
-    }
+    let ring = RING.try_take()?;
+    let (writer, reader) = ring.split(&STATS);
+    cortex_m::interrupt::free(|cs| WRITER.borrow(cs).replace(Some(writer)));
+    Some(RingReceiver { reader })
 }
 
-/// One received byte and its errors, from the receive interrupt handler.
-///
-/// # Safety
-/// Only the receive interrupt handler may call it (the ring's one producer).
-pub unsafe fn push(byte: u8, errors: LineErrors) {
-    // SAFETY: the caller is the one producer; `init` stored the writer before enabling it.
-    if let Some(writer) = unsafe { (*addr_of_mut!(WRITER)).as_mut() } {
-        writer.push(byte, errors);
-    }
+/// One received byte and its errors, from the receive interrupt handler (the ring's one
+/// producer); dropped before [`init`].
+pub fn push(byte: u8, errors: LineErrors) {
+    cortex_m::interrupt::free(|cs| {
+        if let Ok(mut writer) = WRITER.borrow(cs).try_borrow_mut() {
+            if let Some(writer) = writer.as_mut() {
+                writer.push(byte, errors);
+            }
+        }
+    });
 }
 
 /// The main loop's end of the receive ring.

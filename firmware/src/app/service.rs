@@ -12,8 +12,8 @@ use firmware::checkpoint_store::{
     CheckpointStore, Restored, SaveSchedule, StoreBuffers, CHECKPOINT_INTERVAL_S,
 };
 
-use crate::board::{CostCounter, Flash};
-use crate::stack;
+use super::board::{CostCounter, Flash};
+use super::stack;
 
 /// Where checkpoints go, and when.
 pub struct Persistence {
@@ -152,7 +152,8 @@ impl<'a> Service<'a> {
                 Response::Status(self.status(link))
             }
             Request::ReadStatus => Response::Status(self.status(link)),
-            // Only a test build acts on it (main.rs); here it is no request.
+            // Only the watchdog test's build has it and acts on it (main.rs); here it is no request.
+            #[cfg(feature = "test-hang")]
             Request::Hang => {
                 self.count_bad_frame(FrameError::Message);
                 return None;

@@ -4,28 +4,28 @@
 //! stack), written just before the reset and read once at the next boot. A magic number tells a
 //! real mark from power-on garbage.
 
-use core::mem::MaybeUninit;
-use core::ptr::{addr_of_mut, read_volatile, write_volatile};
+use core::sync::atomic::{AtomicU32, Ordering};
 
 use link_protocol::ResetCause;
 
 const MAGIC: u32 = 0x5249_4E53; // "RINS"
 
+/// The magic word and the cause's code. The initialiser is never loaded (`.uninit` is a NOLOAD
+/// section): at boot the words hold what the previous run left, or power-on garbage; any bit
+/// pattern is a valid word.
 #[link_section = ".uninit.RINS_RESET_MARK"]
-static mut MARK: MaybeUninit<[u32; 2]> = MaybeUninit::uninit();
+static MARK: [AtomicU32; 2] = [AtomicU32::new(0), AtomicU32::new(0)];
 
 /// Leaves `cause` for the next boot.
 pub fn set(cause: ResetCause) {
-    // SAFETY: plain words in RAM; an interrupt handler about to reset is the only other writer.
-    unsafe { write_volatile(addr_of_mut!(MARK).cast::<[u32; 2]>(), [MAGIC, cause as u32]) };
+    MARK[1].store(cause as u32, Ordering::SeqCst);
+    MARK[0].store(MAGIC, Ordering::SeqCst);
 }
 
 /// The cause left by the previous run, if it left one; clears it.
 pub fn take() -> Option<ResetCause> {
-    // SAFETY: any bit pattern is a valid pair of words (read as integers, checked below).
-    let [magic, code] = unsafe { read_volatile(addr_of_mut!(MARK).cast::<[u32; 2]>()) };
-    // SAFETY: as above.
-    unsafe { write_volatile(addr_of_mut!(MARK).cast::<[u32; 2]>(), [0, 0]) };
+    let magic = MARK[0].swap(0, Ordering::SeqCst);
+    let code = MARK[1].swap(0, Ordering::SeqCst);
     if magic != MAGIC {
         return None;
     }

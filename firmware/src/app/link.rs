@@ -10,7 +10,7 @@ use firmware::watchdog::Watchdog;
 use link_protocol::frame::MAX_FRAME;
 use link_protocol::{encode_response_frame, FrameError, LinkCounters, Numbered, Request, Response};
 
-use crate::board::{Receiver, Transmitter};
+use super::board::{Receiver, Transmitter};
 
 /// The serial port's two ends and the request decoder.
 pub struct Link<W> {

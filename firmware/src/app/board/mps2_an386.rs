@@ -20,15 +20,18 @@
 //! Interrupts are dispatched by number from cortex-m-rt's `DefaultHandler` (this board has no
 //! peripheral access crate, so no vector table of named handlers).
 
+use core::cell::RefCell;
 use core::convert::Infallible;
-use core::ptr::{addr_of_mut, read_volatile, write_volatile};
+use core::ptr::{read_volatile, write_volatile};
 
+use cortex_m::interrupt::Mutex;
 use cortex_m_rt::exception;
 use defmt_semihosting as _;
 use firmware::rx_stats::LineErrors;
 use firmware::watchdog::Watchdog;
 use heapless::spsc::{Consumer, Producer, Queue};
 use link_protocol::{ClockSource, ResetCause};
+use static_cell::ConstStaticCell;
 
 pub use super::interrupt_rx::RingReceiver as Receiver;
 pub use super::systick_cost::CostCounter;
@@ -181,25 +184,31 @@ fn uart_rx_interrupt() {
     }
 }
 
-static mut TX_QUEUE: Queue<u8, TX_QUEUE_ENTRIES> = Queue::new();
+/// The transmit queue, taken once by `Transmitter::init`.
+static TX_QUEUE: ConstStaticCell<Queue<u8, TX_QUEUE_ENTRIES>> = ConstStaticCell::new(Queue::new());
 /// The transmit interrupt handler's end of the queue; `None` until `Transmitter::init`.
-static mut TX_CONSUMER: Option<Consumer<'static, u8>> = None;
+static TX_CONSUMER: Mutex<RefCell<Option<Consumer<'static, u8>>>> = Mutex::new(RefCell::new(None));
 
 /// UART0's transmit interrupt (the buffer emptied), or pended by [`Transmitter::write`]: the next
 /// queued byte goes out.
 fn uart_tx_interrupt() {
-    // SAFETY: UART0's registers; this handler is the only writer of DATA and the queue's one
-    // consumer.
-    unsafe {
-        reg_write(UART_INTSTATUS, INTSTATUS_TX);
-        if let Some(queue) = (*addr_of_mut!(TX_CONSUMER)).as_mut() {
-            if reg_read(UART_STATE) & STATE_TX_FULL == 0 {
-                if let Some(byte) = queue.dequeue() {
-                    reg_write(UART_DATA, u32::from(byte));
+    // SAFETY: UART0's registers; this handler is the only writer of DATA.
+    unsafe { reg_write(UART_INTSTATUS, INTSTATUS_TX) };
+    cortex_m::interrupt::free(|cs| {
+        let Ok(mut consumer) = TX_CONSUMER.borrow(cs).try_borrow_mut() else {
+            return;
+        };
+        if let Some(queue) = consumer.as_mut() {
+            // SAFETY: as above; this handler is the queue's one consumer.
+            unsafe {
+                if reg_read(UART_STATE) & STATE_TX_FULL == 0 {
+                    if let Some(byte) = queue.dequeue() {
+                        reg_write(UART_DATA, u32::from(byte));
+                    }
                 }
             }
         }
-    }
+    });
 }
 
 /// UART0's transmitter: bytes are queued and sent by the transmit interrupt.
@@ -209,16 +218,9 @@ pub struct Transmitter {
 
 impl Transmitter {
     fn init() -> Option<Transmitter> {
-        // SAFETY: called once from Board::init before the transmit interrupt is enabled.
-        unsafe {
-            let consumer = &mut *addr_of_mut!(TX_CONSUMER);
-            if consumer.is_some() {
-                return None;
-            }
-            let (producer, c) = (*addr_of_mut!(TX_QUEUE)).split();
-            *consumer = Some(c);
-            Some(Transmitter { queue: producer })
-        }
+        let (producer, consumer) = TX_QUEUE.try_take()?.split();
+        cortex_m::interrupt::free(|cs| TX_CONSUMER.borrow(cs).replace(Some(consumer)));
+        Some(Transmitter { queue: producer })
     }
 }
 

@@ -12,12 +12,13 @@
 //! second overruns it, RM0090 30.6.1). The DMA keeps writing to SRAM meanwhile. The ring's reader
 //! is `firmware::dma_ring` (host-tested against a simulated DMA and the chip's timeline).
 
-use core::ptr::{addr_of, addr_of_mut, read_volatile};
+use core::ptr::read_volatile;
 
 use firmware::dma_ring::{snapshot, DmaFlags, DmaRing, DmaStream};
 use firmware::rx_stats::{LineErrors, RxStats};
 use firmware::{Received, DMA_RX_BUFFER_BYTES};
 use link_protocol::{BlockingWriter, LinkCounters};
+use static_cell::ConstStaticCell;
 use stm32f4xx_hal::dma::config::Priority;
 use stm32f4xx_hal::dma::traits::{Stream, StreamISR};
 use stm32f4xx_hal::dma::{DmaChannel, DmaDataSize, DmaDirection, StreamX, StreamsTuple};
@@ -35,9 +36,11 @@ const BAUD: u32 = 115_200;
 const TX_BUFFER_BYTES: usize = 256;
 
 /// The circular receive buffer the DMA writes (SRAM1, which DMA2 reaches; not the CCM).
-static mut DMA_RX_BUFFER: [u8; DMA_RX_BUFFER_BYTES] = [0; DMA_RX_BUFFER_BYTES];
+static DMA_RX_BUFFER: ConstStaticCell<[u8; DMA_RX_BUFFER_BYTES]> =
+    ConstStaticCell::new([0; DMA_RX_BUFFER_BYTES]);
 /// What the transmit DMA sends from.
-static mut DMA_TX_BUFFER: [u8; TX_BUFFER_BYTES] = [0; TX_BUFFER_BYTES];
+static DMA_TX_BUFFER: ConstStaticCell<[u8; TX_BUFFER_BYTES]> =
+    ConstStaticCell::new([0; TX_BUFFER_BYTES]);
 /// The DMA path's error counters (the USART1 interrupt counts line errors into them).
 static DMA_STATS: RxStats = RxStats::new();
 
@@ -77,9 +80,17 @@ pub fn init(
             )
         }
         Environment::Silicon => {
+            let (Some(rx_buffer), Some(tx_buffer)) =
+                (DMA_RX_BUFFER.try_take(), DMA_TX_BUFFER.try_take())
+            else {
+                return Ok(None);
+            };
+            // From here on only the DMA writes the receive buffer, and it is read through this
+            // pointer only (volatile).
+            let rx_buffer: *const u8 = rx_buffer.as_mut_ptr();
             let streams = StreamsTuple::new(dma2, rcc);
-            let rx_stream = start_rx_dma(streams.2);
-            let tx_stream = prepare_tx_dma(streams.7);
+            let rx_stream = start_rx_dma(streams.2, rx_buffer);
+            let tx_stream = prepare_tx_dma(streams.7, tx_buffer.as_ptr());
             rx.listen_idle();
             // SAFETY: USART1's CR3, owned by this setup: DMA for both directions, and the error
             // interrupt (overrun, framing, noise flags while the DMA reads the data register).
@@ -89,10 +100,14 @@ pub fn init(
                     .modify(|_, w| w.dmar().set_bit().dmat().set_bit().eie().set_bit());
             }
             (
-                Transmitter::Dma(DmaTransmitter { stream: tx_stream }),
+                Transmitter::Dma(DmaTransmitter {
+                    stream: tx_stream,
+                    buffer: tx_buffer,
+                }),
                 Receiver::Dma(DmaReceiver {
                     ring: DmaRing::new(),
                     stream: RxStream(rx_stream),
+                    buffer: rx_buffer,
                 }),
             )
         }
@@ -108,11 +123,11 @@ fn usart1_dr_address() -> u32 {
     unsafe { (*USART1::ptr()).dr().as_ptr() as u32 }
 }
 
-fn start_rx_dma(mut stream: StreamX<DMA2, 2>) -> StreamX<DMA2, 2> {
+fn start_rx_dma(mut stream: StreamX<DMA2, 2>, buffer: *const u8) -> StreamX<DMA2, 2> {
     stream.set_channel(DmaChannel::Channel4);
     stream.set_direction(DmaDirection::PeripheralToMemory);
     stream.set_peripheral_address(usart1_dr_address());
-    stream.set_memory_address(addr_of!(DMA_RX_BUFFER) as u32);
+    stream.set_memory_address(buffer as u32);
     stream.set_number_of_transfers(DMA_RX_BUFFER_BYTES as u16);
     stream.set_memory_increment(true);
     stream.set_peripheral_increment(false);
@@ -130,11 +145,11 @@ fn start_rx_dma(mut stream: StreamX<DMA2, 2>) -> StreamX<DMA2, 2> {
     stream
 }
 
-fn prepare_tx_dma(mut stream: StreamX<DMA2, 7>) -> StreamX<DMA2, 7> {
+fn prepare_tx_dma(mut stream: StreamX<DMA2, 7>, buffer: *const u8) -> StreamX<DMA2, 7> {
     stream.set_channel(DmaChannel::Channel4);
     stream.set_direction(DmaDirection::MemoryToPeripheral);
     stream.set_peripheral_address(usart1_dr_address());
-    stream.set_memory_address(addr_of!(DMA_TX_BUFFER) as u32);
+    stream.set_memory_address(buffer as u32);
     stream.set_memory_increment(true);
     stream.set_peripheral_increment(false);
     stream.set_circular_mode(false);
@@ -175,19 +190,17 @@ impl DmaStream for RxStream {
 pub struct DmaReceiver {
     ring: DmaRing<DMA_RX_BUFFER_BYTES>,
     stream: RxStream,
+    /// The start of the receive buffer, which the DMA writes.
+    buffer: *const u8,
 }
 
 impl DmaReceiver {
-    fn byte_at(i: usize) -> u8 {
-        // SAFETY: a volatile read of a byte the DMA has written (`DmaRing` only asks for those);
-        // the index is below the buffer's length (the ring's positions are modulo it).
-        unsafe {
-            read_volatile(
-                addr_of!(DMA_RX_BUFFER)
-                    .cast::<u8>()
-                    .add(i % DMA_RX_BUFFER_BYTES),
-            )
-        }
+    /// The byte at ring position `i` of the receive buffer that starts at `buffer`.
+    fn byte_at(buffer: *const u8, i: usize) -> u8 {
+        // SAFETY: `buffer` is the receive buffer's start; a volatile read of a byte the DMA has
+        // written (`DmaRing` only asks for those); the index is below the buffer's length (the
+        // ring's positions are modulo it).
+        unsafe { read_volatile(buffer.add(i % DMA_RX_BUFFER_BYTES)) }
     }
 
     fn update(&mut self) {
@@ -202,11 +215,12 @@ impl Receiver {
         match self {
             Receiver::Interrupt(r) => r.next(),
             Receiver::Dma(d) => {
-                if let Some(item) = d.ring.next(DmaReceiver::byte_at) {
+                let buffer = d.buffer;
+                if let Some(item) = d.ring.next(|i| DmaReceiver::byte_at(buffer, i)) {
                     return Some(item);
                 }
                 d.update();
-                d.ring.next(DmaReceiver::byte_at)
+                d.ring.next(|i| DmaReceiver::byte_at(buffer, i))
             }
         }
     }
@@ -240,6 +254,8 @@ impl Receiver {
 /// The silicon's transmitter: one DMA transfer per write.
 pub struct DmaTransmitter {
     stream: StreamX<DMA2, 7>,
+    /// What the stream sends from: filled only while the stream is idle.
+    buffer: &'static mut [u8; TX_BUFFER_BYTES],
 }
 
 impl DmaTransmitter {
@@ -266,9 +282,8 @@ impl embedded_io::Write for Transmitter {
                 }
                 d.wait_idle();
                 let n = buf.len().min(TX_BUFFER_BYTES);
-                // SAFETY: the stream is idle, so nothing reads the buffer while it is filled.
-                let buffer = unsafe { &mut *addr_of_mut!(DMA_TX_BUFFER) };
-                if let (Some(to), Some(from)) = (buffer.get_mut(..n), buf.get(..n)) {
+                // The stream is idle, so nothing reads the buffer while it is filled.
+                if let (Some(to), Some(from)) = (d.buffer.get_mut(..n), buf.get(..n)) {
                     to.copy_from_slice(from);
                 }
                 // Every flag of stream 7 cleared in one write to DMA2_HIFCR (bits 22 and 24-27:
@@ -314,8 +329,7 @@ pub fn usart1_interrupt(environment: Environment) {
         Environment::Qemu => {
             if sr.rxne().bit_is_set() {
                 let byte = usart.dr().read().dr().bits() as u8;
-                // SAFETY: this handler is the ring's one producer.
-                unsafe { interrupt_rx::push(byte, errors) };
+                interrupt_rx::push(byte, errors);
             }
         }
         Environment::Silicon => {
