@@ -112,7 +112,10 @@ pub enum Restored {
     /// The newest entry is an invalidation (a `Reset`): nothing to restore.
     Forgotten,
     /// The newest image, restored; the time of its last sample (`None` before any sample).
-    Image { time_s: Option<f64> },
+    Image {
+        /// The time of the image's last sample, s (`None` before any sample).
+        time_s: Option<f64>,
+    },
     /// The newest image was refused by the core (another format version, a foreign image); the
     /// estimator is unchanged, and the next save replaces the image.
     Refused(CheckpointError),
@@ -121,7 +124,9 @@ pub enum Restored {
     /// reports them, and compensates with them, from the first sample. The time of the record's
     /// last sample and the version the image was refused for.
     Learned {
+        /// The time of the record's last sample, s.
         time_s: f64,
+        /// Why the core refused the image saved with the record.
         refused: CheckpointError,
     },
 }

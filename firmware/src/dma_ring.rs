@@ -49,7 +49,9 @@ pub trait DmaStream {
 /// The stream's state at one moment: counter and the flags since the previous snapshot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DmaSnapshot {
+    /// The stream's transfer counter (NDTR): bytes left before it wraps.
     pub remaining: u16,
+    /// The half- and full-transfer flags since the previous snapshot.
     pub flags: DmaFlags,
 }
 

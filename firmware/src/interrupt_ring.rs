@@ -32,6 +32,7 @@ impl<const N: usize> InterruptRing<N> {
     /// Bytes the ring holds.
     pub const CAPACITY: usize = N - 1;
 
+    /// An empty ring.
     pub const fn new() -> Self {
         InterruptRing {
             queue: Queue::new(),

@@ -17,6 +17,7 @@
 //!
 //! `tests/receive_timeline.rs` runs the receive path against the STM32F405's timeline at 115200
 //! baud, the flash stalls included.
+#![warn(missing_docs)]
 #![cfg_attr(not(test), no_std)]
 #![deny(
     clippy::unwrap_used,
@@ -60,6 +61,8 @@ pub const INTERRUPT_RX_RING_ENTRIES: usize = 1024;
 /// byte: the receive buffer overflowed, or the UART overran).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Received {
+    /// A byte received.
     Byte(u8),
+    /// Bytes were lost just before the next one.
     Gap,
 }

@@ -15,6 +15,7 @@ pub struct RequestReceiver {
 }
 
 impl RequestReceiver {
+    /// No byte received yet, no sequence number seen.
     pub const fn new() -> Self {
         RequestReceiver {
             frames: FrameAccumulator::new(),

@@ -41,6 +41,7 @@ fn saturating_increment(counter: &AtomicU32) {
 }
 
 impl RxStats {
+    /// Every counter at zero.
     pub const fn new() -> Self {
         RxStats {
             uart_overruns: AtomicU32::new(0),

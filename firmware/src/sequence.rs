@@ -26,6 +26,7 @@ pub fn next_seq(seq: u32) -> u32 {
 }
 
 impl SequenceTracker {
+    /// No sequence number seen yet.
     pub const fn new() -> Self {
         SequenceTracker {
             expected: None,

@@ -25,6 +25,7 @@ pub const fn iwdg_timeout_range_ms(nominal_ms: u32) -> (u32, u32) {
 
 /// Something that must be fed in time. Feeding is a register write: a copyable handle suffices.
 pub trait Watchdog {
+    /// Restarts the watchdog's countdown.
     fn feed(&self);
 }
 
@@ -44,6 +45,7 @@ pub struct FedFlash<F, W> {
 }
 
 impl<F, W> FedFlash<F, W> {
+    /// `flash`, feeding `watchdog` before each erase block and each write.
     pub fn new(flash: F, watchdog: W) -> Self {
         FedFlash { flash, watchdog }
     }

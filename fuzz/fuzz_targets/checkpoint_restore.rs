@@ -5,7 +5,6 @@
 //! (1 s apart from t = 10^4 s: a clock jump for the restored grid, or its first samples).
 #![no_main]
 
-#[path = "common/mod.rs"]
 mod common;
 
 use common::{assert_finite, healthy, CAP};

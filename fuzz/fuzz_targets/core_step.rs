@@ -5,7 +5,6 @@
 //! sample changes nothing but its counter, and the final state validates (checkpoint round trip).
 #![no_main]
 
-#[path = "common/mod.rs"]
 mod common;
 
 use common::{assert_finite, assert_state_valid, healthy, CAP};

@@ -3,7 +3,6 @@
 //! on the whole input. Checks: no panic, finite core output.
 #![no_main]
 
-#[path = "common/mod.rs"]
 mod common;
 
 use common::{assert_finite, CAP};

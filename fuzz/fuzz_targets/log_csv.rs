@@ -3,7 +3,6 @@
 //! error of that row only: rows may follow it), finite core output.
 #![no_main]
 
-#[path = "common/mod.rs"]
 mod common;
 
 use common::{assert_finite, CAP};
