@@ -178,18 +178,38 @@ pub enum Part {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CheckpointError {
     /// The buffer is shorter than the image.
-    BufferTooSmall { needed: usize, available: usize },
+    BufferTooSmall {
+        /// Bytes the image (or, on restore, its header) takes.
+        needed: usize,
+        /// Bytes in the buffer.
+        available: usize,
+    },
     /// The first four bytes are not [`MAGIC`].
     BadMagic,
     /// The image has another format version than this firmware's [`VERSION`] (see the module
     /// doc: an older image must be discarded).
-    Version { found: u16, expected: u16 },
+    Version {
+        /// The image's format version.
+        found: u16,
+        /// The format version this firmware reads, [`VERSION`].
+        expected: u16,
+    },
     /// Written with another float width (`f32` vs `f64` feature); the value is the image's bytes.
     RealWidthMismatch(u8),
     /// The header's length is not [`CHECKPOINT_LEN`].
-    LengthMismatch { expected: usize, found: usize },
+    LengthMismatch {
+        /// The image length this build writes and reads, [`CHECKPOINT_LEN`], bytes.
+        expected: usize,
+        /// The length in the image's header, bytes.
+        found: usize,
+    },
     /// The CRC-32 does not match the content.
-    CrcMismatch { stored: u32, computed: u32 },
+    CrcMismatch {
+        /// The CRC-32 at the end of the image.
+        stored: u32,
+        /// The CRC-32 of the image's bytes before it ([`crc32`]).
+        computed: u32,
+    },
     /// The method code is unknown.
     UnknownMethod(u8),
     /// The configuration does not pass [`Config::check`].

@@ -10,6 +10,7 @@
 pub struct UnknownCode {
     /// The enum, as a reader would name it ("method", "status", ...).
     pub what: &'static str,
+    /// The byte that is not one of its codes.
     pub code: u8,
 }
 

@@ -158,13 +158,22 @@ impl Default for Config {
 pub enum ConfigError {
     /// A pinned `rotation_period_s` outside [`ROTATION_PERIOD_RANGE_S`] (or a ring of fewer than
     /// two entries: `value_s` is then the capacity).
-    RotationPeriod { value_s: f64 },
+    RotationPeriod {
+        /// The pinned period, s (the ring's capacity, entries, for a ring too small).
+        value_s: f64,
+    },
     /// A pinned `sample_interval_s` outside [`SAMPLE_INTERVAL_RANGE_S`].
-    SampleInterval { value_s: f64 },
+    SampleInterval {
+        /// The pinned interval, s.
+        value_s: f64,
+    },
     /// A noise, tolerance, gate or filling limit out of its bound.
     Parameter {
+        /// The parameter, as [`Config`] names it (`prior.x_rad[0]` for an element of the prior).
         name: &'static str,
+        /// Its value, widened to `f64`.
         value: f64,
+        /// The bound it breaks.
         bound: Bound,
     },
     /// The method is not in this build (the paper's method needs the `paper-method` feature).

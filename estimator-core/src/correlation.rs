@@ -138,6 +138,8 @@ pub struct ReferenceFilter {
 /// The references of one sample: the four channels' and the turn channel's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct References {
+    /// The low-passed references of the four channels (`sin(rho-s)`, `cos(rho-s)`, `sin rho`,
+    /// `cos rho`), in channel order.
     pub channels: [Real; 4],
     /// The rate of turn, low-passed, in units of [`TURN_RATE_UNIT_RAD_S`].
     pub turn: Real,
@@ -195,13 +197,21 @@ pub const TRIG_COUNTS: f64 = (1u64 << 14) as f64;
 /// (for eq (2)'s rows) and the low-passed references.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct QuantizedSample {
+    /// Roll, [`ATTITUDE_COUNTS`] per rad.
     pub roll: i32,
+    /// Pitch, [`ATTITUDE_COUNTS`] per rad.
     pub pitch: i32,
+    /// `sin rho`, [`TRIG_COUNTS`] per unit.
     pub sin_rho: i16,
+    /// `cos rho`, [`TRIG_COUNTS`] per unit.
     pub cos_rho: i16,
+    /// `sin(rho-s)`, [`TRIG_COUNTS`] per unit.
     pub sin_rho_s: i16,
+    /// `cos(rho-s)`, [`TRIG_COUNTS`] per unit.
     pub cos_rho_s: i16,
+    /// `sin L`, [`TRIG_COUNTS`] per unit.
     pub sin_lat: i16,
+    /// `cos L`, [`TRIG_COUNTS`] per unit.
     pub cos_lat: i16,
     /// The references of the four channels, low-passed ([`ReferenceFilter`]), in channel order.
     pub reference: [i16; 4],
@@ -349,6 +359,7 @@ pub const FULL_WEIGHT: u8 = 64;
 pub struct CorrelationSums {
     /// Samples (window entries) summed.
     pub count: u32,
+    /// The [`SUMS`] sums of the weighted products, in fixed-point counts, in the order above.
     pub sums: [i64; SUMS],
     /// Sum of the entries' fill weights (see [`crate::gap_fill`]).
     pub fill_weight: u32,
@@ -384,11 +395,14 @@ fn to_real(v: i64) -> Real {
 /// A window's measurement: the four channels and their rows (`z = rows x`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Measurement {
+    /// The four channels' centred means, rad, in channel order.
     pub z: [Real; 4],
+    /// Each channel's row: the coefficients of the [`STATES`] states in its `z`.
     pub rows: [[Real; STATES]; 4],
     /// The turn channel (roll with the rate of turn as its reference; with the roll pair only):
     /// its measurement and row.
     pub turn_z: Real,
+    /// The turn channel's row: the coefficients of the [`STATES`] states in `turn_z`.
     pub turn_row: [Real; STATES],
 }
 

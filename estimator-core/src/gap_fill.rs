@@ -90,11 +90,15 @@ pub const MISSING_NEIGHBOUR_VARIANCE_FACTOR: [u32; NEIGHBOURS] = [76, 20, 10, 6,
 pub struct GridSample {
     /// Index on the sample grid.
     pub index: u32,
+    /// Roll, rad.
     pub roll_rad: Real,
+    /// Pitch, rad.
     pub pitch_rad: Real,
+    /// Rotation angle rho of eq (2), rad.
     pub rotation_rad: Real,
     /// Rotation minus platform angle, rad.
     pub rotation_minus_platform_rad: Real,
+    /// Latitude, rad.
     pub latitude_rad: Real,
     /// Heading, rad (the ship's turns: [`crate::correlation`], "Heel in turns").
     pub heading_rad: Real,
@@ -117,8 +121,11 @@ struct Held {
 /// (0 to [`FULL_WEIGHT`]), and whether the window restarts before it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Passed {
+    /// The sample, received or filled.
     pub sample: GridSample,
+    /// Its weight in the window's sums, 0 to [`FULL_WEIGHT`].
     pub weight: u8,
+    /// Whether the window restarts before it.
     pub restart: bool,
 }
 
@@ -311,7 +318,9 @@ impl GapFiller {
 /// The error variance of one filled sample, measured online, of roll and of pitch.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FillVariance {
+    /// Of roll, rad^2.
     pub roll_rad2: Real,
+    /// Of pitch, rad^2.
     pub pitch_rad2: Real,
 }
 

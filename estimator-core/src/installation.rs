@@ -19,12 +19,17 @@ use crate::Real;
 /// Sines and cosines of one sample's angles, computed once per step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Angles {
+    /// sin rho, of the rotation angle rho.
     pub sin_rho: Real,
+    /// cos rho.
     pub cos_rho: Real,
-    /// sin(rho - s), cos(rho - s).
+    /// sin(rho - s), with s the platform angle.
     pub sin_rho_s: Real,
+    /// cos(rho - s).
     pub cos_rho_s: Real,
+    /// sin L, of the latitude L.
     pub sin_lat: Real,
+    /// cos L.
     pub cos_lat: Real,
 }
 

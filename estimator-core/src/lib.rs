@@ -63,6 +63,7 @@
 //! }
 //! # Ok::<(), estimator_core::ConfigError>(())
 //! ```
+#![warn(missing_docs)]
 #![no_std]
 #![cfg_attr(
     not(test),

@@ -24,9 +24,12 @@ pub use windowed::{MethodEstimate, Windowed};
 /// The running state of whichever method the configuration selects.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MethodState<const CAP: usize> {
+    /// The windowed method's ([`Method::Windowed`]).
     Windowed(Windowed<CAP>),
+    /// The paper's method's ([`Method::Paper`]).
     #[cfg(feature = "paper-method")]
     Paper(Paper<CAP>),
+    /// The traditional baseline's ([`Method::Traditional`]).
     Traditional(Traditional),
 }
 

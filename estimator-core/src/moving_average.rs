@@ -193,7 +193,9 @@ pub struct CorrelationWindow<const CAP: usize> {
 /// What a push did: whether it completed an entry, and how many old entries it removed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Pushed {
+    /// Whether the push completed an entry (every push, without bins).
     pub completed: bool,
+    /// Old entries the push removed, at most [`MAX_REMOVALS_PER_PUSH`].
     pub removed: u32,
 }
 
@@ -206,6 +208,7 @@ pub const MAX_REMOVALS_PER_PUSH: usize = 3;
 /// took a byte-wise library copy each way).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Entry {
+    /// The sample's (or the bin's) inputs, in fixed point.
     pub sample: QuantizedSample,
     /// The entry's number (grid index, or bin number with bins), low 16 bits.
     pub number: u16,
@@ -289,26 +292,33 @@ impl FillCode {
 /// A bin being filled: the sums of its samples' values times their weights.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Bin {
+    /// Samples in the bin.
     pub count: u32,
     /// The bin's number.
     pub number: u32,
     /// Sum of the samples' weights (a full weight counts 1).
     pub weight: Real,
+    /// Sum of roll, rad.
     pub roll_rad: Real,
+    /// Sum of pitch, rad.
     pub pitch_rad: Real,
+    /// Sum of latitude, rad.
     pub latitude_rad: Real,
     /// Sum of the low-passed references.
     pub reference: [Real; 4],
-    /// Sum of the rates of turn and of the turn channel's references, in units of
-    /// [`crate::correlation::TURN_RATE_UNIT_RAD_S`].
+    /// Sum of the rates of turn, in units of [`crate::correlation::TURN_RATE_UNIT_RAD_S`].
     pub turn_rate: Real,
+    /// Sum of the turn channel's references, in the same units.
     pub turn_reference: Real,
-    /// The first sample's rotation and rotation-minus-platform angles, and the sums of the offsets
-    /// from them.
+    /// The first sample's rotation angle, rad.
     pub rotation0_rad: Real,
+    /// Sum of the rotation angles' offsets from `rotation0_rad`, rad.
     pub rotation_offset_rad: Real,
+    /// The first sample's rotation-minus-platform angle, rad.
     pub rotation_minus_platform0_rad: Real,
+    /// Sum of the rotation-minus-platform angles' offsets from `rotation_minus_platform0_rad`, rad.
     pub rotation_minus_platform_offset_rad: Real,
+    /// Sum of the samples' fill weights (unweighted, see [`crate::gap_fill`]).
     pub fill_weight: u32,
 }
 
@@ -335,7 +345,9 @@ impl Bin {
 /// How one period is held by the window: samples per entry and entries in a full window.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct WindowLayout {
+    /// Samples per entry (1 without bins).
     pub samples_per_entry: u32,
+    /// Entries in a full window.
     pub entries: usize,
 }
 

@@ -98,7 +98,9 @@ impl TryFrom<u8> for Status {
 /// The four installation errors with their 1-sigma, rad.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Estimate {
+    /// x1..x4, rad.
     pub x_rad: [Real; 4],
+    /// Their 1-sigma, rad.
     pub sigma_rad: [Real; 4],
 }
 
@@ -107,6 +109,7 @@ pub struct Estimate {
 pub struct Output {
     /// The sample's time stamp, s, as received.
     pub time_s: f64,
+    /// What the estimator is doing at this sample.
     pub status: Status,
     /// `None` until the filter has had its first measurement.
     pub estimate: Option<Estimate>,
@@ -247,9 +250,19 @@ pub enum Holdup {
     /// The rotation pattern's period is being detected.
     RotationPeriodNotDetected,
     /// The rotation has broken its pattern since this sample time, s.
-    RotationFault { fault: RotationFault, since_s: f64 },
+    RotationFault {
+        /// How the rotation breaks its pattern.
+        fault: RotationFault,
+        /// Time stamp of the sample at which the fault began, s.
+        since_s: f64,
+    },
     /// The window is filling: `filled` of `len` entries.
-    WindowFilling { filled: u32, len: u32 },
+    WindowFilling {
+        /// Entry numbers the window spans so far.
+        filled: u32,
+        /// Entries in a full window (one rotation period).
+        len: u32,
+    },
 }
 
 impl core::fmt::Display for Holdup {

@@ -185,8 +185,9 @@ const fn dwell_threshold_samples() -> u32 {
 /// Bounds the monitor works within, from the configuration and the sample interval.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Limits {
-    /// Shortest and longest period accepted, samples.
+    /// Shortest period accepted, samples.
     pub min_period_samples: u32,
+    /// Longest period accepted, samples.
     pub max_period_samples: u32,
     /// Largest relative deviation of the time between two passes from the period.
     pub period_tolerance: Real,

@@ -27,8 +27,11 @@ pub struct Sample {
 /// Heading, roll and pitch, rad.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Attitude {
+    /// Heading, rad.
     pub heading_rad: Real,
+    /// Roll, rad.
     pub roll_rad: Real,
+    /// Pitch, rad.
     pub pitch_rad: Real,
 }
 
@@ -36,12 +39,19 @@ pub struct Attitude {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
 pub enum Field {
+    /// [`Sample::time_s`].
     Time = 0,
+    /// [`Sample::rotation_rad`].
     Rotation = 1,
+    /// [`Sample::platform_rad`].
     Platform = 2,
+    /// [`Sample::latitude_rad`].
     Latitude = 3,
+    /// The attitude's [`Attitude::heading_rad`].
     Heading = 4,
+    /// The attitude's [`Attitude::roll_rad`].
     Roll = 5,
+    /// The attitude's [`Attitude::pitch_rad`].
     Pitch = 6,
 }
 
@@ -86,10 +96,17 @@ pub enum SampleError {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u8)]
 pub enum RejectReason {
+    /// [`SampleError::NonFinite`]: a field is NaN or infinite.
     NonFinite = 0,
+    /// [`SampleError::LatitudeOutOfRange`]: |latitude| >= 90 deg.
     LatitudeOutOfRange = 1,
+    /// [`SampleError::AngleOutOfRange`]: an angle is outside its range.
     AngleOutOfRange = 2,
+    /// [`SampleError::TimeNotIncreasing`]: the time is not later than the previous accepted
+    /// sample's.
     TimeNotIncreasing = 3,
+    /// [`SampleError::IrregularTimeStep`]: the time step is not a whole number of sample
+    /// intervals.
     IrregularTimeStep = 4,
 }
 

@@ -111,7 +111,10 @@ pub enum Placement {
     /// One of the stamps the grid is learned from.
     Learning,
     /// `intervals` sample intervals after the previous accepted sample (1: the next sample).
-    OnGrid { intervals: u32 },
+    OnGrid {
+        /// Sample intervals since the previous accepted sample.
+        intervals: u32,
+    },
     /// A clock jump or a clock step backwards: the grid is re-anchored here.
     ClockStep,
 }

@@ -150,12 +150,19 @@ enum RinsField
   : uint32_t
 #endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
  {
+  // The sample's `time_s`.
   RINS_FIELD_TIME = 0,
+  // The sample's `rotation_deg`.
   RINS_FIELD_ROTATION = 1,
+  // The sample's `platform_deg`.
   RINS_FIELD_PLATFORM = 2,
+  // The sample's `latitude_deg`.
   RINS_FIELD_LATITUDE = 3,
+  // The sample's `heading_deg`.
   RINS_FIELD_HEADING = 4,
+  // The sample's `roll_deg`.
   RINS_FIELD_ROLL = 5,
+  // The sample's `pitch_deg`.
   RINS_FIELD_PITCH = 6,
   // No field: the sample was accepted, or its rejection names none.
   RINS_FIELD_NONE = 255,
@@ -274,7 +281,9 @@ typedef struct RinsConfig {
 // The four installation errors x1..x4 and their 1-sigma, rad (multiply by
 // `RINS_ARCSEC_PER_RAD` for arcsec).
 typedef struct RinsEstimate {
+  // x1..x4, rad.
   float x_rad[4];
+  // Their 1-sigma, rad.
   float sigma_rad[4];
 } RinsEstimate;
 

@@ -23,6 +23,7 @@
 //! `#![no_std]`: the library's code uses `core` only. On targets with an operating system (the
 //! laptop's static library) it links `std` for one thing, its panic runtime: a `no_std` static
 //! library cannot be built there with the workspace's unwinding release profile.
+#![warn(missing_docs)]
 #![no_std]
 #![deny(
     clippy::unwrap_used,

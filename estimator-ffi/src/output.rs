@@ -69,7 +69,9 @@ impl From<&Attitude> for RinsAttitude {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub struct RinsEstimate {
+    /// x1..x4, rad.
     pub x_rad: [f32; 4],
+    /// Their 1-sigma, rad.
     pub sigma_rad: [f32; 4],
 }
 
@@ -220,12 +222,19 @@ impl From<RejectReason> for RinsStatus {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
 pub enum RinsField {
+    /// The sample's `time_s`.
     Time = 0,
+    /// The sample's `rotation_deg`.
     Rotation = 1,
+    /// The sample's `platform_deg`.
     Platform = 2,
+    /// The sample's `latitude_deg`.
     Latitude = 3,
+    /// The sample's `heading_deg`.
     Heading = 4,
+    /// The sample's `roll_deg`.
     Roll = 5,
+    /// The sample's `pitch_deg`.
     Pitch = 6,
     /// No field: the sample was accepted, or its rejection names none.
     None = 255,

@@ -20,6 +20,7 @@ pub struct BlockingWriter<W> {
 }
 
 impl<W> BlockingWriter<W> {
+    /// Wraps the transmitter `inner`.
     pub fn new(inner: W) -> Self {
         BlockingWriter { inner }
     }

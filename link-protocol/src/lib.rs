@@ -64,6 +64,7 @@
 //! assert_eq!(responses, [ready]);
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
+#![warn(missing_docs)]
 #![no_std]
 #![cfg_attr(
     not(test),

@@ -26,7 +26,10 @@ use crate::frame::FrameError;
 /// On the wire: `seq` as a varint (1 to 5 bytes), then the message.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 pub struct Numbered<T> {
+    /// The sequence number: the request's, in its answer too; [`UNNUMBERED`] outside the numbered
+    /// stream.
     pub seq: u32,
+    /// The message it numbers.
     pub message: T,
 }
 
@@ -74,12 +77,19 @@ pub enum Response {
 /// [`estimator_core::Sample`], field for field.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 pub struct SampleMsg {
+    /// Time stamp, s ([`Sample::time_s`]).
     pub time_s: f64,
+    /// Rotation angle rho, rad ([`Sample::rotation_rad`]).
     pub rotation_rad: Real,
+    /// Platform angle s, rad ([`Sample::platform_rad`]).
     pub platform_rad: Real,
+    /// Latitude, rad ([`Sample::latitude_rad`]).
     pub latitude_rad: Real,
+    /// Heading, rad ([`Attitude::heading_rad`] of [`Sample::attitude`]).
     pub heading_rad: Real,
+    /// Roll, rad ([`Attitude::roll_rad`] of [`Sample::attitude`]).
     pub roll_rad: Real,
+    /// Pitch, rad ([`Attitude::pitch_rad`] of [`Sample::attitude`]).
     pub pitch_rad: Real,
 }
 
@@ -116,7 +126,9 @@ impl From<&SampleMsg> for Sample {
 /// [`estimator_core::Estimate`]: x1..x4 and their 1-sigma, rad.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 pub struct EstimateMsg {
+    /// x1..x4, rad.
     pub x_rad: [Real; 4],
+    /// Their 1-sigma, rad.
     pub sigma_rad: [Real; 4],
 }
 
@@ -141,12 +153,21 @@ impl From<&EstimateMsg> for Estimate {
 /// [`estimator_core::Health`]: the latched alarms and the residuals' level of a step.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 pub struct HealthMsg {
+    /// Changes of the installation errors declared ([`Health::changes_detected`]).
     pub changes_detected: u32,
+    /// Time stamp of the sample at which the last change was declared, s
+    /// ([`Health::last_change_s`]).
     pub last_change_s: Option<f64>,
+    /// Restarts of the moving average ([`Health::window_restarts`]).
     pub window_restarts: u32,
+    /// Samples rejected, every reason ([`Health::rejected`]).
     pub rejected: u32,
+    /// Time spent in status `model_mismatch`, s ([`Health::mismatch_s`]).
     pub mismatch_s: f64,
+    /// The residual level of the pitch and the roll channel pair, rad ([`Health::residual_rad`]).
     pub residual_rad: Option<[Real; 2]>,
+    /// The factor by which each pair's learned noise widens the reported 1-sigma
+    /// ([`Health::noise_scale`]).
     pub noise_scale: Option<[Real; 2]>,
 }
 
@@ -182,7 +203,9 @@ impl From<&HealthMsg> for Health {
 /// since boot (they survive `Reset`; saturating).
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counters {
+    /// Bad frames, indexed by [`FrameError`] code.
     pub bad_frames: [u32; FrameError::COUNT],
+    /// Rejected samples, indexed by [`RejectReason`] code.
     pub rejected_samples: [u32; RejectReason::ALL.len()],
 }
 
@@ -212,16 +235,22 @@ impl Counters {
 /// An accepted sample's [`estimator_core::Output`], the cost of its step and the counters.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
 pub struct StepReply {
+    /// The sample's time stamp, s, as received ([`Output::time_s`]).
     pub time_s: f64,
     /// [`Status::code`].
     pub status: u8,
+    /// The output's estimate, `None` while there is none ([`Output::estimate`]).
     pub estimate: Option<EstimateMsg>,
+    /// The corrected heading, rad ([`Output::corrected`]).
     pub corrected_heading_rad: Real,
+    /// The corrected roll, rad ([`Output::corrected`]).
     pub corrected_roll_rad: Real,
+    /// The corrected pitch, rad ([`Output::corrected`]).
     pub corrected_pitch_rad: Real,
     /// Ticks of the board's cost counter spent in `Estimator::step` (see
     /// [`StatusReply::cost_counter_hz`]).
     pub step_cost_ticks: u32,
+    /// The bad frames and rejected samples counted, after this sample.
     pub counters: Counters,
     /// The output's latched alarms and residuals' level.
     pub health: HealthMsg,
@@ -268,7 +297,10 @@ pub struct RejectedReply {
     pub reason: u8,
     /// The [`Field`] code of the field named by the error, [`NO_FIELD`] when the reason names none.
     pub field: u8,
+    /// Ticks of the board's cost counter spent in `Estimator::step` (see
+    /// [`StatusReply::cost_counter_hz`]).
     pub step_cost_ticks: u32,
+    /// The bad frames and rejected samples counted, this rejection included.
     pub counters: Counters,
 }
 
@@ -305,19 +337,25 @@ pub struct StatusReply {
     pub protocol_version: u8,
     /// The running configuration's [`estimator_core::Method`] code (`method as u8`).
     pub method: u8,
+    /// The bad frames and rejected samples counted.
     pub counters: Counters,
-    /// The estimator's counters: samples accepted, lost samples filled from their neighbours,
-    /// window restarts.
+    /// Samples the estimator accepted ([`estimator_core::Counters::accepted`]).
     pub accepted: u32,
+    /// Lost samples the estimator filled from their neighbours
+    /// ([`estimator_core::Counters::filled`]).
     pub filled: u32,
+    /// Restarts of the estimator's moving average ([`estimator_core::Counters::window_restarts`]).
     pub window_restarts: u32,
+    /// The estimator's estimate, `None` while it has none.
     pub estimate: Option<EstimateMsg>,
     /// Frequency of the cost counter behind `step_cost_ticks` (the core clock, for SysTick).
     pub cost_counter_hz: u32,
-    /// Stack high-water marks (painted stack): of the start-up (the core's `Estimator::new`), and
-    /// of the service loop since then (includes a `Reset`'s if one was served); the stack's size.
+    /// Stack high-water mark (painted stack) of the start-up (the core's `Estimator::new`), bytes.
     pub boot_stack_peak_bytes: u32,
+    /// Stack high-water mark of the service loop since the start-up (includes a `Reset`'s if one
+    /// was served), bytes.
     pub stack_peak_bytes: u32,
+    /// The stack's size, bytes.
     pub stack_size_bytes: u32,
     /// Sample time of the newest checkpoint saved or restored at boot (`None`: none, or no flash).
     pub checkpoint_time_s: Option<f64>,

@@ -257,6 +257,8 @@ pub const LONG_HORIZONS: u32 = 32;
 /// is switched off), and at and above which as a persistent bias (the full random walk of
 /// `Config::drift_rad_per_sqrt_s`). Between them the random walk's variance rises linearly.
 pub const BIAS_SHARE_NOISE: Real = 0.35;
+/// Bias share at and above which the residual mean is taken as a persistent bias (see
+/// [`BIAS_SHARE_NOISE`]).
 pub const BIAS_SHARE_DRIFT: Real = 0.7;
 
 /// Innovation gate, in standard deviations of a window's residual (see "Innovation gate" in the
@@ -355,8 +357,12 @@ impl CleanState {
 /// whether errors are being learned again after a change.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MethodEstimate {
+    /// x1..x4, rad.
     pub x_rad: [Real; 4],
+    /// Their 1-sigma, rad.
     pub sigma_rad: [Real; 4],
+    /// Whether a channel's residual mean is beyond the residual check's bound (the status
+    /// `model_mismatch`).
     pub mismatch: bool,
     /// Within one period of a declared change of the errors, or still learning them again
     /// ([`change`]).

@@ -53,6 +53,7 @@ pub const CENTRED_FROM: u32 = 3;
 /// batches that alternate (the sway's leak, which averages out faster than white noise) count as
 /// fewer than independent ones, but not below a third; a ripple many batches long at most 19.
 pub const MIN_CORRELATION: Real = -0.5;
+/// Upper bound of the batches' lag-one correlation (see [`MIN_CORRELATION`]).
 pub const MAX_CORRELATION: Real = 0.9;
 
 /// Standard deviations of the batch means' scale under white residuals that are taken as chance

@@ -71,18 +71,30 @@ pub enum StartTaper {
     Fresh,
     /// The window restarted during the bumps: its next full window begins them again. `held`:
     /// a bump had ended (its estimate is held).
-    Restarted { held: bool },
+    Restarted {
+        /// Whether a bump had ended (its estimate is held).
+        held: bool,
+    },
     /// In a bump: the window numbers of the first bump's first window and of this bump's, this
     /// bump's length in windows, and whether a bump has ended (its estimate is held).
     Bumps {
+        /// The window number of the first bump's first window.
         first: u32,
+        /// The window number of this bump's first window.
         start: u32,
+        /// This bump's length, windows.
         len: u32,
+        /// Whether a bump has ended (its estimate is held).
         held: bool,
     },
     /// After the bumps, the weights rising to 1 over `len` windows from window `start`, the
     /// estimate reported at every update.
-    Rise { start: u32, len: u32 },
+    Rise {
+        /// The window number the rise starts from.
+        start: u32,
+        /// The rise's length, windows.
+        len: u32,
+    },
     /// Equal weights, the estimate reported at every update.
     Done,
 }
