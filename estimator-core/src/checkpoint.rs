@@ -8,7 +8,7 @@
 //! learned from, the rotation pattern's period and shape, the fill-error estimate, the health of
 //! the run (the start gate, the last rotation fault), the counters and the time of the last
 //! sample. It does not keep what the next samples rebuild within one rotation period: the
-//! one-period moving-average window (21.6 KB of the 23.6 KB state), the gap filler's delay line
+//! one-period moving-average window (most of the state), the gap filler's delay line
 //! and the low-pass of the correlation references.
 //!
 //! So a restored estimator continues as after a long gap: the estimate and its 1-sigma are

@@ -53,10 +53,9 @@ pub const MAX_SAMPLES_PER_STEP: u32 = 2;
 pub const MAX_WORK_PER_STEP: u32 = 4;
 
 /// The ring capacity of the default estimator, in window entries: one period of up to 720 samples
-/// without bins (720 s at 1 Hz); longer periods are binned. 32 bytes an entry (the inputs, the
-/// entry's number, its weight and its fill weight coded in a byte): with the gap filler's delay
-/// line, the estimator's state stays within 29 KiB (28,824 bytes), under half the firmware's static
-/// RAM budget.
+/// without bins (720 s at 1 Hz); longer periods are binned. The ring is most of the estimator's
+/// state, which stays under half the firmware's static RAM budget (its size and the limit a test
+/// holds it to: docs/results.md).
 pub const DEFAULT_CAPACITY: usize = 720;
 
 /// The constants of the sample grid, fixed when samples start to be fed (from the interval known
@@ -181,7 +180,7 @@ impl<const CAP: usize> Estimator<CAP> {
 
     /// Makes a fresh estimator in `slot`, in place, and returns it; or returns why the
     /// configuration cannot run (and leaves `slot` as it was). The same as [`Estimator::new`],
-    /// without building the state (23.6 KB for the default capacity, most of it the window) on
+    /// without building the state (tens of KB for the default capacity, most of it the window) on
     /// the stack and copying it: how a microcontroller, whose stack is a few KiB, makes its
     /// estimator in a static, and how the C library makes one in the caller's memory. Every field
     /// is written in place, the window's ring not at all (it is uninitialised until it fills);

@@ -49,8 +49,8 @@ impl<const CAP: usize> MethodState<CAP> {
     }
 
     /// Back to the state of [`MethodState::new`], in place when the method stays the same (the
-    /// windowed and paper states hold a 13 KB ring, which must not pass through the stack of a
-    /// microcontroller); a change of method builds the new state by value.
+    /// windowed and paper states hold the one-period ring, which must not pass through the stack
+    /// of a microcontroller); a change of method builds the new state by value.
     pub fn reset(&mut self, config: &Config) {
         match (self, config.method) {
             (MethodState::Windowed(m), Method::Windowed) => m.reset(config),
@@ -61,8 +61,8 @@ impl<const CAP: usize> MethodState<CAP> {
         }
     }
 
-    /// A change of method: the new state is built by value (13 KB of stack for the default
-    /// capacity). Out of line, so that only a change of method uses that stack, not every reset.
+    /// A change of method: the new state is built by value (its ring on the stack). Out of line,
+    /// so that only a change of method uses that stack, not every reset.
     #[cold]
     #[inline(never)]
     fn replace(&mut self, config: &Config) {

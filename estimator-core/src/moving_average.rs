@@ -97,7 +97,7 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
     }
 
     /// Back to the state of [`WindowAverage::new`]`(len)`, in place: no `CAP x CH` temporary on
-    /// the stack (13 KB for the default estimator), which a microcontroller's stack may not hold.
+    /// the stack (most of the estimator's state), which a microcontroller's stack may not hold.
     pub fn reset(&mut self, len: usize) {
         self.clear();
         self.len = len.clamp(1, CAP.max(1));
