@@ -164,7 +164,9 @@ impl<I: LogLines> LogLines for BinnedLines<I> {
 // One a run, held while it runs: the binned variant's size costs nothing.
 #[allow(clippy::large_enum_variant)]
 pub enum Lines<I> {
+    /// The rows as they come.
     Plain(I),
+    /// The rows averaged into bins.
     Binned(BinnedLines<I>),
 }
 

@@ -7,6 +7,8 @@ use estimator_core::units::{arcsec_to_rad, RAD_PER_DEG};
 use estimator_core::{Config, Method, Real};
 
 /// `--scenario`.
+// A doc comment on a variant would become its help in `--help`, which lists the names alone.
+#[allow(missing_docs)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ScenarioArg {
     Paper,
@@ -435,6 +437,7 @@ pub struct RecorderArgs {
 }
 
 impl RecorderArgs {
+    /// These options as the recorder's settings (the outages not yet placed).
     pub fn settings(&self) -> RecorderSettings {
         RecorderSettings {
             drop_fraction: self.drop_fraction,
@@ -496,6 +499,7 @@ pub struct ShipMotionArgs {
     /// starboard heels to port).
     #[arg(long, value_name = "DEG_PER_DEG_S", default_value_t = 0.0)]
     pub heel_per_turn_rate: f64,
+    /// How the RINS's interface departs from the model.
     #[command(flatten)]
     pub interface: InterfaceArgs,
 }
@@ -585,8 +589,10 @@ pub struct LogShapeArgs {
     /// Rotation scheme of the RINS.
     #[arg(long, value_enum, default_value_t)]
     pub scheme: RotationScheme,
+    /// Rotation period and sample interval.
     #[command(flatten)]
     pub timing: TimingArgs,
+    /// The recorder's effects.
     #[command(flatten)]
     pub recorder: RecorderArgs,
 }

@@ -160,6 +160,7 @@ impl Variant {
 /// What the fit of one variant gave.
 #[derive(Clone, Debug)]
 pub struct Fit {
+    /// The variant the log was fitted under.
     pub variant: Variant,
     /// The replay's summary: rows, final status and estimate, what held it back.
     pub replay: Replay,

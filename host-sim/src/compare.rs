@@ -17,12 +17,17 @@ pub const COMPARE_TIMES_S: [f64; 3] = [2_000.0, 20_000.0, 45_000.0];
 /// One line of the table: a method on a scenario over seeds.
 #[derive(Clone, Debug)]
 pub struct CompareRow {
+    /// The scenario.
     pub scenario: ScenarioKind,
+    /// The identification method.
     pub method: Method,
+    /// Runs, one per seed.
     pub runs: usize,
     /// Time after which all four errors stay within 0.5 % (infinite: not within at the end),
     /// median and 95th percentile over seeds, s.
     pub to_percent_s: (f64, f64),
+    /// Time after which all four errors stay within 10 arcsec (infinite: not within at the end),
+    /// median and 95th percentile over seeds, s.
     pub to_arcsec_s: (f64, f64),
     /// Largest |error| of the four at each of [`COMPARE_TIMES_S`] inside the run (NaN outside),
     /// median and 95th percentile, arcsec.
@@ -30,6 +35,7 @@ pub struct CompareRow {
     /// Share of (run, error) pairs within twice the reported 1-sigma at each of
     /// [`COMPARE_TIMES_S`] inside the run (NaN outside; [`coverage_2sigma`]).
     pub coverage_2sigma: Vec<f64>,
+    /// Length of each run, s.
     pub duration_s: f64,
     /// Row-level honesty of the 1-sigma, pooled over the runs' rows (the largest |error| /
     /// 1-sigma: the largest over the runs).

@@ -88,15 +88,20 @@ impl<W: Write> EstimatesWriter<W> {
 /// One parsed row of the estimates CSV.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EstimateRow {
+    /// The input row's time, s.
     pub time_s: f64,
+    /// The estimates of x1..x4, arcsec; `None` while there is no estimate.
     pub x_arcsec: Option<[f64; 4]>,
+    /// Their 1-sigma, arcsec; `None` while there is no estimate.
     pub sigma_arcsec: Option<[f64; 4]>,
+    /// The status's name, or `rejected_<reason>` for a rejected row.
     pub status: String,
     /// Heading, roll, pitch corrected, deg; `None` on a rejected row.
     pub corrected_deg: Option<[f64; 3]>,
 }
 
 impl EstimateRow {
+    /// Whether the estimator rejected the row.
     pub fn is_rejected(&self) -> bool {
         self.status.starts_with(REJECTED_PREFIX)
     }

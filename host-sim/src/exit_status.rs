@@ -29,16 +29,31 @@ pub const HELP: &str = "Exit status:
 pub enum RunEnd {
     /// Not one row of the log could be read.
     #[error("{log}: no row of the log could be read{detail}")]
-    NothingRead { log: String, detail: String },
+    NothingRead {
+        /// The log's name in messages: its path, or `standard input`.
+        log: String,
+        /// The unreadable rows and the first of them, or that there were no rows, in parentheses
+        /// after a space.
+        detail: String,
+    },
     /// Rows were read, but the estimator reached no estimate.
     #[error("no estimate: {reason}")]
-    NoEstimate { reason: String },
+    NoEstimate {
+        /// What held the estimate back.
+        reason: String,
+    },
     /// `commission`: the log's fits cannot tell its conventions (too close, or no fit).
     #[error("conventions undecided: {reason}")]
-    Undecided { reason: String },
+    Undecided {
+        /// Why the fits cannot tell.
+        reason: String,
+    },
     /// `commission`: a variant of the log's conventions fits better than the log as it is.
     #[error("a variant of the log's conventions fits better than the log as it is: {variants}")]
-    VariantFitsBetter { variants: String },
+    VariantFitsBetter {
+        /// The names of the variants that fit better, joined by `or`.
+        variants: String,
+    },
 }
 
 impl RunEnd {
@@ -55,6 +70,7 @@ impl RunEnd {
         }
     }
 
+    /// The exit status of this end: 3, 4 or 5 (see the module doc).
     pub fn status(&self) -> i32 {
         match self {
             RunEnd::NothingRead { .. } => 3,

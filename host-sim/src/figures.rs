@@ -43,7 +43,9 @@ pub fn percent_curves(steps: &[Step], truth: &[RowTruth], interval_s: f64) -> [V
 /// Heading, roll and pitch errors over time, arcsec: before compensation (the oscillation of
 /// eq (2) put in) and after it.
 pub struct AttitudeCurves {
+    /// Heading, roll and pitch error before compensation: the oscillation of eq (2) put in.
     pub before: [Curve; 3],
+    /// Heading, roll and pitch error left after compensation.
     pub after: [Curve; 3],
 }
 

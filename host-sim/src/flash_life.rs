@@ -48,9 +48,13 @@ pub struct FlashLifeArgs {
 /// What a run of the store measured.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlashLife {
+    /// The board's checkpoint flash.
     pub layout: FlashLayout,
+    /// Days of sea log run through the store.
     pub days: f64,
+    /// Checkpoints saved.
     pub saves: u64,
+    /// What the model of the flash counted: erases of each sector, bytes programmed.
     pub counts: FlashCounts,
     /// Bytes programmed by the save that programmed most, and by the one that programmed least.
     pub save_bytes: [u64; 2],

@@ -12,13 +12,16 @@ use std::path::{Path, PathBuf};
 /// A PNG of the report and what it shows.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Figure {
+    /// The PNG file, read and embedded when the page is made.
     pub path: PathBuf,
+    /// What it shows, under it and as its alternative text.
     pub caption: String,
 }
 
 /// A part of a section.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Block {
+    /// A paragraph of text.
     Paragraph(String),
     /// Preformatted text (a command line, a markdown table as printed).
     Code(String),
@@ -26,19 +29,26 @@ pub enum Block {
     Facts(Vec<(String, String)>),
     /// A table: its head and rows.
     Table {
+        /// The head's cells.
         head: Vec<String>,
+        /// The rows' cells.
         rows: Vec<Vec<String>>,
     },
+    /// A figure, embedded.
     Figure(Figure),
 }
 
+/// A titled part of the page.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Section {
+    /// The section's heading.
     pub title: String,
+    /// Its parts, in order.
     pub blocks: Vec<Block>,
 }
 
 impl Section {
+    /// An empty section titled `title`.
     pub fn new(title: impl Into<String>) -> Section {
         Section {
             title: title.into(),
@@ -46,6 +56,7 @@ impl Section {
         }
     }
 
+    /// The section with `block` added at its end.
     pub fn with(mut self, block: Block) -> Section {
         self.blocks.push(block);
         self
@@ -55,9 +66,11 @@ impl Section {
 /// The whole page.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Page {
+    /// The page's title and top heading.
     pub title: String,
     /// The command line that made it.
     pub command: String,
+    /// Its sections, in order.
     pub sections: Vec<Section>,
 }
 

@@ -1,5 +1,6 @@
 //! host-sim: the std side of the project. Generates scenarios, replays logs through the same
 //! `estimator-core` the firmware runs, and reports.
+#![warn(missing_docs)]
 pub mod binned_lines;
 pub mod cli_args;
 pub mod commission;

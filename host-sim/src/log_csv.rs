@@ -56,8 +56,11 @@ pub const STDIO: &str = "-";
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{path}:{line}: {message}")]
 pub struct LogError {
+    /// The file's path, as displayed.
     pub path: String,
+    /// The line, 1-based; 0 for the whole file.
     pub line: usize,
+    /// What is wrong.
     pub message: String,
     /// Only this row is unreadable; the rows after it can still be read.
     pub row: bool,
@@ -86,7 +89,9 @@ impl LogError {
 /// One parsed data line: its 1-based line number in the file, and the row.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LogLine {
+    /// Line number in the file, 1-based.
     pub line: usize,
+    /// The row.
     pub row: Row,
 }
 
@@ -740,11 +745,13 @@ where
 pub struct Truth {
     /// Installation errors x1..x4 at t = 0, arcsec (they drift only under a model mismatch).
     pub x_arcsec: [f64; 4],
+    /// Every parameter of the scenario, written at the top level.
     #[serde(flatten)]
     pub params: ScenarioParams,
 }
 
 impl Truth {
+    /// The truth file of the log `params` generates.
     pub fn new(params: &ScenarioParams) -> Truth {
         Truth {
             x_arcsec: params.errors_arcsec,

@@ -46,8 +46,11 @@ pub enum StudyError {
          give --duration {first_s} or more"
     )]
     TooShort {
+        /// Length of each run, s.
         duration_s: f64,
+        /// The table's first time, s.
         first_s: f64,
+        /// Two rotation periods, s: about when a first estimate comes.
         two_periods_s: f64,
     },
 }
@@ -74,12 +77,19 @@ pub enum ScenarioError {
     /// The rotation scheme needs a longer period (its stops and turns do not fit).
     #[error("the {scheme} scheme needs a rotation period of at least {min_period_s} s")]
     PeriodTooShortForScheme {
+        /// Name of the rotation scheme.
         scheme: &'static str,
+        /// The shortest rotation period the scheme takes, s.
         min_period_s: f64,
     },
     /// The log is shorter than one sample interval.
     #[error("the log ({duration_s} s) is shorter than one sample interval ({interval_s} s)")]
-    ShorterThanOneSample { duration_s: f64, interval_s: f64 },
+    ShorterThanOneSample {
+        /// Length of the log, s.
+        duration_s: f64,
+        /// Interval between samples, s.
+        interval_s: f64,
+    },
     /// The recorder's settings.
     #[error(transparent)]
     Recorder(#[from] RecorderError),
@@ -88,7 +98,9 @@ pub enum ScenarioError {
 /// How the runs are drawn.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Draw {
+    /// The scenario every run starts from.
     pub kind: ScenarioKind,
+    /// Master seed: run `i` uses [`Draw::run_seed`] of `i`.
     pub seed: u64,
     /// Installation errors: magnitude uniform in this range (arcsec), random sign.
     pub error_magnitude_arcsec: (f64, f64),
@@ -96,21 +108,26 @@ pub struct Draw {
     pub lat_range_deg: Option<(f64, f64)>,
     /// Roll sway amplitude (sqrt(2) x RMS) uniform between the scenario's and this, deg.
     pub max_roll_deg: Option<f64>,
+    /// Effects outside eq (2), the same in every run.
     pub mismatch: Mismatch,
     /// The ship's slow heel and trim and its heel per turn rate; the phases drawn per run, from
     /// the run's seed.
     pub ship_motion: ShipMotionSettings,
     /// Log length override, s.
     pub duration_s: Option<f64>,
+    /// Rotation scheme of every run.
     pub scheme: RotationScheme,
-    /// Rotation period and sample interval overrides, s.
+    /// Rotation period override, s.
     pub rotation_period_s: Option<f64>,
+    /// Sample interval override, s.
     pub sample_interval_s: Option<f64>,
     /// The recorder; outages are placed per run, from the run's seed.
     pub recorder: RecorderSettings,
 }
 
 impl Draw {
+    /// Runs of `kind` from master seed `seed`: error magnitudes from 100 to 500 arcsec, no spread,
+    /// mismatch, ship motion or recorder effects, everything else the scenario's.
     pub fn new(kind: ScenarioKind, seed: u64) -> Draw {
         Draw {
             kind,
@@ -359,10 +376,15 @@ pub fn sorted(values: impl IntoIterator<Item = f64>) -> Vec<f64> {
 /// infinite error (written as `null`).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct Summary {
+    /// Runs the statistics are over.
     pub runs: usize,
+    /// Report times, s.
     pub times_s: Vec<f64>,
+    /// Median over the runs of the |error| of x1..x4, per time, arcsec.
     pub median_abs_error_arcsec: Vec<[f64; 4]>,
+    /// 95th percentile over the runs of the |error| of x1..x4, per time, arcsec.
     pub p95_abs_error_arcsec: Vec<[f64; 4]>,
+    /// Largest |error| of x1..x4 over the runs, per time, arcsec.
     pub max_abs_error_arcsec: Vec<[f64; 4]>,
     /// Share of runs with all four errors within 10 arcsec, per time.
     pub share_within_10_arcsec: Vec<f64>,
@@ -407,19 +429,30 @@ impl Summary {
 /// same at [`PLOT_POINTS`] times over the runs (`over_time`).
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct StudyJson {
+    /// Name of the scenario (`paper`, `turntable`, `sea`).
     pub scenario: String,
+    /// Name of the identification method (`windowed`, `paper`, `traditional`).
     pub method: String,
+    /// Name of the rotation scheme.
     pub scheme: String,
     /// The draw in words (latitudes, sway, mismatch, recorder...).
     pub description: String,
+    /// Length of each run, s.
     pub duration_s: f64,
+    /// The seed each run's seed is derived from ([`Draw::run_seed`]).
     pub master_seed: u64,
     /// The seed of each run, in order (`generate --seed S` with the draw's spreads gives run i).
     pub run_seeds: Vec<u64>,
+    /// The command line that ran the study.
     pub command: String,
+    /// Version of host-sim that ran it.
     pub version: String,
+    /// The statistics at the table's times ([`MC_TIMES_S`] inside the runs), written at the top
+    /// level.
     #[serde(flatten)]
     pub summary: Summary,
+    /// The statistics at every time tracked ([`tracked_times_s`]): [`PLOT_POINTS`] evenly spaced
+    /// over the runs and the table's.
     pub over_time: Summary,
     /// The 1-sigma's honesty row by row, the runs' rows pooled ([`pool_honesty`]; `largest.run`
     /// indexes `run_seeds`).

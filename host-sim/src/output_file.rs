@@ -186,6 +186,7 @@ impl Write for OutputFile {
 /// An input of a run and what it is, for [`check_not_input`]'s message.
 #[derive(Clone, Debug)]
 pub struct Input {
+    /// The input's path.
     pub path: PathBuf,
     /// E.g. `the log itself`, `the log's truth file`.
     pub what: &'static str,

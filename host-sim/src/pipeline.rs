@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 
 /// A replayed log.
 pub struct Estimated {
+    /// What the replay produced.
     pub replay: Replay,
     /// Against the truth, when there was one.
     pub report: Option<Report>,
@@ -67,7 +68,9 @@ pub fn log_name(log: &Path) -> String {
 
 /// The truth beside a log: the file, and its scenario regenerated when it names one.
 pub struct LogTruth {
+    /// The truth file as read.
     pub file: TruthFile,
+    /// The scenario it names, regenerated (`None` for a file with the errors only).
     pub generated: Option<Generated>,
 }
 
@@ -121,6 +124,7 @@ pub fn truth_rows<'a>(truth: &'a TruthFile, generated: Option<&'a Generated>) ->
 /// How a log is replayed.
 #[derive(Clone, Debug, Default)]
 pub struct EstimateOptions {
+    /// The estimator's configuration.
     pub config: Config,
     /// Checkpoint, drop and restore the estimator after the rows at these times (ascending).
     pub restart_at_s: Vec<f64>,

@@ -42,8 +42,11 @@ pub type CorrelationPanel = (String, Curve, Curve);
 /// One line of a panel.
 #[derive(Clone, Debug)]
 pub struct Series {
+    /// Name in the legend.
     pub label: String,
+    /// Colour of the line.
     pub color: RGBColor,
+    /// `(x, y)` points; a NaN is a gap in the line.
     pub points: Vec<(f64, f64)>,
 }
 
@@ -51,20 +54,30 @@ pub struct Series {
 /// a gap in the band.
 #[derive(Clone, Debug)]
 pub struct Band {
+    /// Name in the legend.
     pub label: String,
+    /// Colour of the band, drawn translucent.
     pub color: RGBColor,
+    /// `(x, low, high)` points.
     pub points: Vec<(f64, f64, f64)>,
 }
 
 /// One panel: a chart with a title, axis labels, bands and lines.
 #[derive(Clone, Debug, Default)]
 pub struct Panel {
+    /// Title above the chart.
     pub title: String,
+    /// Label of the x axis.
     pub x_label: String,
+    /// Label of the y axis.
     pub y_label: String,
+    /// Lowest and highest value of the y axis; values beyond it are drawn at its edge and marked.
     pub y_range: (f64, f64),
+    /// Whether the y axis is logarithmic.
     pub log_y: bool,
+    /// The lines, drawn over the bands.
     pub series: Vec<Series>,
+    /// The shaded bands.
     pub bands: Vec<Band>,
 }
 
@@ -115,7 +128,9 @@ pub const PALETTE: [RGBColor; 4] = [
     RGBColor(20, 150, 60),
     RGBColor(150, 60, 170),
 ];
+/// Colour of the correlation values of eq (8) in Fig. 3.
 pub const BLUE_LINE: RGBColor = RGBColor(30, 90, 200);
+/// Colour of their averages of eq (11) in Fig. 3.
 pub const RED_LINE: RGBColor = RGBColor(210, 30, 30);
 
 fn x_extent(panel: &Panel) -> (f64, f64) {
@@ -397,9 +412,13 @@ pub fn attitude_error_figure(
 /// as ticks.
 #[derive(Clone, Debug)]
 pub struct Lane {
+    /// Name on the lane's left.
     pub name: String,
+    /// Colour of its bars and ticks.
     pub color: RGBColor,
+    /// `(from, to)` times where it holds, s, drawn as bars.
     pub spans: Vec<(f64, f64)>,
+    /// Instants, s, drawn as ticks.
     pub ticks: Vec<f64>,
 }
 

@@ -124,24 +124,38 @@ pub enum RecorderError {
     DropFraction(f64),
     /// The time offset is beyond [`MAX_TIME_OFFSET_S`].
     #[error("--time-offset must be within +-{MAX_TIME_OFFSET_S} s, got {value_s}")]
-    TimeOffset { value_s: f64 },
+    TimeOffset {
+        /// The time offset, s.
+        value_s: f64,
+    },
     /// The jitter is negative, or not below half the sample interval (`limit_s`), so that stamps
     /// could leave their order.
     #[error("--time-jitter must be >= 0 and below half the sample interval ({limit_s} s) so stamps stay in order, got {value_s}")]
-    TimeJitter { value_s: f64, limit_s: f64 },
+    TimeJitter {
+        /// The jitter's half-width, s.
+        value_s: f64,
+        /// Half the sample interval, s: the jitter must stay below it.
+        limit_s: f64,
+    },
     /// The outages (each [`OUTAGE_S`], `gap_s` apart) do not fit in the log.
     #[error("--outages: {count} outages of {OUTAGE_S} s (and {gap_s} s between them) do not fit in {duration_s} s")]
     OutagesDoNotFit {
+        /// Outages asked for.
         count: usize,
+        /// Shortest time between two outages, s: two sample intervals.
         gap_s: f64,
+        /// Length of the log, s.
         duration_s: f64,
     },
     /// The regular gaps' period is negative or not finite, or their rows do not leave a row
     /// between two gaps.
     #[error("--gap-every must be >= 0 s and longer than --gap-rows rows ({rows} x {interval_s} s), got {every_s}")]
     RegularGaps {
+        /// Period of the regular gaps, s.
         every_s: f64,
+        /// Rows lost in a row at each gap.
         rows: u32,
+        /// Sample interval, s.
         interval_s: f64,
     },
 }
@@ -149,13 +163,17 @@ pub enum RecorderError {
 /// What the recorder is asked to do, before the outages are placed.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RecorderSettings {
+    /// Probability that a row is dropped, independently of the others.
     pub drop_fraction: f64,
     /// Number of outages of [`OUTAGE_S`].
     pub outages: usize,
+    /// Added to every time stamp, s.
     pub time_offset_s: f64,
+    /// Half-width of the uniform time-stamp jitter, s.
     pub time_jitter_s: f64,
-    /// Regular gaps: every this many seconds (0: none), this many rows in a row.
+    /// Period of the regular gaps, s (0: none).
     pub gap_every_s: f64,
+    /// Rows lost in a row at each regular gap.
     pub gap_rows: u32,
 }
 

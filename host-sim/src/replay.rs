@@ -21,6 +21,7 @@ pub type HostEstimator = Estimator;
 pub struct Step {
     /// The input row's time, s.
     pub time_s: f64,
+    /// The estimator's output for the row, or why it rejected the row.
     pub result: Result<Output, SampleError>,
 }
 
@@ -29,14 +30,17 @@ pub struct Step {
 pub struct Replay {
     /// Rows stepped (accepted or rejected by the core); with binning, the bins stepped.
     pub rows: u64,
+    /// Rows the estimator rejected, by reason.
     pub rejected: RejectCounts,
     /// Samples accepted, lost samples filled, restarts of the moving average, clock steps.
     pub counters: Counters,
-    /// The estimate at the end of the log, and the status of the last row accepted.
+    /// The estimate at the end of the log.
     pub final_estimate: Option<estimator_core::Estimate>,
+    /// The status of the last row accepted.
     pub final_status: Option<estimator_core::Status>,
-    /// The sample interval learned (or pinned), s, and the rotation pattern, at the end.
+    /// The sample interval learned (or pinned) at the end, s.
     pub sample_interval_s: Option<f64>,
+    /// The rotation pattern learned (or pinned) at the end.
     pub rotation: RotationSummary,
     /// What held the estimate back at the end, if anything.
     pub holdup: Option<Holdup>,
@@ -53,19 +57,29 @@ pub struct Replay {
 /// Why a replay stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum ReplayError {
+    /// The log cannot be read, or one of its rows (when unreadable rows are refused).
     #[error(transparent)]
     Log(#[from] LogError),
+    /// The estimator's configuration is invalid.
     #[error("invalid estimator configuration: {0}")]
     Config(ConfigError),
+    /// The `--bin-interval-s` is invalid.
     #[error("invalid --bin-interval-s: {0}")]
     BinInterval(BinIntervalError),
+    /// The estimates cannot be written.
     #[error("cannot write estimates")]
     Write(#[from] std::io::Error),
     /// The log's time stamps step by an interval that makes no sense.
     #[error(transparent)]
     Interval(#[from] IntervalError),
+    /// The estimator cannot be checkpointed, or restored from its checkpoint (`--restart-at`).
     #[error("checkpoint at {time_s} s: {message}")]
-    Checkpoint { time_s: f64, message: String },
+    Checkpoint {
+        /// Time of the row after which the checkpoint was taken, s.
+        time_s: f64,
+        /// What went wrong.
+        message: String,
+    },
 }
 
 /// Checkpoints the estimator and restores a fresh one from the bytes (which the caller puts in its
@@ -159,7 +173,9 @@ pub fn sample_of(row: &Row) -> Sample {
 
 /// One row as the replay saw it: handed to the caller of [`replay_each`] after each step.
 pub struct StepView<'a> {
+    /// The row and its line number in the log.
     pub line: &'a LogLine,
+    /// The estimator's output for the row, or why it rejected the row.
     pub result: &'a Result<Output, SampleError>,
     /// Where an accepted row fell on the sample grid (lost samples before it, a clock step).
     pub placement: Option<Placement>,
@@ -198,6 +214,8 @@ pub struct GridFollower {
 }
 
 impl GridFollower {
+    /// The grid a fresh estimator of `config` starts with: its interval pinned by `config`, or
+    /// to be learned from the stamps.
     pub fn new(config: &Config) -> GridFollower {
         GridFollower {
             grid: TimeGrid::new(config.sample_interval_s),

@@ -28,8 +28,9 @@ use serde::Serialize;
 
 /// Times of the accuracy table, s.
 pub const REPORT_TIMES_S: [f64; 4] = [20_000.0, 45_000.0, 86_400.0, 172_800.0];
-/// Settling thresholds.
+/// Settling threshold of the absolute percentage error, %.
 pub const PERCENT_THRESHOLD: f64 = 0.5;
+/// Settling threshold of the absolute error, arcsec.
 pub const ARCSEC_THRESHOLD: f64 = 10.0;
 
 /// The estimate's reported 1-sigma, arcsec, per error; `None` without an estimate.
@@ -485,6 +486,7 @@ pub fn format_honesty(h: &Honesty) -> String {
 /// Accuracy at one report time.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AccuracyAt {
+    /// The report time, s.
     pub time_s: f64,
     /// Estimate minus truth, arcsec; `None` without an estimate.
     pub error_arcsec: Option<[f64; 4]>,
@@ -508,6 +510,7 @@ impl AccuracyAt {
 /// The accuracy table's numbers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Accuracy {
+    /// The accuracy at each report time inside the run.
     pub points: Vec<AccuracyAt>,
     /// Per error: first time after which it stays within 0.5 % (10 arcsec for a true error of 0);
     /// `None`: not within at the end.
@@ -525,6 +528,9 @@ impl Accuracy {
     pub fn all_within_percent_from_s(&self) -> Option<f64> {
         latest(&self.within_percent_from_s)
     }
+
+    /// The latest of the four settling times within 10 arcsec (all errors within), `None` if one
+    /// never settles.
     pub fn all_within_arcsec_from_s(&self) -> Option<f64> {
         latest(&self.within_arcsec_from_s)
     }
@@ -539,10 +545,15 @@ fn latest(v: &[Option<f64>; 4]) -> Option<f64> {
 /// (heading, roll, pitch).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AttitudeRms {
+    /// Start of the span, s: the rows from this time on are taken.
     pub from_s: f64,
+    /// Time of the last row taken, s (`from_s` when none was).
     pub to_s: f64,
+    /// Rows taken.
     pub rows: usize,
+    /// RMS of the oscillation eq (2) put in, before compensation, arcsec.
     pub before_arcsec: [f64; 3],
+    /// RMS of what is left of it after compensation, arcsec.
     pub after_arcsec: [f64; 3],
 }
 
@@ -580,6 +591,7 @@ pub struct RmsAccumulator {
 }
 
 impl RmsAccumulator {
+    /// An accumulator of the rows from `from_s` on, s.
     pub fn new(from_s: f64) -> Self {
         RmsAccumulator {
             from_s,
@@ -590,6 +602,8 @@ impl RmsAccumulator {
         }
     }
 
+    /// Takes one accepted row: its time, s, the attitude error left after compensation
+    /// ([`residual_arcsec`]) and its truth. A row before `from_s` is left out.
     pub fn add(&mut self, time_s: f64, residual_arcsec: &[f64; 3], truth: &RowTruth) {
         if time_s.is_nan() || time_s < self.from_s {
             return;
@@ -604,6 +618,7 @@ impl RmsAccumulator {
         }
     }
 
+    /// The RMS over the rows taken.
     pub fn finish(&self) -> AttitudeRms {
         let n = self.rows.max(1) as f64;
         AttitudeRms {
@@ -654,6 +669,7 @@ pub fn truth_index(time_s: f64, interval_s: f64, len: usize) -> Option<usize> {
 /// The full report of one replay against the truth.
 #[derive(Clone, Debug)]
 pub struct Report {
+    /// The accuracy table's numbers.
     pub accuracy: Accuracy,
     /// Over the rows from the first estimate to the end (a generated truth only).
     pub rms_from_first_estimate: Option<AttitudeRms>,
@@ -671,9 +687,13 @@ pub enum TruthRows<'a> {
     /// added to the log's time stamps (its `--time-offset`), taken off before matching;
     /// `errors_step_at_s`: when the truth's errors change (its `errors_step`), s from the start.
     Generated {
+        /// The generator's rows, one per sample instant.
         rows: &'a [Row],
+        /// Their truth, in the same order.
         truth: &'a [RowTruth],
+        /// What the recorder added to the log's time stamps, s.
         time_offset_s: f64,
+        /// When the truth's errors change, s from the start.
         errors_step_at_s: Option<f64>,
     },
 }
@@ -691,6 +711,7 @@ pub struct ReportBuilder<'a> {
 }
 
 impl<'a> ReportBuilder<'a> {
+    /// A builder judging rows against `truth`, reporting at [`REPORT_TIMES_S`].
     pub fn new(truth: TruthRows<'a>) -> Self {
         let errors_step_at_s = match truth {
             TruthRows::Constant(_) => None,

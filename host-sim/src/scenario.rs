@@ -42,12 +42,19 @@ const EARTH_RADIUS_M: f64 = 6_371_000.0;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ScenarioKind {
+    /// The paper's Section II simulation: roll 3 deg at 6 s, pitch 1 deg at 8-10 s, latitude
+    /// 40 deg, 2 days.
     Paper,
+    /// The paper's Section IV-A turntable test: roll 3 deg, pitch 1 deg, periods near 10 s, static
+    /// base.
     Turntable,
+    /// The paper's Section IV-B sea trial, and rougher: irregular sway from a wave spectrum,
+    /// heading changes, a ship under way at low latitude.
     Sea,
 }
 
 impl ScenarioKind {
+    /// The scenario's name on the command line and in truth files: `paper`, `turntable`, `sea`.
     pub fn name(&self) -> &'static str {
         match self {
             ScenarioKind::Paper => "paper",
@@ -55,6 +62,8 @@ impl ScenarioKind {
             ScenarioKind::Sea => "sea",
         }
     }
+
+    /// The scenario named `s` as [`ScenarioKind::name`] writes it, if there is one.
     pub fn parse(s: &str) -> Option<ScenarioKind> {
         match s {
             "paper" => Some(ScenarioKind::Paper),
@@ -68,8 +77,11 @@ impl ScenarioKind {
 /// One sinusoidal sway component: `amplitude sin(2 pi t / period + phase)`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SwayComponent {
+    /// Amplitude, deg.
     pub amplitude_deg: f64,
+    /// Period, s.
     pub period_s: f64,
+    /// Phase at t = 0, rad.
     pub phase_rad: f64,
 }
 
@@ -253,18 +265,31 @@ pub enum ShipMotionError {
     /// A list of amplitudes and its list of periods differ in length.
     #[error("--{what}-deg gives {amplitudes} amplitudes but --{what}-period-s {periods} periods: give one period per amplitude")]
     CountsDiffer {
+        /// The motion, as its options name it: `slow-heel` or `slow-trim`.
         what: &'static str,
+        /// Amplitudes given.
         amplitudes: usize,
+        /// Periods given.
         periods: usize,
     },
     /// An amplitude that is not a finite number.
     #[error("--{what}-deg: every amplitude must be a finite number of degrees, got {value}")]
-    Amplitude { what: &'static str, value: f64 },
+    Amplitude {
+        /// The motion, as its options name it: `slow-heel` or `slow-trim`.
+        what: &'static str,
+        /// The amplitude, deg.
+        value: f64,
+    },
     /// A period that is not a finite positive number.
     #[error(
         "--{what}-period-s: every period must be a finite number of seconds above 0, got {value}"
     )]
-    Period { what: &'static str, value: f64 },
+    Period {
+        /// The motion, as its options name it: `slow-heel` or `slow-trim`.
+        what: &'static str,
+        /// The period, s.
+        value: f64,
+    },
     /// A heel per turn rate that is not finite.
     #[error(
         "--heel-per-turn-rate must be a finite number (deg of heel per deg/s of turn), got {0}"
@@ -351,10 +376,13 @@ pub struct ErrorsStep {
 /// Everything that defines a generated log. Written into the truth file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ScenarioParams {
+    /// The scenario whose defaults these parameters started from.
     pub scenario: ScenarioKind,
+    /// Seed of the random phases, sway spectrum and noise.
     pub seed: u64,
     /// Length of the log, s (one sample per `sample_interval_s`).
     pub duration_s: f64,
+    /// Interval between sample instants, s.
     pub sample_interval_s: f64,
     /// Installation errors x1..x4 of eqs (1)-(2), arcsec (from the start; see `errors_step`).
     pub errors_arcsec: [f64; 4],
@@ -376,11 +404,14 @@ pub struct ScenarioParams {
     pub rotation_phase_deg: f64,
     /// Platform angle s at t = 0, deg; it then turns at the Earth rate.
     pub platform_phase_deg: f64,
-    /// Roll and pitch sway components (eq 4).
+    /// Roll sway components (eq 4).
     pub roll_sway: Vec<SwayComponent>,
+    /// Pitch sway components (eq 4).
     pub pitch_sway: Vec<SwayComponent>,
-    /// Heading: mean, and yaw sway components; plus a slow weave of this rate amplitude.
+    /// Mean heading, deg; the yaw sway, the slow weave of `heading_weave_rate_deg_s` and the
+    /// turns come on top of it.
     pub heading_deg: f64,
+    /// Yaw sway components about the heading.
     pub heading_sway: Vec<SwayComponent>,
     /// Peak heading rate of the ship's slow course changes, deg/s (0 = none); period 600 s.
     pub heading_weave_rate_deg_s: f64,
@@ -389,6 +420,7 @@ pub struct ScenarioParams {
     pub low_frequency_deg: f64,
     /// 1-sigma of white attitude noise, arcsec.
     pub noise_arcsec: f64,
+    /// Effects outside eq (2) (default: none).
     pub mismatch: Mismatch,
     /// The ship's slow heel and trim and its heel in course changes: true attitude, not errors
     /// (truth files without it: none).
@@ -402,12 +434,19 @@ pub struct ScenarioParams {
 /// One generated row, degrees (the log format's units).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Row {
+    /// Sample time, s.
     pub time_s: f64,
+    /// Rotation angle rho of the sensor assembly (eq (2)), deg.
     pub rotation_deg: f64,
+    /// Platform angle s (eq (2)), deg.
     pub platform_deg: f64,
+    /// Latitude L, deg.
     pub latitude_deg: f64,
+    /// Heading the RINS outputs, with the oscillation of eq (2) in it, deg.
     pub heading_deg: f64,
+    /// Roll the RINS outputs, with the oscillation of eq (2) in it, deg.
     pub roll_deg: f64,
+    /// Pitch the RINS outputs, with the oscillation of eq (2) in it, deg.
     pub pitch_deg: f64,
 }
 
@@ -415,7 +454,10 @@ pub struct Row {
 /// installation-error oscillation actually put into the row, deg.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RowTruth {
+    /// The true attitude (heading, roll, pitch), deg: the ship's motion, without the errors.
     pub true_attitude_deg: [f64; 3],
+    /// The oscillation of eq (2) put into the row for the errors in force (heading, roll,
+    /// pitch), deg.
     pub oscillation_deg: [f64; 3],
     /// Installation errors in force at this row (they drift only under [`Mismatch`] and change
     /// only at an [`ErrorsStep`]), arcsec.
@@ -565,7 +607,9 @@ fn sway(comps: &[SwayComponent], t: f64) -> f64 {
 
 /// A generated log: one row per sample instant (before the recorder) and its truth.
 pub struct Generated {
+    /// One row per sample instant, in time order.
     pub rows: Vec<Row>,
+    /// The truth of each row, in the same order.
     pub truth: Vec<RowTruth>,
 }
 
@@ -605,6 +649,7 @@ pub struct Samples<'a> {
 }
 
 impl<'a> Samples<'a> {
+    /// The rows of `p`, from its first sample instant.
     pub fn new(p: &'a ScenarioParams) -> Samples<'a> {
         let mut rng =
             ChaCha8Rng::seed_from_u64(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xA77_17D3);
@@ -658,6 +703,7 @@ impl<'a> Samples<'a> {
         self.n - self.k
     }
 
+    /// Whether no rows are left to come.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

@@ -127,8 +127,11 @@ pub struct StreamArgs {
 
 /// The firmware, wherever it runs.
 pub struct Target {
+    /// The framed link to the firmware.
     pub link: FirmwareLink,
+    /// The QEMU the firmware runs in (`None` on a board).
     pub qemu: Option<Qemu>,
+    /// What a tick of the firmware's cost counter is worth.
     pub unit: CostUnit,
     /// The firmware's answer to the first `ReadStatus`.
     pub boot_status: StatusReply,
@@ -244,8 +247,11 @@ pub(crate) fn describe_exit(qemu: &mut Option<Qemu>) -> String {
 /// One sample's answer: the core's result as the firmware computed it, and the step's cost.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Answer {
+    /// The core's output for the sample, or why it rejected the sample.
     pub result: Result<Output, SampleError>,
+    /// Ticks of the board's cost counter spent in the step.
     pub step_cost_ticks: u32,
+    /// The firmware's bad frames and rejected samples since boot, by code.
     pub counters: Counters,
 }
 
@@ -317,11 +323,15 @@ pub struct LinkSummary {
 pub struct StreamSummary {
     /// Rows answered (and written).
     pub rows: u64,
+    /// What happened on the link.
     pub link: LinkSummary,
     /// The firmware's status after each restart in the stream (reset cause, restored checkpoint).
     pub restart_status: Vec<StatusReply>,
+    /// The step costs the firmware reported.
     pub cost: CostStats,
+    /// The firmware's status after the last row.
     pub final_status: StatusReply,
+    /// Wall-clock time the stream took.
     pub wall: Duration,
     /// Unreadable rows skipped.
     pub unreadable: RowFilter,

@@ -134,11 +134,17 @@ pub enum IntervalError {
          they look like {unit} ({interval_s} {unit_short} a row is {as_seconds} s){hint}"
     )]
     WrongUnit {
+        /// Median of the first [`CHECKED_STEPS`] steps, s, to 4 significant digits.
         interval_s: f64,
+        /// Shortest interval accepted, s: 10 ms, or 5 ms when binned.
         shortest_s: f64,
+        /// The unit that explains the steps, in words: `milliseconds`, `minutes`, ...
         unit: &'static str,
+        /// Its symbol: `ms`, `min`, ...
         unit_short: &'static str,
+        /// The median step in seconds, were the stamps in that unit, to 4 significant digits.
         as_seconds: f64,
+        /// What to do about it, the end of the message (starting with a space).
         hint: &'static str,
     },
     /// The stamps step by more than 10 s or less than 10 ms (5 ms when binned: `shortest_s`),
@@ -148,8 +154,11 @@ pub enum IntervalError {
          {cause}"
     )]
     Implausible {
+        /// Median of the first [`CHECKED_STEPS`] steps, s, to 4 significant digits.
         interval_s: f64,
+        /// Shortest interval accepted, s: 10 ms, or 5 ms when binned.
         shortest_s: f64,
+        /// The likely cause, in words.
         cause: &'static str,
     },
     /// The stamps step by 5 to 10 ms, a navigation computer's rate, and the log is not binned.
@@ -157,21 +166,32 @@ pub enum IntervalError {
         "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), but a RINS logs every 0.01 to 10 s \
          to the estimator: attitude at the navigation rate (up to 200 Hz) is averaged into its grid with --bin-interval-s S (0.1 to 10, e.g. 1)"
     )]
-    NavigationRate { interval_s: f64 },
+    NavigationRate {
+        /// Median of the first [`CHECKED_STEPS`] steps, s, to 4 significant digits.
+        interval_s: f64,
+    },
     /// The stamps of a binned log step by more than one bin: bins would be left empty.
     #[error(
         "the time stamps step by {interval_s} s (median of the first {CHECKED_STEPS} steps), more than --bin-interval-s {bin_s} s: \
          most bins would be empty; give a --bin-interval-s of at least {interval_s} s, or leave it out for a log at the grid's rate"
     )]
-    SlowerThanBins { interval_s: f64, bin_s: f64 },
+    SlowerThanBins {
+        /// Median of the first [`CHECKED_STEPS`] steps, s, to 4 significant digits.
+        interval_s: f64,
+        /// The bin interval (`--bin-interval-s`), s.
+        bin_s: f64,
+    },
     /// `--sample-interval` says one interval, the stamps another.
     #[error(
         "--sample-interval {pinned_s} s contradicts the log's time stamps, which step by {step_s} s ({which} of the first {CHECKED_STEPS} steps): \
          every row would be off the grid; leave --sample-interval out (the interval is learned) or give {step_s}"
     )]
     ContradictsPinned {
+        /// The `--sample-interval`, s.
         pinned_s: f64,
+        /// The step that contradicts it, s, to 4 significant digits.
         step_s: f64,
+        /// Which step that is: `the shortest` or `the median` of the first [`CHECKED_STEPS`].
         which: &'static str,
     },
 }

@@ -36,9 +36,13 @@ pub const MAX_EVENTS: usize = 200;
 /// Least and greatest value, and the sum, of `N` signals over some rows.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Envelope<const N: usize> {
+    /// Least value of each signal.
     pub min: [f64; N],
+    /// Greatest value of each signal.
     pub max: [f64; N],
+    /// Sum of each signal, for [`Envelope::mean`].
     pub sum: [f64; N],
+    /// Rows taken: those whose `N` values were all finite.
     pub rows: u64,
 }
 
@@ -85,11 +89,14 @@ impl<const N: usize> Envelope<N> {
 /// The estimate in arcsec.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EstimateArcsec {
+    /// The estimates of x1..x4, arcsec.
     pub x: [f64; 4],
+    /// Their 1-sigma, arcsec.
     pub sigma: [f64; 4],
 }
 
 impl EstimateArcsec {
+    /// The core's estimate `e` (rad) in arcsec.
     pub fn of(e: &Estimate) -> EstimateArcsec {
         EstimateArcsec {
             x: e.x_rad.map(|v| rad_to_arcsec(v as f64)),
@@ -101,24 +108,41 @@ impl EstimateArcsec {
 /// Consecutive rows.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Bucket {
-    /// Time of the first and the last row, s.
+    /// Time of the first row, s.
     pub t0_s: f64,
+    /// Time of the last row, s.
     pub t1_s: f64,
+    /// Rows in the bucket, accepted and rejected.
     pub rows: u64,
     /// The estimate on board at the last row that had one.
     pub estimate: Option<EstimateArcsec>,
-    /// The true errors and the estimate's error against them at the last row judged.
+    /// The true errors x1..x4 at the last row judged, arcsec.
     pub truth_x_arcsec: Option<[f64; 4]>,
+    /// The estimate's error against the true errors (estimate minus truth) at the last row
+    /// judged, arcsec.
     pub error_arcsec: Option<[f64; 4]>,
+    /// Envelope of `removed` over the accepted rows (heading, roll, pitch), arcsec: the
+    /// oscillation the compensation took out.
     pub removed_arcsec: Option<Envelope<3>>,
+    /// Envelope of `before` over the accepted rows with a truth (heading, roll, pitch), arcsec:
+    /// the oscillation eq (2) puts in for the true errors.
     pub before_arcsec: Option<Envelope<3>>,
+    /// Envelope of `after` over the accepted rows with a truth (heading, roll, pitch), arcsec:
+    /// what is left after compensation.
     pub after_arcsec: Option<Envelope<3>>,
+    /// Envelope of the post-fit residuals of the four correlation channels over the rows that
+    /// have them, arcsec.
     pub residual_arcsec: Option<Envelope<4>>,
     /// Statuses seen: bit `i` for `Status::ALL[i]`.
     pub statuses: u64,
+    /// Rows the estimator rejected.
     pub rejected: u64,
+    /// Samples lost before these rows, from where the rows fell on the sample grid.
     pub lost_samples: u64,
+    /// Restarts of the moving average, from the estimator's counters (counted only where they
+    /// are known row by row: [`Timeline::knows_restarts`]).
     pub window_restarts: u64,
+    /// Clock jumps and steps back in the rows' stamps.
     pub clock_steps: u64,
 }
 
@@ -161,9 +185,13 @@ fn status_bit(status: Status) -> Option<u64> {
 /// One accepted row kept whole (arcsec, heading, roll, pitch).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TailRow {
+    /// Time of the row, s.
     pub time_s: f64,
+    /// The oscillation the compensation took out, raw attitude minus corrected, arcsec.
     pub removed_arcsec: [f64; 3],
+    /// With a truth: the oscillation eq (2) puts in for the true errors, arcsec.
     pub before_arcsec: Option<[f64; 3]>,
+    /// With a truth: what is left after compensation, `before - removed`, arcsec.
     pub after_arcsec: Option<[f64; 3]>,
 }
 
@@ -172,26 +200,36 @@ pub struct TailRow {
 pub enum EventKind {
     /// The status changed (the first status too).
     Status {
+        /// Name of the status before (`None` at the first status).
         from: Option<&'static str>,
+        /// Name of the status from this row on.
         to: &'static str,
     },
     /// Samples lost before this row (from the stamps).
-    Gap { lost: u64 },
+    Gap {
+        /// Samples lost.
+        lost: u64,
+    },
     /// The moving average restarted (the estimator's counter; not known from a stream).
     WindowRestart,
     /// A clock jump or step back.
     ClockStep,
 }
 
+/// One line of the report's table of events.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Event {
+    /// Time of the row it happened at, s.
     pub time_s: f64,
+    /// What happened.
     pub kind: EventKind,
 }
 
 /// One row as the timeline takes it.
 pub struct TimelineRow<'a> {
+    /// The row, as read from the log or generated.
     pub row: &'a Row,
+    /// The estimator's answer to the row: its output, or why the row was rejected.
     pub result: &'a Result<Output, SampleError>,
     /// Where an accepted row fell on the sample grid.
     pub placement: Option<Placement>,
@@ -216,20 +254,24 @@ pub struct Timeline {
     last_status: Option<Status>,
     last_counters: Counters,
     held: Option<EstimateArcsec>,
-    /// Time of the first and the last row, s.
+    /// Time of the first row, s.
     pub first_time_s: Option<f64>,
+    /// Time of the last row, s.
     pub last_time_s: Option<f64>,
-    /// Time of the first row with an estimate, and of the first row whose status was `converged`.
+    /// Time of the first row with an estimate, s.
     pub first_estimate_s: Option<f64>,
+    /// Time of the first row whose status was `converged`, s.
     pub first_converged_s: Option<f64>,
-    /// Whether any row had a truth, residuals.
+    /// Whether any row had a truth.
     pub has_truth: bool,
+    /// Whether any row had residuals.
     pub has_residuals: bool,
     /// Whether window restarts are known row by row (a replay) or not (a stream).
     pub knows_restarts: bool,
 }
 
 impl Timeline {
+    /// An empty timeline, one row a bucket.
     pub fn new() -> Timeline {
         Timeline {
             rows_per_bucket: 1,

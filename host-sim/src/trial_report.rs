@@ -367,8 +367,11 @@ pub fn write_stream_report(
 
 /// What a Monte Carlo report says of its study.
 pub struct MonteCarloStudy<'a> {
+    /// The draw in words, in the page's title.
     pub description: String,
+    /// Name-value pairs of the study (scenario, method, runs, seeds...).
     pub facts: Vec<(String, String)>,
+    /// The statistics over time, plotted.
     pub summary: &'a Summary,
     /// The table as printed (markdown).
     pub table: String,

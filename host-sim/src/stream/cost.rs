@@ -10,18 +10,23 @@
 /// Max and mean of the step costs, in ticks.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CostStats {
+    /// Steps counted.
     pub steps: u64,
+    /// The largest step cost, ticks.
     pub max_ticks: u32,
+    /// Sum of the step costs, ticks.
     pub sum_ticks: u64,
 }
 
 impl CostStats {
+    /// Counts one step that cost `ticks`.
     pub fn add(&mut self, ticks: u32) {
         self.steps += 1;
         self.max_ticks = self.max_ticks.max(ticks);
         self.sum_ticks += ticks as u64;
     }
 
+    /// Mean step cost, ticks (0 before any step).
     pub fn mean_ticks(&self) -> f64 {
         if self.steps == 0 {
             0.0
@@ -35,9 +40,17 @@ impl CostStats {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CostUnit {
     /// QEMU with `-icount shift`: ticks convert exactly into instructions.
-    QemuInstructions { icount_shift: u32, counter_hz: u32 },
+    QemuInstructions {
+        /// QEMU's `-icount shift`: each guest instruction takes 2^shift ns of virtual time.
+        icount_shift: u32,
+        /// Frequency of the firmware's cost counter, Hz of virtual time.
+        counter_hz: u32,
+    },
     /// A real board: ticks are core cycles.
-    BoardCycles { counter_hz: u32 },
+    BoardCycles {
+        /// Frequency of the cost counter, Hz: the core clock.
+        counter_hz: u32,
+    },
 }
 
 impl CostUnit {

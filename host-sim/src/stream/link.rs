@@ -18,9 +18,10 @@ use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// A byte stream to the firmware (what each end needs: reading or writing).
+/// The reading end of a byte stream to the firmware.
 pub trait PortReader: Read + Send {}
 impl<T: Read + Send> PortReader for T {}
+/// The writing end of a byte stream to the firmware.
 pub trait PortWriter: Write + Send {}
 impl<T: Write + Send> PortWriter for T {}
 
