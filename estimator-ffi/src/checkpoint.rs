@@ -28,16 +28,10 @@ pub unsafe extern "C" fn rins_estimator_checkpoint(
     written: *mut usize,
 ) -> RinsError {
     // SAFETY: the caller's promises.
-    let checked = unsafe {
-        (
-            from_handle(estimator),
-            pointer::check(written.cast_const()),
-            pointer::bytes_mut(buffer, capacity),
-        )
-    };
-    let (est, buffer) = match checked {
-        (Ok(est), Ok(()), Ok(buffer)) => (est, buffer),
-        (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => return e,
+    let (est, buffer) = match unsafe { estimator_and_output(estimator, buffer, capacity, written) }
+    {
+        Ok(checked) => checked,
+        Err(e) => return e,
     };
     match est.checkpoint(buffer) {
         Ok(len) => {
@@ -101,16 +95,10 @@ pub unsafe extern "C" fn rins_estimator_learned(
     written: *mut usize,
 ) -> RinsError {
     // SAFETY: the caller's promises.
-    let checked = unsafe {
-        (
-            from_handle(estimator),
-            pointer::check(written.cast_const()),
-            pointer::bytes_mut(buffer, capacity),
-        )
-    };
-    let (est, buffer) = match checked {
-        (Ok(est), Ok(()), Ok(buffer)) => (est, buffer),
-        (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => return e,
+    let (est, buffer) = match unsafe { estimator_and_output(estimator, buffer, capacity, written) }
+    {
+        Ok(checked) => checked,
+        Err(e) => return e,
     };
     let Some(learned) = est.learned_errors() else {
         return RinsError::NoEstimate;
@@ -153,5 +141,32 @@ pub unsafe extern "C" fn rins_estimator_start_from_learned(
     match est.start_from_learned(&learned) {
         Ok(()) => RinsError::Ok,
         Err(_) => RinsError::CheckpointCorrupt,
+    }
+}
+
+/// The estimator and the output buffer of a call that writes bytes out (a checkpoint, the learned
+/// errors), every pointer checked; of several errors, the estimator's first, then `written`'s,
+/// then the buffer's.
+///
+/// # Safety
+/// The calls' promises: `estimator` is null or a live handle no call changes meanwhile; `buffer`
+/// is null or points to `capacity` writable bytes; `written` is null or points to a `size_t`.
+unsafe fn estimator_and_output<'a>(
+    estimator: *const RinsEstimator,
+    buffer: *mut u8,
+    capacity: usize,
+    written: *mut usize,
+) -> Result<(&'a Estimator, &'a mut [u8]), RinsError> {
+    // SAFETY: the caller's promises.
+    let checked = unsafe {
+        (
+            from_handle(estimator),
+            pointer::check(written.cast_const()),
+            pointer::bytes_mut(buffer, capacity),
+        )
+    };
+    match checked {
+        (Ok(est), Ok(()), Ok(buffer)) => Ok((est, buffer)),
+        (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => Err(e),
     }
 }
