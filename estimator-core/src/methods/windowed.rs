@@ -186,6 +186,7 @@ pub(crate) mod checkpoint;
 pub mod long_run;
 pub mod pair;
 pub mod start;
+pub mod turn_hold;
 
 use crate::config::Config;
 use crate::correlation::{
@@ -245,6 +246,7 @@ fn heel_learned(p: Real) -> bool {
     p > 4.0 * HEEL_HELD_SIGMA_RAD * HEEL_HELD_SIGMA_RAD
 }
 use start::StartTaper;
+use turn_hold::{TurnHold, TurnVerdict, ROLL_HOLD_SIGMAS};
 
 /// Time constant of the residual average, in rotation periods.
 pub const RESIDUAL_PERIODS: usize = 4;
@@ -328,6 +330,9 @@ pub struct Windowed<const CAP: usize> {
     /// The turn channel's measurement of the heel while it is not yet learned: its running mean
     /// over a period of the roll pair's updates, rad, and the updates in it.
     heel_evidence: (Real, u32),
+    /// Whether the roll pair waits for a turn to leave the window ([`turn_hold`]; not kept by a
+    /// checkpoint).
+    turn_hold: TurnHold,
     /// The estimate reported ([`Windowed::estimate_now`] after each update).
     report: Option<MethodEstimate>,
     /// A bump has just ended: the other pair's report is to be refreshed at the next update (not
@@ -411,6 +416,7 @@ impl<const CAP: usize> Windowed<CAP> {
             last_heading: None,
             turning: false,
             heel_evidence: (0.0, 0),
+            turn_hold: TurnHold::NEW,
             report: None,
             held_report_due: false,
         }
@@ -463,6 +469,7 @@ impl<const CAP: usize> Windowed<CAP> {
         self.last_heading = None;
         self.turning = false;
         self.heel_evidence = (0.0, 0);
+        self.turn_hold = TurnHold::NEW;
         self.report = None;
         self.held_report_due = false;
     }
@@ -666,9 +673,20 @@ impl<const CAP: usize> Windowed<CAP> {
         // Whether the measurement was taken (applied, or held out by the gate or the detector's
         // hold: its residuals still go on to the checks).
         let (mut applied, mut taken) = (false, false);
+        let turn = if pair == ROLL_PAIR {
+            self.test_turn(&m, gate.is_some())
+        } else {
+            TurnVerdict::default()
+        };
         if self.change.holding() {
             // A change may be building up: the filter waits.
             taken = true;
+        } else if turn.held {
+            // The window holds a turn the heel state does not explain: the roll pair waits until
+            // it has left the window, from the copy of before it began to pull.
+            if turn.started {
+                self.restore_clean_state();
+            }
         } else {
             if pair == ROLL_PAIR
                 && self.turning
@@ -835,6 +853,39 @@ impl<const CAP: usize> Windowed<CAP> {
         sigma[HEEL_STATE] = HEEL_PRIOR_SIGMA_RAD;
         self.kf.forget(&which, &sigma);
         self.forget_roll_information(&which);
+    }
+
+    /// The turn hold's verdict on the roll pair's update of window `m` ([`turn_hold`]); none
+    /// while the heading does not change. `spread_known`: the roll channels' spreads are learned
+    /// (as for the innovation gate).
+    fn test_turn(
+        &mut self,
+        m: &crate::correlation::Measurement,
+        spread_known: bool,
+    ) -> TurnVerdict {
+        if !(m.turn_row[HEEL_STATE] > 0.0) {
+            return TurnVerdict::default();
+        }
+        let x = self.kf.state().as_slice();
+        let innovation =
+            |row: &[Real; STATES], z: Real| row.iter().zip(x).fold(z, |e, (h, xj)| e - h * xj);
+        let mut roll_beyond = false;
+        if spread_known {
+            let [a, b] = channels(ROLL_PAIR);
+            for (k, ch) in [a, b].into_iter().enumerate() {
+                let e = innovation(&m.rows[ch], m.z[ch]);
+                let bound =
+                    ROLL_HOLD_SIGMAS * ROLL_HOLD_SIGMAS * self.pairs[ROLL_PAIR].spread_rad2[k];
+                roll_beyond |= e * e > bound;
+            }
+        }
+        let turn = innovation(&m.turn_row, m.turn_z);
+        self.turn_hold.test(
+            turn,
+            roll_beyond,
+            self.window.newest_number(),
+            self.window.len() as u32,
+        )
     }
 
     /// The residual average's horizon, in updates of a pair: [`RESIDUAL_PERIODS`] periods of
@@ -1128,6 +1179,7 @@ impl<const CAP: usize> Windowed<CAP> {
             self.window.reset();
             self.entries_since_update = 0;
             self.start.restart();
+            self.turn_hold.end();
         }
     }
 
@@ -1136,6 +1188,7 @@ impl<const CAP: usize> Windowed<CAP> {
         self.window.clear();
         self.entries_since_update = 0;
         self.start.restart();
+        self.turn_hold.end();
     }
 
     /// Current estimate, 1-sigma (the filter's, widened by the residual check) and whether the
