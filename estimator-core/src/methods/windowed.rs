@@ -856,14 +856,16 @@ impl<const CAP: usize> Windowed<CAP> {
     }
 
     /// The turn hold's verdict on the roll pair's update of window `m` ([`turn_hold`]); none
-    /// while the heading does not change. `spread_known`: the roll channels' spreads are learned
-    /// (as for the innovation gate).
+    /// unless the ship turns within the window (the variance of its low-passed rate of turn over
+    /// the window, the turn row's last term, beyond [`TURN_EXCITATION`] squared: the yaw sway of
+    /// eq (4) leaves less than a thousandth of it, the sea scenario's course weave a hundred times
+    /// it). `spread_known`: the roll channels' spreads are learned (as for the innovation gate).
     fn test_turn(
         &mut self,
         m: &crate::correlation::Measurement,
         spread_known: bool,
     ) -> TurnVerdict {
-        if !(m.turn_row[HEEL_STATE] > 0.0) {
+        if !(m.turn_row[HEEL_STATE] > TURN_EXCITATION * TURN_EXCITATION) {
             return TurnVerdict::default();
         }
         let x = self.kf.state().as_slice();

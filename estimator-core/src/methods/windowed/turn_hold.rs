@@ -14,8 +14,9 @@
 //! pair takes no measurement from a window that holds it.
 //!
 //! # When a window holds a turn
-//! While the ship's heading changes (the turn channel has a row), a roll update counts towards a
-//! hold when
+//! While the ship turns within the window (the variance of its low-passed rate of turn over the
+//! window beyond [`super::TURN_EXCITATION`] squared; a yaw sway leaves far less), a roll update
+//! counts towards a hold when
 //! - a roll channel's innovation lies beyond [`ROLL_HOLD_SIGMAS`] times that channel's learned
 //!   spread (the residual spread of [`super::pair`]), or
 //! - the turn channel's innovation (its measurement less its row times the estimate, the heel
@@ -33,8 +34,8 @@
 //! run goes on. When a hold starts, the filter and its residual statistics go back to the
 //! copy kept at the end of the roll pair's last clean block (as when the change detector starts to
 //! hold): the windows of the turn's first seconds, taken before it showed, are undone. The turn
-//! channel's RMS needs a period of the roll pair's updates before it holds anything; a logged
-//! heading that does not change (a lab log, a turntable) never holds.
+//! channel's RMS needs a period of the roll pair's updates before it holds anything; a heading that
+//! only sways (a lab log, a turntable, the paper's scenario) never holds.
 //!
 //! The RMS is not kept by a checkpoint (after a restore it is learned again over a period of
 //! updates, the roll channels' spreads holding meanwhile), nor is a hold (the window restarts).
