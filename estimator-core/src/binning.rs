@@ -200,6 +200,27 @@ pub struct Binner {
     bin: Option<Bin>,
 }
 
+/// Bins of 1 s: the estimator's grid at its usual rate, one step a second.
+pub const DEFAULT_BIN_INTERVAL_S: f64 = 1.0;
+
+/// [`DEFAULT_BIN_INTERVAL_S`] lies within [`BIN_INTERVAL_RANGE_S`], which [`Binner::default`]
+/// relies on.
+const _: () = assert!(
+    DEFAULT_BIN_INTERVAL_S >= BIN_INTERVAL_RANGE_S.0
+        && DEFAULT_BIN_INTERVAL_S <= BIN_INTERVAL_RANGE_S.1
+);
+
+impl Default for Binner {
+    /// An empty binner of [`DEFAULT_BIN_INTERVAL_S`] bins.
+    fn default() -> Binner {
+        Binner {
+            interval_s: DEFAULT_BIN_INTERVAL_S,
+            last_time_s: None,
+            bin: None,
+        }
+    }
+}
+
 impl Binner {
     /// A binner of bins `bin_interval_s` long, within [`BIN_INTERVAL_RANGE_S`].
     pub fn new(bin_interval_s: f64) -> Result<Binner, BinIntervalError> {

@@ -299,6 +299,7 @@ pub(crate) fn answer_of(msg: &SampleMsg, response: Response) -> anyhow::Result<A
             })
         }
         Response::Status(_) => bail!("the firmware answered a sample with a status"),
+        Response::Nav(_) => bail!("the firmware answered a sample as a navigation-rate sample"),
         Response::Ready { .. } => {
             bail!("the firmware restarted (it announced Ready instead of answering)")
         }

@@ -294,6 +294,7 @@ mod tests {
             Request::Sample(sample()),
             Request::Reset,
             Request::ReadStatus,
+            Request::NavSample(sample()),
             #[cfg(feature = "test-hang")]
             Request::Hang,
         ];
@@ -318,6 +319,25 @@ mod tests {
             Response::Ready {
                 protocol_version: crate::PROTOCOL_VERSION,
             },
+            // The longest answer: a navigation sample that completed a bin.
+            Response::Nav(NavReply {
+                time_s: -1.0e300,
+                corrected_rad: Some([1.0e30; 3]),
+                bin: BinOutcome::Step(step_reply()),
+                cost_ticks: u32::MAX,
+            }),
+            Response::Nav(NavReply {
+                time_s: 0.5,
+                corrected_rad: None,
+                bin: BinOutcome::Rejected(rejected),
+                cost_ticks: 0,
+            }),
+            Response::Nav(NavReply {
+                time_s: 0.25,
+                corrected_rad: None,
+                bin: BinOutcome::Open,
+                cost_ticks: 7,
+            }),
         ] {
             let numbered = Numbered {
                 seq: u32::MAX,
@@ -410,7 +430,7 @@ mod tests {
             [0x00, 0x05, 0x03, 0x02, 0x1e, 0x68, 0x00].to_vec()
         );
         // `Hang`, number 300: decoded only with the `test-hang` feature, a bad message without.
-        let hang = [0x00, 0x06, 0xac, 0x02, 0x03, 0x60, 0x52, 0x00];
+        let hang = [0x00, 0x06, 0xac, 0x02, 0x04, 0x87, 0x22, 0x00];
         #[cfg(feature = "test-hang")]
         assert_eq!(
             frame_of(&Numbered {
@@ -424,7 +444,7 @@ mod tests {
             decode_frame::<Numbered<Request>>(&mut body(&hang)),
             Err(FrameError::Message)
         );
-        // The firmware's boot announcement (protocol 6), unnumbered: M = 00 03 06.
+        // The firmware's boot announcement (protocol 7), unnumbered: M = 00 03 07.
         let ready = Numbered {
             seq: UNNUMBERED,
             message: Response::Ready {
@@ -432,11 +452,11 @@ mod tests {
             },
         };
         let bytes = postcard::to_slice(&ready, &mut raw).unwrap().to_vec();
-        assert_eq!(bytes, [0x00, 0x03, 0x06]);
-        assert_eq!(crate::crc::crc16(&bytes), 0xf909);
+        assert_eq!(bytes, [0x00, 0x03, 0x07]);
+        assert_eq!(crate::crc::crc16(&bytes), 0xe928);
         assert_eq!(
             frame_of(&ready),
-            [0x00, 0x01, 0x05, 0x03, 0x06, 0x09, 0xf9, 0x00].to_vec()
+            [0x00, 0x01, 0x05, 0x03, 0x07, 0x28, 0xe9, 0x00].to_vec()
         );
         // No sample frame is longer than 43 bytes: 5 + 33 + 2 bytes COBS-encoded into at most 41.
         assert!(
@@ -609,7 +629,7 @@ mod tests {
         let ready = body(&frame_of(&Response::Ready {
             protocol_version: crate::PROTOCOL_VERSION,
         }));
-        assert_eq!(ready, [0x05, 0x03, 0x06, 0x9a, 0x28]);
+        assert_eq!(ready, [0x05, 0x03, 0x07, 0xbb, 0x38]);
         for cut in 0..ready.len() {
             let mut part = ready[..cut].to_vec();
             assert_eq!(

@@ -102,7 +102,7 @@ fn cobs_matches_the_published_examples_both_ways() {
 }
 
 /// The frames of real messages, exact bytes (hex, delimiters included).
-fn golden() -> [(&'static str, Vec<u8>, &'static str); 5] {
+fn golden() -> [(&'static str, Vec<u8>, &'static str); 6] {
     let sample = SampleMsg::from(&estimator_core::Sample::from_degrees(
         86_399.0, 359.0, -3.0, 61.5, 271.0, -9.5, 4.25,
     ));
@@ -114,6 +114,14 @@ fn golden() -> [(&'static str, Vec<u8>, &'static str); 5] {
                 message: Request::Sample(sample),
             }),
             GOLDEN_SAMPLE,
+        ),
+        (
+            "navigation-rate sample, seq 9",
+            frame(&Numbered {
+                seq: 9,
+                message: Request::NavSample(sample),
+            }),
+            GOLDEN_NAV_SAMPLE,
         ),
         (
             "reset, seq 8",
@@ -154,16 +162,18 @@ fn golden() -> [(&'static str, Vec<u8>, &'static str); 5] {
 
 const GOLDEN_SAMPLE: &str =
     "000207010101011ff017f54035fa8ebc507756bd6f64893ff2d3c6bf1fc929bed8e9973d0b6a00";
+const GOLDEN_NAV_SAMPLE: &str =
+    "000309030101011ff017f54035fa8ebc507756bd6f64893ff2d3c6bf1fc929bed8e9973d5f3500";
 const GOLDEN_RESET: &str = "00050801878400";
 const GOLDEN_READ_STATUS: &str = "0006ac0202414200";
-const GOLDEN_READY: &str = "000105030609f900";
+const GOLDEN_READY: &str = "000105030728e900";
 const GOLDEN_LAST_SEQ: &str = "0009ffffffff0f01df8400";
 
 #[test]
-fn golden_frames_are_the_bytes_of_protocol_version_6() {
+fn golden_frames_are_the_bytes_of_protocol_version_7() {
     assert_eq!(
         crate::PROTOCOL_VERSION,
-        6,
+        7,
         "a new protocol version needs new golden frames (see this module's doc)"
     );
     let frames = golden();
@@ -184,9 +194,10 @@ fn golden_frames_decode_and_every_cut_of_them_is_refused() {
         .collect();
     assert_eq!(
         decoded.iter().map(|m| m.seq).collect::<Vec<_>>(),
-        [7, 8, 300, u32::MAX]
+        [7, 9, 8, 300, u32::MAX]
     );
-    assert_eq!(decoded[1].message, Request::Reset);
+    assert!(matches!(decoded[1].message, Request::NavSample(_)));
+    assert_eq!(decoded[2].message, Request::Reset);
     for (what, bytes, _) in golden() {
         let body = &bytes[1..bytes.len() - 1];
         for cut in 0..body.len() {

@@ -55,7 +55,7 @@
 //! // Firmware to host: the boot announcement, unnumbered, 8 bytes on the wire.
 //! let ready = Numbered { seq: UNNUMBERED, message: Response::Ready { protocol_version: PROTOCOL_VERSION } };
 //! let n = encode_frame(&ready, &mut frame)?;
-//! assert_eq!(frame[..n], [0x00, 0x01, 0x05, 0x03, 0x06, 0x09, 0xf9, 0x00]);
+//! assert_eq!(frame[..n], [0x00, 0x01, 0x05, 0x03, 0x07, 0x28, 0xe9, 0x00]);
 //! let mut host_rx = FrameAccumulator::<MAX_RESPONSE_ENCODED>::new();
 //! let responses = frame[..n]
 //!     .iter()
@@ -91,17 +91,19 @@ pub use accumulator::FrameAccumulator;
 pub use blocking_writer::BlockingWriter;
 pub use frame::{decode_frame, encode_frame, encode_response_frame, EncodeError, FrameError};
 pub use message::{
-    ClockSource, Counters, EstimateMsg, HealthMsg, LinkCounters, Numbered, RejectedReply, Request,
-    ResetCause, Response, SampleMsg, StatusReply, StepReply, UNNUMBERED,
+    BinOutcome, ClockSource, Counters, EstimateMsg, HealthMsg, LinkCounters, NavReply, Numbered,
+    RejectedReply, Request, ResetCause, Response, SampleMsg, StatusReply, StepReply, UNNUMBERED,
 };
 
 /// Version of this protocol, reported in [`StatusReply::protocol_version`]. 5: every frame's
 /// message is [`Numbered`] (a sequence number before it), `Status` appends the receive path's
 /// [`LinkCounters`], the reset cause and the clock source, and the request `Hang` (variant 3, test
-/// builds only) exists, and `Step`'s status may be 10 (a change of the installation errors
+/// builds only; 4 from protocol 7) exists, and `Step`'s status may be 10 (a change of the installation errors
 /// declared) (docs/link-protocol.md, Versioning). 6: `Step` appends the output's latched alarms
-/// and residuals' level ([`HealthMsg`]).
-pub const PROTOCOL_VERSION: u8 = 6;
+/// and residuals' level ([`HealthMsg`]). 7: the request `NavSample` (variant 3: a sample at the
+/// navigation rate, binned by the firmware) and its answer `Nav` ([`NavReply`], response variant
+/// 4); the test builds' `Hang` moves to request variant 4.
+pub const PROTOCOL_VERSION: u8 = 7;
 
 /// Largest COBS-encoded request the firmware accepts (without the two 0x00 delimiters). The largest
 /// request, a sample, encodes to 36 bytes; anything longer than this is counted as oversized.

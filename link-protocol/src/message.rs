@@ -6,7 +6,8 @@
 //! Sample fields travel exactly as [`estimator_core::Sample`] holds them, so the firmware feeds its
 //! core bit-identical samples to the ones the host builds with `Sample::from_degrees`; output values
 //! travel exactly as [`estimator_core::Output`] holds them, so the host rebuilds the same `Output`.
-//! Variants are only ever appended, never reordered.
+//! Variants are only ever appended, never reordered; the test builds' `Hang` stays last, so that
+//! every build numbers the production variants alike.
 
 use estimator_core::{
     Attitude, Estimate, Field, Health, Output, Real, RejectReason, Sample, SampleError, Status,
@@ -47,7 +48,15 @@ pub enum Request {
     Reset,
     /// (2) Answered by [`Response::Status`].
     ReadStatus,
-    /// (3) Only for the watchdog test, and only with this crate's `test-hang` feature (which the
+    /// (3) One sample at the navigation computer's own rate (up to 200 Hz), as it comes: the
+    /// firmware averages it into the bin of its grid interval it falls in (the core's
+    /// [`estimator_core::binning::Binner`]), steps the estimator with a bin once a later bin's
+    /// first sample arrives, and compensates the sample with the estimate then current
+    /// ([`estimator_core::Estimator::compensate`]). Answered by [`Response::Nav`], or by
+    /// [`Response::Rejected`] for a sample the binner refuses (its fields, or a time not after the
+    /// last one's; nothing changes).
+    NavSample(SampleMsg),
+    /// (4) Only for the watchdog test, and only with this crate's `test-hang` feature (which the
     /// firmware's `test-hang` feature and host-sim's tests turn on): a firmware built with it
     /// stops its main loop for good (it no longer feeds the watchdog), so the watchdog must reset
     /// it. Without the feature the variant does not exist: its bytes fail to decode, and the
@@ -72,6 +81,37 @@ pub enum Response {
         /// [`crate::PROTOCOL_VERSION`] of the firmware.
         protocol_version: u8,
     },
+    /// (4) Answer to `NavSample`: the sample compensated, and the step of the bin it completed.
+    Nav(NavReply),
+}
+
+/// The answer to a [`Request::NavSample`]: the sample's attitude compensated with the current
+/// estimate, and what the bin the sample completed gave the estimator.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+pub struct NavReply {
+    /// The sample's time stamp, s, as received.
+    pub time_s: f64,
+    /// The sample's heading, roll and pitch with eq (2)'s oscillation for the current estimate
+    /// removed, rad ([`estimator_core::Estimator::compensate`], after the bin's step); `None` while
+    /// there is no estimate.
+    pub corrected_rad: Option<[Real; 3]>,
+    /// The step of the bin this sample completed (the bin before the sample's), if one did.
+    pub bin: BinOutcome,
+    /// Ticks of the board's cost counter spent on the sample: the binning, the bin's step when
+    /// there is one, and the compensation (see [`StatusReply::cost_counter_hz`]).
+    pub cost_ticks: u32,
+}
+
+/// What the bin a navigation sample completed gave the estimator.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq)]
+pub enum BinOutcome {
+    /// (0) No bin completed: the sample opened none, or fell in the bin being filled.
+    Open,
+    /// (1) The bin's average was stepped: its [`StepReply`] (its time is the bin's centre).
+    Step(StepReply),
+    /// (2) The core rejected the bin's average (a time the estimator refuses); the estimator is
+    /// unchanged.
+    Rejected(RejectedReply),
 }
 
 /// [`estimator_core::Sample`], field for field.

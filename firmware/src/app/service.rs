@@ -1,10 +1,11 @@
 //! The loop's work: one request in, the core stepped, one response out. All estimation is
 //! `estimator-core`'s; this file only converts messages, times the step and keeps the counters.
 
+use estimator_core::binning::Binner;
 use estimator_core::{Estimator, Output, Sample, SampleError};
 use link_protocol::{
-    ClockSource, Counters, EstimateMsg, FrameError, LinkCounters, RejectedReply, Request,
-    ResetCause, Response, StatusReply, StepReply, PROTOCOL_VERSION,
+    BinOutcome, ClockSource, Counters, EstimateMsg, FrameError, LinkCounters, NavReply,
+    RejectedReply, Request, ResetCause, Response, StatusReply, StepReply, PROTOCOL_VERSION,
 };
 
 use estimator_core::checkpoint::CheckpointError;
@@ -67,9 +68,12 @@ impl Persistence {
     }
 }
 
-/// The estimator, the cost counter, the link counters and the checkpoints.
+/// The estimator, the navigation-rate binner (bins of the estimator's 1 s grid,
+/// [`estimator_core::binning::DEFAULT_BIN_INTERVAL_S`]), the cost counter, the link counters and the
+/// checkpoints.
 pub struct Service<'a> {
     estimator: &'a mut Estimator,
+    binner: Binner,
     cost: CostCounter,
     bad_frames: Counters,
     boot_stack_peak_bytes: u32,
@@ -89,6 +93,7 @@ impl<'a> Service<'a> {
     ) -> Self {
         Service {
             estimator,
+            binner: Binner::default(),
             cost,
             bad_frames: Counters::default(),
             boot_stack_peak_bytes,
@@ -98,7 +103,9 @@ impl<'a> Service<'a> {
         }
     }
 
-    /// Saves a checkpoint when one is due after the sample at `time_s` ([`SaveSchedule`]).
+    /// Saves a checkpoint when one is due after the sample at `time_s` ([`SaveSchedule`]). Out of
+    /// line: one copy for the two kinds of sample.
+    #[inline(never)]
     fn maybe_checkpoint(&mut self, time_s: f64) {
         let Some(p) = self.persistence.as_mut() else {
             return;
@@ -138,8 +145,10 @@ impl<'a> Service<'a> {
                     )),
                 }
             }
+            Request::NavSample(msg) => self.nav_sample(&Sample::from(msg)),
             Request::Reset => {
                 reset(self.estimator);
+                self.binner = Binner::default();
                 // Forgotten for good: a power cut must not restore the state the host asked to
                 // forget. If the flash fails, the Status still shows the checkpoint's time, which
                 // tells the host that the reset is incomplete.
@@ -158,6 +167,52 @@ impl<'a> Service<'a> {
                 self.count_bad_frame(FrameError::Message);
                 return None;
             }
+        })
+    }
+
+    /// A navigation-rate sample: binned; the bin it completes, if any, stepped (and checkpointed
+    /// when one is due); then the sample compensated with the estimate of that step. Out of line:
+    /// the image's flash, not its speed, is what it would cost inlined into the loop.
+    #[inline(never)]
+    fn nav_sample(&mut self, sample: &Sample) -> Response {
+        let start = self.cost.stamp();
+        let completed = match self.binner.push(sample) {
+            Ok(completed) => completed,
+            Err(error) => {
+                let ticks = self.cost.ticks_since(start);
+                return Response::Rejected(RejectedReply::new(
+                    sample.time_s,
+                    &error,
+                    ticks,
+                    self.counters(),
+                ));
+            }
+        };
+        let stepped = completed.map(|bin| (bin.time_s, step(self.estimator, &bin)));
+        let corrected_rad = self
+            .estimator
+            .compensate(sample)
+            .ok()
+            .map(|a| [a.heading_rad, a.roll_rad, a.pitch_rad]);
+        let cost_ticks = self.cost.ticks_since(start);
+        let bin = match stepped {
+            None => BinOutcome::Open,
+            Some((_, Ok(output))) => {
+                self.maybe_checkpoint(output.time_s);
+                BinOutcome::Step(StepReply::new(&output, cost_ticks, self.counters()))
+            }
+            Some((time_s, Err(error))) => BinOutcome::Rejected(RejectedReply::new(
+                time_s,
+                &error,
+                cost_ticks,
+                self.counters(),
+            )),
+        };
+        Response::Nav(NavReply {
+            time_s: sample.time_s,
+            corrected_rad,
+            bin,
+            cost_ticks,
         })
     }
 

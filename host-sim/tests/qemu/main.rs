@@ -9,6 +9,7 @@ mod qemu_checkpoint_interval;
 mod qemu_configured;
 mod qemu_e2e;
 mod qemu_faults;
+mod qemu_nav_rate;
 mod qemu_port;
 mod qemu_power_cut;
 mod qemu_report;
