@@ -3,10 +3,10 @@
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use estimator_core::{Config, Method};
-use host_sim::log_csv::write_log;
+use host_sim::formats::log_csv::write_log;
 use host_sim::pipeline::estimate_file;
 use host_sim::replay::{sample_of, HostEstimator};
-use host_sim::scenario::{generate, ScenarioKind, ScenarioParams};
+use host_sim::sim::scenario::{generate, ScenarioKind, ScenarioParams};
 use std::hint::black_box;
 
 fn core_step(c: &mut Criterion) {

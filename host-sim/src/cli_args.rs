@@ -1,8 +1,8 @@
 //! Command-line argument groups shared by several subcommands.
 
-use crate::recorder::RecorderSettings;
-use crate::rotation_scheme::RotationScheme;
-use crate::scenario::{ErrorsStep, ScenarioKind, ScenarioParams, ShipMotionSettings};
+use crate::sim::recorder::RecorderSettings;
+use crate::sim::rotation_scheme::RotationScheme;
+use crate::sim::scenario::{ErrorsStep, ScenarioKind, ScenarioParams, ShipMotionSettings};
 use estimator_core::units::{arcsec_to_rad, RAD_PER_DEG};
 use estimator_core::{Config, Method, Real};
 
@@ -407,7 +407,7 @@ impl TimingArgs {
     }
 }
 
-/// The recorder's effects on a generated log (see [`crate::recorder`]).
+/// The recorder's effects on a generated log (see [`crate::sim::recorder`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, clap::Args)]
 pub struct RecorderArgs {
     /// Recorder: drop each row independently with this probability (0 <= F < 1).
@@ -529,7 +529,7 @@ pub struct InterfaceArgs {
 
 impl InterfaceArgs {
     /// Puts the interface's departures into `m`, checked.
-    pub fn apply(&self, m: &mut crate::scenario::Mismatch) -> anyhow::Result<()> {
+    pub fn apply(&self, m: &mut crate::sim::scenario::Mismatch) -> anyhow::Result<()> {
         anyhow::ensure!(
             (0.0..=1.0).contains(&self.angle_latency_s),
             "--log-angle-latency-s must be within 0 to 1 s, got {}",
@@ -555,7 +555,7 @@ impl InterfaceArgs {
 
 impl ShipMotionArgs {
     /// The slow heel and trim and the heel per turn rate, checked (the heel in turns is a field
-    /// of [`crate::scenario::Mismatch`]: [`ShipMotionArgs::heel_in_turns_deg`]).
+    /// of [`crate::sim::scenario::Mismatch`]: [`ShipMotionArgs::heel_in_turns_deg`]).
     pub fn settings(&self) -> anyhow::Result<ShipMotionSettings> {
         Ok(ShipMotionSettings::new(
             (&self.slow_heel_deg, &self.slow_heel_period_s),

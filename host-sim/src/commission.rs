@@ -75,10 +75,10 @@
 //! pitch are both negated fits as it is, and the same test of the heading says so in a note.
 
 use crate::exit_status::RunEnd;
-use crate::log_csv::{self, read_ahead, LogError, LogLine, RowFilter, READ_AHEAD_BATCH};
+use crate::formats::log_csv::{self, read_ahead, LogError, LogLine, RowFilter, READ_AHEAD_BATCH};
 use crate::pipeline::log_name;
 use crate::replay::{pattern_summary, Replay, ReplayError, Replayer, StepView};
-use crate::scenario::Row;
+use crate::sim::scenario::Row;
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::Config;
 use rayon::prelude::*;
@@ -271,7 +271,7 @@ impl Accumulator {
         };
         self.heading = Some((row.heading_deg, unwrapped));
         let x = out.estimate.map_or([0.0; 4], |e| e.x_rad.map(f64::from));
-        let oscillation = crate::scenario::oscillation_rad(
+        let oscillation = crate::sim::scenario::oscillation_rad(
             &x,
             row.rotation_deg.to_radians(),
             row.platform_deg.to_radians(),

@@ -9,17 +9,17 @@ use host_sim::cli_args::{
     SchemeList, ShipMotionArgs, TimingArgs, TuningArgs,
 };
 use host_sim::exit_status::{RunEnd, HELP as EXIT_HELP};
-use host_sim::log_csv::{self, LogError, Truth};
-use host_sim::monte_carlo::{format_summary, run_all, summarize, Draw, MC_TIMES_S};
+use host_sim::formats::log_csv::{self, LogError, Truth};
 use host_sim::pipeline::{
     default_estimates_path, estimate_log, inputs_of, load_truth, log_name, truth_rows,
     EstimateOptions,
 };
-use host_sim::recorder::{recorded_rows, Recorder};
 use host_sim::replay::{Replay, Step};
 use host_sim::report::{format_accuracy, format_honesty, format_rms, Report, TruthRows};
-use host_sim::rotation_scheme::RotationScheme;
-use host_sim::scenario::{generate, Mismatch, Samples, ScenarioKind};
+use host_sim::sim::recorder::{recorded_rows, Recorder};
+use host_sim::sim::rotation_scheme::RotationScheme;
+use host_sim::sim::scenario::{generate, Mismatch, Samples, ScenarioKind};
+use host_sim::study::monte_carlo::{format_summary, run_all, summarize, Draw, MC_TIMES_S};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -377,7 +377,7 @@ fn cmd_generate(a: &GenerateArgs) -> anyhow::Result<()> {
         .filter_map(|(row, _)| recorder.record(&row))
         .inspect(|_| written += 1);
     log_csv::write_log(&a.out, rows)?;
-    if a.out == Path::new(host_sim::output_file::STDOUT) {
+    if a.out == Path::new(host_sim::formats::output_file::STDOUT) {
         // The log is on standard output: the summary goes to standard error, and there is no
         // file for the truth to sit beside.
         eprintln!("wrote {written} rows to standard output (no truth file)");
@@ -443,7 +443,7 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
         }
     }
     if let Some(dir) = &a.report {
-        host_sim::trial_report::check_dir(dir, &inputs_of(&a.log))?;
+        host_sim::report::pages::check_dir(dir, &inputs_of(&a.log))?;
     }
     let options = EstimateOptions {
         config: a.timing.pin(a.tuning.checked_config(method)?),
@@ -479,7 +479,7 @@ fn cmd_estimate(a: &EstimateArgs) -> anyhow::Result<()> {
         print_report(&mut info, method, rep)?;
     }
     if let (Some(dir), Some(tl)) = (&a.report, &est.timeline) {
-        let page = host_sim::trial_report::write_replay_report(
+        let page = host_sim::report::pages::write_replay_report(
             dir,
             &log_name(&a.log),
             method_label(method),
@@ -627,7 +627,7 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}:0: cannot create directory", dir.display()))?;
     let log = dir.join(format!("{}.csv", params.scenario.name()));
     if let Some(report_dir) = &a.report {
-        host_sim::trial_report::check_dir(report_dir, &inputs_of(&log))?;
+        host_sim::report::pages::check_dir(report_dir, &inputs_of(&log))?;
     }
     let generated = generate(&params);
     let logged = recorded_rows(
@@ -741,13 +741,13 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
     let window = (params.rotation_period_s / params.sample_interval_s).round() as usize;
     let grid_rows: Vec<_> = logged
         .iter()
-        .map(|r| host_sim::scenario::Row {
+        .map(|r| host_sim::sim::scenario::Row {
             time_s: grid(r.time_s),
             ..*r
         })
         .collect();
     let paper_figures = |into: &Path| {
-        host_sim::figures::write_figures(
+        host_sim::report::figures::write_figures(
             into,
             &grid_rows,
             &generated.truth,
@@ -764,12 +764,12 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
         }
     }
     if let (Some(report_dir), Some(est)) = (&a.report, &ours) {
-        use host_sim::html_report::{Block, Figure, Section};
-        host_sim::trial_report::create_dir(report_dir)?;
+        use host_sim::report::html::{Block, Figure, Section};
+        host_sim::report::pages::create_dir(report_dir)?;
         let figures = paper_figures(report_dir)?;
         let mut paper = Section::new("The paper's figures, from this run");
         for path in figures {
-            let caption = host_sim::figures::caption_of(&path);
+            let caption = host_sim::report::figures::caption_of(&path);
             paper = paper.with(Block::Figure(Figure { path, caption }));
         }
         let extra = vec![
@@ -777,7 +777,7 @@ fn cmd_run(a: &RunArgs) -> anyhow::Result<()> {
             paper,
         ];
         let tl = est.timeline.as_ref().context("our method's timeline")?;
-        let page = host_sim::trial_report::write_replay_report(
+        let page = host_sim::report::pages::write_replay_report(
             report_dir,
             &log.display().to_string(),
             method_label(Method::Windowed),
@@ -822,10 +822,10 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
     let method: Method = a.method.into();
     let config = a.tuning.config(method);
     if let Some(dir) = &a.report {
-        host_sim::trial_report::create_dir(dir)?;
+        host_sim::report::pages::create_dir(dir)?;
     }
     let duration_s = draw.params(0).duration_s;
-    let times = host_sim::monte_carlo::tracked_times_s(duration_s);
+    let times = host_sim::study::monte_carlo::tracked_times_s(duration_s);
     let bar = progress_bar(a.runs as u64, "runs");
     let start = std::time::Instant::now();
     let pool = thread_pool(a.threads)?;
@@ -834,7 +834,7 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
     let elapsed = start.elapsed().as_secs_f64();
     let over_time = summarize(&results);
     let summary = over_time.at_times(&MC_TIMES_S);
-    let description = host_sim::compare::describe(&draw);
+    let description = host_sim::study::compare::describe(&draw);
     println!(
         "monte carlo: scenario {} ({description}), method {}, {} runs of {duration_s:.0} s in {elapsed:.1} s ({} threads)",
         draw.kind.name(),
@@ -843,13 +843,13 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
         pool.current_num_threads()
     );
     println!("absolute error |x_hat - x| over runs, arcsec:");
-    let honesty = host_sim::monte_carlo::pool_honesty(&results);
+    let honesty = host_sim::study::monte_carlo::pool_honesty(&results);
     let table = format_summary(&summary)
-        + &host_sim::monte_carlo::format_honesty_over_runs(&honesty, results.len());
+        + &host_sim::study::monte_carlo::format_honesty_over_runs(&honesty, results.len());
     print!("{table}");
-    let command = host_sim::html_report::command_line();
+    let command = host_sim::report::html::command_line();
     if let Some(out) = &a.out {
-        let json = host_sim::monte_carlo::StudyJson {
+        let json = host_sim::study::monte_carlo::StudyJson {
             scenario: draw.kind.name().to_string(),
             method: method.name().to_string(),
             scheme: draw.scheme.name().to_string(),
@@ -864,7 +864,7 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
             honesty,
         };
         let text = serde_json::to_string_pretty(&json)?;
-        host_sim::output_file::write_bytes(out, (text + "\n").as_bytes())?;
+        host_sim::formats::output_file::write_bytes(out, (text + "\n").as_bytes())?;
         println!("summary in {}", out.display());
     }
     if let Some(dir) = &a.report {
@@ -880,13 +880,13 @@ fn cmd_monte_carlo(a: &MonteCarloArgs) -> anyhow::Result<()> {
                 format!("{elapsed:.1} s on {} threads", pool.current_num_threads()),
             ),
         ];
-        let study = host_sim::trial_report::MonteCarloStudy {
+        let study = host_sim::report::pages::MonteCarloStudy {
             description,
             facts,
             summary: &over_time,
             table,
         };
-        let page = host_sim::trial_report::write_monte_carlo_report(dir, &study)?;
+        let page = host_sim::report::pages::write_monte_carlo_report(dir, &study)?;
         println!("report in {}", page.display());
     }
     if summary.no_estimate() {
@@ -927,9 +927,9 @@ fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
         let mut heading = String::new();
         for &kind in &scenarios {
             let draw = a.spread.draw(kind, scheme, a.seed)?;
-            heading = host_sim::compare::describe(&draw);
+            heading = host_sim::study::compare::describe(&draw);
             for &method in &methods {
-                rows.push(host_sim::compare::compare_one(
+                rows.push(host_sim::study::compare::compare_one(
                     &draw,
                     a.tuning.config(method),
                     a.seeds,
@@ -940,7 +940,7 @@ fn cmd_compare(a: &CompareArgs) -> anyhow::Result<()> {
             println!();
         }
         println!("{heading}\n");
-        print!("{}", host_sim::compare::format_table(&rows));
+        print!("{}", host_sim::study::compare::format_table(&rows));
     }
     let command: Vec<String> = std::env::args().skip(1).collect();
     println!(

@@ -2,14 +2,14 @@
 //! as the rows come (memory does not grow with the log; a truth file with the scenario's
 //! parameters is the exception: its scenario is regenerated in memory).
 
-use crate::estimates_csv::EstimatesWriter;
 use crate::exit_status::RunEnd;
-use crate::log_csv::{self, is_stdio, read_ahead, LogError, RowFilter, TruthFile};
-use crate::output_file::{check_not_input, Input, OutputFile};
+use crate::formats::estimates_csv::EstimatesWriter;
+use crate::formats::log_csv::{self, is_stdio, read_ahead, LogError, RowFilter, TruthFile};
+use crate::formats::output_file::{check_not_input, Input, OutputFile};
 use crate::replay::{replay_each, Replay, ReplayError, ReplayOptions, StepView};
+use crate::report::timeline::{Timeline, TimelineRow};
 use crate::report::{Report, ReportBuilder, TruthRows};
-use crate::scenario::{generate, Generated};
-use crate::timeline::{Timeline, TimelineRow};
+use crate::sim::scenario::{generate, Generated};
 use anyhow::Context;
 use estimator_core::Config;
 use std::path::{Path, PathBuf};

@@ -1,10 +1,10 @@
 //! Replays an attitude log through the core, row by row, writing the estimates CSV.
 
-use crate::binned_lines::{BinningSummary, Lines};
-use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{LogError, LogLine, RowFilter};
-use crate::scenario::Row;
-use crate::time_stamps::{IntervalCheck, IntervalError};
+use crate::formats::binned_lines::{BinningSummary, Lines};
+use crate::formats::estimates_csv::EstimatesWriter;
+use crate::formats::log_csv::{LogError, LogLine, RowFilter};
+use crate::formats::time_stamps::{IntervalCheck, IntervalError};
+use crate::sim::scenario::Row;
 use estimator_core::binning::BinIntervalError;
 use estimator_core::time_grid::{Placement, TimeGrid};
 use estimator_core::{
@@ -287,7 +287,7 @@ where
 /// window refills (see `estimator_core::checkpoint`). [`Replayer`] does the same a row at a time.
 ///
 /// With `options.bin_interval_s` the rows (at any rate up to 200 Hz) are averaged into bins of
-/// that interval ([`crate::binned_lines::BinnedLines`]) and the estimator, its interval pinned to
+/// that interval ([`crate::formats::binned_lines::BinnedLines`]) and the estimator, its interval pinned to
 /// the bins', steps once a bin, each bin's average handed to `each` as a row stamped at the bin's
 /// centre; the last bin is stepped at the end of the rows. A row the binner refuses is counted
 /// ([`BinningSummary::refused`]) and is in no bin.

@@ -19,9 +19,19 @@
 //!   (truth) versus what is left of it after the core's correction:
 //!   `residual = oscillation_in - (raw attitude - corrected attitude)`. The true attitude, the
 //!   low-frequency errors and the noise cancel out of this difference exactly.
+//!
+//! What `--report DIR` writes is in the parts: [`timeline`] (the bounded record of a replay or a
+//! stream), [`figures`] (the data of each picture) drawn by [`plots`], and [`pages`] (what each
+//! command's `report.html` says) written by [`html`].
+
+pub mod figures;
+pub mod html;
+pub mod pages;
+pub mod plots;
+pub mod timeline;
 
 use crate::replay::Step;
-use crate::scenario::{Row, RowTruth};
+use crate::sim::scenario::{Row, RowTruth};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Estimate, Output, SampleError, Status};
 use serde::Serialize;
@@ -1191,13 +1201,16 @@ mod tests {
         // The oscillation a constant truth file puts into each row, from the core's rows, against
         // the generator's own eq (2), over a one-way and a reciprocating log.
         for scheme in [
-            crate::rotation_scheme::RotationScheme::Continuous,
-            crate::rotation_scheme::RotationScheme::Reciprocating,
+            crate::sim::rotation_scheme::RotationScheme::Continuous,
+            crate::sim::rotation_scheme::RotationScheme::Reciprocating,
         ] {
-            let mut p = crate::scenario::ScenarioParams::new(crate::scenario::ScenarioKind::Sea, 3);
+            let mut p = crate::sim::scenario::ScenarioParams::new(
+                crate::sim::scenario::ScenarioKind::Sea,
+                3,
+            );
             p.duration_s = 2000.0;
             p.scheme = scheme;
-            let g = crate::scenario::generate(&p);
+            let g = crate::sim::scenario::generate(&p);
             for (row, truth) in g.rows.iter().zip(&g.truth) {
                 let ours = oscillation_deg(row, &truth.errors_arcsec);
                 for (a, (o, t)) in ours.iter().zip(&truth.oscillation_deg).enumerate() {

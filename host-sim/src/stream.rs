@@ -26,16 +26,16 @@ pub mod link;
 pub mod push;
 pub mod qemu;
 
-use crate::binned_lines::{BinningSummary, Lines};
-use crate::estimates_csv::EstimatesWriter;
 use crate::exit_status::RunEnd;
-use crate::log_csv::{is_stdio, LogLine, LogLines, LogReader, RowFilter};
-use crate::output_file::{check_not_input, Input, OutputFile};
+use crate::formats::binned_lines::{BinningSummary, Lines};
+use crate::formats::estimates_csv::EstimatesWriter;
+use crate::formats::log_csv::{is_stdio, LogLine, LogLines, LogReader, RowFilter};
+use crate::formats::output_file::{check_not_input, Input, OutputFile};
+use crate::formats::time_stamps::IntervalCheck;
 use crate::pipeline::{default_estimates_path, inputs_of, load_truth, log_name, truth_rows};
 use crate::replay::{sample_of, GridFollower};
+use crate::report::timeline::{Timeline, TimelineRow};
 use crate::report::ReportBuilder;
-use crate::time_stamps::IntervalCheck;
-use crate::timeline::{Timeline, TimelineRow};
 use anyhow::{bail, Context};
 use cost::{CostStats, CostUnit};
 use estimator_core::{Output, RejectReason, SampleError};
@@ -563,7 +563,7 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         check_not_input(log, "--defmt-log", &inputs)?;
     }
     if let Some(dir) = &args.report {
-        crate::trial_report::create_dir(dir)?;
+        crate::report::pages::create_dir(dir)?;
     }
     if let Some(bin_s) = args.bin_interval_s {
         let (lo, hi) = estimator_core::binning::BIN_INTERVAL_RANGE_S;
@@ -698,7 +698,7 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     if let (Some(dir), Some(tl)) = (&args.report, &timeline) {
         let interval_s = grid.interval_s().unwrap_or(1.0);
         let report = judge.map(|j| j.finish(interval_s));
-        let page = crate::trial_report::write_stream_report(
+        let page = crate::report::pages::write_stream_report(
             dir,
             &log_name(&args.log),
             &what,

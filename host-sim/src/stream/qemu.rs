@@ -122,7 +122,7 @@ impl Qemu {
         let stderr_path = dir.join("qemu.stderr");
         let defmt_log = match defmt_log {
             Some(target) => {
-                let temp = crate::output_file::temp_beside(target)?;
+                let temp = crate::formats::output_file::temp_beside(target)?;
                 Some((temp, target.to_path_buf()))
             }
             None => None,
@@ -195,7 +195,7 @@ impl Qemu {
         let _ = self.child.kill();
         let _ = self.child.wait();
         match self.defmt_log.take() {
-            Some((temp, target)) => crate::output_file::persist(temp, &target),
+            Some((temp, target)) => crate::formats::output_file::persist(temp, &target),
             None => Ok(()),
         }
     }

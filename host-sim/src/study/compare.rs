@@ -5,10 +5,10 @@
 //! |error| / 1-sigma of any run.
 
 use crate::cli_args::method_label;
-use crate::monte_carlo::{coverage_2sigma, pool_honesty, quantile, run_all, sorted, Draw};
 use crate::replay::HostEstimator;
 use crate::report::{percent_of_rows, Accuracy, Honesty};
-use crate::scenario::{ScenarioKind, ShipMotionSettings};
+use crate::sim::scenario::{ScenarioKind, ShipMotionSettings};
+use crate::study::monte_carlo::{coverage_2sigma, pool_honesty, quantile, run_all, sorted, Draw};
 use estimator_core::{Config, Method};
 
 /// Times of the error columns, s.
@@ -228,7 +228,7 @@ pub fn describe(draw: &Draw) -> String {
         rec.push(format!(
             "{} outages of {} s",
             r.outages,
-            crate::recorder::OUTAGE_S
+            crate::sim::recorder::OUTAGE_S
         ));
     }
     if r.gap_every_s > 0.0 && r.gap_rows > 0 {

@@ -22,8 +22,8 @@
 //! Numbers are written with Rust's `Display` for `f64`, the shortest decimal that parses back to the
 //! same `f64`: a generated log read back gives bit-identical rows.
 
-use crate::scenario::{Row, ScenarioParams};
-use crate::time_stamps::TimeColumn;
+use crate::formats::time_stamps::TimeColumn;
+use crate::sim::scenario::{Row, ScenarioParams};
 use serde::{Deserialize, Serialize};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Write};
@@ -728,13 +728,13 @@ where
 }
 
 /// Writes rows as an attitude log file (through a temporary file beside it, renamed when complete:
-/// [`crate::output_file`]).
+/// [`crate::formats::output_file`]).
 pub fn write_log<I>(path: &Path, rows: I) -> anyhow::Result<()>
 where
     I: IntoIterator,
     I::Item: std::borrow::Borrow<Row>,
 {
-    let mut out = crate::output_file::OutputFile::create(path)?;
+    let mut out = crate::formats::output_file::OutputFile::create(path)?;
     write_log_to(&mut out, rows)
         .map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))?;
     out.commit()
@@ -776,7 +776,7 @@ pub fn truth_path(log_path: &Path) -> PathBuf {
 pub fn write_truth(path: &Path, truth: &Truth) -> anyhow::Result<()> {
     let text = serde_json::to_string_pretty(truth)
         .map_err(|e| LogError::new(path, 0, format!("cannot encode: {e}")))?;
-    crate::output_file::write_bytes(path, (text + "\n").as_bytes())
+    crate::formats::output_file::write_bytes(path, (text + "\n").as_bytes())
 }
 
 /// A truth file as read: the errors, and the scenario when `generate` wrote it.
@@ -821,7 +821,7 @@ pub fn read_truth(path: &Path) -> Result<Option<TruthFile>, LogError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::{generate, ScenarioKind};
+    use crate::sim::scenario::{generate, ScenarioKind};
 
     fn parse(text: &str) -> Vec<Result<LogLine, LogError>> {
         LogReader::new(Path::new("t.csv"), text.as_bytes()).collect()
@@ -997,7 +997,7 @@ mod tests {
 
     #[test]
     fn written_log_reads_back_bit_identical_plain_and_gzip() {
-        let mut p = crate::scenario::ScenarioParams::new(ScenarioKind::Sea, 3);
+        let mut p = crate::sim::scenario::ScenarioParams::new(ScenarioKind::Sea, 3);
         p.duration_s = 300.0;
         let g = generate(&p);
         let mut buf = Vec::new();
@@ -1023,7 +1023,7 @@ mod tests {
 
     #[test]
     fn truth_round_trips_with_params_and_needs_only_x_arcsec() {
-        let p = crate::scenario::ScenarioParams::new(ScenarioKind::Paper, 9);
+        let p = crate::sim::scenario::ScenarioParams::new(ScenarioKind::Paper, 9);
         let truth = Truth::new(&p);
         let text = serde_json::to_string(&truth).unwrap();
         assert!(

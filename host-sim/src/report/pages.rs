@@ -1,5 +1,5 @@
-//! What `--report DIR` writes: the plots ([`crate::figures`]) and `report.html`
-//! ([`crate::html_report`]) of a replayed log (`estimate`, `run`), of a log streamed through the
+//! What `--report DIR` writes: the plots ([`crate::report::figures`]) and `report.html`
+//! ([`crate::report::html`]) of a replayed log (`estimate`, `run`), of a log streamed through the
 //! firmware (`stream`) and of a Monte Carlo study (`monte-carlo`).
 //!
 //! The page of a log says what the estimator reported (the final estimate and status, or why
@@ -8,13 +8,13 @@
 //! clock steps, the first events), the accuracy against the truth when there is a truth file,
 //! and shows the plots. Statuses are named by the core ([`estimator_core::Status::name`]).
 
-use crate::figures::{monte_carlo_figure, timeline_figures};
-use crate::html_report::{command_line, Block, Figure, Page, Section};
-use crate::monte_carlo::Summary;
+use crate::formats::time_stamps::format_utc;
 use crate::replay::{significant_4, Replay};
+use crate::report::figures::{monte_carlo_figure, timeline_figures};
+use crate::report::html::{command_line, Block, Figure, Page, Section};
+use crate::report::timeline::{EstimateArcsec, EventKind, Timeline};
 use crate::report::{accuracy_table, format_honesty, rms_table, rms_title, Report};
-use crate::time_stamps::format_utc;
-use crate::timeline::{EstimateArcsec, EventKind, Timeline};
+use crate::study::monte_carlo::Summary;
 use anyhow::Context;
 use estimator_core::RejectReason;
 use std::path::{Path, PathBuf};
@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 pub const PAGE: &str = "report.html";
 
 /// Every file a report directory may get.
-/// (`run --report` also writes the paper's figures, named by [`crate::figures::write_figures`].)
+/// (`run --report` also writes the paper's figures, named by [`crate::report::figures::write_figures`].)
 pub const FILES: [&str; 7] = [
     PAGE,
     "estimates.png",
@@ -35,9 +35,9 @@ pub const FILES: [&str; 7] = [
 ];
 
 /// Refuses a report directory in which a report would overwrite one of the run's inputs.
-pub fn check_dir(dir: &Path, inputs: &[crate::output_file::Input]) -> anyhow::Result<()> {
+pub fn check_dir(dir: &Path, inputs: &[crate::formats::output_file::Input]) -> anyhow::Result<()> {
     FILES.iter().try_for_each(|name| {
-        crate::output_file::check_not_input(&dir.join(name), "--report", inputs)
+        crate::formats::output_file::check_not_input(&dir.join(name), "--report", inputs)
     })
 }
 

@@ -3,11 +3,11 @@
 //! recorder), each generated, recorded and replayed row by row in memory, in parallel (rayon), with
 //! the error statistics per report time.
 
-use crate::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
 use crate::replay::sample_of;
 use crate::report::{format_honesty_shares, rows_text, Accuracy, Honesty, Tracker};
-use crate::rotation_scheme::RotationScheme;
-use crate::scenario::{
+use crate::sim::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
+use crate::sim::rotation_scheme::RotationScheme;
+use crate::sim::scenario::{
     Mismatch, Samples, ScenarioKind, ScenarioParams, ShipMotionSettings, SwayComponent,
 };
 use estimator_core::Config;

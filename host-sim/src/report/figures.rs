@@ -1,14 +1,14 @@
-//! The data of the figures, drawn by [`crate::plots`]: the paper's figures from a replay and the
+//! The data of the figures, drawn by [`crate::report::plots`]: the paper's figures from a replay and the
 //! generator's truth ([`write_figures`]); the report's figures of any log from its [`Timeline`]
 //! ([`timeline_figures`]); the Monte Carlo statistics over time ([`monte_carlo_figure`]).
 
-use crate::html_report::Figure;
-use crate::monte_carlo::Summary;
-use crate::plots::{self, Band, CorrelationPanel, Curve, Lane, Panel, Series, PALETTE};
 use crate::replay::Step;
+use crate::report::html::Figure;
+use crate::report::plots::{self, Band, CorrelationPanel, Curve, Lane, Panel, Series, PALETTE};
+use crate::report::timeline::{Bucket, Timeline};
 use crate::report::{errors_arcsec, percent_error, residual_arcsec, truth_index};
-use crate::scenario::{Row, RowTruth};
-use crate::timeline::{Bucket, Timeline};
+use crate::sim::scenario::{Row, RowTruth};
+use crate::study::monte_carlo::Summary;
 use estimator_core::correlation::{products, ROLL_SIN};
 use estimator_core::installation::Angles;
 use estimator_core::units::{rad_to_arcsec, RAD_PER_DEG};
@@ -321,7 +321,11 @@ pub fn timeline_figures(
 
     // Estimates with 1-sigma bands, one panel per error.
     if tl.first_estimate_s.is_some() {
-        let with_estimate: Vec<(f64, crate::timeline::EstimateArcsec, Option<[f64; 4]>)> = buckets
+        let with_estimate: Vec<(
+            f64,
+            crate::report::timeline::EstimateArcsec,
+            Option<[f64; 4]>,
+        )> = buckets
             .iter()
             .filter_map(|b| b.estimate.map(|e| (b.t1_s, e, b.truth_x_arcsec)))
             .collect();
@@ -517,31 +521,32 @@ pub fn timeline_figures(
     });
 
     // Attitude before and after compensation.
-    let tail: Vec<&crate::timeline::TailRow> = {
+    let tail: Vec<&crate::report::timeline::TailRow> = {
         let all: Vec<_> = tl.tail().collect();
         let end = all.last().map_or(0.0, |r| r.time_s);
         let span = 2.0 * period_s.unwrap_or(960.0 / 2.0);
         all.into_iter().filter(|r| r.time_s >= end - span).collect()
     };
-    let envelope_bands = |pick: &dyn Fn(&Bucket) -> Option<crate::timeline::Envelope<3>>,
-                          from_s: f64|
-     -> Vec<Band> {
-        (0..3)
-            .map(|a| Band {
-                label: AXES[a].into(),
-                color: PALETTE[a],
-                points: buckets
-                    .iter()
-                    .filter(|b| b.t0_s >= from_s)
-                    .map(|b| {
-                        pick(b).map_or((f64::NAN, f64::NAN, f64::NAN), |e| {
-                            (0.5 * (b.t0_s + b.t1_s), e.min[a], e.max[a])
+    let envelope_bands =
+        |pick: &dyn Fn(&Bucket) -> Option<crate::report::timeline::Envelope<3>>,
+         from_s: f64|
+         -> Vec<Band> {
+            (0..3)
+                .map(|a| Band {
+                    label: AXES[a].into(),
+                    color: PALETTE[a],
+                    points: buckets
+                        .iter()
+                        .filter(|b| b.t0_s >= from_s)
+                        .map(|b| {
+                            pick(b).map_or((f64::NAN, f64::NAN, f64::NAN), |e| {
+                                (0.5 * (b.t0_s + b.t1_s), e.min[a], e.max[a])
+                            })
                         })
-                    })
-                    .collect(),
-            })
-            .collect()
-    };
+                        .collect(),
+                })
+                .collect()
+        };
     let band_range = |bands: &[Band], floor: f64| {
         symmetric_range(
             bands

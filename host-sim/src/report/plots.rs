@@ -14,7 +14,7 @@
 //! are drawn at its edge and **marked**: a triangle at the edge where a line leaves the axis
 //! (pointing up above it, down below it) and `(beyond the axis: triangles)` after its name in the
 //! legend; a band that is cut says `(cut at the axis)`. Every PNG is written through a temporary
-//! file beside its target ([`crate::output_file`]).
+//! file beside its target ([`crate::formats::output_file`]).
 
 use anyhow::{anyhow, Context, Result};
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
@@ -23,7 +23,7 @@ use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
 
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
 fn register_font() {
@@ -257,7 +257,7 @@ where
 
 /// Draws panels stacked vertically into one PNG of `width` x (`panel_height` x panels).
 pub fn draw_png(path: &Path, panels: &[Panel], width: u32, panel_height: u32) -> Result<()> {
-    crate::output_file::write_via_temp(path, |temp| {
+    crate::formats::output_file::write_via_temp(path, |temp| {
         draw_png_at(temp, path, panels, width, panel_height)
     })
 }
@@ -424,7 +424,7 @@ pub struct Lane {
 
 /// A timeline: one lane per row, the first at the top, over `x_range` (time, s).
 pub fn lanes_figure(path: &Path, title: &str, lanes: &[Lane], x_range: (f64, f64)) -> Result<()> {
-    crate::output_file::write_via_temp(path, |temp| {
+    crate::formats::output_file::write_via_temp(path, |temp| {
         register_font();
         let height = 120 + 28 * lanes.len().max(1) as u32;
         let root = BitMapBackend::new(temp, (1000, height)).into_drawing_area();

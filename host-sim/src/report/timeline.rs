@@ -20,7 +20,7 @@
 //!   ([`crate::replay::StepView::residuals_rad`]), when the replay has them.
 
 use crate::report::TruthAt;
-use crate::scenario::Row;
+use crate::sim::scenario::Row;
 use estimator_core::time_grid::Placement;
 use estimator_core::units::{rad_to_arcsec, wrap_deg};
 use estimator_core::{Counters, Estimate, Output, SampleError, Status};

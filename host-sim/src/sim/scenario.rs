@@ -22,12 +22,12 @@
 //! angle the log's `rotation_deg` reports.
 //!
 //! The generator makes one row per sample instant; what reaches the log (lost rows, outages,
-//! loose time stamps) is the [`crate::recorder`]'s business, described by
+//! loose time stamps) is the [`crate::sim::recorder`]'s business, described by
 //! [`ScenarioParams::recording`]. [`Samples`] yields the rows one at a time, so a log of millions
 //! of rows can be written without holding it.
 
-use crate::recorder::Recording;
-use crate::rotation_scheme::RotationScheme;
+use crate::sim::recorder::Recording;
+use crate::sim::rotation_scheme::RotationScheme;
 use estimator_core::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
