@@ -1,10 +1,9 @@
 //! host-sim: the std side of the project. Generates scenarios, replays logs through the same
 //! `estimator-core` the firmware runs, and reports.
 #![warn(missing_docs)]
-pub mod cli_args;
+pub mod cmd;
 pub mod commission;
 pub mod exit_status;
-pub mod flash_life;
 pub mod flash_model;
 pub mod formats;
 pub mod pipeline;

@@ -33,8 +33,17 @@ pub mod timeline;
 use crate::replay::Step;
 use crate::sim::scenario::{Row, RowTruth};
 use estimator_core::units::rad_to_arcsec;
-use estimator_core::{Estimate, Output, SampleError, Status};
+use estimator_core::{Estimate, Method, Output, SampleError, Status};
 use serde::Serialize;
+
+/// Label of a method in reports.
+pub fn method_label(m: Method) -> &'static str {
+    match m {
+        Method::Windowed => "ours (windowed)",
+        Method::Paper => "paper (literal)",
+        Method::Traditional => "traditional",
+    }
+}
 
 /// Times of the accuracy table, s.
 pub const REPORT_TIMES_S: [f64; 4] = [20_000.0, 45_000.0, 86_400.0, 172_800.0];

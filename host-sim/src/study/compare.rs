@@ -4,9 +4,8 @@
 //! share of the runs' rows where some error lies beyond 2 and 3 sigma, and the largest
 //! |error| / 1-sigma of any run.
 
-use crate::cli_args::method_label;
 use crate::replay::HostEstimator;
-use crate::report::{percent_of_rows, Accuracy, Honesty};
+use crate::report::{method_label, percent_of_rows, Accuracy, Honesty};
 use crate::sim::scenario::{ScenarioKind, ShipMotionSettings};
 use crate::study::monte_carlo::{coverage_2sigma, pool_honesty, quantile, run_all, sorted, Draw};
 use estimator_core::{Config, Method};

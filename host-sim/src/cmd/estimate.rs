@@ -1,0 +1,150 @@
+//! `host-sim estimate`: a log replayed through the estimator into its estimates CSV, with the
+//! summary, the accuracy against a truth file beside the log, and the report.
+
+use crate::cmd::args::{MethodArg, TimingArgs, TuningArgs};
+use crate::cmd::{print_report, print_summary, warn_row};
+use crate::exit_status::RunEnd;
+use crate::formats::log_csv;
+use crate::pipeline::{
+    default_estimates_path, estimate_log, inputs_of, load_truth, log_name, truth_rows,
+    EstimateOptions,
+};
+use crate::replay::Replay;
+use crate::report::method_label;
+use estimator_core::Method;
+use std::io::Write;
+use std::path::PathBuf;
+
+/// `host-sim estimate`.
+#[derive(clap::Args, Debug)]
+pub struct EstimateArgs {
+    /// Attitude log (CSV, plain or gzip, `-` for standard input; format: docs/log-format.md).
+    log: PathBuf,
+    /// Estimates CSV to write (default: LOG.estimates.csv beside the log; `-`: standard output,
+    /// the summary then goes to standard error). Never the log itself.
+    #[arg(long, value_name = "EST.csv", allow_hyphen_values = true)]
+    out: Option<PathBuf>,
+    /// Refuse the log at its first unreadable row (default: skip it, count it, report its line).
+    #[arg(long)]
+    strict: bool,
+    /// Identification method.
+    #[arg(long, value_enum, default_value_t = MethodArg::Windowed)]
+    method: MethodArg,
+    #[command(flatten)]
+    tuning: TuningArgs,
+    #[command(flatten)]
+    timing: TimingArgs,
+    /// Average the log's rows (any rate up to 200 Hz: a navigation computer's attitude) into bins
+    /// of S s (0.1-10) aligned to multiples of S, and step the estimator once a bin with the
+    /// average, stamped at the bin's centre: the estimator's interval is S, and the estimates CSV
+    /// has one row per bin (docs/interface.md, "Attitude at the navigation rate").
+    #[arg(long, value_name = "S")]
+    bin_interval_s: Option<f64>,
+    /// Checkpoint the estimator after the rows at these times, drop it and restore a fresh one
+    /// from the bytes, as after a power cut right after a save: the estimates go on from the
+    /// checkpoint's while the window refills (docs/reliability.md).
+    #[arg(long, value_name = "T1,T2,...", value_delimiter = ',')]
+    restart_at: Vec<f64>,
+    /// Write plots (estimates with 1-sigma, error against the truth, status timeline, attitude
+    /// before and after compensation, residuals) and a self-contained report.html into DIR
+    /// (created if missing).
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
+}
+
+/// `host-sim estimate`: replays the log into the estimates CSV, prints the summary (and the
+/// accuracy with a truth file), writes the report when asked; exit status 4 without an estimate.
+pub fn run(a: &EstimateArgs) -> anyhow::Result<()> {
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| default_estimates_path(&a.log));
+    let method: Method = a.method.into();
+    let mut restart_at = a.restart_at.clone();
+    anyhow::ensure!(
+        restart_at.iter().all(|t| t.is_finite()),
+        "--restart-at needs finite times"
+    );
+    restart_at.sort_by(f64::total_cmp);
+    a.timing.check()?;
+    if let Some(bin_s) = a.bin_interval_s {
+        let (lo, hi) = estimator_core::binning::BIN_INTERVAL_RANGE_S;
+        anyhow::ensure!(
+            bin_s.is_finite() && (lo..=hi).contains(&bin_s),
+            "--bin-interval-s must be between {lo} and {hi} s, got {bin_s}"
+        );
+        if let Some(d) = a.timing.sample_interval {
+            anyhow::ensure!(
+                d == bin_s,
+                "--sample-interval {d} contradicts --bin-interval-s {bin_s}: the estimator's interval is the bins'; leave --sample-interval out"
+            );
+        }
+    }
+    if let Some(dir) = &a.report {
+        crate::report::pages::check_dir(dir, &inputs_of(&a.log))?;
+    }
+    let options = EstimateOptions {
+        config: a.timing.pin(a.tuning.checked_config(method)?),
+        restart_at_s: restart_at.clone(),
+        strict: a.strict,
+        timeline: a.report.is_some(),
+        bin_interval_s: a.bin_interval_s,
+    };
+    let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
+    let rows = truth
+        .as_ref()
+        .map(|t| truth_rows(&t.file, t.generated.as_ref()));
+    let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_| {})?;
+    // The summary goes where the estimates do not.
+    let mut info: Box<dyn Write> = if log_csv::is_stdio(&out) {
+        Box::new(std::io::stderr())
+    } else {
+        Box::new(std::io::stdout().lock())
+    };
+    if !restart_at.is_empty() {
+        writeln!(
+            info,
+            "restarted from a checkpoint after the rows at {restart_at:?} s"
+        )?;
+    }
+    let out_name = if log_csv::is_stdio(&out) {
+        "standard output".to_string()
+    } else {
+        out.display().to_string()
+    };
+    print_summary(&mut info, &a.log, method, &est.replay, &out_name)?;
+    if let Some(rep) = &est.report {
+        print_report(&mut info, method, rep)?;
+    }
+    if let (Some(dir), Some(tl)) = (&a.report, &est.timeline) {
+        let page = crate::report::pages::write_replay_report(
+            dir,
+            &log_name(&a.log),
+            method_label(method),
+            &est.replay,
+            est.report.as_ref(),
+            tl,
+            vec![],
+        )?;
+        writeln!(info, "report in {}", page.display())?;
+    }
+    info.flush()?;
+    no_estimate_end(&est.replay)
+}
+
+/// The end of a replay without an estimate (exit status 4, the reason on standard error).
+fn no_estimate_end(r: &Replay) -> anyhow::Result<()> {
+    if r.final_estimate.is_some() {
+        return Ok(());
+    }
+    let reason = match (r.holdup, r.binning) {
+        (Some(h), _) => format!("{h} at the end of the log"),
+        (None, Some(b)) => format!(
+            "no bin accepted ({} rejected; {} rows refused by the binning)",
+            r.rejected.total(),
+            b.refused.total()
+        ),
+        (None, None) => format!("no row accepted ({} rejected)", r.rejected.total()),
+    };
+    Err(RunEnd::NoEstimate { reason }.into())
+}
