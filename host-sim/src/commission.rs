@@ -75,8 +75,9 @@
 //! pitch are both negated fits as it is, and the same test of the heading says so in a note.
 
 use crate::exit_status::RunEnd;
-use crate::formats::log_csv::{self, read_ahead, LogError, LogLine, RowFilter, READ_AHEAD_BATCH};
-use crate::pipeline::log_name;
+use crate::formats::log_csv::{self, LogError, LogLine, RowFilter};
+use crate::formats::log_paths::log_name;
+use crate::formats::read_ahead::{read_ahead, READ_AHEAD_BATCH};
 use crate::replay::{pattern_summary, Replay, ReplayError, Replayer, StepView};
 use crate::sim::scenario::Row;
 use estimator_core::units::rad_to_arcsec;

@@ -4,15 +4,16 @@
 
 use crate::exit_status::RunEnd;
 use crate::formats::estimates_csv::EstimatesWriter;
-use crate::formats::log_csv::{self, is_stdio, read_ahead, LogError, RowFilter, TruthFile};
-use crate::formats::output_file::{check_not_input, Input, OutputFile};
+use crate::formats::log_csv::{self, LogError, RowFilter};
+use crate::formats::log_paths::{inputs_of, log_name};
+use crate::formats::output_file::{check_not_input, OutputFile};
+use crate::formats::read_ahead::read_ahead;
 use crate::replay::{replay_each, Replay, ReplayError, ReplayOptions, StepView};
 use crate::report::timeline::{Timeline, TimelineRow};
 use crate::report::{Report, ReportBuilder, TruthRows};
-use crate::sim::scenario::{generate, Generated};
 use anyhow::Context;
 use estimator_core::Config;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A replayed log.
 pub struct Estimated {
@@ -22,103 +23,6 @@ pub struct Estimated {
     pub report: Option<Report>,
     /// What the report draws, when asked for ([`EstimateOptions::timeline`]).
     pub timeline: Option<Timeline>,
-}
-
-/// `<dir>/<stem>.estimates.csv` beside the log (`trial.csv` and `trial.csv.gz` give
-/// `trial.estimates.csv`); standard output for a log read from standard input.
-pub fn default_estimates_path(log: &Path) -> PathBuf {
-    if is_stdio(log) {
-        return PathBuf::from(log_csv::STDIO);
-    }
-    let stem = log_csv::log_stem(log);
-    let name = format!(
-        "{}.estimates.csv",
-        stem.file_name()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    );
-    stem.with_file_name(name)
-}
-
-/// The inputs of a run on `log`: the log itself and its truth file (none for standard input).
-pub fn inputs_of(log: &Path) -> Vec<Input> {
-    if is_stdio(log) {
-        return vec![];
-    }
-    vec![
-        Input {
-            path: log.to_path_buf(),
-            what: "the log itself",
-        },
-        Input {
-            path: log_csv::truth_path(log),
-            what: "the log's truth file",
-        },
-    ]
-}
-
-/// The name of a log in messages.
-pub fn log_name(log: &Path) -> String {
-    if is_stdio(log) {
-        "standard input".to_string()
-    } else {
-        log.display().to_string()
-    }
-}
-
-/// The truth beside a log: the file, and its scenario regenerated when it names one.
-pub struct LogTruth {
-    /// The truth file as read.
-    pub file: TruthFile,
-    /// The scenario it names, regenerated (`None` for a file with the errors only).
-    pub generated: Option<Generated>,
-}
-
-/// The truth beside a log, if any. A truth file that cannot be read is a warning (`warn`), not an
-/// error: no accuracy table.
-pub fn load_truth(log: &Path, warn: &mut dyn FnMut(String)) -> Option<LogTruth> {
-    if is_stdio(log) {
-        return None;
-    }
-    match log_csv::read_truth(&log_csv::truth_path(log)) {
-        Ok(None) => None,
-        Err(e) => {
-            warn(format!("{e}: truth file unreadable, no accuracy table"));
-            None
-        }
-        Ok(Some(truth)) => {
-            if let Some(why) = &truth.params_error {
-                warn(format!(
-                    "{}: scenario parameters unreadable ({why}): judging against x_arcsec only",
-                    log_csv::truth_path(log).display()
-                ));
-            }
-            let generated = truth.params.as_ref().map(generate);
-            Some(LogTruth {
-                file: truth,
-                generated,
-            })
-        }
-    }
-}
-
-/// The rows a report judges against.
-pub fn truth_rows<'a>(truth: &'a TruthFile, generated: Option<&'a Generated>) -> TruthRows<'a> {
-    match generated {
-        Some(g) => TruthRows::Generated {
-            rows: &g.rows,
-            truth: &g.truth,
-            time_offset_s: truth
-                .params
-                .as_ref()
-                .map_or(0.0, |p| p.recording.time_offset_s),
-            errors_step_at_s: truth
-                .params
-                .as_ref()
-                .and_then(|p| p.errors_step.map(|step| step.at_s)),
-        },
-        None => TruthRows::Constant(truth.x_arcsec),
-    }
 }
 
 /// How a log is replayed.

@@ -30,6 +30,7 @@ pub mod pages;
 pub mod plots;
 pub mod timeline;
 
+use crate::formats::truth_file::LogTruth;
 use crate::replay::Step;
 use crate::sim::scenario::{Row, RowTruth};
 use estimator_core::units::rad_to_arcsec;
@@ -715,6 +716,29 @@ pub enum TruthRows<'a> {
         /// When the truth's errors change, s from the start.
         errors_step_at_s: Option<f64>,
     },
+}
+
+impl<'a> TruthRows<'a> {
+    /// The rows a log is judged against: the truth beside it ([`LogTruth`]), its scenario's rows
+    /// when it names one, its errors alone otherwise.
+    pub fn of(truth: &'a LogTruth) -> TruthRows<'a> {
+        let (file, generated) = (&truth.file, truth.generated.as_ref());
+        match generated {
+            Some(g) => TruthRows::Generated {
+                rows: &g.rows,
+                truth: &g.truth,
+                time_offset_s: file
+                    .params
+                    .as_ref()
+                    .map_or(0.0, |p| p.recording.time_offset_s),
+                errors_step_at_s: file
+                    .params
+                    .as_ref()
+                    .and_then(|p| p.errors_step.map(|step| step.at_s)),
+            },
+            None => TruthRows::Constant(file.x_arcsec),
+        }
+    }
 }
 
 /// Builds a [`Report`] row by row, as the replay goes: it holds no rows of its own.

@@ -2,7 +2,7 @@
 
 use crate::cmd::args::{TimingArgs, TuningArgs};
 use crate::cmd::warn_row;
-use crate::pipeline::log_name;
+use crate::formats::log_paths::log_name;
 use estimator_core::Method;
 use std::io::Write;
 use std::path::PathBuf;

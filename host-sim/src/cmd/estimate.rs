@@ -5,12 +5,11 @@ use crate::cmd::args::{MethodArg, TimingArgs, TuningArgs};
 use crate::cmd::{print_report, print_summary, warn_row};
 use crate::exit_status::RunEnd;
 use crate::formats::log_csv;
-use crate::pipeline::{
-    default_estimates_path, estimate_log, inputs_of, load_truth, log_name, truth_rows,
-    EstimateOptions,
-};
+use crate::formats::log_paths::{default_estimates_path, inputs_of, log_name};
+use crate::formats::truth_file::load_truth;
+use crate::pipeline::{estimate_log, EstimateOptions};
 use crate::replay::Replay;
-use crate::report::method_label;
+use crate::report::{method_label, TruthRows};
 use estimator_core::Method;
 use std::io::Write;
 use std::path::PathBuf;
@@ -91,9 +90,7 @@ pub fn run(a: &EstimateArgs) -> anyhow::Result<()> {
         bin_interval_s: a.bin_interval_s,
     };
     let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
-    let rows = truth
-        .as_ref()
-        .map(|t| truth_rows(&t.file, t.generated.as_ref()));
+    let rows = truth.as_ref().map(TruthRows::of);
     let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_| {})?;
     // The summary goes where the estimates do not.
     let mut info: Box<dyn Write> = if log_csv::is_stdio(&out) {

@@ -2,7 +2,8 @@
 
 use crate::cmd::args::generated_log::{LogShapeArgs, ScenarioOverrides, ShipMotionArgs};
 use crate::cmd::args::ScenarioArg;
-use crate::formats::log_csv::{self, Truth};
+use crate::formats::log_csv;
+use crate::formats::truth_file::{truth_path, write_truth, Truth};
 use crate::sim::recorder::Recorder;
 use crate::sim::scenario::Samples;
 use std::path::{Path, PathBuf};
@@ -47,8 +48,8 @@ pub fn run(a: &GenerateArgs) -> anyhow::Result<()> {
         eprintln!("wrote {written} rows to standard output (no truth file)");
         return Ok(());
     }
-    let truth_path = log_csv::truth_path(&a.out);
-    log_csv::write_truth(&truth_path, &Truth::new(&params))?;
+    let truth_path = truth_path(&a.out);
+    write_truth(&truth_path, &Truth::new(&params))?;
     println!(
         "wrote {} ({written} rows) and {}",
         a.out.display(),

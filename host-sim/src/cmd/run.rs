@@ -4,8 +4,10 @@
 use crate::cmd::args::generated_log::{LogShapeArgs, ScenarioOverrides, ShipMotionArgs};
 use crate::cmd::args::{ScenarioArg, TuningArgs};
 use crate::cmd::{print_report, print_summary, warn_row};
-use crate::formats::log_csv::{self, Truth};
-use crate::pipeline::{estimate_log, inputs_of, EstimateOptions};
+use crate::formats::log_csv;
+use crate::formats::log_paths::inputs_of;
+use crate::formats::truth_file::{truth_path, write_truth, Truth};
+use crate::pipeline::{estimate_log, EstimateOptions};
 use crate::replay::Step;
 use crate::report::method_label;
 use crate::report::{Report, TruthRows};
@@ -70,7 +72,7 @@ pub fn run(a: &RunArgs) -> anyhow::Result<()> {
     );
     log_csv::write_log(&log, &logged)?;
     let truth = Truth::new(&params);
-    log_csv::write_truth(&log_csv::truth_path(&log), &truth)?;
+    write_truth(&truth_path(&log), &truth)?;
     println!(
         "wrote {} ({} rows) and its truth file",
         log.display(),

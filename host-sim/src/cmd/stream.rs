@@ -5,11 +5,12 @@ use crate::exit_status::RunEnd;
 use crate::formats::binned_lines::{BinningSummary, Lines};
 use crate::formats::estimates_csv::EstimatesWriter;
 use crate::formats::log_csv::{is_stdio, LogLine, LogReader, RowFilter};
+use crate::formats::log_paths::{default_estimates_path, inputs_of, log_name};
 use crate::formats::output_file::{check_not_input, Input, OutputFile};
-use crate::pipeline::{default_estimates_path, inputs_of, load_truth, log_name, truth_rows};
+use crate::formats::truth_file::load_truth;
 use crate::replay::GridFollower;
 use crate::report::timeline::{Timeline, TimelineRow};
-use crate::report::ReportBuilder;
+use crate::report::{ReportBuilder, TruthRows};
 use crate::stream::push::{stream_log_push, PushOptions};
 use crate::stream::qemu::Machine;
 use crate::stream::{prepare_firmware, stream_log, StreamSummary, Target};
@@ -183,9 +184,7 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         .report
         .as_ref()
         .and_then(|_| load_truth(&args.log, &mut |w| eprintln!("warning: {w}")));
-    let mut judge = truth
-        .as_ref()
-        .map(|t| ReportBuilder::new(truth_rows(&t.file, t.generated.as_ref())));
+    let mut judge = truth.as_ref().map(|t| ReportBuilder::new(TruthRows::of(t)));
     let mut grid = GridFollower::new(&estimator_core::Config::default());
     let mut timeline = args.report.as_ref().map(|_| Timeline::new());
     let mut each = |line: &LogLine, result: &Result<Output, SampleError>| {

@@ -63,7 +63,8 @@ fn mismatch_logs_unchanged() {
 }
 
 use host_sim::formats::estimates_csv::read_estimates;
-use host_sim::formats::log_csv::{read_log, read_truth, truth_path};
+use host_sim::formats::log_csv::read_log;
+use host_sim::formats::truth_file::{read_truth, truth_path};
 use host_sim::sim::scenario::{Row, ScenarioParams};
 
 /// What `generate` records beside a log: the scenario's parameters.

@@ -444,7 +444,7 @@ fn generate_estimate_and_the_summary_say_when_the_errors_changed() {
         path_str(&log),
     ]);
     let truth =
-        host_sim::formats::log_csv::read_truth(&host_sim::formats::log_csv::truth_path(&log))
+        host_sim::formats::truth_file::read_truth(&host_sim::formats::truth_file::truth_path(&log))
             .unwrap()
             .unwrap();
     let step = truth

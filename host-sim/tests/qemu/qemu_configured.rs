@@ -7,7 +7,7 @@
 //! end.
 
 use crate::qemu_support::*;
-use host_sim::formats::log_csv::{read_truth, truth_path};
+use host_sim::formats::truth_file::{read_truth, truth_path};
 
 #[test]
 fn mps2_an386_built_with_a_latency_and_known_values_estimates_as_the_host_configured_alike() {
