@@ -76,9 +76,10 @@
 
 use crate::exit_status::RunEnd;
 use crate::formats::log_csv::{self, LogError, LogLine, RowFilter};
-use crate::formats::log_paths::log_name;
 use crate::formats::read_ahead::{read_ahead, READ_AHEAD_BATCH};
-use crate::replay::{pattern_summary, Replay, ReplayError, Replayer, StepView};
+use crate::replay::replayer::{Replayer, StepView};
+use crate::replay::summary::pattern_summary;
+use crate::replay::{Replay, ReplayError};
 use crate::sim::scenario::Row;
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::Config;
@@ -420,10 +421,7 @@ pub fn fit_variants(
     let mut out = Vec::with_capacity(fits.len());
     for f in fits {
         if let Some(e) = f.failed {
-            return Err(match e {
-                ReplayError::Interval(i) => anyhow::anyhow!("{}: {i}", log_name(log)),
-                other => other.into(),
-            });
+            return Err(e.for_people(log, None));
         }
         out.push(f.acc.finish(f.variant, f.replayer.finish()));
     }
@@ -437,14 +435,7 @@ pub fn fit_variants(
             .is_some_and(|m| top > 0.0 && m >= FOUND_POWER_SHARE * top);
     }
     if let Some(first) = out.first() {
-        if first.replay.rows == 0 {
-            return Err(RunEnd::nothing_read(
-                &log_name(log),
-                first.replay.unreadable.skipped,
-                first.replay.unreadable.first.first(),
-            )
-            .into());
-        }
+        first.replay.check_rows_read(log)?;
     }
     Ok(out)
 }

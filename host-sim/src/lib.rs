@@ -6,7 +6,6 @@ pub mod commission;
 pub mod exit_status;
 pub mod flash_model;
 pub mod formats;
-pub mod pipeline;
 pub mod replay;
 pub mod report;
 pub mod sim;

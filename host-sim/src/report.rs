@@ -36,6 +36,7 @@ use crate::sim::scenario::{Row, RowTruth};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Estimate, Method, Output, SampleError, Status};
 use serde::Serialize;
+use std::io::Write;
 
 /// Label of a method in reports.
 pub fn method_label(m: Method) -> &'static str {
@@ -1008,6 +1009,21 @@ pub fn format_side_by_side(reports: &[(&str, &Report)]) -> String {
         ));
     }
     s
+}
+
+/// The accuracy of a replay with `method` against the truth as `estimate` and `run` print it:
+/// the table, the honesty of the 1-sigma and the attitude error's RMS.
+pub fn write_report(w: &mut dyn Write, method: Method, rep: &Report) -> std::io::Result<()> {
+    writeln!(w, "\naccuracy against the truth, {}:", method_label(method))?;
+    write!(w, "{}", format_accuracy(&rep.accuracy))?;
+    write!(w, "{}", format_honesty(&rep.accuracy.honesty))?;
+    if let Some(r) = &rep.rms_from_first_estimate {
+        write!(w, "{}", format_rms("from the first estimate", r))?;
+    }
+    if let Some(r) = &rep.rms_last_quarter {
+        write!(w, "{}", format_rms("last quarter of the run", r))?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

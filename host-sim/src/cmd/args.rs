@@ -251,6 +251,16 @@ pub const SAMPLE_INTERVAL_RANGE_S: (f64, f64) = (0.1, 10.0);
 /// only binned).
 pub const GENERATED_INTERVAL_RANGE_S: (f64, f64) = (0.005, 10.0);
 
+/// Checks a `--bin-interval-s` ([`estimator_core::binning::BIN_INTERVAL_RANGE_S`]).
+pub fn check_bin_interval(bin_s: f64) -> anyhow::Result<()> {
+    let (lo, hi) = estimator_core::binning::BIN_INTERVAL_RANGE_S;
+    anyhow::ensure!(
+        bin_s.is_finite() && (lo..=hi).contains(&bin_s),
+        "--bin-interval-s must be between {lo} and {hi} s, got {bin_s}"
+    );
+    Ok(())
+}
+
 /// Rotation period and sample interval. They shape a generated log, and they pin the estimator's
 /// configuration; this group is the one place where the command line sets the core's timing.
 #[derive(Clone, Copy, Debug, Default, PartialEq, clap::Args)]

@@ -1,15 +1,14 @@
 //! `host-sim estimate`: a log replayed through the estimator into its estimates CSV, with the
 //! summary, the accuracy against a truth file beside the log, and the report.
 
-use crate::cmd::args::{MethodArg, TimingArgs, TuningArgs};
-use crate::cmd::{print_report, print_summary, warn_row};
+use crate::cmd::args::{check_bin_interval, MethodArg, TimingArgs, TuningArgs};
+use crate::cmd::{summary_writer, warn_row};
 use crate::exit_status::RunEnd;
-use crate::formats::log_csv;
-use crate::formats::log_paths::{default_estimates_path, inputs_of, log_name};
+use crate::formats::log_paths::{default_estimates_path, inputs_of, log_name, output_name};
 use crate::formats::truth_file::load_truth;
-use crate::pipeline::{estimate_log, EstimateOptions};
-use crate::replay::Replay;
-use crate::report::{method_label, TruthRows};
+use crate::replay::summary::write_summary;
+use crate::replay::{LogReplay, Replay};
+use crate::report::{method_label, write_report, TruthRows};
 use estimator_core::Method;
 use std::io::Write;
 use std::path::PathBuf;
@@ -59,19 +58,10 @@ pub fn run(a: &EstimateArgs) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| default_estimates_path(&a.log));
     let method: Method = a.method.into();
-    let mut restart_at = a.restart_at.clone();
-    anyhow::ensure!(
-        restart_at.iter().all(|t| t.is_finite()),
-        "--restart-at needs finite times"
-    );
-    restart_at.sort_by(f64::total_cmp);
+    let restart_at = restart_times(&a.restart_at)?;
     a.timing.check()?;
     if let Some(bin_s) = a.bin_interval_s {
-        let (lo, hi) = estimator_core::binning::BIN_INTERVAL_RANGE_S;
-        anyhow::ensure!(
-            bin_s.is_finite() && (lo..=hi).contains(&bin_s),
-            "--bin-interval-s must be between {lo} and {hi} s, got {bin_s}"
-        );
+        check_bin_interval(bin_s)?;
         if let Some(d) = a.timing.sample_interval {
             anyhow::ensure!(
                 d == bin_s,
@@ -82,36 +72,29 @@ pub fn run(a: &EstimateArgs) -> anyhow::Result<()> {
     if let Some(dir) = &a.report {
         crate::report::pages::check_dir(dir, &inputs_of(&a.log))?;
     }
-    let options = EstimateOptions {
-        config: a.timing.pin(a.tuning.checked_config(method)?),
-        restart_at_s: restart_at.clone(),
-        strict: a.strict,
-        timeline: a.report.is_some(),
-        bin_interval_s: a.bin_interval_s,
-    };
+    let config = a.timing.pin(a.tuning.checked_config(method)?);
     let truth = load_truth(&a.log, &mut |w| eprintln!("warning: {w}"));
-    let rows = truth.as_ref().map(TruthRows::of);
-    let est = estimate_log(&a.log, &out, &options, rows, &mut warn_row, &mut |_| {})?;
-    // The summary goes where the estimates do not.
-    let mut info: Box<dyn Write> = if log_csv::is_stdio(&out) {
-        Box::new(std::io::stderr())
-    } else {
-        Box::new(std::io::stdout().lock())
-    };
+    let est = LogReplay {
+        config,
+        strict: a.strict,
+        restart_at_s: restart_at.clone(),
+        bin_interval_s: a.bin_interval_s,
+        estimates: Some(out.clone()),
+        truth: truth.as_ref().map(TruthRows::of),
+        timeline: a.report.is_some(),
+        steps: false,
+    }
+    .run(&a.log, &mut warn_row)?;
+    let mut info = summary_writer(&out);
     if !restart_at.is_empty() {
         writeln!(
             info,
             "restarted from a checkpoint after the rows at {restart_at:?} s"
         )?;
     }
-    let out_name = if log_csv::is_stdio(&out) {
-        "standard output".to_string()
-    } else {
-        out.display().to_string()
-    };
-    print_summary(&mut info, &a.log, method, &est.replay, &out_name)?;
+    write_summary(&mut info, &a.log, method, &est.replay, &output_name(&out))?;
     if let Some(rep) = &est.report {
-        print_report(&mut info, method, rep)?;
+        write_report(&mut info, method, rep)?;
     }
     if let (Some(dir), Some(tl)) = (&a.report, &est.timeline) {
         let page = crate::report::pages::write_replay_report(
@@ -127,6 +110,17 @@ pub fn run(a: &EstimateArgs) -> anyhow::Result<()> {
     }
     info.flush()?;
     no_estimate_end(&est.replay)
+}
+
+/// The `--restart-at` times, ascending; refused unless finite.
+fn restart_times(times_s: &[f64]) -> anyhow::Result<Vec<f64>> {
+    let mut restart_at = times_s.to_vec();
+    anyhow::ensure!(
+        restart_at.iter().all(|t| t.is_finite()),
+        "--restart-at needs finite times"
+    );
+    restart_at.sort_by(f64::total_cmp);
+    Ok(restart_at)
 }
 
 /// The end of a replay without an estimate (exit status 4, the reason on standard error).

@@ -3,16 +3,17 @@
 
 use crate::cmd::args::generated_log::{LogShapeArgs, ScenarioOverrides, ShipMotionArgs};
 use crate::cmd::args::{ScenarioArg, TuningArgs};
-use crate::cmd::{print_report, print_summary, warn_row};
+use crate::cmd::warn_row;
 use crate::formats::log_csv;
 use crate::formats::log_paths::inputs_of;
 use crate::formats::truth_file::{truth_path, write_truth, Truth};
-use crate::pipeline::{estimate_log, EstimateOptions};
-use crate::replay::Step;
-use crate::report::method_label;
-use crate::report::{Report, TruthRows};
+use crate::replay::summary::write_summary;
+use crate::replay::{LogReplay, Replayed, Step};
+use crate::report::figures::{caption_of, write_figures};
+use crate::report::html::{Block, Figure, Section};
+use crate::report::{format_side_by_side, method_label, write_report, Report, TruthRows};
 use crate::sim::recorder::recorded_rows;
-use crate::sim::scenario::generate;
+use crate::sim::scenario::{generate, Generated, Row, RowTruth, ScenarioParams};
 use anyhow::Context;
 use estimator_core::Method;
 use std::io::Write;
@@ -64,163 +65,228 @@ pub fn run(a: &RunArgs) -> anyhow::Result<()> {
         crate::report::pages::check_dir(report_dir, &inputs_of(&log))?;
     }
     let generated = generate(&params);
+    let logged = write_log_and_truth(&params, &generated, &log)?;
+    let mut runs = Vec::new();
+    for method in [Method::Windowed, Method::Paper, Method::Traditional] {
+        runs.push(estimate(a, &params, &generated, &log, &dir, method)?);
+    }
+    println!(
+        "side by side ({} scenario, seed {}):",
+        params.scenario.name(),
+        params.seed
+    );
+    let side: Vec<(&str, &Report)> = runs
+        .iter()
+        .map(|r| (method_label(r.method), &r.report))
+        .collect();
+    let side_by_side = format_side_by_side(&side);
+    print!("{side_by_side}");
+    let figures = PaperFigures::new(&params, &generated.truth, &logged, &runs);
+    if !a.no_plots {
+        println!("plots:");
+        for f in figures.write(&dir)? {
+            println!("  {}", f.display());
+        }
+    }
+    match (
+        &a.report,
+        runs.iter().find(|r| r.method == Method::Windowed),
+    ) {
+        (Some(report_dir), Some(ours)) => {
+            write_report_page(report_dir, &log, ours, side_by_side, &figures)
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Writes the log as the recorder records it, and its truth file; returns the rows logged.
+fn write_log_and_truth(
+    params: &ScenarioParams,
+    generated: &Generated,
+    log: &Path,
+) -> anyhow::Result<Vec<Row>> {
     let logged = recorded_rows(
         &params.recording,
         params.seed,
         params.sample_interval_s,
         &generated.rows,
     );
-    log_csv::write_log(&log, &logged)?;
-    let truth = Truth::new(&params);
-    write_truth(&truth_path(&log), &truth)?;
+    log_csv::write_log(log, &logged)?;
+    let truth = Truth::new(params);
+    write_truth(&truth_path(log), &truth)?;
     println!(
         "wrote {} ({} rows) and its truth file",
         log.display(),
         logged.len()
     );
-    let mut runs: Vec<(Method, Vec<Step>)> = Vec::new();
-    let mut reports: Vec<(Method, Report)> = Vec::new();
-    let mut ours = None;
-    let mut stdout = std::io::stdout().lock();
-    for method in [Method::Windowed, Method::Paper, Method::Traditional] {
-        let out = dir.join(format!(
-            "{}.estimates.{}.csv",
-            params.scenario.name(),
-            method.name()
-        ));
-        let timeline = a.report.is_some() && method == Method::Windowed;
-        let options = EstimateOptions {
-            config: a.tuning.config(method),
-            restart_at_s: vec![],
-            strict: true,
-            timeline,
-            bin_interval_s: None,
-        };
-        let mut steps = Vec::with_capacity(generated.rows.len());
-        let rows = TruthRows::Generated {
+    Ok(logged)
+}
+
+/// One method's replay of the generated log, and its report against the truth.
+struct MethodRun {
+    method: Method,
+    replayed: Replayed,
+    report: Report,
+}
+
+/// Replays the log with `method` into its estimates file in `dir`, every step kept (and our
+/// method's timeline for the report), and prints its summary and report.
+fn estimate(
+    a: &RunArgs,
+    params: &ScenarioParams,
+    generated: &Generated,
+    log: &Path,
+    dir: &Path,
+    method: Method,
+) -> anyhow::Result<MethodRun> {
+    let out = dir.join(format!(
+        "{}.estimates.{}.csv",
+        params.scenario.name(),
+        method.name()
+    ));
+    let replayed = LogReplay {
+        config: a.tuning.config(method),
+        strict: true,
+        estimates: Some(out.clone()),
+        truth: Some(TruthRows::Generated {
             rows: &generated.rows,
             truth: &generated.truth,
             time_offset_s: params.recording.time_offset_s,
             errors_step_at_s: params.errors_step.map(|step| step.at_s),
+        }),
+        timeline: a.report.is_some() && method == Method::Windowed,
+        steps: true,
+        ..LogReplay::default()
+    }
+    .run(log, &mut warn_row)?;
+    let mut stdout = std::io::stdout().lock();
+    write_summary(
+        &mut stdout,
+        log,
+        method,
+        &replayed.replay,
+        &out.display().to_string(),
+    )?;
+    let report = replayed
+        .report
+        .clone()
+        .context("a report against the generated truth")?;
+    write_report(&mut stdout, method, &report)?;
+    writeln!(stdout)?;
+    Ok(MethodRun {
+        method,
+        replayed,
+        report,
+    })
+}
+
+/// What the paper's figures are drawn from: the logged rows and every method's steps, their
+/// stamps moved back onto the sample instants (the figures index the truth by them).
+struct PaperFigures<'a> {
+    params: &'a ScenarioParams,
+    truth: &'a [RowTruth],
+    rows: Vec<Row>,
+    steps: Vec<(Method, Vec<Step>)>,
+}
+
+impl<'a> PaperFigures<'a> {
+    fn new(
+        params: &'a ScenarioParams,
+        truth: &'a [RowTruth],
+        logged: &[Row],
+        runs: &[MethodRun],
+    ) -> PaperFigures<'a> {
+        let grid = |t: f64| {
+            params
+                .recording
+                .sample_time_s(t, params.sample_interval_s)
+                .unwrap_or(f64::NAN)
         };
-        let est = estimate_log(
-            &log,
-            &out,
-            &options,
-            Some(rows),
-            &mut warn_row,
-            &mut |view| {
-                steps.push(Step {
-                    time_s: view.line.row.time_s,
-                    result: *view.result,
-                })
-            },
-        )?;
-        print_summary(
-            &mut stdout,
-            &log,
-            method,
-            &est.replay,
-            &out.display().to_string(),
-        )?;
-        let rep = est
-            .report
-            .clone()
-            .context("a report against the generated truth")?;
-        print_report(&mut stdout, method, &rep)?;
-        writeln!(stdout)?;
-        runs.push((method, steps));
-        reports.push((method, rep));
-        if timeline {
-            ours = Some(est);
+        let steps = runs
+            .iter()
+            .map(|r| {
+                let moved = r
+                    .replayed
+                    .steps
+                    .iter()
+                    .map(|s| {
+                        let mut s = *s;
+                        s.time_s = grid(s.time_s);
+                        if let Ok(o) = &mut s.result {
+                            o.time_s = grid(o.time_s);
+                        }
+                        s
+                    })
+                    .collect();
+                (r.method, moved)
+            })
+            .collect();
+        let rows = logged
+            .iter()
+            .map(|r| Row {
+                time_s: grid(r.time_s),
+                ..*r
+            })
+            .collect();
+        PaperFigures {
+            params,
+            truth,
+            rows,
+            steps,
         }
     }
-    drop(stdout);
-    println!(
-        "side by side ({} scenario, seed {}):",
-        params.scenario.name(),
-        params.seed
-    );
-    let side: Vec<(&str, &Report)> = reports.iter().map(|(m, r)| (method_label(*m), r)).collect();
-    let side_by_side = crate::report::format_side_by_side(&side);
-    print!("{side_by_side}");
-    // The figures index the truth by sample instant: stamps moved back onto it.
-    let grid = |t: f64| {
-        params
-            .recording
-            .sample_time_s(t, params.sample_interval_s)
-            .unwrap_or(f64::NAN)
-    };
-    let on_grid: Vec<(Method, Vec<Step>)> = runs
-        .iter()
-        .map(|(m, steps)| {
-            let moved = steps
-                .iter()
-                .map(|s| {
-                    let mut s = *s;
-                    s.time_s = grid(s.time_s);
-                    if let Ok(o) = &mut s.result {
-                        o.time_s = grid(o.time_s);
-                    }
-                    s
-                })
-                .collect();
-            (*m, moved)
-        })
-        .collect();
-    let steps: Vec<(&str, &[Step])> = on_grid
-        .iter()
-        .map(|(m, s)| (m.name(), s.as_slice()))
-        .collect();
-    let window = (params.rotation_period_s / params.sample_interval_s).round() as usize;
-    let grid_rows: Vec<_> = logged
-        .iter()
-        .map(|r| crate::sim::scenario::Row {
-            time_s: grid(r.time_s),
-            ..*r
-        })
-        .collect();
-    let paper_figures = |into: &Path| {
-        crate::report::figures::write_figures(
-            into,
-            &grid_rows,
-            &generated.truth,
-            &params.errors_arcsec,
-            params.sample_interval_s,
+
+    /// Writes the figures into `dir`; returns their files.
+    fn write(&self, dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+        let steps: Vec<(&str, &[Step])> = self
+            .steps
+            .iter()
+            .map(|(m, s)| (m.name(), s.as_slice()))
+            .collect();
+        let p = self.params;
+        let window = (p.rotation_period_s / p.sample_interval_s).round() as usize;
+        write_figures(
+            dir,
+            &self.rows,
+            self.truth,
+            &p.errors_arcsec,
+            p.sample_interval_s,
             window,
             &steps,
         )
-    };
-    if !a.no_plots {
-        println!("plots:");
-        for f in paper_figures(&dir)? {
-            println!("  {}", f.display());
-        }
     }
-    if let (Some(report_dir), Some(est)) = (&a.report, &ours) {
-        use crate::report::html::{Block, Figure, Section};
-        crate::report::pages::create_dir(report_dir)?;
-        let figures = paper_figures(report_dir)?;
-        let mut paper = Section::new("The paper's figures, from this run");
-        for path in figures {
-            let caption = crate::report::figures::caption_of(&path);
-            paper = paper.with(Block::Figure(Figure { path, caption }));
-        }
-        let extra = vec![
-            Section::new("The three methods side by side").with(Block::Code(side_by_side)),
-            paper,
-        ];
-        let tl = est.timeline.as_ref().context("our method's timeline")?;
-        let page = crate::report::pages::write_replay_report(
-            report_dir,
-            &log.display().to_string(),
-            method_label(Method::Windowed),
-            &est.replay,
-            est.report.as_ref(),
-            tl,
-            extra,
-        )?;
-        println!("report in {}", page.display());
+}
+
+/// Writes the report of our method's run into `dir`, with the three methods side by side and the
+/// paper's figures.
+fn write_report_page(
+    dir: &Path,
+    log: &Path,
+    ours: &MethodRun,
+    side_by_side: String,
+    figures: &PaperFigures,
+) -> anyhow::Result<()> {
+    crate::report::pages::create_dir(dir)?;
+    let mut paper = Section::new("The paper's figures, from this run");
+    for path in figures.write(dir)? {
+        let caption = caption_of(&path);
+        paper = paper.with(Block::Figure(Figure { path, caption }));
     }
+    let extra = vec![
+        Section::new("The three methods side by side").with(Block::Code(side_by_side)),
+        paper,
+    ];
+    let est = &ours.replayed;
+    let tl = est.timeline.as_ref().context("our method's timeline")?;
+    let page = crate::report::pages::write_replay_report(
+        dir,
+        &log.display().to_string(),
+        method_label(Method::Windowed),
+        &est.replay,
+        est.report.as_ref(),
+        tl,
+        extra,
+    )?;
+    println!("report in {}", page.display());
     Ok(())
 }

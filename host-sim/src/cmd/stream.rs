@@ -1,23 +1,25 @@
 //! `host-sim stream`: a log streamed through the firmware over its link ([`crate::stream`]), the
 //! estimates CSV written from its answers, the summary of the stream and its report.
 
+use crate::cmd::args::check_bin_interval;
+use crate::cmd::summary_writer;
 use crate::exit_status::RunEnd;
 use crate::formats::binned_lines::{BinningSummary, Lines};
 use crate::formats::estimates_csv::EstimatesWriter;
-use crate::formats::log_csv::{is_stdio, LogLine, LogReader, RowFilter};
-use crate::formats::log_paths::{default_estimates_path, inputs_of, log_name};
+use crate::formats::log_csv::{is_stdio, LogLine, LogLines, LogReader, RowFilter};
+use crate::formats::log_paths::{default_estimates_path, inputs_of, log_name, output_name};
 use crate::formats::output_file::{check_not_input, Input, OutputFile};
 use crate::formats::truth_file::load_truth;
-use crate::replay::GridFollower;
-use crate::report::timeline::{Timeline, TimelineRow};
-use crate::report::{ReportBuilder, TruthRows};
+use crate::replay::records::Records;
+use crate::replay::replayer::GridFollower;
+use crate::report::TruthRows;
 use crate::stream::push::{stream_log_push, PushOptions};
 use crate::stream::qemu::Machine;
 use crate::stream::{prepare_firmware, stream_log, StreamSummary, Target};
 use anyhow::{bail, Context};
 use estimator_core::{Output, RejectReason, SampleError};
 use link_protocol::frame::FrameError;
-use link_protocol::{ClockSource, ResetCause};
+use link_protocol::{ClockSource, ResetCause, StatusReply};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -118,121 +120,47 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_estimates_path(&args.log));
-    check_not_input(&out, "--out", &inputs_of(&args.log))?;
-    if let Some(log) = &args.defmt_log {
-        let mut inputs = inputs_of(&args.log);
-        inputs.extend(args.qemu.iter().map(|elf| Input {
-            path: elf.clone(),
-            what: "the firmware ELF",
-        }));
-        inputs.push(Input {
-            path: out.clone(),
-            what: "the estimates file (--out)",
-        });
-        check_not_input(log, "--defmt-log", &inputs)?;
-    }
-    if let Some(dir) = &args.report {
-        crate::report::pages::create_dir(dir)?;
-    }
+    check_outputs(args, &out)?;
     if let Some(bin_s) = args.bin_interval_s {
-        let (lo, hi) = estimator_core::binning::BIN_INTERVAL_RANGE_S;
-        anyhow::ensure!(
-            bin_s.is_finite() && (lo..=hi).contains(&bin_s),
-            "--bin-interval-s must be between {lo} and {hi} s, got {bin_s}"
-        );
+        check_bin_interval(bin_s)?;
     }
     let reader = LogReader::open(&args.log)?;
-    // Read before the reader is wrapped: whether the log is gzip.
-    let gzip_log = reader.is_gzip();
-    let mut lines = Lines::new(reader, args.bin_interval_s)
-        .map_err(|e| anyhow::anyhow!("invalid --bin-interval-s: {e}"))?;
-    let plain_size = (!is_stdio(&args.log))
+    // A gzip log's size says nothing of its rows: no time left then.
+    let total = (!is_stdio(&args.log) && !reader.is_gzip())
         .then(|| std::fs::metadata(&args.log).ok())
         .flatten()
         .map(|m| m.len());
-    let (mut target, what) = match (&args.qemu, &args.port) {
-        (Some(elf), _) => (
-            Target::boot_qemu(
-                elf,
-                args.machine,
-                args.defmt_log.as_deref(),
-                args.flash_dir.as_deref(),
-                timeout,
-            )?,
-            format!("QEMU {} ({})", args.machine, elf.display()),
-        ),
-        (None, Some(device)) => (
-            Target::open_port(device, args.baud, timeout)?,
-            format!("{device} at {} baud", args.baud),
-        ),
-        (None, None) => bail!("give --qemu FIRMWARE.elf or --port DEVICE"),
-    };
-    // The summary goes where the estimates do not.
-    let mut info: Box<dyn Write> = if is_stdio(&out) {
-        Box::new(std::io::stderr())
-    } else {
-        Box::new(std::io::stdout().lock())
-    };
+    let mut lines = Lines::new(reader, args.bin_interval_s)
+        .map_err(|e| anyhow::anyhow!("invalid --bin-interval-s: {e}"))?;
+    let (mut target, what) = connect(args, timeout)?;
+    let mut info = summary_writer(&out);
     let resume_after_s = prepare_firmware(&mut target, args.resume, args.reset, &mut info)?;
     let mut writer = EstimatesWriter::new(OutputFile::create(&out)?)
         .with_context(|| format!("{}:0: cannot write", out.display()))?;
-    // A gzip log's size says nothing of its rows: no time left then.
-    let gzip = plain_size.is_some() && gzip_log;
-    let total = if gzip { None } else { plain_size };
     // The report's record of the answers: the truth beside the log, the grid from the stamps.
     let truth = args
         .report
         .as_ref()
         .and_then(|_| load_truth(&args.log, &mut |w| eprintln!("warning: {w}")));
-    let mut judge = truth.as_ref().map(|t| ReportBuilder::new(TruthRows::of(t)));
+    let mut records = Records::new(
+        truth.as_ref().map(TruthRows::of),
+        args.report.is_some(),
+        false,
+    );
     let mut grid = GridFollower::new(&estimator_core::Config::default());
-    let mut timeline = args.report.as_ref().map(|_| Timeline::new());
-    let mut each = |line: &LogLine, result: &Result<Output, SampleError>| {
-        if let Some(tl) = timeline.as_mut() {
-            let truth = judge.as_mut().and_then(|j| j.observe(&line.row, result));
+    let summary = stream_rows(
+        args,
+        &mut target,
+        &mut lines,
+        resume_after_s,
+        &mut writer,
+        total,
+        &mut info,
+        &mut |line: &LogLine, result: &Result<Output, SampleError>| {
             let placement = grid.follow(line.row.time_s, result);
-            tl.observe(TimelineRow {
-                row: &line.row,
-                result,
-                placement,
-                counters: None,
-                residuals_rad: None,
-                truth,
-            });
-        }
-    };
-    let filter = RowFilter::new(args.strict);
-    let summary = if args.push {
-        let options = PushOptions {
-            realtime: args.realtime,
-            window: args.window.map_or_else(
-                || PushOptions::default_window(&target.boot_status),
-                |w| w as usize,
-            ),
-            inject: None,
-        };
-        stream_log_push(
-            &mut target,
-            &mut lines,
-            filter,
-            resume_after_s,
-            &mut writer,
-            total,
-            &options,
-            &mut info,
-            &mut each,
-        )?
-    } else {
-        stream_log(
-            &mut target,
-            &mut lines,
-            filter,
-            resume_after_s,
-            &mut writer,
-            total,
-            &mut each,
-        )?
-    };
+            records.observe(&line.row, result, placement, None, None);
+        },
+    )?;
     if let Some(e) = lines.take_interval_error() {
         // Rows too slow for the bins (or not a RINS's rate): refused as an unbinned stream's are.
         return Err(e.into());
@@ -253,27 +181,22 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     if let Some(qemu) = target.qemu.take() {
         qemu.finish()?;
     }
-    print_summary(
-        &mut info,
-        &args.log,
-        &out,
-        &what,
-        &summary,
-        lines.binning(),
-        &target,
-    )?;
-    if let (Some(dir), Some(tl)) = (&args.report, &timeline) {
-        let interval_s = grid.interval_s().unwrap_or(1.0);
-        let report = judge.map(|j| j.finish(interval_s));
-        let page = crate::report::pages::write_stream_report(
-            dir,
-            &log_name(&args.log),
-            &what,
-            &summary.final_status,
-            report.as_ref(),
-            tl,
-        )?;
-        writeln!(info, "report in {}", page.display())?;
+    let log = log_name(&args.log);
+    let head = format!("{log}: {} rows streamed through {what}", summary.rows);
+    print_summary(&mut info, &head, &out, &summary, lines.binning(), &target)?;
+    if let Some(dir) = &args.report {
+        let recorded = records.finish(grid.interval_s().unwrap_or(1.0));
+        if let Some(tl) = &recorded.timeline {
+            let page = crate::report::pages::write_stream_report(
+                dir,
+                &log,
+                &what,
+                &summary.final_status,
+                recorded.report.as_ref(),
+                tl,
+            )?;
+            writeln!(info, "report in {}", page.display())?;
+        }
     }
     info.flush()?;
     if summary.final_status.estimate.is_none() {
@@ -285,55 +208,135 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Refuses outputs that are inputs of the run (the estimates file, the defmt log), and creates
+/// the report directory.
+fn check_outputs(args: &StreamArgs, out: &Path) -> anyhow::Result<()> {
+    check_not_input(out, "--out", &inputs_of(&args.log))?;
+    if let Some(log) = &args.defmt_log {
+        let mut inputs = inputs_of(&args.log);
+        inputs.extend(args.qemu.iter().map(|elf| Input {
+            path: elf.clone(),
+            what: "the firmware ELF",
+        }));
+        inputs.push(Input {
+            path: out.to_path_buf(),
+            what: "the estimates file (--out)",
+        });
+        check_not_input(log, "--defmt-log", &inputs)?;
+    }
+    if let Some(dir) = &args.report {
+        crate::report::pages::create_dir(dir)?;
+    }
+    Ok(())
+}
+
+/// Boots the firmware in QEMU or opens the board's serial port; returns the target and what it
+/// is, for the summary.
+fn connect(args: &StreamArgs, timeout: Duration) -> anyhow::Result<(Target, String)> {
+    Ok(match (&args.qemu, &args.port) {
+        (Some(elf), _) => (
+            Target::boot_qemu(
+                elf,
+                args.machine,
+                args.defmt_log.as_deref(),
+                args.flash_dir.as_deref(),
+                timeout,
+            )?,
+            format!("QEMU {} ({})", args.machine, elf.display()),
+        ),
+        (None, Some(device)) => (
+            Target::open_port(device, args.baud, timeout)?,
+            format!("{device} at {} baud", args.baud),
+        ),
+        (None, None) => bail!("give --qemu FIRMWARE.elf or --port DEVICE"),
+    })
+}
+
+/// Streams the log's rows after `resume_after_s` through the target, a sample per answer or,
+/// with `--push`, without waiting for the answers; `each` sees every row and its answer.
+#[allow(clippy::too_many_arguments)]
+fn stream_rows<L: LogLines, W: Write>(
+    args: &StreamArgs,
+    target: &mut Target,
+    lines: &mut L,
+    resume_after_s: Option<f64>,
+    writer: &mut EstimatesWriter<W>,
+    total: Option<u64>,
+    info: &mut dyn Write,
+    each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
+) -> anyhow::Result<StreamSummary> {
+    let filter = RowFilter::new(args.strict);
+    if !args.push {
+        return stream_log(target, lines, filter, resume_after_s, writer, total, each);
+    }
+    let options = PushOptions {
+        realtime: args.realtime,
+        window: args.window.map_or_else(
+            || PushOptions::default_window(&target.boot_status),
+            |w| w as usize,
+        ),
+        inject: None,
+    };
+    stream_log_push(
+        target,
+        lines,
+        filter,
+        resume_after_s,
+        writer,
+        total,
+        &options,
+        info,
+        each,
+    )
+}
+
+/// The summary of a stream: `head` (the log, its rows, what they went through), the wall time and
+/// the estimates file, then the firmware's counts and state, the link's, and the step's cost.
 fn print_summary(
     w: &mut dyn Write,
-    log: &Path,
+    head: &str,
     out: &Path,
-    what: &str,
     s: &StreamSummary,
     binning: Option<BinningSummary>,
     target: &Target,
 ) -> std::io::Result<()> {
-    let st = &s.final_status;
-    let out = if is_stdio(out) {
-        "standard output".to_string()
-    } else {
-        out.display().to_string()
-    };
-    let log = if is_stdio(log) {
-        "standard input".to_string()
-    } else {
-        log.display().to_string()
-    };
     writeln!(
         w,
-        "{log}: {} rows streamed through {what} in {:.1} s ({:.0} rows/s); estimates in {out}",
-        s.rows,
+        "{head} in {:.1} s ({:.0} rows/s); estimates in {}",
         s.wall.as_secs_f64(),
         s.rows as f64 / s.wall.as_secs_f64().max(1e-9),
+        output_name(out),
     )?;
     if let Some(b) = binning {
         writeln!(w, "  binned: {}", b.describe())?;
     }
-    if s.unreadable.skipped > 0 {
-        let lines: Vec<String> = s
-            .unreadable
-            .first
-            .iter()
-            .map(|e| e.line.to_string())
-            .collect();
-        let more = if s.unreadable.skipped as usize > lines.len() {
-            ", ..."
-        } else {
-            ""
-        };
+    if let Some(skipped) = s.unreadable.describe_skipped() {
+        writeln!(w, "  {skipped}")?;
+    }
+    let st = &s.final_status;
+    write_firmware_counts(w, st)?;
+    write_firmware_state(w, st)?;
+    if s.link.restarts > 0 {
         writeln!(
             w,
-            "  unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)",
-            s.unreadable.skipped,
-            lines.join(", ")
+            "  the firmware restarted {} times during the stream",
+            s.link.restarts
         )?;
     }
+    writeln!(
+        w,
+        "frames sent {}, answered {}, lost {}, overruns {}",
+        s.link.sent,
+        s.link.answered,
+        s.link.lost,
+        st.link.overruns()
+    )?;
+    writeln!(w, "{}", target.unit.summary(&s.cost))
+}
+
+/// What the firmware counted: samples accepted and filled, window restarts, bad frames and
+/// rejected samples by kind.
+fn write_firmware_counts(w: &mut dyn Write, st: &StatusReply) -> std::io::Result<()> {
     writeln!(
         w,
         "  firmware: {} accepted, {} filled, {} window restarts",
@@ -364,7 +367,11 @@ fn print_summary(
         "  rejected samples: {} ({})",
         st.counters.rejected_samples_total(),
         samples.join(", ")
-    )?;
+    )
+}
+
+/// The firmware's stack, checkpoints, link counters, last reset and clock.
+fn write_firmware_state(w: &mut dyn Write, st: &StatusReply) -> std::io::Result<()> {
     writeln!(
         w,
         "  stack (painted): start-up peak {} bytes, service loop peak {} bytes, of {} bytes",
@@ -385,21 +392,5 @@ fn print_summary(
     )?;
     let cause = ResetCause::try_from(st.reset_cause).map_or("unknown", |c| c.name());
     let clock = ClockSource::try_from(st.clock_source).map_or("unknown", |c| c.name());
-    writeln!(w, "  firmware's last reset: {cause}; clock: {clock}")?;
-    if s.link.restarts > 0 {
-        writeln!(
-            w,
-            "  the firmware restarted {} times during the stream",
-            s.link.restarts
-        )?;
-    }
-    writeln!(
-        w,
-        "frames sent {}, answered {}, lost {}, overruns {}",
-        s.link.sent,
-        s.link.answered,
-        s.link.lost,
-        st.link.overruns()
-    )?;
-    writeln!(w, "{}", target.unit.summary(&s.cost))
+    writeln!(w, "  firmware's last reset: {cause}; clock: {clock}")
 }

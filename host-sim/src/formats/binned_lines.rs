@@ -13,7 +13,8 @@
 
 use crate::formats::log_csv::{LogError, LogLine, LogLines};
 use crate::formats::time_stamps::{IntervalCheck, IntervalError};
-use crate::replay::{row_of, sample_of, significant_4};
+use crate::replay::summary::significant_4;
+use crate::replay::{row_of, sample_of};
 use estimator_core::binning::{BinIntervalError, Binner};
 use estimator_core::{RejectCounts, RejectReason};
 

@@ -410,6 +410,25 @@ impl RowFilter {
             Err(e) => Err(e),
         }
     }
+
+    /// `unreadable rows skipped: N (lines A, B, ...; --strict refuses such a log)`, the lines of
+    /// the first few; `None` when no row was skipped.
+    pub fn describe_skipped(&self) -> Option<String> {
+        if self.skipped == 0 {
+            return None;
+        }
+        let lines: Vec<String> = self.first.iter().map(|e| e.line.to_string()).collect();
+        let more = if self.skipped as usize > lines.len() {
+            ", ..."
+        } else {
+            ""
+        };
+        Some(format!(
+            "unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)",
+            self.skipped,
+            lines.join(", ")
+        ))
+    }
 }
 
 /// Writes rows (a slice, or an iterator: streamed) as an attitude log (lossless, see the module doc).

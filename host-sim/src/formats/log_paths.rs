@@ -55,6 +55,15 @@ pub fn inputs_of(log: &Path) -> Vec<Input> {
     ]
 }
 
+/// The name of an output in messages: `standard output` for `-`.
+pub fn output_name(out: &Path) -> String {
+    if is_stdio(out) {
+        "standard output".to_string()
+    } else {
+        out.display().to_string()
+    }
+}
+
 /// The name of a log in messages.
 pub fn log_name(log: &Path) -> String {
     if is_stdio(log) {

@@ -9,7 +9,8 @@
 //! and shows the plots. Statuses are named by the core ([`estimator_core::Status::name`]).
 
 use crate::formats::time_stamps::format_utc;
-use crate::replay::{significant_4, Replay};
+use crate::replay::summary::{describe_health, describe_limit, pattern_summary, significant_4};
+use crate::replay::Replay;
 use crate::report::figures::{monte_carlo_figure, timeline_figures};
 use crate::report::html::{command_line, Block, Figure, Page, Section};
 use crate::report::timeline::{EstimateArcsec, EventKind, Timeline};
@@ -225,12 +226,12 @@ pub fn write_replay_report(
         ("clock steps".into(), c.clock_steps.to_string()),
         (
             "alarms".into(),
-            crate::replay::describe_health(&r.health)
+            describe_health(&r.health)
                 .trim_start_matches("alarms: ")
                 .to_string(),
         ),
     ];
-    if let Some(limit) = crate::replay::describe_limit(&r.health) {
+    if let Some(limit) = describe_limit(&r.health) {
         rows.push((
             "limit".into(),
             limit.trim_start_matches("limit: ").to_string(),
@@ -269,7 +270,7 @@ pub fn write_replay_report(
             "samples per window entry".into(),
             r.rotation.samples_per_entry.to_string(),
         ),
-        ("in one line".into(), crate::replay::pattern_summary(r)),
+        ("in one line".into(), pattern_summary(r)),
     ];
     let mut sections = vec![
         Section::new("Summary").with(Block::Facts(rows)),

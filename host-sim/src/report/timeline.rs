@@ -17,7 +17,7 @@
 //! - with a truth: `before`, the oscillation eq (2) puts in for the true errors, and `after`, what
 //!   is left after compensation, `before - removed` ([`crate::report::residual_arcsec`]);
 //! - `residual`: the windowed method's post-fit residuals of its correlation channels
-//!   ([`crate::replay::StepView::residuals_rad`]), when the replay has them.
+//!   ([`crate::replay::replayer::StepView::residuals_rad`]), when the replay has them.
 
 use crate::report::TruthAt;
 use crate::sim::scenario::Row;
