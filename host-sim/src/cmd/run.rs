@@ -9,7 +9,7 @@ use crate::formats::log_paths::inputs_of;
 use crate::formats::truth_file::{truth_path, write_truth, Truth};
 use crate::replay::summary::write_summary;
 use crate::replay::{LogReplay, Replayed, Step};
-use crate::report::figures::{caption_of, write_figures};
+use crate::report::figures::paper::{caption_of, write_figures};
 use crate::report::html::{Block, Figure, Section};
 use crate::report::{format_side_by_side, method_label, write_report, Report, TruthRows};
 use crate::sim::recorder::recorded_rows;

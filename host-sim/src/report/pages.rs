@@ -11,7 +11,8 @@
 use crate::formats::time_stamps::format_utc;
 use crate::replay::summary::{describe_health, describe_limit, pattern_summary, significant_4};
 use crate::replay::Replay;
-use crate::report::figures::{monte_carlo_figure, timeline_figures};
+use crate::report::figures::monte_carlo_figure;
+use crate::report::figures::report_page::timeline_figures;
 use crate::report::html::{command_line, Block, Figure, Page, Section};
 use crate::report::timeline::{EstimateArcsec, EventKind, Timeline};
 use crate::report::{accuracy_table, format_honesty, rms_table, rms_title, Report};
@@ -24,7 +25,7 @@ use std::path::{Path, PathBuf};
 pub const PAGE: &str = "report.html";
 
 /// Every file a report directory may get.
-/// (`run --report` also writes the paper's figures, named by [`crate::report::figures::write_figures`].)
+/// (`run --report` also writes the paper's figures, named by [`crate::report::figures::paper::write_figures`].)
 pub const FILES: [&str; 7] = [
     PAGE,
     "estimates.png",
