@@ -46,7 +46,7 @@ enum Command {
     /// variant of its conventions (rotation, platform, roll or pitch negated, roll and pitch
     /// exchanged, rotation in radians) and tells which fits best, with the residual power of each.
     /// docs/interface.md.
-    #[command(after_help = host_sim::commission::HELP)]
+    #[command(after_help = cmd::commission::HELP)]
     Commission(cmd::commission::CommissionArgs),
 }
 

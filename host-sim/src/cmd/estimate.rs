@@ -8,7 +8,8 @@ use crate::formats::log_paths::{default_estimates_path, inputs_of, log_name, out
 use crate::formats::truth_file::load_truth;
 use crate::replay::summary::write_summary;
 use crate::replay::{LogReplay, Replay};
-use crate::report::{method_label, write_report, TruthRows};
+use crate::report::tables::{method_label, write_report};
+use crate::report::TruthRows;
 use estimator_core::Method;
 use std::io::Write;
 use std::path::PathBuf;

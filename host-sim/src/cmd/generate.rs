@@ -5,7 +5,7 @@ use crate::cmd::args::ScenarioArg;
 use crate::formats::log_csv;
 use crate::formats::truth_file::{truth_path, write_truth, Truth};
 use crate::sim::recorder::Recorder;
-use crate::sim::scenario::Samples;
+use crate::sim::samples::Samples;
 use std::path::{Path, PathBuf};
 
 /// `host-sim generate`.

@@ -4,7 +4,7 @@
 use crate::cmd::args::generated_log::SpreadArgs;
 use crate::cmd::args::{MethodArg, ScenarioArg, TuningArgs};
 use crate::exit_status::RunEnd;
-use crate::report::method_label;
+use crate::report::tables::method_label;
 use crate::sim::rotation_scheme::RotationScheme;
 use crate::study::monte_carlo::{format_summary, run_all, summarize, MC_TIMES_S};
 use estimator_core::Method;

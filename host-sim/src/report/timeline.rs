@@ -15,7 +15,7 @@
 //! - `removed`: the oscillation the compensation took out, raw attitude minus corrected (eq (2)
 //!   with the running estimate);
 //! - with a truth: `before`, the oscillation eq (2) puts in for the true errors, and `after`, what
-//!   is left after compensation, `before - removed` ([`crate::report::residual_arcsec`]);
+//!   is left after compensation, `before - removed` ([`crate::report::attitude_rms::residual_arcsec`]);
 //! - `residual`: the windowed method's post-fit residuals of its correlation channels
 //!   ([`crate::replay::replayer::StepView::residuals_rad`]), when the replay has them.
 

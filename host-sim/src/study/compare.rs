@@ -1,12 +1,15 @@
 //! `compare`: every method on every scenario over several seeds, as a markdown table for docs/results.md;
 //! one table per rotation scheme, headed by how its logs are made ([`describe`]). Besides the
-//! errors at two times, the honesty of the 1-sigma row by row ([`crate::report::Honesty`]): the
+//! errors at two times, the honesty of the 1-sigma row by row ([`crate::report::honesty::Honesty`]): the
 //! share of the runs' rows where some error lies beyond 2 and 3 sigma, and the largest
 //! |error| / 1-sigma of any run.
 
 use crate::replay::HostEstimator;
-use crate::report::{method_label, percent_of_rows, Accuracy, Honesty};
-use crate::sim::scenario::{ScenarioKind, ShipMotionSettings};
+use crate::report::accuracy::Accuracy;
+use crate::report::honesty::Honesty;
+use crate::report::tables::{method_label, percent_of_rows};
+use crate::sim::scenario::ScenarioKind;
+use crate::sim::ship_motion::ShipMotionSettings;
 use crate::study::monte_carlo::{coverage_2sigma, pool_honesty, quantile, run_all, sorted, Draw};
 use estimator_core::{Config, Method};
 

@@ -542,7 +542,7 @@ fn an_offset_log_estimates_and_reports_as_the_plain_one() {
 /// phases come from the seed and are recorded.
 #[test]
 fn ship_options_add_slow_heel_trim_and_heel_in_turns() {
-    use host_sim::sim::scenario::turns;
+    use host_sim::sim::ship_motion::turns;
     use std::f64::consts::PI;
     let dir = tempfile::tempdir().unwrap();
     let (plain, _) = generate(dir.path(), "plain", &["--duration", "7500"]);

@@ -10,7 +10,8 @@ use estimator_core::{Config, ErrorChange, Estimator, Status};
 use host_sim::replay::sample_of;
 use host_sim::sim::recorder::Recorder;
 use host_sim::sim::rotation_scheme::RotationScheme;
-use host_sim::sim::scenario::{ErrorsStep, Mismatch, Samples, ScenarioKind, ScenarioParams};
+use host_sim::sim::samples::Samples;
+use host_sim::sim::scenario::{ErrorsStep, Mismatch, ScenarioKind, ScenarioParams};
 use host_sim::study::monte_carlo::Draw;
 use rayon::prelude::*;
 

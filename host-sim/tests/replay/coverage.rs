@@ -9,7 +9,7 @@
 //! the method reported before it learned the noise.
 
 use estimator_core::{Config, Method};
-use host_sim::report::Accuracy;
+use host_sim::report::accuracy::Accuracy;
 use host_sim::sim::scenario::{Mismatch, ScenarioKind};
 use host_sim::study::compare::{compare_one, CompareRow};
 use host_sim::study::monte_carlo::{quantile, run_all, sorted, Draw};

@@ -11,7 +11,7 @@
 //!   paper and sea scenarios, and every error within 10 arcsec by then.
 
 use estimator_core::{Config, Method};
-use host_sim::report::Accuracy;
+use host_sim::report::accuracy::Accuracy;
 use host_sim::sim::recorder::RecorderSettings;
 use host_sim::sim::rotation_scheme::RotationScheme;
 use host_sim::sim::scenario::{ScenarioKind, ScenarioParams};

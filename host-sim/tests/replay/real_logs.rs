@@ -4,7 +4,7 @@
 //! recorder's effects applied (`host-sim generate --scheme ... --drop-fraction ...`).
 
 use estimator_core::Config;
-use host_sim::report::Accuracy;
+use host_sim::report::accuracy::Accuracy;
 use host_sim::sim::recorder::RecorderSettings;
 use host_sim::sim::rotation_scheme::RotationScheme;
 use host_sim::sim::scenario::{ScenarioKind, ScenarioParams};

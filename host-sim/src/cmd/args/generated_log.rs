@@ -8,9 +8,8 @@ use super::{
 };
 use crate::sim::recorder::RecorderSettings;
 use crate::sim::rotation_scheme::RotationScheme;
-use crate::sim::scenario::{
-    ErrorsStep, Mismatch, ScenarioKind, ScenarioParams, ShipMotionSettings,
-};
+use crate::sim::scenario::{ErrorsStep, Mismatch, ScenarioKind, ScenarioParams};
+use crate::sim::ship_motion::ShipMotionSettings;
 use crate::study::monte_carlo::Draw;
 
 /// Overrides of the scenario's fields (physics unchanged).

@@ -3,8 +3,10 @@
 //! their averages (Fig. 3), and the attitude error before and after compensation (Figs. 7 and 8).
 
 use crate::replay::Step;
+use crate::report::accuracy::{errors_arcsec, percent_error};
+use crate::report::attitude_rms::residual_arcsec;
 use crate::report::plots::{self, CorrelationPanel, Curve};
-use crate::report::{errors_arcsec, percent_error, residual_arcsec, truth_index};
+use crate::report::truth_index;
 use crate::sim::scenario::{Row, RowTruth};
 use estimator_core::correlation::{products, ROLL_SIN};
 use estimator_core::installation::Angles;

@@ -221,7 +221,12 @@ fn error_figure(page: &Page) -> anyhow::Result<Figure> {
             points: errors
                 .iter()
                 .filter(|e| e.truth[i] != 0.0)
-                .map(|e| (e.t, crate::report::percent_error(e.error[i], e.truth[i])))
+                .map(|e| {
+                    (
+                        e.t,
+                        crate::report::accuracy::percent_error(e.error[i], e.truth[i]),
+                    )
+                })
                 .collect(),
         });
     }
