@@ -4,11 +4,15 @@
 use crate::cmd::args::generated_log::SpreadArgs;
 use crate::cmd::args::{MethodArg, ScenarioArg, TuningArgs};
 use crate::exit_status::RunEnd;
+use crate::report::honesty::Honesty;
 use crate::report::tables::method_label;
 use crate::sim::rotation_scheme::RotationScheme;
-use crate::study::monte_carlo::{format_summary, run_all, summarize, MC_TIMES_S};
+use crate::study::monte_carlo::Draw;
+use crate::study::monte_carlo::{
+    format_summary, run_all, summarize, StudyJson, Summary, MC_TIMES_S,
+};
 use estimator_core::Method;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// `host-sim monte-carlo`.
 #[derive(clap::Args, Debug)]
@@ -103,49 +107,25 @@ pub fn run(a: &MonteCarloArgs) -> anyhow::Result<()> {
     let table = format_summary(&summary)
         + &crate::study::monte_carlo::format_honesty_over_runs(&honesty, results.len());
     print!("{table}");
-    let command = crate::report::html::command_line();
+    let ran = Ran {
+        draw: &draw,
+        method,
+        runs: a.runs,
+        duration_s,
+        description,
+        over_time,
+        summary,
+        honesty,
+        table,
+    };
     if let Some(out) = &a.out {
-        let json = crate::study::monte_carlo::StudyJson {
-            scenario: draw.kind.name().to_string(),
-            method: method.name().to_string(),
-            scheme: draw.scheme.name().to_string(),
-            description: description.clone(),
-            duration_s,
-            master_seed: draw.seed,
-            run_seeds: (0..a.runs).map(|i| draw.run_seed(i)).collect(),
-            command: command.clone(),
-            version: env!("CARGO_PKG_VERSION").to_string(),
-            summary: summary.clone(),
-            over_time: over_time.clone(),
-            honesty,
-        };
-        let text = serde_json::to_string_pretty(&json)?;
-        crate::formats::output_file::write_bytes(out, (text + "\n").as_bytes())?;
-        println!("summary in {}", out.display());
+        write_json(out, &ran)?;
     }
     if let Some(dir) = &a.report {
-        let facts = vec![
-            ("scenario".to_string(), draw.kind.name().to_string()),
-            ("draw".into(), description.clone()),
-            ("method".into(), method_label(method).to_string()),
-            ("rotation scheme".into(), draw.scheme.name().to_string()),
-            ("runs".into(), format!("{} of {duration_s:.0} s", a.runs)),
-            ("master seed".into(), draw.seed.to_string()),
-            (
-                "wall time".into(),
-                format!("{elapsed:.1} s on {} threads", pool.current_num_threads()),
-            ),
-        ];
-        let study = crate::report::pages::MonteCarloStudy {
-            description,
-            facts,
-            summary: &over_time,
-            table,
-        };
-        let page = crate::report::pages::write_monte_carlo_report(dir, &study)?;
-        println!("report in {}", page.display());
+        let wall = format!("{elapsed:.1} s on {} threads", pool.current_num_threads());
+        write_report(dir, &ran, wall)?;
     }
-    if summary.no_estimate() {
+    if ran.summary.no_estimate() {
         return Err(RunEnd::NoEstimate {
             reason: format!(
                 "no run reached an estimate by the table's times ({} s and after)",
@@ -154,5 +134,69 @@ pub fn run(a: &MonteCarloArgs) -> anyhow::Result<()> {
         }
         .into());
     }
+    Ok(())
+}
+
+/// A study as it ran: what its JSON summary and its report say.
+struct Ran<'a> {
+    draw: &'a Draw,
+    method: Method,
+    runs: usize,
+    duration_s: f64,
+    description: String,
+    over_time: Summary,
+    summary: Summary,
+    honesty: Honesty,
+    /// The table as printed.
+    table: String,
+}
+
+/// Writes the summary as JSON (with the scenario, method, seeds and command) to `out`.
+fn write_json(out: &Path, ran: &Ran) -> anyhow::Result<()> {
+    let draw = ran.draw;
+    let json = StudyJson {
+        scenario: draw.kind.name().to_string(),
+        method: ran.method.name().to_string(),
+        scheme: draw.scheme.name().to_string(),
+        description: ran.description.clone(),
+        duration_s: ran.duration_s,
+        master_seed: draw.seed,
+        run_seeds: (0..ran.runs).map(|i| draw.run_seed(i)).collect(),
+        command: crate::report::html::command_line(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        summary: ran.summary.clone(),
+        over_time: ran.over_time.clone(),
+        honesty: ran.honesty,
+    };
+    let text = serde_json::to_string_pretty(&json)?;
+    crate::formats::output_file::write_bytes(out, (text + "\n").as_bytes())?;
+    println!("summary in {}", out.display());
+    Ok(())
+}
+
+/// Writes the report of the study into `dir`; `wall`: the wall time it took, and on how many
+/// threads.
+fn write_report(dir: &Path, ran: &Ran, wall: String) -> anyhow::Result<()> {
+    let draw = ran.draw;
+    let facts = vec![
+        ("scenario".to_string(), draw.kind.name().to_string()),
+        ("draw".into(), ran.description.clone()),
+        ("method".into(), method_label(ran.method).to_string()),
+        ("rotation scheme".into(), draw.scheme.name().to_string()),
+        (
+            "runs".into(),
+            format!("{} of {:.0} s", ran.runs, ran.duration_s),
+        ),
+        ("master seed".into(), draw.seed.to_string()),
+        ("wall time".into(), wall),
+    ];
+    let study = crate::report::pages::MonteCarloStudy {
+        description: ran.description.clone(),
+        facts,
+        summary: &ran.over_time,
+        table: ran.table.clone(),
+    };
+    let page = crate::report::pages::write_monte_carlo_report(dir, &study)?;
+    println!("report in {}", page.display());
     Ok(())
 }

@@ -20,7 +20,7 @@ use anyhow::{bail, Context};
 use estimator_core::{Output, RejectReason, SampleError};
 use link_protocol::frame::FrameError;
 use link_protocol::{ClockSource, ResetCause, StatusReply};
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -121,17 +121,7 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| default_estimates_path(&args.log));
     check_outputs(args, &out)?;
-    if let Some(bin_s) = args.bin_interval_s {
-        check_bin_interval(bin_s)?;
-    }
-    let reader = LogReader::open(&args.log)?;
-    // A gzip log's size says nothing of its rows: no time left then.
-    let total = (!is_stdio(&args.log) && !reader.is_gzip())
-        .then(|| std::fs::metadata(&args.log).ok())
-        .flatten()
-        .map(|m| m.len());
-    let mut lines = Lines::new(reader, args.bin_interval_s)
-        .map_err(|e| anyhow::anyhow!("invalid --bin-interval-s: {e}"))?;
+    let (mut lines, total) = open_log(args)?;
     let (mut target, what) = connect(args, timeout)?;
     let mut info = summary_writer(&out);
     let resume_after_s = prepare_firmware(&mut target, args.resume, args.reset, &mut info)?;
@@ -161,19 +151,7 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
             records.observe(&line.row, result, placement, None, None);
         },
     )?;
-    if let Some(e) = lines.take_interval_error() {
-        // Rows too slow for the bins (or not a RINS's rate): refused as an unbinned stream's are.
-        return Err(e.into());
-    }
-    if summary.rows == 0 {
-        // Nothing to write: an earlier estimates file stays as it was.
-        return Err(RunEnd::nothing_read(
-            &log_name(&args.log),
-            summary.unreadable.skipped,
-            summary.unreadable.first.first(),
-        )
-        .into());
-    }
+    check_rows_streamed(&args.log, &mut lines, &summary)?;
     writer
         .finish()
         .with_context(|| format!("{}:0: cannot write", out.display()))?
@@ -181,28 +159,68 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     if let Some(qemu) = target.qemu.take() {
         qemu.finish()?;
     }
+    let recorded = records.finish(grid.interval_s().unwrap_or(1.0));
     let log = log_name(&args.log);
     let head = format!("{log}: {} rows streamed through {what}", summary.rows);
     print_summary(&mut info, &head, &out, &summary, lines.binning(), &target)?;
-    if let Some(dir) = &args.report {
-        let recorded = records.finish(grid.interval_s().unwrap_or(1.0));
-        if let Some(tl) = &recorded.timeline {
-            let page = crate::report::pages::write_stream_report(
-                dir,
-                &log,
-                &what,
-                &summary.final_status,
-                recorded.report.as_ref(),
-                tl,
-            )?;
-            writeln!(info, "report in {}", page.display())?;
-        }
+    if let (Some(dir), Some(tl)) = (&args.report, &recorded.timeline) {
+        let page = crate::report::pages::write_stream_report(
+            dir,
+            &log,
+            &what,
+            &summary.final_status,
+            recorded.report.as_ref(),
+            tl,
+        )?;
+        writeln!(info, "report in {}", page.display())?;
     }
     info.flush()?;
     if summary.final_status.estimate.is_none() {
         return Err(RunEnd::NoEstimate {
             reason: "the firmware reports no estimate at the end of the log".into(),
         }
+        .into());
+    }
+    Ok(())
+}
+
+/// A log's rows as the stream reads them, binned or not.
+type StreamLines = Lines<LogReader<Box<dyn Read + Send>>>;
+
+/// The log's rows, binned when asked (`--bin-interval-s`, checked), and its size when it tells
+/// the time left (a plain file).
+fn open_log(args: &StreamArgs) -> anyhow::Result<(StreamLines, Option<u64>)> {
+    if let Some(bin_s) = args.bin_interval_s {
+        check_bin_interval(bin_s)?;
+    }
+    let reader = LogReader::open(&args.log)?;
+    // A gzip log's size says nothing of its rows: no time left then.
+    let total = (!is_stdio(&args.log) && !reader.is_gzip())
+        .then(|| std::fs::metadata(&args.log).ok())
+        .flatten()
+        .map(|m| m.len());
+    let lines = Lines::new(reader, args.bin_interval_s)
+        .map_err(|e| anyhow::anyhow!("invalid --bin-interval-s: {e}"))?;
+    Ok((lines, total))
+}
+
+/// Refuses a stream that read no row, or whose rows were too slow for the bins (or not at a
+/// RINS's rate: refused as an unbinned stream's are); nothing is written then, and an earlier
+/// estimates file stays as it was.
+fn check_rows_streamed<I>(
+    log: &Path,
+    lines: &mut Lines<I>,
+    summary: &StreamSummary,
+) -> anyhow::Result<()> {
+    if let Some(e) = lines.take_interval_error() {
+        return Err(e.into());
+    }
+    if summary.rows == 0 {
+        return Err(RunEnd::nothing_read(
+            &log_name(log),
+            summary.unreadable.skipped,
+            summary.unreadable.first.first(),
+        )
         .into());
     }
     Ok(())

@@ -207,6 +207,34 @@ pub fn write_replay_report(
 ) -> anyhow::Result<PathBuf> {
     create_dir(dir)?;
     let figures = timeline_figures(dir, tl, method, r.rotation.period_s)?;
+    let mut sections = vec![
+        Section::new("Summary").with(Block::Facts(replay_facts(log, method, r, tl))),
+        final_estimate_section(
+            tl.final_estimate(),
+            r.final_status.map(|s| s.name()),
+            r.holdup.map(|h| h.to_string()),
+        ),
+        Section::new("What was learned from the log").with(Block::Facts(learned_facts(r))),
+    ];
+    if let Some(rep) = report {
+        sections.push(accuracy_sections(rep, method));
+    }
+    sections.push(figures_section(figures));
+    sections.extend(extra);
+    sections.push(events_section(tl));
+    let page = Page {
+        title: format!("RINS installation errors: {log}"),
+        command: command_line(),
+        sections,
+    };
+    let path = dir.join(PAGE);
+    page.write(&path)?;
+    Ok(path)
+}
+
+/// The summary of a replay: the log, the method, what happened to the rows, the alarms and the
+/// limit the log sets, and the timeline's times.
+fn replay_facts(log: &str, method: &str, r: &Replay, tl: &Timeline) -> Vec<(String, String)> {
     let c = &r.counters;
     let mut rows = vec![
         ("log".to_string(), log.to_string()),
@@ -244,7 +272,12 @@ pub fn write_replay_report(
         rows.insert(2, ("binned".into(), b.describe()));
     }
     rows.extend(timeline_facts(tl));
-    let learned = vec![
+    rows
+}
+
+/// What was learned of the log: the sample interval and the rotation pattern.
+fn learned_facts(r: &Replay) -> Vec<(String, String)> {
+    vec![
         (
             "sample interval".to_string(),
             r.sample_interval_s.map_or("not yet learned".into(), |d| {
@@ -273,30 +306,7 @@ pub fn write_replay_report(
             r.rotation.samples_per_entry.to_string(),
         ),
         ("in one line".into(), pattern_summary(r)),
-    ];
-    let mut sections = vec![
-        Section::new("Summary").with(Block::Facts(rows)),
-        final_estimate_section(
-            tl.final_estimate(),
-            r.final_status.map(|s| s.name()),
-            r.holdup.map(|h| h.to_string()),
-        ),
-        Section::new("What was learned from the log").with(Block::Facts(learned)),
-    ];
-    if let Some(rep) = report {
-        sections.push(accuracy_sections(rep, method));
-    }
-    sections.push(figures_section(figures));
-    sections.extend(extra);
-    sections.push(events_section(tl));
-    let page = Page {
-        title: format!("RINS installation errors: {log}"),
-        command: command_line(),
-        sections,
-    };
-    let path = dir.join(PAGE);
-    page.write(&path)?;
-    Ok(path)
+    ]
 }
 
 /// Writes the plots and `report.html` of a log streamed through the firmware into `dir`.

@@ -133,6 +133,7 @@ pub const BLUE_LINE: RGBColor = RGBColor(30, 90, 200);
 /// Colour of their averages of eq (11) in Fig. 3.
 pub const RED_LINE: RGBColor = RGBColor(210, 30, 30);
 
+/// The time span of what a panel draws (0 to 1 when it draws nothing).
 fn x_extent(panel: &Panel) -> (f64, f64) {
     let (lo, hi) = panel
         .series
@@ -155,6 +156,8 @@ fn x_extent(panel: &Panel) -> (f64, f64) {
     }
 }
 
+/// Draws one panel on `area`: its title, axes and mesh, its bands, its lines and the legend; `y` is
+/// its vertical axis (linear or log).
 fn draw_panel<DB, Y>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     panel: &Panel,
@@ -167,7 +170,6 @@ where
     Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
 {
     let (x0, x1) = x_extent(panel);
-    let (y0, y1) = panel.y_range;
     let mut chart = ChartBuilder::on(area)
         .caption(&panel.title, ("sans-serif", 20))
         .margin(10)
@@ -185,64 +187,10 @@ where
         .draw()
         .map_err(|e| anyhow!("plot: {e}"))?;
     for b in &panel.bands {
-        let color = b.color;
-        // One polygon per stretch of finite points (a non-finite point is a gap): the low edge
-        // forward, the high edge back.
-        let polygons: Vec<Vec<(f64, f64)>> = b
-            .points
-            .split(|p| !(p.0.is_finite() && p.1.is_finite() && p.2.is_finite()))
-            .filter(|run| !run.is_empty())
-            .map(|run| {
-                run.iter()
-                    .map(|p| (p.0, p.1.clamp(y0, y1)))
-                    .chain(run.iter().rev().map(|p| (p.0, p.2.clamp(y0, y1))))
-                    .collect()
-            })
-            .collect();
-        let label = if band_is_cut(b, panel.y_range) {
-            format!("{} (cut at the axis)", b.label)
-        } else {
-            b.label.clone()
-        };
-        chart
-            .draw_series(
-                polygons
-                    .into_iter()
-                    .map(|polygon| Polygon::new(polygon, color.mix(0.4).filled())),
-            )
-            .map_err(|e| anyhow!("plot: {e}"))?
-            .label(label)
-            .legend(move |(x, y)| {
-                Rectangle::new([(x, y - 5), (x + 20, y + 5)], color.mix(0.4).filled())
-            });
+        draw_band(&mut chart, b, panel.y_range)?;
     }
     for s in &panel.series {
-        let color = s.color;
-        // A NaN is a gap in the line; values beyond the axis are drawn at its edge.
-        let runs: Vec<Vec<(f64, f64)>> = s
-            .points
-            .split(|p| p.1.is_nan() || !p.0.is_finite())
-            .filter(|run| !run.is_empty())
-            .map(|run| run.iter().map(|&(x, v)| (x, v.clamp(y0, y1))).collect())
-            .collect();
-        chart
-            .draw_series(
-                runs.into_iter()
-                    .map(|run| PathElement::new(run, color.stroke_width(1))),
-            )
-            .map_err(|e| anyhow!("plot: {e}"))?
-            .label(legend_label(s, panel.y_range))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
-        let marks = clip_marks(&s.points, panel.y_range);
-        chart
-            .draw_series(marks.into_iter().take(MAX_CLIP_MARKS).map(|(x, above)| {
-                let tip: i32 = if above { -8 } else { 8 };
-                EmptyElement::at((x, if above { y1 } else { y0 }))
-                    + Polygon::new(vec![(0, tip), (-6, 0), (6, 0)], color.filled())
-            }))
-            .map_err(|e| anyhow!("plot: {e}"))?;
+        draw_line(&mut chart, s, panel.y_range)?;
     }
     chart
         .configure_series_labels()
@@ -251,6 +199,85 @@ where
         .label_font(("sans-serif", 14))
         .position(SeriesLabelPosition::UpperRight)
         .draw()
+        .map_err(|e| anyhow!("plot: {e}"))?;
+    Ok(())
+}
+
+/// A chart of a panel: time across, `Y` (linear or log) up.
+type Chart<'a, DB, Y> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>;
+
+/// Draws a band, cut at the axis `y_range`, with its legend entry.
+fn draw_band<DB, Y>(chart: &mut Chart<'_, DB, Y>, b: &Band, y_range: (f64, f64)) -> Result<()>
+where
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64>,
+{
+    let (y0, y1) = y_range;
+    let color = b.color;
+    // One polygon per stretch of finite points (a non-finite point is a gap): the low edge
+    // forward, the high edge back.
+    let polygons: Vec<Vec<(f64, f64)>> = b
+        .points
+        .split(|p| !(p.0.is_finite() && p.1.is_finite() && p.2.is_finite()))
+        .filter(|run| !run.is_empty())
+        .map(|run| {
+            run.iter()
+                .map(|p| (p.0, p.1.clamp(y0, y1)))
+                .chain(run.iter().rev().map(|p| (p.0, p.2.clamp(y0, y1))))
+                .collect()
+        })
+        .collect();
+    let label = if band_is_cut(b, y_range) {
+        format!("{} (cut at the axis)", b.label)
+    } else {
+        b.label.clone()
+    };
+    chart
+        .draw_series(
+            polygons
+                .into_iter()
+                .map(|polygon| Polygon::new(polygon, color.mix(0.4).filled())),
+        )
+        .map_err(|e| anyhow!("plot: {e}"))?
+        .label(label)
+        .legend(move |(x, y)| {
+            Rectangle::new([(x, y - 5), (x + 20, y + 5)], color.mix(0.4).filled())
+        });
+    Ok(())
+}
+
+/// Draws a line, cut at the axis `y_range` and marked where it leaves it, with its legend entry.
+fn draw_line<DB, Y>(chart: &mut Chart<'_, DB, Y>, s: &Series, y_range: (f64, f64)) -> Result<()>
+where
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64>,
+{
+    let (y0, y1) = y_range;
+    let color = s.color;
+    // A NaN is a gap in the line; values beyond the axis are drawn at its edge.
+    let runs: Vec<Vec<(f64, f64)>> = s
+        .points
+        .split(|p| p.1.is_nan() || !p.0.is_finite())
+        .filter(|run| !run.is_empty())
+        .map(|run| run.iter().map(|&(x, v)| (x, v.clamp(y0, y1))).collect())
+        .collect();
+    chart
+        .draw_series(
+            runs.into_iter()
+                .map(|run| PathElement::new(run, color.stroke_width(1))),
+        )
+        .map_err(|e| anyhow!("plot: {e}"))?
+        .label(legend_label(s, y_range))
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    let marks = clip_marks(&s.points, y_range);
+    chart
+        .draw_series(marks.into_iter().take(MAX_CLIP_MARKS).map(|(x, above)| {
+            let tip: i32 = if above { -8 } else { 8 };
+            EmptyElement::at((x, if above { y1 } else { y0 }))
+                + Polygon::new(vec![(0, tip), (-6, 0), (6, 0)], color.filled())
+        }))
         .map_err(|e| anyhow!("plot: {e}"))?;
     Ok(())
 }

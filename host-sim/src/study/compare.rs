@@ -58,30 +58,7 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
     let inf = f64::INFINITY;
     let duration_s = draw.params(0).duration_s;
     if let Err(e) = HostEstimator::new(config) {
-        return Ok(CompareRow {
-            scenario: draw.kind,
-            method: config.method,
-            runs: seeds,
-            to_percent_s: (inf, inf),
-            to_arcsec_s: (inf, inf),
-            error_at_arcsec: COMPARE_TIMES_S
-                .iter()
-                .map(|t| {
-                    if *t > duration_s {
-                        (f64::NAN, f64::NAN)
-                    } else {
-                        (inf, inf)
-                    }
-                })
-                .collect(),
-            coverage_2sigma: COMPARE_TIMES_S
-                .iter()
-                .map(|t| if *t > duration_s { f64::NAN } else { 0.0 })
-                .collect(),
-            duration_s,
-            honesty: Honesty::default(),
-            final_status: vec![(format!("configuration rejected ({e:?})"), seeds)],
-        });
+        return Ok(rejected_row(draw, config, seeds, duration_s, &e));
     }
     let results: Vec<Accuracy> = run_all(draw, config, seeds, &COMPARE_TIMES_S, &|| {})?;
     let error_at_arcsec = COMPARE_TIMES_S
@@ -110,21 +87,10 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
             }
         })
         .collect();
-    let mut final_status: Vec<(String, usize)> = Vec::new();
-    for name in results
-        .iter()
-        .map(|r| r.final_status.map_or("none", |s| s.name()))
-    {
-        match final_status.iter_mut().find(|(n, _)| n == name) {
-            Some((_, count)) => *count += 1,
-            None => final_status.push((name.to_string(), 1)),
-        }
-    }
-    final_status.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
     let honesty = pool_honesty(&results);
     Ok(CompareRow {
         scenario: draw.kind,
-        final_status,
+        final_status: final_statuses(&results),
         method: config.method,
         runs: seeds,
         to_percent_s: stats(
@@ -142,6 +108,57 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
         duration_s,
         honesty,
     })
+}
+
+/// The line of a configuration the estimator rejects (`e`): no estimate in any run.
+fn rejected_row(
+    draw: &Draw,
+    config: Config,
+    seeds: usize,
+    duration_s: f64,
+    e: &estimator_core::ConfigError,
+) -> CompareRow {
+    let inf = f64::INFINITY;
+    CompareRow {
+        scenario: draw.kind,
+        method: config.method,
+        runs: seeds,
+        to_percent_s: (inf, inf),
+        to_arcsec_s: (inf, inf),
+        error_at_arcsec: COMPARE_TIMES_S
+            .iter()
+            .map(|t| {
+                if *t > duration_s {
+                    (f64::NAN, f64::NAN)
+                } else {
+                    (inf, inf)
+                }
+            })
+            .collect(),
+        coverage_2sigma: COMPARE_TIMES_S
+            .iter()
+            .map(|t| if *t > duration_s { f64::NAN } else { 0.0 })
+            .collect(),
+        duration_s,
+        honesty: Honesty::default(),
+        final_status: vec![(format!("configuration rejected ({e:?})"), seeds)],
+    }
+}
+
+/// The statuses the runs ended in, each with how many runs ended in it, most frequent first.
+fn final_statuses(results: &[Accuracy]) -> Vec<(String, usize)> {
+    let mut final_status: Vec<(String, usize)> = Vec::new();
+    for name in results
+        .iter()
+        .map(|r| r.final_status.map_or("none", |s| s.name()))
+    {
+        match final_status.iter_mut().find(|(n, _)| n == name) {
+            Some((_, count)) => *count += 1,
+            None => final_status.push((name.to_string(), 1)),
+        }
+    }
+    final_status.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    final_status
 }
 
 fn fmt_time(t: f64, duration_s: f64) -> String {
