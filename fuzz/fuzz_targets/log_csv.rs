@@ -7,7 +7,7 @@ mod common;
 
 use common::{assert_finite, CAP};
 use estimator_core::{Config, Estimator, Sample};
-use host_sim::log_csv::LogReader;
+use host_sim::formats::log_csv::LogReader;
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 

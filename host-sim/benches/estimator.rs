@@ -3,10 +3,9 @@
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use estimator_core::{Config, Method};
-use host_sim::log_csv::write_log;
-use host_sim::pipeline::estimate_file;
-use host_sim::replay::{sample_of, HostEstimator};
-use host_sim::scenario::{generate, ScenarioKind, ScenarioParams};
+use host_sim::formats::log_csv::write_log;
+use host_sim::replay::{sample_of, HostEstimator, LogReplay};
+use host_sim::sim::scenario::{generate, ScenarioKind, ScenarioParams};
 use std::hint::black_box;
 
 fn core_step(c: &mut Criterion) {
@@ -44,11 +43,15 @@ fn estimate_two_days(c: &mut Criterion) {
     group.throughput(Throughput::Elements(g.rows.len() as u64));
     group.bench_function("windowed", |b| {
         b.iter(|| {
-            estimate_file(&log, &out, Config::default())
-                .unwrap()
-                .replay
-                .counters
-                .accepted
+            LogReplay {
+                estimates: Some(out.clone()),
+                ..LogReplay::default()
+            }
+            .run(&log, &mut |_| {})
+            .unwrap()
+            .replay
+            .counters
+            .accepted
         })
     });
     group.finish();

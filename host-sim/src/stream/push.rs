@@ -5,8 +5,8 @@
 
 use super::cost::CostStats;
 use super::{answer_of, describe_exit, LinkSummary, Progress, StreamSummary, Target};
-use crate::estimates_csv::EstimatesWriter;
-use crate::log_csv::{LogLine, LogLines, RowFilter};
+use crate::formats::estimates_csv::EstimatesWriter;
+use crate::formats::log_csv::{LogLine, LogLines, RowFilter};
 use crate::replay::sample_of;
 use anyhow::{bail, Context};
 use estimator_core::{Output, SampleError};
@@ -247,8 +247,8 @@ fn realtime_due(start: Instant, first_s: &mut Option<f64>, time_s: f64) -> Optio
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::binned_lines::Lines;
-    use crate::log_csv::LogReader;
+    use crate::formats::binned_lines::Lines;
+    use crate::formats::log_csv::LogReader;
     use crate::stream::cost::CostUnit;
     use crate::stream::link::FirmwareLink;
     use estimator_core::SampleError;

@@ -93,6 +93,26 @@ pub struct Qemu {
     defmt_log: Option<(NamedTempFile, PathBuf)>,
 }
 
+/// QEMU's command line: `machine` booting `elf`, the link's serial port on the socket `socket`
+/// (the guest waits for it to connect), semihosting on, no display, instructions counted.
+fn qemu_command(binary: &str, machine: Machine, elf: &Path, socket: &Path) -> Command {
+    let mut command = Command::new(binary);
+    command
+        .args(machine.args())
+        .args(["-icount", &format!("shift={ICOUNT_SHIFT}")])
+        .args(["-display", "none", "-monitor", "none"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .arg("-chardev")
+        .arg(format!(
+            "socket,id=link,path={},server=on,wait=on",
+            socket.display()
+        ))
+        .args(["-serial", "chardev:link", "-kernel"])
+        .arg(elf)
+        .args(extra_args());
+    command
+}
+
 /// The QEMU binary: `$QEMU_SYSTEM_ARM`, else `qemu-system-arm` on the PATH.
 pub fn qemu_binary() -> String {
     std::env::var("QEMU_SYSTEM_ARM").unwrap_or_else(|_| "qemu-system-arm".to_string())
@@ -122,7 +142,7 @@ impl Qemu {
         let stderr_path = dir.join("qemu.stderr");
         let defmt_log = match defmt_log {
             Some(target) => {
-                let temp = crate::output_file::temp_beside(target)?;
+                let temp = crate::formats::output_file::temp_beside(target)?;
                 Some((temp, target.to_path_buf()))
             }
             None => None,
@@ -135,20 +155,8 @@ impl Qemu {
             None => Stdio::null(),
         };
         let binary = qemu_binary();
-        let mut command = Command::new(&binary);
+        let mut command = qemu_command(&binary, machine, elf, &socket);
         command
-            .args(machine.args())
-            .args(["-icount", &format!("shift={ICOUNT_SHIFT}")])
-            .args(["-display", "none", "-monitor", "none"])
-            .args(["-semihosting-config", "enable=on,target=native"])
-            .arg("-chardev")
-            .arg(format!(
-                "socket,id=link,path={},server=on,wait=on",
-                socket.display()
-            ))
-            .args(["-serial", "chardev:link", "-kernel"])
-            .arg(elf)
-            .args(extra_args())
             .current_dir(flash_dir.unwrap_or(&dir))
             .stdin(Stdio::null())
             .stdout(stdout)
@@ -161,28 +169,33 @@ impl Qemu {
             }
             Err(e) => return Err(e).with_context(|| format!("cannot start {binary}")),
         };
-        let mut qemu = Qemu {
+        let qemu = Qemu {
             child,
             _dir: scratch,
             stderr_path,
             defmt_log,
         };
+        qemu.connect(&socket)
+    }
+
+    /// Waits (20 s at most) for the link's socket to connect; errors if QEMU exits first.
+    fn connect(mut self, socket: &Path) -> anyhow::Result<(Qemu, UnixStream)> {
         let deadline = Instant::now() + Duration::from_secs(20);
         loop {
-            if let Some(status) = qemu.child.try_wait()? {
+            if let Some(status) = self.child.try_wait()? {
                 bail!(
                     "QEMU exited ({status}) before the link's socket connected: {}",
-                    qemu.stderr_tail()
+                    self.stderr_tail()
                 );
             }
-            if let Ok(stream) = UnixStream::connect(&socket) {
-                return Ok((qemu, stream));
+            if let Ok(stream) = UnixStream::connect(socket) {
+                return Ok((self, stream));
             }
             if Instant::now() > deadline {
                 bail!(
                     "QEMU's link socket {} did not open within 20 s: {}",
                     socket.display(),
-                    qemu.stderr_tail()
+                    self.stderr_tail()
                 );
             }
             std::thread::sleep(Duration::from_millis(20));
@@ -195,7 +208,7 @@ impl Qemu {
         let _ = self.child.kill();
         let _ = self.child.wait();
         match self.defmt_log.take() {
-            Some((temp, target)) => crate::output_file::persist(temp, &target),
+            Some((temp, target)) => crate::formats::output_file::persist(temp, &target),
             None => Ok(()),
         }
     }

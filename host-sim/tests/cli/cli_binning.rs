@@ -6,9 +6,9 @@
 //! `host-sim/src/stream/push.rs`.)
 
 use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
-use host_sim::estimates_csv::read_estimates;
-use host_sim::log_csv::{read_log, write_log};
-use host_sim::scenario::Row;
+use host_sim::formats::estimates_csv::read_estimates;
+use host_sim::formats::log_csv::{read_log, write_log};
+use host_sim::sim::scenario::Row;
 use std::path::Path;
 
 /// The generated log's interval, s (200 Hz).

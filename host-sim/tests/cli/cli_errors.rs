@@ -1,8 +1,8 @@
 //! Malformed logs, NaN rows and gaps, through the binary.
 
 use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
-use host_sim::estimates_csv::read_estimates;
-use host_sim::log_csv::HEADER;
+use host_sim::formats::estimates_csv::read_estimates;
+use host_sim::formats::log_csv::HEADER;
 
 /// Runs `estimate` (with `extra` arguments) on a log with `text`; expects failure and a one-line
 /// `FILE:LINE: message`.

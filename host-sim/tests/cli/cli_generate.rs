@@ -45,7 +45,7 @@ fn default_scenarios_unchanged() {
 /// error, rotation-angle jitter, coloured noise, drifting errors) on the rough sea.
 #[test]
 fn mismatch_logs_unchanged() {
-    use host_sim::scenario::{generate, Mismatch, ScenarioKind, ScenarioParams};
+    use host_sim::sim::scenario::{generate, Mismatch, ScenarioKind, ScenarioParams};
     let mut p = ScenarioParams::new(ScenarioKind::Sea, 11);
     p.duration_s = 1200.0;
     p.mismatch = Mismatch {
@@ -57,14 +57,15 @@ fn mismatch_logs_unchanged() {
         ..Mismatch::default()
     };
     let mut bytes = Vec::new();
-    host_sim::log_csv::write_log_to(&mut bytes, &generate(&p).rows).unwrap();
+    host_sim::formats::log_csv::write_log_to(&mut bytes, &generate(&p).rows).unwrap();
     let crc = crc::Crc::<u64>::new(&crc::CRC_64_ECMA_182).checksum(&bytes);
     assert_eq!((crc, bytes.len()), (8_036_464_345_581_861_486, 139_024));
 }
 
-use host_sim::estimates_csv::read_estimates;
-use host_sim::log_csv::{read_log, read_truth, truth_path};
-use host_sim::scenario::{Row, ScenarioParams};
+use host_sim::formats::estimates_csv::read_estimates;
+use host_sim::formats::log_csv::read_log;
+use host_sim::formats::truth_file::{read_truth, truth_path};
+use host_sim::sim::scenario::{Row, ScenarioParams};
 
 /// What `generate` records beside a log: the scenario's parameters.
 struct Truth {
@@ -541,7 +542,7 @@ fn an_offset_log_estimates_and_reports_as_the_plain_one() {
 /// phases come from the seed and are recorded.
 #[test]
 fn ship_options_add_slow_heel_trim_and_heel_in_turns() {
-    use host_sim::scenario::turns;
+    use host_sim::sim::ship_motion::turns;
     use std::f64::consts::PI;
     let dir = tempfile::tempdir().unwrap();
     let (plain, _) = generate(dir.path(), "plain", &["--duration", "7500"]);
@@ -578,7 +579,7 @@ fn ship_options_add_slow_heel_trim_and_heel_in_turns() {
         (m.slow_trim[0].amplitude_deg, m.slow_trim[0].period_s),
         (0.1, 1800.0)
     );
-    let wave = |c: &host_sim::scenario::SwayComponent, t: f64| {
+    let wave = |c: &host_sim::sim::scenario::SwayComponent, t: f64| {
         c.amplitude_deg * (2.0 * PI * t / c.period_s + c.phase_rad).sin()
     };
     assert_eq!(plain.len(), ship.len());

@@ -1,8 +1,8 @@
 //! generate + estimate through the binary for each scenario, checked against the truth file.
 
 use crate::common::{host_sim_ok, path_str, temp_dir};
-use host_sim::estimates_csv::{read_estimates, EstimateRow};
-use host_sim::log_csv::{read_truth, truth_path};
+use host_sim::formats::estimates_csv::{read_estimates, EstimateRow};
+use host_sim::formats::truth_file::{read_truth, truth_path};
 use std::path::Path;
 
 /// Generates a log, replays it, returns (rows of the estimates CSV, truth x, estimate stdout).

@@ -7,11 +7,12 @@
 use crate::common::{host_sim_ok, path_str, temp_dir};
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, ErrorChange, Estimator, Status};
-use host_sim::monte_carlo::Draw;
-use host_sim::recorder::Recorder;
 use host_sim::replay::sample_of;
-use host_sim::rotation_scheme::RotationScheme;
-use host_sim::scenario::{ErrorsStep, Mismatch, Samples, ScenarioKind, ScenarioParams};
+use host_sim::sim::recorder::Recorder;
+use host_sim::sim::rotation_scheme::RotationScheme;
+use host_sim::sim::samples::Samples;
+use host_sim::sim::scenario::{ErrorsStep, Mismatch, ScenarioKind, ScenarioParams};
+use host_sim::study::monte_carlo::Draw;
 use rayon::prelude::*;
 
 /// What a run of one log shows.
@@ -443,9 +444,10 @@ fn generate_estimate_and_the_summary_say_when_the_errors_changed() {
         "--out",
         path_str(&log),
     ]);
-    let truth = host_sim::log_csv::read_truth(&host_sim::log_csv::truth_path(&log))
-        .unwrap()
-        .unwrap();
+    let truth =
+        host_sim::formats::truth_file::read_truth(&host_sim::formats::truth_file::truth_path(&log))
+            .unwrap()
+            .unwrap();
     let step = truth
         .params
         .unwrap()

@@ -4,7 +4,7 @@
 //! saves every 20 s from its time on. The default build's rule is what `qemu_power_cut` follows.
 
 use crate::qemu_support::*;
-use host_sim::log_csv::read_log;
+use host_sim::formats::log_csv::read_log;
 use host_sim::replay::sample_of;
 use host_sim::stream::qemu::Machine;
 use host_sim::stream::{step_remote, Target};

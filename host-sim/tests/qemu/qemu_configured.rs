@@ -7,7 +7,7 @@
 //! end.
 
 use crate::qemu_support::*;
-use host_sim::log_csv::{read_truth, truth_path};
+use host_sim::formats::truth_file::{read_truth, truth_path};
 
 #[test]
 fn mps2_an386_built_with_a_latency_and_known_values_estimates_as_the_host_configured_alike() {
@@ -59,7 +59,7 @@ fn mps2_an386_built_with_a_latency_and_known_values_estimates_as_the_host_config
         false,
     );
     // The known values from the first row on.
-    let rows = host_sim::estimates_csv::read_estimates(&streamed).unwrap();
+    let rows = host_sim::formats::estimates_csv::read_estimates(&streamed).unwrap();
     let first = rows[0].x_arcsec.expect("the known values on the first row");
     for i in 0..4 {
         assert!(

@@ -6,7 +6,7 @@
 
 use crate::qemu_support::*;
 use estimator_core::{Config, Field, Output, RejectReason, SampleError};
-use host_sim::log_csv::read_log;
+use host_sim::formats::log_csv::read_log;
 use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::frame::MAX_FRAME;

@@ -7,7 +7,7 @@
 use crate::qemu_support::*;
 use estimator_core::binning::Binner;
 use estimator_core::{Config, Estimator};
-use host_sim::log_csv::read_log;
+use host_sim::formats::log_csv::read_log;
 use host_sim::replay::sample_of;
 use host_sim::stream::Target;
 use link_protocol::{BinOutcome, Request, Response, SampleMsg};

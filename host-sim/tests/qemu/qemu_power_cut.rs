@@ -15,7 +15,7 @@ use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, Estimate};
 use firmware::checkpoint_store::{SaveSchedule, CHECKPOINT_INTERVAL_S};
 use firmware::flash_layout::{EMULATED_FLASH_CUT_ORDER_FILE, EMULATED_FLASH_POWER_CUT_EXIT_CODE};
-use host_sim::log_csv::read_log;
+use host_sim::formats::log_csv::read_log;
 use host_sim::replay::{sample_of, HostEstimator};
 use host_sim::stream::{step_remote, Target};
 use link_protocol::{Request, SampleMsg};

@@ -11,7 +11,7 @@
 //! restore stays within its 4 KiB of stack.
 
 use crate::qemu_support::*;
-use host_sim::log_csv::{read_truth, truth_path};
+use host_sim::formats::truth_file::{read_truth, truth_path};
 use std::path::Path;
 
 /// The estimates (x1..x4 arcsec, empty while none) and status of an estimates CSV's data row.

@@ -12,7 +12,7 @@ use estimator_core::{Config, Estimator};
 use firmware::checkpoint_store::{CheckpointStore, StoreBuffers};
 use firmware::flash_layout::MPS2_AN386;
 use host_sim::flash_model::FlashModel;
-use host_sim::log_csv::read_log;
+use host_sim::formats::log_csv::read_log;
 use host_sim::replay::sample_of;
 use host_sim::stream::qemu::Machine;
 use host_sim::stream::{step_remote, Target};

@@ -5,7 +5,7 @@
 //! checkpoints: a power cut right after it brings no state back.
 
 use crate::qemu_support::*;
-use host_sim::log_csv::read_log;
+use host_sim::formats::log_csv::read_log;
 use host_sim::replay::sample_of;
 use host_sim::stream::{holds_state, step_remote, Target};
 use link_protocol::{Request, Response, SampleMsg};

@@ -305,9 +305,10 @@ pub fn stream_and_compare_with_estimate(
     }
     let out = host_sim(&args.iter().map(String::as_str).collect::<Vec<_>>());
     println!("{out}");
-    let truth = host_sim::log_csv::read_truth(&host_sim::log_csv::truth_path(log))
-        .unwrap()
-        .expect("generate writes the truth");
+    let truth =
+        host_sim::formats::truth_file::read_truth(&host_sim::formats::truth_file::truth_path(log))
+            .unwrap()
+            .expect("generate writes the truth");
     assert_stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth(
         board,
         log,
@@ -356,7 +357,7 @@ pub fn assert_stream_is_byte_identical_to_estimate_and_within_10_arcsec_of_truth
         );
     }
 
-    let rows = host_sim::estimates_csv::read_estimates(streamed).unwrap();
+    let rows = host_sim::formats::estimates_csv::read_estimates(streamed).unwrap();
     let x = rows
         .last()
         .unwrap()

@@ -8,8 +8,8 @@
 //! the `Hang`, and every sample after the restart answered.
 
 use crate::qemu_support::*;
-use host_sim::estimates_csv::EstimatesWriter;
-use host_sim::log_csv::{LogReader, RowFilter};
+use host_sim::formats::estimates_csv::EstimatesWriter;
+use host_sim::formats::log_csv::{LogReader, RowFilter};
 use host_sim::stream::push::{stream_log_push, PushOptions};
 use host_sim::stream::qemu::Machine;
 use host_sim::stream::Target;

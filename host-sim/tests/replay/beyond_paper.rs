@@ -5,7 +5,7 @@
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, Estimator, Method};
 use host_sim::replay::sample_of;
-use host_sim::scenario::{generate, ScenarioKind, ScenarioParams};
+use host_sim::sim::scenario::{generate, ScenarioKind, ScenarioParams};
 
 /// Absolute errors (arcsec) of x1..x4 at each of `at_s`, for one run.
 fn errors_at(params: &ScenarioParams, method: Method, at_s: &[f64]) -> Vec<[f64; 4]> {

@@ -6,10 +6,10 @@
 //! docs/real-logs.md).
 
 use estimator_core::Config;
-use host_sim::monte_carlo::{track_run, track_run_with_capacity};
-use host_sim::report::Accuracy;
-use host_sim::rotation_scheme::RotationScheme;
-use host_sim::scenario::{ScenarioKind, ScenarioParams};
+use host_sim::report::accuracy::Accuracy;
+use host_sim::sim::rotation_scheme::RotationScheme;
+use host_sim::sim::scenario::{ScenarioKind, ScenarioParams};
+use host_sim::study::monte_carlo::{track_run, track_run_with_capacity};
 use rayon::prelude::*;
 
 const TIMES_S: [f64; 2] = [20_000.0, 45_000.0];

@@ -1,4 +1,4 @@
-//! Checkpoint and restore on the project's own scenarios (host_sim::scenario), as after a power cut
+//! Checkpoint and restore on the project's own scenarios (host_sim::sim::scenario), as after a power cut
 //! right after a save: for each scenario and method, checkpoint at spread-out and random cut
 //! points, restore into a fresh estimator of another method, continue to the end. The restored
 //! estimator writes the very image it came from, reports the checkpoint's estimate from its first
@@ -13,7 +13,7 @@
 use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, Estimator, Method, Output, SampleError};
 use host_sim::replay::sample_of;
-use host_sim::scenario::{generate, ScenarioKind, ScenarioParams};
+use host_sim::sim::scenario::{generate, ScenarioKind, ScenarioParams};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -9,10 +9,10 @@
 //! the method reported before it learned the noise.
 
 use estimator_core::{Config, Method};
-use host_sim::compare::{compare_one, CompareRow};
-use host_sim::monte_carlo::{quantile, run_all, sorted, Draw};
-use host_sim::report::Accuracy;
-use host_sim::scenario::{Mismatch, ScenarioKind};
+use host_sim::report::accuracy::Accuracy;
+use host_sim::sim::scenario::{Mismatch, ScenarioKind};
+use host_sim::study::compare::{compare_one, CompareRow};
+use host_sim::study::monte_carlo::{quantile, run_all, sorted, Draw};
 
 const TIMES_S: [f64; 2] = [5_000.0, 45_000.0];
 

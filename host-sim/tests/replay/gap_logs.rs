@@ -11,11 +11,11 @@
 //!   paper and sea scenarios, and every error within 10 arcsec by then.
 
 use estimator_core::{Config, Method};
-use host_sim::monte_carlo::track_run;
-use host_sim::recorder::RecorderSettings;
-use host_sim::report::Accuracy;
-use host_sim::rotation_scheme::RotationScheme;
-use host_sim::scenario::{ScenarioKind, ScenarioParams};
+use host_sim::report::accuracy::Accuracy;
+use host_sim::sim::recorder::RecorderSettings;
+use host_sim::sim::rotation_scheme::RotationScheme;
+use host_sim::sim::scenario::{ScenarioKind, ScenarioParams};
+use host_sim::study::monte_carlo::track_run;
 use rayon::prelude::*;
 
 const PERIOD_S: f64 = 480.0;

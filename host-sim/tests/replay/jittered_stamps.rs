@@ -4,10 +4,11 @@
 //! window restart and no clock step.
 
 use estimator_core::{Config, Counters, Estimator};
-use host_sim::recorder::{Recorder, RecorderSettings};
 use host_sim::replay::sample_of;
-use host_sim::report::errors_arcsec;
-use host_sim::scenario::{Samples, ScenarioKind, ScenarioParams};
+use host_sim::report::accuracy::errors_arcsec;
+use host_sim::sim::recorder::{Recorder, RecorderSettings};
+use host_sim::sim::samples::Samples;
+use host_sim::sim::scenario::{ScenarioKind, ScenarioParams};
 
 /// The estimates (arcsec) at `at_s` and at the end of a sea log of `duration_s` with rows every
 /// `interval_s` stamped with `jitter_s` of jitter, and the counters at the end.

@@ -4,11 +4,11 @@
 //! recorder's effects applied (`host-sim generate --scheme ... --drop-fraction ...`).
 
 use estimator_core::Config;
-use host_sim::monte_carlo::track_run;
-use host_sim::recorder::RecorderSettings;
-use host_sim::report::Accuracy;
-use host_sim::rotation_scheme::RotationScheme;
-use host_sim::scenario::{ScenarioKind, ScenarioParams};
+use host_sim::report::accuracy::Accuracy;
+use host_sim::sim::recorder::RecorderSettings;
+use host_sim::sim::rotation_scheme::RotationScheme;
+use host_sim::sim::scenario::{ScenarioKind, ScenarioParams};
+use host_sim::study::monte_carlo::track_run;
 use rayon::prelude::*;
 
 const TIMES_S: [f64; 2] = [20_000.0, 45_000.0];

@@ -10,9 +10,9 @@
 //! 6,000 s on the heel and trim of the third line (about 9,500 s).
 
 use estimator_core::{Config, Method};
-use host_sim::compare::{compare_one, CompareRow};
-use host_sim::monte_carlo::Draw;
-use host_sim::scenario::ScenarioKind;
+use host_sim::sim::scenario::ScenarioKind;
+use host_sim::study::compare::{compare_one, CompareRow};
+use host_sim::study::monte_carlo::Draw;
 
 const SEEDS: usize = 2;
 const DURATION_S: f64 = 20_001.0;

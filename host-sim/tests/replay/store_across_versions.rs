@@ -10,7 +10,8 @@ use estimator_core::units::rad_to_arcsec;
 use estimator_core::{Config, Estimator};
 use firmware::checkpoint_store::{restore_item, Restored};
 use host_sim::replay::sample_of;
-use host_sim::scenario::{Samples, ScenarioKind, ScenarioParams};
+use host_sim::sim::samples::Samples;
+use host_sim::sim::scenario::{ScenarioKind, ScenarioParams};
 
 /// An estimator that has run 3,000 s of the paper scenario, and the rows after.
 fn run() -> (Estimator, Vec<estimator_core::Sample>) {

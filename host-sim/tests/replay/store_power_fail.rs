@@ -12,7 +12,8 @@ use estimator_core::{Config, Estimator};
 use firmware::checkpoint_store::{CheckpointStore, Restored, StoreBuffers};
 use host_sim::flash_model::FlashModel;
 use host_sim::replay::sample_of;
-use host_sim::scenario::{Samples, ScenarioKind, ScenarioParams};
+use host_sim::sim::samples::Samples;
+use host_sim::sim::scenario::{ScenarioKind, ScenarioParams};
 
 /// Images of a running estimator, all different (one every 10 samples of the paper scenario).
 fn images(n: usize) -> Vec<Vec<u8>> {

@@ -1,14 +1,16 @@
 //! `compare`: every method on every scenario over several seeds, as a markdown table for docs/results.md;
 //! one table per rotation scheme, headed by how its logs are made ([`describe`]). Besides the
-//! errors at two times, the honesty of the 1-sigma row by row ([`crate::report::Honesty`]): the
+//! errors at two times, the honesty of the 1-sigma row by row ([`crate::report::honesty::Honesty`]): the
 //! share of the runs' rows where some error lies beyond 2 and 3 sigma, and the largest
 //! |error| / 1-sigma of any run.
 
-use crate::cli_args::method_label;
-use crate::monte_carlo::{coverage_2sigma, pool_honesty, quantile, run_all, sorted, Draw};
 use crate::replay::HostEstimator;
-use crate::report::{percent_of_rows, Accuracy, Honesty};
-use crate::scenario::{ScenarioKind, ShipMotionSettings};
+use crate::report::accuracy::Accuracy;
+use crate::report::honesty::Honesty;
+use crate::report::tables::{method_label, percent_of_rows};
+use crate::sim::scenario::ScenarioKind;
+use crate::sim::ship_motion::ShipMotionSettings;
+use crate::study::monte_carlo::{coverage_2sigma, pool_honesty, quantile, run_all, sorted, Draw};
 use estimator_core::{Config, Method};
 
 /// Times of the error columns, s.
@@ -56,30 +58,7 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
     let inf = f64::INFINITY;
     let duration_s = draw.params(0).duration_s;
     if let Err(e) = HostEstimator::new(config) {
-        return Ok(CompareRow {
-            scenario: draw.kind,
-            method: config.method,
-            runs: seeds,
-            to_percent_s: (inf, inf),
-            to_arcsec_s: (inf, inf),
-            error_at_arcsec: COMPARE_TIMES_S
-                .iter()
-                .map(|t| {
-                    if *t > duration_s {
-                        (f64::NAN, f64::NAN)
-                    } else {
-                        (inf, inf)
-                    }
-                })
-                .collect(),
-            coverage_2sigma: COMPARE_TIMES_S
-                .iter()
-                .map(|t| if *t > duration_s { f64::NAN } else { 0.0 })
-                .collect(),
-            duration_s,
-            honesty: Honesty::default(),
-            final_status: vec![(format!("configuration rejected ({e:?})"), seeds)],
-        });
+        return Ok(rejected_row(draw, config, seeds, duration_s, &e));
     }
     let results: Vec<Accuracy> = run_all(draw, config, seeds, &COMPARE_TIMES_S, &|| {})?;
     let error_at_arcsec = COMPARE_TIMES_S
@@ -108,21 +87,10 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
             }
         })
         .collect();
-    let mut final_status: Vec<(String, usize)> = Vec::new();
-    for name in results
-        .iter()
-        .map(|r| r.final_status.map_or("none", |s| s.name()))
-    {
-        match final_status.iter_mut().find(|(n, _)| n == name) {
-            Some((_, count)) => *count += 1,
-            None => final_status.push((name.to_string(), 1)),
-        }
-    }
-    final_status.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
     let honesty = pool_honesty(&results);
     Ok(CompareRow {
         scenario: draw.kind,
-        final_status,
+        final_status: final_statuses(&results),
         method: config.method,
         runs: seeds,
         to_percent_s: stats(
@@ -140,6 +108,57 @@ pub fn compare_one(draw: &Draw, config: Config, seeds: usize) -> anyhow::Result<
         duration_s,
         honesty,
     })
+}
+
+/// The line of a configuration the estimator rejects (`e`): no estimate in any run.
+fn rejected_row(
+    draw: &Draw,
+    config: Config,
+    seeds: usize,
+    duration_s: f64,
+    e: &estimator_core::ConfigError,
+) -> CompareRow {
+    let inf = f64::INFINITY;
+    CompareRow {
+        scenario: draw.kind,
+        method: config.method,
+        runs: seeds,
+        to_percent_s: (inf, inf),
+        to_arcsec_s: (inf, inf),
+        error_at_arcsec: COMPARE_TIMES_S
+            .iter()
+            .map(|t| {
+                if *t > duration_s {
+                    (f64::NAN, f64::NAN)
+                } else {
+                    (inf, inf)
+                }
+            })
+            .collect(),
+        coverage_2sigma: COMPARE_TIMES_S
+            .iter()
+            .map(|t| if *t > duration_s { f64::NAN } else { 0.0 })
+            .collect(),
+        duration_s,
+        honesty: Honesty::default(),
+        final_status: vec![(format!("configuration rejected ({e:?})"), seeds)],
+    }
+}
+
+/// The statuses the runs ended in, each with how many runs ended in it, most frequent first.
+fn final_statuses(results: &[Accuracy]) -> Vec<(String, usize)> {
+    let mut final_status: Vec<(String, usize)> = Vec::new();
+    for name in results
+        .iter()
+        .map(|r| r.final_status.map_or("none", |s| s.name()))
+    {
+        match final_status.iter_mut().find(|(n, _)| n == name) {
+            Some((_, count)) => *count += 1,
+            None => final_status.push((name.to_string(), 1)),
+        }
+    }
+    final_status.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    final_status
 }
 
 fn fmt_time(t: f64, duration_s: f64) -> String {
@@ -228,7 +247,7 @@ pub fn describe(draw: &Draw) -> String {
         rec.push(format!(
             "{} outages of {} s",
             r.outages,
-            crate::recorder::OUTAGE_S
+            crate::sim::recorder::OUTAGE_S
         ));
     }
     if r.gap_every_s > 0.0 && r.gap_rows > 0 {

@@ -1,7 +1,7 @@
 //! `report.html`: one self-contained page (the PNG plots embedded as `data:` URIs, no script, no
 //! external file, no network), made of sections of text, key-value lists, tables and figures.
 //! Text is escaped with the `html-escape` crate; the page is written through a temporary file
-//! beside its target ([`crate::output_file`]).
+//! beside its target ([`crate::formats::output_file`]).
 
 use anyhow::Context;
 use base64::Engine as _;
@@ -109,7 +109,7 @@ impl Page {
 
     /// Writes the page to `path`.
     pub fn write(&self, path: &Path) -> anyhow::Result<()> {
-        crate::output_file::write_bytes(path, self.to_html()?.as_bytes())
+        crate::formats::output_file::write_bytes(path, self.to_html()?.as_bytes())
     }
 }
 

@@ -22,21 +22,18 @@
 //! angle the log's `rotation_deg` reports.
 //!
 //! The generator makes one row per sample instant; what reaches the log (lost rows, outages,
-//! loose time stamps) is the [`crate::recorder`]'s business, described by
+//! loose time stamps) is the [`crate::sim::recorder`]'s business, described by
 //! [`ScenarioParams::recording`]. [`Samples`] yields the rows one at a time, so a log of millions
 //! of rows can be written without holding it.
 
-use crate::recorder::Recording;
-use crate::rotation_scheme::RotationScheme;
-use estimator_core::units::{arcsec_to_rad, EARTH_RATE_RAD_PER_S, RAD_PER_DEG};
+use crate::sim::recorder::Recording;
+use crate::sim::rotation_scheme::RotationScheme;
+use crate::sim::samples::Samples;
+use crate::sim::ship_motion::ShipMotion;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
-
-/// Earth radius for the latitude drift of a moving ship, m.
-const EARTH_RADIUS_M: f64 = 6_371_000.0;
 
 /// Which scenario.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -104,6 +101,11 @@ pub struct Mismatch {
     /// [`TURN_EVERY_S`] from [`FIRST_TURN_S`] on, alternately to starboard and to port, the ship
     /// heeling outward by this much while it turns (a frigate at 15 m/s heels some 3 deg in a
     /// standard-rate turn). Truth files without it: no turns.
+    ///
+    /// [`TURN_DEG`]: crate::sim::ship_motion::TURN_DEG
+    /// [`TURN_RATE_DEG_S`]: crate::sim::ship_motion::TURN_RATE_DEG_S
+    /// [`TURN_EVERY_S`]: crate::sim::ship_motion::TURN_EVERY_S
+    /// [`FIRST_TURN_S`]: crate::sim::ship_motion::FIRST_TURN_S
     #[serde(default)]
     pub heel_in_turns_deg: f64,
     /// The RINS's interface: how long before the row's time its rotation angle was measured, s
@@ -122,244 +124,6 @@ pub struct Mismatch {
     /// it: 0.
     #[serde(default)]
     pub rotating_gyro_bias_deg_h: f64,
-}
-
-/// Course change of each turn of [`Mismatch::heel_in_turns_deg`], deg.
-pub const TURN_DEG: f64 = 90.0;
-/// Rate of turn, deg/s (a turn takes 180 s).
-pub const TURN_RATE_DEG_S: f64 = 0.5;
-/// Time from one turn's start to the next's, s.
-pub const TURN_EVERY_S: f64 = 3600.0;
-/// Start of the first turn, s: two hours in, once the estimator has settled (a turn before that
-/// costs it accuracy for hours: docs/uncertainty.md).
-pub const FIRST_TURN_S: f64 = 2.0 * TURN_EVERY_S;
-/// Time the heel takes to build up and to die away at the start and the end of a turn, s.
-pub const TURN_HEEL_RAMP_S: f64 = 20.0;
-
-/// Where the ship's turns of [`Mismatch::heel_in_turns_deg`] stand at one instant.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct TurnState {
-    /// Heading changed by the turns so far, deg.
-    pub heading_deg: f64,
-    /// Heel of the turn under way, deg (outward: a turn to starboard heels to port, negative).
-    pub heel_deg: f64,
-    /// Rate of the heading change, deg/s: the exact derivative of `heading_deg` (+-
-    /// [`TURN_RATE_DEG_S`] while a turn is under way, 0 between turns).
-    pub rate_deg_s: f64,
-}
-
-/// The ship's turns at `t` (none when `heel_deg` is 0: the turns come with their heel).
-pub fn turns(heel_deg: f64, t: f64) -> TurnState {
-    if heel_deg == 0.0 {
-        return TurnState::default();
-    }
-    if t < FIRST_TURN_S {
-        return TurnState::default();
-    }
-    let k = ((t - FIRST_TURN_S) / TURN_EVERY_S).floor();
-    let into = t - FIRST_TURN_S - k * TURN_EVERY_S;
-    let duration = TURN_DEG / TURN_RATE_DEG_S;
-    // Turns alternate: to starboard (heading up), then back to port.
-    let starboard = (k as i64) % 2 == 0;
-    let before = if starboard { 0.0 } else { TURN_DEG };
-    // The heading changes at a constant rate (no ramp): its derivative is the rate inside the
-    // turn and 0 outside; only the heel ramps in and out.
-    let (turned, heel, rate) = if into >= duration {
-        (TURN_DEG, 0.0, 0.0)
-    } else {
-        let ramp = |u: f64| 0.5 - 0.5 * (PI * (u / TURN_HEEL_RAMP_S).clamp(0.0, 1.0)).cos();
-        (
-            TURN_RATE_DEG_S * into,
-            heel_deg * ramp(into).min(ramp(duration - into)),
-            TURN_RATE_DEG_S,
-        )
-    };
-    // Outward: a turn to starboard heels the ship to port (roll < 0).
-    if starboard {
-        TurnState {
-            heading_deg: before + turned,
-            heel_deg: -heel,
-            rate_deg_s: rate,
-        }
-    } else {
-        TurnState {
-            heading_deg: before - turned,
-            heel_deg: heel,
-            rate_deg_s: -rate,
-        }
-    }
-}
-
-/// Period of the ship's slow heading weave ([`ScenarioParams::heading_weave_rate_deg_s`]), s.
-pub const WEAVE_PERIOD_S: f64 = 600.0;
-
-/// The slow heading weave at `t`: `(heading, rate)`, deg and deg/s. The heading is
-/// `R P / (2 pi) sin(2 pi t / P)` for a peak rate `R` and period `P` = [`WEAVE_PERIOD_S`]; the rate
-/// its exact derivative, `R cos(2 pi t / P)`.
-pub fn weave(peak_rate_deg_s: f64, t: f64) -> (f64, f64) {
-    if peak_rate_deg_s > 0.0 {
-        let w = 2.0 * PI * t / WEAVE_PERIOD_S;
-        (
-            peak_rate_deg_s * WEAVE_PERIOD_S / (2.0 * PI) * w.sin(),
-            peak_rate_deg_s * w.cos(),
-        )
-    } else {
-        (0.0, 0.0)
-    }
-}
-
-/// The ship's slow motions on an ordinary day, beyond the wave-frequency sway: wind heel, fuel
-/// and loading shift the roll and the pitch over tens of minutes, and the ship heels in its
-/// course changes. They are part of the TRUE attitude of eq (3), not errors: the estimator must
-/// cancel them. All off by default (truth files without them: none).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct ShipMotion {
-    /// Slow heel (roll, deg): sinusoids `amplitude_deg sin(2 pi t / period_s + phase_rad)` added
-    /// to the roll (phases drawn from the seed).
-    #[serde(default)]
-    pub slow_heel: Vec<SwayComponent>,
-    /// Slow trim (pitch, deg), of the same form, added to the pitch.
-    #[serde(default)]
-    pub slow_trim: Vec<SwayComponent>,
-    /// Heel per rate of turn of the course, deg of heel per deg/s: the ship heels outward by this
-    /// much times the rate of its course (the slow heading weave and the turns of
-    /// [`Mismatch::heel_in_turns_deg`], not the wave-frequency yaw sway): roll +=
-    /// `-K * rate_deg_s` (a turn to starboard, heading increasing, heels to port). 0: none.
-    #[serde(default)]
-    pub heel_per_turn_rate_deg_per_deg_s: f64,
-}
-
-impl ShipMotion {
-    /// Whether any of the slow motions is on.
-    pub fn is_none(&self) -> bool {
-        self.slow_heel.is_empty()
-            && self.slow_trim.is_empty()
-            && self.heel_per_turn_rate_deg_per_deg_s == 0.0
-    }
-
-    /// What the slow motions add to the true attitude at `t`, deg: `(roll, pitch)`;
-    /// `course_rate_deg_s` is the rate of the ship's course then ([`course_rate_deg_s`]).
-    pub fn roll_pitch_deg(&self, t: f64, course_rate_deg_s: f64) -> (f64, f64) {
-        (
-            sway(&self.slow_heel, t) - self.heel_per_turn_rate_deg_per_deg_s * course_rate_deg_s,
-            sway(&self.slow_trim, t),
-        )
-    }
-}
-
-/// The ship's slow motions as asked for: amplitudes and periods; the phases are drawn per seed
-/// ([`ShipMotionSettings::motion`]), so each run of a study has its own.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct ShipMotionSettings {
-    /// Slow heel components: (amplitude deg, period s).
-    pub slow_heel: Vec<(f64, f64)>,
-    /// Slow trim components: (amplitude deg, period s).
-    pub slow_trim: Vec<(f64, f64)>,
-    /// [`ShipMotion::heel_per_turn_rate_deg_per_deg_s`], deg per deg/s.
-    pub heel_per_turn_rate_deg_per_deg_s: f64,
-}
-
-/// Why the ship's slow motions asked for cannot be made.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum ShipMotionError {
-    /// A list of amplitudes and its list of periods differ in length.
-    #[error("--{what}-deg gives {amplitudes} amplitudes but --{what}-period-s {periods} periods: give one period per amplitude")]
-    CountsDiffer {
-        /// The motion, as its options name it: `slow-heel` or `slow-trim`.
-        what: &'static str,
-        /// Amplitudes given.
-        amplitudes: usize,
-        /// Periods given.
-        periods: usize,
-    },
-    /// An amplitude that is not a finite number.
-    #[error("--{what}-deg: every amplitude must be a finite number of degrees, got {value}")]
-    Amplitude {
-        /// The motion, as its options name it: `slow-heel` or `slow-trim`.
-        what: &'static str,
-        /// The amplitude, deg.
-        value: f64,
-    },
-    /// A period that is not a finite positive number.
-    #[error(
-        "--{what}-period-s: every period must be a finite number of seconds above 0, got {value}"
-    )]
-    Period {
-        /// The motion, as its options name it: `slow-heel` or `slow-trim`.
-        what: &'static str,
-        /// The period, s.
-        value: f64,
-    },
-    /// A heel per turn rate that is not finite.
-    #[error(
-        "--heel-per-turn-rate must be a finite number (deg of heel per deg/s of turn), got {0}"
-    )]
-    HeelPerTurnRate(f64),
-}
-
-impl ShipMotionSettings {
-    /// The settings of the two lists of each slow motion (amplitudes deg, periods s) and the heel
-    /// per turn rate, checked: as many periods as amplitudes, every value finite, periods above 0.
-    pub fn new(
-        slow_heel: (&[f64], &[f64]),
-        slow_trim: (&[f64], &[f64]),
-        heel_per_turn_rate_deg_per_deg_s: f64,
-    ) -> Result<ShipMotionSettings, ShipMotionError> {
-        fn pairs(
-            what: &'static str,
-            (amplitudes, periods): (&[f64], &[f64]),
-        ) -> Result<Vec<(f64, f64)>, ShipMotionError> {
-            if amplitudes.len() != periods.len() {
-                return Err(ShipMotionError::CountsDiffer {
-                    what,
-                    amplitudes: amplitudes.len(),
-                    periods: periods.len(),
-                });
-            }
-            if let Some(&value) = amplitudes.iter().find(|a| !a.is_finite()) {
-                return Err(ShipMotionError::Amplitude { what, value });
-            }
-            if let Some(&value) = periods.iter().find(|p| !(p.is_finite() && **p > 0.0)) {
-                return Err(ShipMotionError::Period { what, value });
-            }
-            Ok(amplitudes
-                .iter()
-                .copied()
-                .zip(periods.iter().copied())
-                .collect())
-        }
-        if !heel_per_turn_rate_deg_per_deg_s.is_finite() {
-            return Err(ShipMotionError::HeelPerTurnRate(
-                heel_per_turn_rate_deg_per_deg_s,
-            ));
-        }
-        Ok(ShipMotionSettings {
-            slow_heel: pairs("slow-heel", slow_heel)?,
-            slow_trim: pairs("slow-trim", slow_trim)?,
-            heel_per_turn_rate_deg_per_deg_s,
-        })
-    }
-
-    /// The motions of a log of `seed`: each component's phase drawn uniformly in [0, 2 pi) from
-    /// the seed (the heel's and the trim's from streams of their own, so adding a trim leaves the
-    /// heel as it was). Deterministic; the generator's other random draws are untouched.
-    pub fn motion(&self, seed: u64) -> ShipMotion {
-        let draw = |salt: u64, items: &[(f64, f64)]| {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ salt);
-            sway_set(&mut rng, items)
-        };
-        ShipMotion {
-            slow_heel: draw(0x510_4EE1, &self.slow_heel),
-            slow_trim: draw(0x510_7819, &self.slow_trim),
-            heel_per_turn_rate_deg_per_deg_s: self.heel_per_turn_rate_deg_per_deg_s,
-        }
-    }
-}
-
-/// Rate of the ship's course at `t`, deg/s: the exact derivative of its slow heading, the weave
-/// ([`weave`]) plus the turns ([`turns`]); the wave-frequency yaw sway is not part of it.
-pub fn course_rate_deg_s(p: &ScenarioParams, t: f64) -> f64 {
-    weave(p.heading_weave_rate_deg_s, t).1 + turns(p.mismatch.heel_in_turns_deg, t).rate_deg_s
 }
 
 /// A change of the installation errors during the log: a re-installation after maintenance, or a
@@ -464,7 +228,8 @@ pub struct RowTruth {
     pub errors_arcsec: [f64; 4],
 }
 
-fn sway_set(rng: &mut ChaCha8Rng, items: &[(f64, f64)]) -> Vec<SwayComponent> {
+/// Sinusoids of these (amplitude deg, period s), each with a phase drawn uniformly in [0, 2 pi).
+pub(crate) fn sway_set(rng: &mut ChaCha8Rng, items: &[(f64, f64)]) -> Vec<SwayComponent> {
     items
         .iter()
         .map(|&(amplitude_deg, period_s)| SwayComponent {
@@ -586,19 +351,8 @@ impl ScenarioParams {
     }
 }
 
-/// Eq (2) in f64: (heading, roll, pitch) errors in rad for errors `x` in rad.
-pub fn oscillation_rad(x: &[f64; 4], rho: f64, s: f64, lat: f64) -> [f64; 3] {
-    let (sl, cl) = lat.sin_cos();
-    let (sr, cr) = rho.sin_cos();
-    let (srs, crs) = (rho - s).sin_cos();
-    [
-        -x[0] * cl * crs - x[1] * cl * srs - x[2] * sl * sr + x[3] * sl * cr,
-        -x[0] * sl * crs - x[1] * sl * srs + x[2] * cl * sr - x[3] * cl * cr,
-        x[0] * srs - x[1] * crs,
-    ]
-}
-
-fn sway(comps: &[SwayComponent], t: f64) -> f64 {
+/// The sum of the sinusoids `comps` at `t`, deg.
+pub(crate) fn sway(comps: &[SwayComponent], t: f64) -> f64 {
     comps
         .iter()
         .map(|c| c.amplitude_deg * (2.0 * PI * t / c.period_s + c.phase_rad).sin())
@@ -626,193 +380,12 @@ pub fn generate(p: &ScenarioParams) -> Generated {
     Generated { rows, truth }
 }
 
-/// The rows of a scenario and their truth, one sample instant at a time (`k * sample_interval_s`,
-/// `k = 0, 1, ...` while below `duration_s`).
-pub struct Samples<'a> {
-    p: &'a ScenarioParams,
-    rng: ChaCha8Rng,
-    white: Normal<f64>,
-    jitter: Normal<f64>,
-    lf: Vec<[f64; 5]>,
-    w_lf: f64,
-    gm_sigma: f64,
-    gm_a: f64,
-    gm_drive: Normal<f64>,
-    gm: [f64; 3],
-    /// True rotation period (nominal with the period error), s.
-    period_s: f64,
-    north_rate_rad_s: f64,
-    /// The roll and pitch the rotating gyro bias has tilted the attitude by so far, rad.
-    gyro_tilt_rad: [f64; 2],
-    k: usize,
-    n: usize,
-}
-
-impl<'a> Samples<'a> {
-    /// The rows of `p`, from its first sample instant.
-    pub fn new(p: &'a ScenarioParams) -> Samples<'a> {
-        let mut rng =
-            ChaCha8Rng::seed_from_u64(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xA77_17D3);
-        let white = Normal::new(0.0, arcsec_to_rad(p.noise_arcsec).max(0.0))
-            .unwrap_or(Normal::new(0.0, 0.0).unwrap());
-        let jitter = Normal::new(0.0, (p.mismatch.rotation_jitter_deg * RAD_PER_DEG).max(0.0))
-            .unwrap_or(Normal::new(0.0, 0.0).unwrap());
-        // Eq (5) coefficients per axis (heading, roll, pitch): random directions with norm = amplitude.
-        let lf_amp = p.low_frequency_deg * RAD_PER_DEG;
-        let lf: Vec<[f64; 5]> = (0..3)
-            .map(|_| {
-                let v: [f64; 5] = core::array::from_fn(|_| rng.gen_range(-1.0..1.0));
-                let norm = v.iter().map(|a| a * a).sum::<f64>().sqrt().max(1e-9);
-                core::array::from_fn(|i| v[i] / norm * lf_amp)
-            })
-            .collect();
-        let w_lf = EARTH_RATE_RAD_PER_S * (1.0 + p.mismatch.low_frequency_rate_error);
-        let gm_tau = 60.0;
-        let gm_sigma = arcsec_to_rad(p.mismatch.coloured_noise_arcsec);
-        let gm_a = (-p.sample_interval_s / gm_tau).exp();
-        let gm_drive = Normal::new(0.0, (gm_sigma * (1.0 - gm_a * gm_a).sqrt()).max(0.0))
-            .unwrap_or(Normal::new(0.0, 0.0).unwrap());
-        let mut gm = [0.0f64; 3];
-        if gm_sigma > 0.0 {
-            let init = Normal::new(0.0, gm_sigma).unwrap_or(Normal::new(0.0, 0.0).unwrap());
-            for g in &mut gm {
-                *g = init.sample(&mut rng);
-            }
-        }
-        Samples {
-            p,
-            rng,
-            white,
-            jitter,
-            lf,
-            w_lf,
-            gm_sigma,
-            gm_a,
-            gm_drive,
-            gm,
-            period_s: p.rotation_period_s * (1.0 + p.mismatch.rotation_period_error),
-            north_rate_rad_s: p.speed_m_s * (p.course_deg * RAD_PER_DEG).cos() / EARTH_RADIUS_M,
-            gyro_tilt_rad: [0.0; 2],
-            k: 0,
-            n: (p.duration_s / p.sample_interval_s).floor() as usize,
-        }
-    }
-
-    /// Number of rows still to come.
-    pub fn len(&self) -> usize {
-        self.n - self.k
-    }
-
-    /// Whether no rows are left to come.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
-
-impl Iterator for Samples<'_> {
-    type Item = (Row, RowTruth);
-
-    fn next(&mut self) -> Option<(Row, RowTruth)> {
-        if self.k >= self.n {
-            return None;
-        }
-        let p = self.p;
-        let t = self.k as f64 * p.sample_interval_s;
-        self.k += 1;
-        let drift = p.mismatch.error_drift_arcsec_per_day * t / 86_400.0;
-        let base = match p.errors_step {
-            Some(step) if t >= step.at_s => step.errors_after_arcsec,
-            _ => p.errors_arcsec,
-        };
-        let x_arcsec: [f64; 4] = core::array::from_fn(|i| base[i] + drift);
-        let x: [f64; 4] = core::array::from_fn(|i| arcsec_to_rad(x_arcsec[i]));
-        // The angle actually applied: the scheme at the true period, plus the angle jitter. Eq (2)
-        // is evaluated at it and the log reports it.
-        let jitter = self.jitter.sample(&mut self.rng);
-        let rho = p.rotation_phase_deg * RAD_PER_DEG + p.scheme.rho_rad(t, self.period_s) + jitter;
-        // What the log reports: the angle measured the latency before, off by the encoder's zero.
-        let logged_rho =
-            if p.mismatch.angle_latency_s == 0.0 && p.mismatch.encoder_offset_deg == 0.0 {
-                rho
-            } else {
-                p.rotation_phase_deg * RAD_PER_DEG
-                    + p.scheme
-                        .rho_rad(t - p.mismatch.angle_latency_s, self.period_s)
-                    + jitter
-                    + p.mismatch.encoder_offset_deg * RAD_PER_DEG
-            };
-        let gyro_tilt = self.gyro_tilt_rad;
-        if p.mismatch.rotating_gyro_bias_deg_h != 0.0 {
-            let b_rad_s = p.mismatch.rotating_gyro_bias_deg_h * RAD_PER_DEG / 3600.0;
-            self.gyro_tilt_rad[0] += b_rad_s * rho.cos() * p.sample_interval_s;
-            self.gyro_tilt_rad[1] += b_rad_s * rho.sin() * p.sample_interval_s;
-        }
-        let s = p.platform_phase_deg * RAD_PER_DEG + EARTH_RATE_RAD_PER_S * t;
-        let lat = p.latitude_deg * RAD_PER_DEG + self.north_rate_rad_s * t;
-        let (weave_deg, weave_rate_deg_s) = weave(p.heading_weave_rate_deg_s, t);
-        let turn = turns(p.mismatch.heel_in_turns_deg, t);
-        let mut true_att = [
-            p.heading_deg + weave_deg + turn.heading_deg + sway(&p.heading_sway, t),
-            sway(&p.roll_sway, t) + turn.heel_deg,
-            sway(&p.pitch_sway, t),
-        ];
-        if !p.ship_motion.is_none() {
-            let (roll_deg, pitch_deg) = p
-                .ship_motion
-                .roll_pitch_deg(t, weave_rate_deg_s + turn.rate_deg_s);
-            true_att[1] += roll_deg;
-            true_att[2] += pitch_deg;
-        }
-        let osc = oscillation_rad(&x, rho, s, lat);
-        let we = self.w_lf * t;
-        let mut out = [0.0; 3];
-        for axis in 0..3 {
-            let a = &self.lf[axis];
-            let low = a[0]
-                + a[1] * we.sin()
-                + a[2] * we.cos()
-                + a[3] * (2.0 * we).sin()
-                + a[4] * (2.0 * we).cos();
-            if self.gm_sigma > 0.0 {
-                self.gm[axis] = self.gm_a * self.gm[axis] + self.gm_drive.sample(&mut self.rng);
-            }
-            let tilt = match axis {
-                1 => gyro_tilt[0],
-                2 => gyro_tilt[1],
-                _ => 0.0,
-            };
-            let err_rad = osc[axis] + low + self.white.sample(&mut self.rng) + self.gm[axis] + tilt;
-            out[axis] = true_att[axis] + err_rad / RAD_PER_DEG;
-        }
-        let row = Row {
-            time_s: t,
-            rotation_deg: (logged_rho / RAD_PER_DEG).rem_euclid(360.0),
-            platform_deg: (s / RAD_PER_DEG).rem_euclid(360.0),
-            latitude_deg: lat / RAD_PER_DEG,
-            heading_deg: out[0].rem_euclid(360.0),
-            roll_deg: out[1],
-            pitch_deg: out[2],
-        };
-        let truth = RowTruth {
-            true_attitude_deg: true_att,
-            oscillation_deg: [
-                osc[0] / RAD_PER_DEG,
-                osc[1] / RAD_PER_DEG,
-                osc[2] / RAD_PER_DEG,
-            ],
-            errors_arcsec: x_arcsec,
-        };
-        Some((row, truth))
-    }
-
-    fn size_hint(&self) -> (usize, Option<usize>) {
-        (self.len(), Some(self.len()))
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sim::samples::oscillation_rad;
+    use crate::sim::ship_motion::{course_rate_deg_s, ShipMotionError, ShipMotionSettings};
+    use estimator_core::units::{arcsec_to_rad, RAD_PER_DEG};
 
     #[test]
     fn parameters_without_scheme_or_recording_read_as_one_way_and_lossless() {

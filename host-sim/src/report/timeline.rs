@@ -15,12 +15,12 @@
 //! - `removed`: the oscillation the compensation took out, raw attitude minus corrected (eq (2)
 //!   with the running estimate);
 //! - with a truth: `before`, the oscillation eq (2) puts in for the true errors, and `after`, what
-//!   is left after compensation, `before - removed` ([`crate::report::residual_arcsec`]);
+//!   is left after compensation, `before - removed` ([`crate::report::attitude_rms::residual_arcsec`]);
 //! - `residual`: the windowed method's post-fit residuals of its correlation channels
-//!   ([`crate::replay::StepView::residuals_rad`]), when the replay has them.
+//!   ([`crate::replay::replayer::StepView::residuals_rad`]), when the replay has them.
 
 use crate::report::TruthAt;
-use crate::scenario::Row;
+use crate::sim::scenario::Row;
 use estimator_core::time_grid::Placement;
 use estimator_core::units::{rad_to_arcsec, wrap_deg};
 use estimator_core::{Counters, Estimate, Output, SampleError, Status};
@@ -301,30 +301,7 @@ impl Timeline {
         self.first_time_s.get_or_insert(t);
         self.last_time_s = Some(t);
         match r.result {
-            Ok(out) => {
-                if let Some(bit) = status_bit(out.status) {
-                    self.current.statuses |= bit;
-                }
-                self.held = out.estimate.as_ref().map(EstimateArcsec::of);
-                if self.held.is_some() {
-                    self.first_estimate_s.get_or_insert(t);
-                }
-                if out.status == Status::Converged {
-                    self.first_converged_s.get_or_insert(t);
-                }
-                if self.last_status != Some(out.status) {
-                    let from = self.last_status.map(|s| s.name());
-                    self.last_status = Some(out.status);
-                    self.event(
-                        t,
-                        EventKind::Status {
-                            from,
-                            to: out.status.name(),
-                        },
-                    );
-                }
-                self.observe_attitude(&r, out);
-            }
+            Ok(out) => self.observe_output(&r, out),
             Err(_) => self.current.rejected += 1,
         }
         if let Some(e) = self.held {
@@ -338,18 +315,7 @@ impl Timeline {
         if r.truth.is_some() {
             self.has_truth = true;
         }
-        match r.placement {
-            Some(Placement::OnGrid { intervals }) if intervals > 1 => {
-                let lost = u64::from(intervals - 1);
-                self.current.lost_samples += lost;
-                self.event(t, EventKind::Gap { lost });
-            }
-            Some(Placement::ClockStep) => {
-                self.current.clock_steps += 1;
-                self.event(t, EventKind::ClockStep);
-            }
-            _ => {}
-        }
+        self.observe_placement(t, r.placement);
         if let Some(c) = r.counters {
             self.knows_restarts = true;
             let restarts = c
@@ -367,6 +333,50 @@ impl Timeline {
                 &mut self.current.residual_arcsec,
                 &res.map(|v| rad_to_arcsec(v as f64)),
             );
+        }
+    }
+
+    /// An accepted row: its status (and the status's change), its estimate, its attitude.
+    fn observe_output(&mut self, r: &TimelineRow, out: &Output) {
+        let t = r.row.time_s;
+        if let Some(bit) = status_bit(out.status) {
+            self.current.statuses |= bit;
+        }
+        self.held = out.estimate.as_ref().map(EstimateArcsec::of);
+        if self.held.is_some() {
+            self.first_estimate_s.get_or_insert(t);
+        }
+        if out.status == Status::Converged {
+            self.first_converged_s.get_or_insert(t);
+        }
+        if self.last_status != Some(out.status) {
+            let from = self.last_status.map(|s| s.name());
+            self.last_status = Some(out.status);
+            self.event(
+                t,
+                EventKind::Status {
+                    from,
+                    to: out.status.name(),
+                },
+            );
+        }
+        self.observe_attitude(r, out);
+    }
+
+    /// Where an accepted row at `t` fell on the sample grid: the samples lost before it, a clock
+    /// step.
+    fn observe_placement(&mut self, t: f64, placement: Option<Placement>) {
+        match placement {
+            Some(Placement::OnGrid { intervals }) if intervals > 1 => {
+                let lost = u64::from(intervals - 1);
+                self.current.lost_samples += lost;
+                self.event(t, EventKind::Gap { lost });
+            }
+            Some(Placement::ClockStep) => {
+                self.current.clock_steps += 1;
+                self.event(t, EventKind::ClockStep);
+            }
+            _ => {}
         }
     }
 

@@ -6,7 +6,7 @@
 //! on board at that moment: a rejected sample leaves the estimator untouched, so that is the
 //! estimate of the last [`Output`], which the writer remembers.
 
-use crate::log_csv::LogError;
+use crate::formats::log_csv::LogError;
 use estimator_core::estimates_csv::{write_output, write_rejected};
 use estimator_core::{Estimate, Output, SampleError};
 use std::fs::File;

@@ -8,7 +8,8 @@
 
 use crate::flash_model::{FlashCounts, FlashModel};
 use crate::replay::sample_of;
-use crate::scenario::{Samples, ScenarioKind, ScenarioParams};
+use crate::sim::samples::Samples;
+use crate::sim::scenario::{ScenarioKind, ScenarioParams};
 use anyhow::{ensure, Context};
 use estimator_core::checkpoint::CHECKPOINT_LEN;
 use estimator_core::{Config, Estimator};

@@ -22,15 +22,14 @@
 //! Numbers are written with Rust's `Display` for `f64`, the shortest decimal that parses back to the
 //! same `f64`: a generated log read back gives bit-identical rows.
 
-use crate::scenario::{Row, ScenarioParams};
-use crate::time_stamps::TimeColumn;
-use serde::{Deserialize, Serialize};
+mod header;
+
+use crate::formats::time_stamps::TimeColumn;
+use crate::sim::scenario::Row;
+use header::{scan_header, Layout};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, SyncSender};
-use std::sync::Arc;
 
 /// The attitude log's header as `generate` writes it.
 pub const HEADER: &str =
@@ -153,162 +152,6 @@ impl<R> LineCounter<R> {
             self.passed += 1;
         }
         self.passed + 1
-    }
-}
-
-/// How many bytes at most are looked at for the header line, to choose the separator.
-const HEADER_SCAN_BYTES: usize = 1 << 16;
-
-/// Reads the start of `reader` up to the first line that is neither blank nor a comment (or
-/// [`HEADER_SCAN_BYTES`], or the end), and picks the separator from that line ([`separator_of`]).
-/// Returns the separator and the bytes read, which go back in front of the rest.
-fn scan_header<R: Read>(reader: &mut R) -> std::io::Result<(u8, Vec<u8>)> {
-    let mut head = Vec::new();
-    let mut chunk = [0u8; 4096];
-    loop {
-        if let Some(line) = header_line(&head) {
-            return Ok((separator_of(line), head));
-        }
-        if head.len() >= HEADER_SCAN_BYTES {
-            return Ok((b',', head));
-        }
-        let n = match reader.read(&mut chunk) {
-            Ok(n) => n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            Err(e) => return Err(e),
-        };
-        if n == 0 {
-            // The whole input is shorter: its last line may be the header, without a line end.
-            let line = head
-                .split(|b| *b == b'\n')
-                .map(trim_line)
-                .find(|l| is_content(l))
-                .unwrap_or(&[]);
-            return Ok((separator_of(line), head));
-        }
-        head.extend_from_slice(&chunk[..n]);
-    }
-}
-
-/// A line without its byte-order mark, `\r` and surrounding spaces.
-fn trim_line(line: &[u8]) -> &[u8] {
-    let line = line.strip_prefix("\u{feff}".as_bytes()).unwrap_or(line);
-    line.trim_ascii()
-}
-
-/// Whether a (trimmed) line carries data: not blank, not a `#` comment.
-fn is_content(line: &[u8]) -> bool {
-    !line.is_empty() && line[0] != b'#'
-}
-
-/// The first complete line of `head` that carries data, if `head` holds one.
-fn header_line(head: &[u8]) -> Option<&[u8]> {
-    let mut lines = head.split(|b| *b == b'\n');
-    // The last piece has no line end yet: it may be incomplete.
-    let complete = head.iter().filter(|b| **b == b'\n').count();
-    lines
-        .by_ref()
-        .take(complete)
-        .map(trim_line)
-        .find(|l| is_content(l))
-}
-
-/// The separator of [`SEPARATORS`] that occurs most often in `line` outside double quotes (`,` on
-/// a tie or when none occurs).
-pub fn separator_of(line: &[u8]) -> u8 {
-    let mut counts = [0usize; SEPARATORS.len()];
-    let mut quoted = false;
-    for &b in line {
-        if b == b'"' {
-            quoted = !quoted;
-        } else if !quoted {
-            if let Some(i) = SEPARATORS.iter().position(|s| *s == b) {
-                counts[i] += 1;
-            }
-        }
-    }
-    let best =
-        (0..SEPARATORS.len()).fold(0, |best, i| if counts[i] > counts[best] { i } else { best });
-    SEPARATORS[best]
-}
-
-/// A header name as it is matched: trimmed, without a byte-order mark, lower case, every run of
-/// spaces and underscores one underscore (`Time S`, `TIME_S` and `time  s` are `time_s`).
-pub fn normalize_column_name(name: &str) -> String {
-    let name = name.trim_start_matches('\u{feff}').trim().to_lowercase();
-    let mut out = String::with_capacity(name.len());
-    for c in name.chars() {
-        if c == ' ' || c == '_' {
-            if !out.ends_with('_') {
-                out.push('_');
-            }
-        } else {
-            out.push(c);
-        }
-    }
-    out
-}
-
-/// Where the seven values of a row are: the time column and its kind, then the six angles'
-/// columns in [`COLUMNS`] order; and the names as the header writes them.
-#[derive(Clone, Debug)]
-struct Layout {
-    time: TimeColumn,
-    index: [usize; 7],
-    names: [String; 7],
-}
-
-impl Layout {
-    /// Finds every column in a header (see [`normalize_column_name`]).
-    fn of(header: &[String]) -> Result<Layout, String> {
-        let normalized: Vec<String> = header.iter().map(|n| normalize_column_name(n)).collect();
-        let find = |want: &str| -> Result<Option<usize>, String> {
-            let mut found = normalized
-                .iter()
-                .enumerate()
-                .filter(|(_, n)| *n == want)
-                .map(|(i, _)| i);
-            match (found.next(), found.next()) {
-                (Some(_), Some(_)) => Err(format!("column {want:?} appears twice in the header")),
-                (first, _) => Ok(first),
-            }
-        };
-        let mut time = None;
-        for column in TimeColumn::ALL {
-            if let Some(i) = find(column.name())? {
-                time.get_or_insert((column, i));
-            }
-        }
-        let missing = |want: &str| {
-            let times: Vec<String> = TimeColumn::ALL
-                .iter()
-                .skip(1)
-                .map(|c| format!("{:?}", c.name()))
-                .collect();
-            let or_time = if want == COLUMNS[0] {
-                format!(" (or {})", times.join(", "))
-            } else {
-                String::new()
-            };
-            let header: Vec<&str> = header
-                .iter()
-                .map(|n| n.trim_start_matches('\u{feff}'))
-                .collect();
-            format!(
-                "no column {want:?}{or_time} in the header {:?} (needs {})",
-                header.join(","),
-                COLUMNS.join(",")
-            )
-        };
-        let Some((time, time_index)) = time else {
-            return Err(missing(COLUMNS[0]));
-        };
-        let mut index = [time_index; 7];
-        for (k, want) in COLUMNS.iter().enumerate().skip(1) {
-            index[k] = find(want)?.ok_or_else(|| missing(want))?;
-        }
-        let names = index.map(|i| header[i].trim_start_matches('\u{feff}').trim().to_string());
-        Ok(Layout { time, index, names })
     }
 }
 
@@ -519,125 +362,6 @@ impl<R: Read> Iterator for LogReader<R> {
     }
 }
 
-/// Rows parsed ahead by [`read_ahead`]'s thread, per batch: a consumer that stops at the end of
-/// a batch of this many items (or of a divisor of it) never waits on rows the reader has not yet
-/// handed over.
-pub const READ_AHEAD_BATCH: usize = 4096;
-/// Batches that may wait in [`read_ahead`]'s channel.
-pub const READ_AHEAD_DEPTH: usize = 4;
-
-/// One item of a log, as [`LogReader`] gives it.
-type LogItem = Result<LogLine, LogError>;
-
-/// Runs `reader` on a thread of its own, a few batches of rows ahead of `consume`, which gets the
-/// same items in the same order: parsing the CSV and the work done with its rows then share two
-/// cores. At most [`READ_AHEAD_DEPTH`] batches of [`READ_AHEAD_BATCH`] rows wait at any time, so
-/// memory does not grow with the log.
-///
-/// However `consume` ends (it read every item, returned early, or panicked), the reader ends too,
-/// and this function does not wait on it longer than it must. When `consume` stops before the end
-/// of the log, the channel is hung up and the reader told to stop, which it does before its next
-/// row (at once if it is waiting to hand over a batch); it is not waited for, as it may be blocked
-/// in a read that returns only when its writer writes or closes (standard input): it ends then, or
-/// with the process. When `consume` read every item, the reader has hung up and is joined: a panic
-/// in it is raised here, so that a log is never taken for complete because its reader died.
-pub fn read_ahead<R, T>(
-    reader: LogReader<R>,
-    consume: impl FnOnce(&mut dyn Iterator<Item = LogItem>) -> T,
-) -> T
-where
-    R: Read + Send + 'static,
-{
-    let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<LogItem>>(READ_AHEAD_DEPTH);
-    let stop = Arc::new(AtomicBool::new(false));
-    let reader_stop = stop.clone();
-    let handle = std::thread::spawn(move || read_batches(reader, &tx, &reader_stop));
-    let mut items = Batches {
-        rx,
-        batch: Vec::new().into_iter(),
-        stop,
-        ended: false,
-    };
-    let result = consume(&mut items);
-    let ended = items.ended;
-    // Hangs up and tells the reader to stop (also done when `consume` panics: `items` is dropped
-    // then too).
-    drop(items);
-    if ended {
-        if let Err(panic) = handle.join() {
-            std::panic::resume_unwind(panic);
-        }
-    }
-    result
-}
-
-/// [`read_ahead`]'s thread: batches of rows into `tx` until the end of the log, a hang-up, or
-/// `stop`.
-fn read_batches<R: Read>(
-    mut reader: LogReader<R>,
-    tx: &SyncSender<Vec<LogItem>>,
-    stop: &AtomicBool,
-) {
-    loop {
-        let mut batch = Vec::with_capacity(READ_AHEAD_BATCH);
-        let mut end = false;
-        while batch.len() < READ_AHEAD_BATCH {
-            if stop.load(Ordering::Relaxed) {
-                return;
-            }
-            match reader.next() {
-                Some(item) => batch.push(item),
-                None => {
-                    end = true;
-                    break;
-                }
-            }
-        }
-        // A send fails as soon as the consumer hangs up, even one waiting on a full channel.
-        if !batch.is_empty() && tx.send(batch).is_err() {
-            return;
-        }
-        if end {
-            return;
-        }
-    }
-}
-
-/// The consumer's end of [`read_ahead`]: the items of the batches in order. Dropping it hangs up
-/// and tells the reader to stop.
-struct Batches {
-    rx: Receiver<Vec<LogItem>>,
-    batch: std::vec::IntoIter<LogItem>,
-    stop: Arc<AtomicBool>,
-    /// The reader hung up: every item was received.
-    ended: bool,
-}
-
-impl Iterator for Batches {
-    type Item = LogItem;
-
-    fn next(&mut self) -> Option<LogItem> {
-        loop {
-            if let Some(item) = self.batch.next() {
-                return Some(item);
-            }
-            if self.ended {
-                return None;
-            }
-            match self.rx.recv() {
-                Ok(batch) => self.batch = batch.into_iter(),
-                Err(_) => self.ended = true,
-            }
-        }
-    }
-}
-
-impl Drop for Batches {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-    }
-}
-
 /// Reads a whole attitude log; any unreadable row is an error.
 pub fn read_log(path: &Path) -> Result<Vec<LogLine>, LogError> {
     LogReader::open(path)?.collect()
@@ -686,21 +410,25 @@ impl RowFilter {
             Err(e) => Err(e),
         }
     }
-}
 
-/// The name a log's companion files are made from: `dir/trial.csv` and `dir/trial.csv.gz` both
-/// give `dir/trial`.
-pub fn log_stem(log_path: &Path) -> PathBuf {
-    let name = log_path
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let name = name.strip_suffix(".gz").unwrap_or(&name);
-    let stem = Path::new(name)
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    log_path.with_file_name(stem)
+    /// `unreadable rows skipped: N (lines A, B, ...; --strict refuses such a log)`, the lines of
+    /// the first few; `None` when no row was skipped.
+    pub fn describe_skipped(&self) -> Option<String> {
+        if self.skipped == 0 {
+            return None;
+        }
+        let lines: Vec<String> = self.first.iter().map(|e| e.line.to_string()).collect();
+        let more = if self.skipped as usize > lines.len() {
+            ", ..."
+        } else {
+            ""
+        };
+        Some(format!(
+            "unreadable rows skipped: {} (lines {}{more}; --strict refuses such a log)",
+            self.skipped,
+            lines.join(", ")
+        ))
+    }
 }
 
 /// Writes rows (a slice, or an iterator: streamed) as an attitude log (lossless, see the module doc).
@@ -728,100 +456,23 @@ where
 }
 
 /// Writes rows as an attitude log file (through a temporary file beside it, renamed when complete:
-/// [`crate::output_file`]).
+/// [`crate::formats::output_file`]).
 pub fn write_log<I>(path: &Path, rows: I) -> anyhow::Result<()>
 where
     I: IntoIterator,
     I::Item: std::borrow::Borrow<Row>,
 {
-    let mut out = crate::output_file::OutputFile::create(path)?;
+    let mut out = crate::formats::output_file::OutputFile::create(path)?;
     write_log_to(&mut out, rows)
         .map_err(|e| LogError::new(path, 0, format!("cannot write: {e}")))?;
     out.commit()
 }
 
-/// The truth file of a generated log: the installation errors and every scenario parameter.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Truth {
-    /// Installation errors x1..x4 at t = 0, arcsec (they drift only under a model mismatch).
-    pub x_arcsec: [f64; 4],
-    /// Every parameter of the scenario, written at the top level.
-    #[serde(flatten)]
-    pub params: ScenarioParams,
-}
-
-impl Truth {
-    /// The truth file of the log `params` generates.
-    pub fn new(params: &ScenarioParams) -> Truth {
-        Truth {
-            x_arcsec: params.errors_arcsec,
-            params: params.clone(),
-        }
-    }
-}
-
-/// `<dir>/<stem>.truth.json` beside the log `<dir>/<stem>.csv` (or `.csv.gz`).
-pub fn truth_path(log_path: &Path) -> PathBuf {
-    let stem = log_stem(log_path);
-    let name = format!(
-        "{}.truth.json",
-        stem.file_name()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    );
-    stem.with_file_name(name)
-}
-
-/// Writes the truth file (through a temporary file beside it).
-pub fn write_truth(path: &Path, truth: &Truth) -> anyhow::Result<()> {
-    let text = serde_json::to_string_pretty(truth)
-        .map_err(|e| LogError::new(path, 0, format!("cannot encode: {e}")))?;
-    crate::output_file::write_bytes(path, (text + "\n").as_bytes())
-}
-
-/// A truth file as read: the errors, and the scenario when `generate` wrote it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct TruthFile {
-    /// Installation errors x1..x4, arcsec.
-    pub x_arcsec: [f64; 4],
-    /// The scenario's parameters, when the file carries them.
-    pub params: Option<ScenarioParams>,
-    /// Why the scenario's parameters (the file has a `scenario` field) could not be read.
-    pub params_error: Option<String>,
-}
-
-/// Reads a truth file; `Ok(None)` when it does not exist. Only `x_arcsec` is required.
-pub fn read_truth(path: &Path) -> Result<Option<TruthFile>, LogError> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(LogError::new(path, 0, format!("cannot read: {e}"))),
-    };
-    let value: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| LogError::new(path, e.line(), e.to_string()))?;
-    let x = value
-        .get("x_arcsec")
-        .ok_or_else(|| LogError::new(path, 0, "no \"x_arcsec\": [x1, x2, x3, x4] (arcsec)"))?;
-    let x_arcsec: [f64; 4] = serde_json::from_value(x.clone())
-        .map_err(|e| LogError::new(path, 0, format!("x_arcsec: {e}")))?;
-    let (params, params_error) = match value.get("scenario") {
-        None => (None, None),
-        Some(_) => match ScenarioParams::deserialize(&value) {
-            Ok(p) => (Some(p), None),
-            Err(e) => (None, Some(e.to_string())),
-        },
-    };
-    Ok(Some(TruthFile {
-        x_arcsec,
-        params,
-        params_error,
-    }))
-}
-
 #[cfg(test)]
 mod tests {
+    use super::header::{normalize_column_name, separator_of};
     use super::*;
-    use crate::scenario::{generate, ScenarioKind};
+    use crate::sim::scenario::{generate, ScenarioKind};
 
     fn parse(text: &str) -> Vec<Result<LogLine, LogError>> {
         LogReader::new(Path::new("t.csv"), text.as_bytes()).collect()
@@ -997,7 +648,7 @@ mod tests {
 
     #[test]
     fn written_log_reads_back_bit_identical_plain_and_gzip() {
-        let mut p = crate::scenario::ScenarioParams::new(ScenarioKind::Sea, 3);
+        let mut p = crate::sim::scenario::ScenarioParams::new(ScenarioKind::Sea, 3);
         p.duration_s = 300.0;
         let g = generate(&p);
         let mut buf = Vec::new();
@@ -1019,197 +670,5 @@ mod tests {
         let unzipped = read_log(&gz).unwrap();
         let _ = std::fs::remove_dir_all(&dir);
         assert_eq!(unzipped, back);
-    }
-
-    #[test]
-    fn truth_round_trips_with_params_and_needs_only_x_arcsec() {
-        let p = crate::scenario::ScenarioParams::new(ScenarioKind::Paper, 9);
-        let truth = Truth::new(&p);
-        let text = serde_json::to_string(&truth).unwrap();
-        assert!(
-            text.starts_with("{\"x_arcsec\":[200.0,-150.0,300.0,-250.0],"),
-            "{text}"
-        );
-        let dir = std::env::temp_dir().join(format!("host-sim-truth-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let full = dir.join("full.truth.json");
-        write_truth(&full, &truth).unwrap();
-        let minimal = dir.join("min.truth.json");
-        std::fs::write(&minimal, "{\"x_arcsec\": [1, -2, 3.5, 0]}").unwrap();
-        let broken = dir.join("broken.truth.json");
-        std::fs::write(&broken, "{\"x\": 1}").unwrap();
-        let (full, minimal, broken, missing) = (
-            read_truth(&full),
-            read_truth(&minimal),
-            read_truth(&broken),
-            read_truth(&dir.join("none.json")),
-        );
-        let _ = std::fs::remove_dir_all(&dir);
-        assert_eq!(
-            full.unwrap().unwrap(),
-            TruthFile {
-                x_arcsec: truth.x_arcsec,
-                params: Some(p),
-                params_error: None
-            }
-        );
-        assert_eq!(
-            minimal.unwrap().unwrap(),
-            TruthFile {
-                x_arcsec: [1.0, -2.0, 3.5, 0.0],
-                params: None,
-                params_error: None
-            }
-        );
-        assert!(broken.unwrap_err().to_string().contains("x_arcsec"));
-        assert_eq!(missing.unwrap(), None);
-    }
-
-    /// A log of `rows` rows at 1 s, every `bad`-th row (if any) unreadable.
-    fn long_log(rows: usize, bad: Option<usize>) -> Vec<u8> {
-        let mut text = format!("{HEADER}\n");
-        for k in 0..rows {
-            if bad.is_some_and(|b| k % b == b - 1) {
-                text.push_str(&format!("{k},1,x,40,4,5,6\n"));
-            } else {
-                text.push_str(&format!("{k},1,2,40,4,5,6\n"));
-            }
-        }
-        text.into_bytes()
-    }
-
-    /// Bytes that count what is read of them and, at their end, wait until `release` hangs up
-    /// (standard input from a writer that neither writes nor closes).
-    struct Watched {
-        bytes: std::io::Cursor<Vec<u8>>,
-        read: Arc<std::sync::atomic::AtomicU64>,
-        release: Option<Receiver<()>>,
-        /// Panic at the end instead.
-        panic_at_end: bool,
-    }
-
-    impl Read for Watched {
-        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-            let n = self.bytes.read(buf)?;
-            if n == 0 {
-                assert!(!self.panic_at_end, "the reader fails");
-                if let Some(release) = &self.release {
-                    let _ = release.recv();
-                }
-            }
-            self.read.fetch_add(n as u64, Ordering::Relaxed);
-            Ok(n)
-        }
-    }
-
-    fn watched(bytes: Vec<u8>) -> (Watched, Arc<std::sync::atomic::AtomicU64>) {
-        let read = Arc::new(std::sync::atomic::AtomicU64::new(0));
-        let w = Watched {
-            bytes: std::io::Cursor::new(bytes),
-            read: read.clone(),
-            release: None,
-            panic_at_end: false,
-        };
-        (w, read)
-    }
-
-    /// `f` on a thread of its own; fails the test if it has not returned within 20 s (a hang).
-    fn within_20_s<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
-        let (tx, rx) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            let _ = tx.send(f());
-        });
-        rx.recv_timeout(std::time::Duration::from_secs(20))
-            .expect("did not return within 20 s")
-    }
-
-    #[test]
-    fn read_ahead_hands_on_every_item_in_order() {
-        let bytes = long_log(20_000, Some(997));
-        let plain: Vec<_> = LogReader::new(Path::new("t.csv"), bytes.as_slice()).collect();
-        let (input, _) = watched(bytes);
-        let ahead = within_20_s(|| {
-            read_ahead(LogReader::new(Path::new("t.csv"), input), |items| {
-                items.collect::<Vec<_>>()
-            })
-        });
-        assert_eq!(plain.len(), 20_000);
-        assert_eq!(ahead, plain);
-    }
-
-    #[test]
-    fn a_consumer_stopping_early_stops_the_reader_with_the_channel_full() {
-        // Far more rows than the channel holds: the reader waits on a full channel when the
-        // consumer stops at its first row.
-        let bytes = long_log(300_000, None);
-        let total = bytes.len() as u64;
-        let (input, read) = watched(bytes);
-        let first = within_20_s(|| {
-            read_ahead(LogReader::new(Path::new("t.csv"), input), |items| {
-                items.next().map(|i| i.map(|l| l.line))
-            })
-        });
-        assert_eq!(first, Some(Ok(2)));
-        // The reader stops where it was: what it has read no longer grows.
-        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(10);
-        let mut last = u64::MAX;
-        loop {
-            let now = read.load(Ordering::Relaxed);
-            if now == last {
-                break;
-            }
-            assert!(
-                std::time::Instant::now() < deadline,
-                "the reader goes on: {now} bytes"
-            );
-            last = now;
-            std::thread::sleep(std::time::Duration::from_millis(100));
-        }
-        assert!(last < total / 2, "read {last} of {total} bytes");
-    }
-
-    #[test]
-    fn a_consumer_stopping_early_does_not_wait_on_a_reader_blocked_in_a_read() {
-        let (release, wait) = std::sync::mpsc::channel::<()>();
-        let (mut input, _) = watched(long_log(10_000, None));
-        input.release = Some(wait);
-        // The first batch comes, then the reader waits for input that does not come.
-        let taken = within_20_s(|| {
-            read_ahead(LogReader::new(Path::new("t.csv"), input), |items| {
-                items.take(10).count()
-            })
-        });
-        assert_eq!(taken, 10);
-        drop(release);
-    }
-
-    #[test]
-    fn a_reader_that_dies_is_not_taken_for_the_end_of_the_log() {
-        let (mut input, _) = watched(long_log(10_000, None));
-        input.panic_at_end = true;
-        let outcome = within_20_s(|| {
-            std::panic::catch_unwind(|| {
-                read_ahead(LogReader::new(Path::new("t.csv"), input), |items| {
-                    items.count()
-                })
-            })
-        });
-        assert!(outcome.is_err(), "{outcome:?}");
-    }
-
-    #[test]
-    fn companion_files_drop_csv_and_gz() {
-        assert_eq!(
-            truth_path(Path::new("/a/b/log.csv")),
-            PathBuf::from("/a/b/log.truth.json")
-        );
-        assert_eq!(
-            truth_path(Path::new("/a/b/log.csv.gz")),
-            PathBuf::from("/a/b/log.truth.json")
-        );
-        assert_eq!(
-            log_stem(Path::new("x/trial.csv.gz")),
-            PathBuf::from("x/trial")
-        );
     }
 }

@@ -3,13 +3,15 @@
 //! recorder), each generated, recorded and replayed row by row in memory, in parallel (rayon), with
 //! the error statistics per report time.
 
-use crate::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
 use crate::replay::sample_of;
-use crate::report::{format_honesty_shares, rows_text, Accuracy, Honesty, Tracker};
-use crate::rotation_scheme::RotationScheme;
-use crate::scenario::{
-    Mismatch, Samples, ScenarioKind, ScenarioParams, ShipMotionSettings, SwayComponent,
-};
+use crate::report::accuracy::{Accuracy, Tracker};
+use crate::report::honesty::Honesty;
+use crate::report::tables::{format_honesty_shares, rows_text};
+use crate::sim::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
+use crate::sim::rotation_scheme::RotationScheme;
+use crate::sim::samples::Samples;
+use crate::sim::scenario::{Mismatch, ScenarioKind, ScenarioParams, SwayComponent};
+use crate::sim::ship_motion::ShipMotionSettings;
 use estimator_core::Config;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -505,7 +507,7 @@ pub fn summarize(results: &[Accuracy]) -> Summary {
         s.max_abs_error_arcsec.push(max);
         let within = results
             .iter()
-            .filter(|r| (0..4).all(|i| abs(r, i) <= crate::report::ARCSEC_THRESHOLD))
+            .filter(|r| (0..4).all(|i| abs(r, i) <= crate::report::accuracy::ARCSEC_THRESHOLD))
             .count();
         s.share_within_10_arcsec
             .push(within as f64 / results.len().max(1) as f64);
@@ -665,8 +667,8 @@ mod tests {
         time_s: f64,
         error_arcsec: Option<[f64; 4]>,
         sigma_arcsec: [f64; 4],
-    ) -> crate::report::AccuracyAt {
-        crate::report::AccuracyAt {
+    ) -> crate::report::accuracy::AccuracyAt {
+        crate::report::accuracy::AccuracyAt {
             time_s,
             error_arcsec,
             sigma_arcsec: error_arcsec.map(|_| sigma_arcsec),
@@ -674,13 +676,13 @@ mod tests {
         }
     }
 
-    fn accuracy(points: Vec<crate::report::AccuracyAt>) -> Accuracy {
+    fn accuracy(points: Vec<crate::report::accuracy::AccuracyAt>) -> Accuracy {
         Accuracy {
             points,
             within_percent_from_s: [None; 4],
             within_arcsec_from_s: [None; 4],
             final_status: None,
-            honesty: crate::report::Honesty::default(),
+            honesty: crate::report::honesty::Honesty::default(),
         }
     }
 

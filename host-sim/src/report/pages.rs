@@ -1,5 +1,5 @@
-//! What `--report DIR` writes: the plots ([`crate::figures`]) and `report.html`
-//! ([`crate::html_report`]) of a replayed log (`estimate`, `run`), of a log streamed through the
+//! What `--report DIR` writes: the plots ([`crate::report::figures`]) and `report.html`
+//! ([`crate::report::html`]) of a replayed log (`estimate`, `run`), of a log streamed through the
 //! firmware (`stream`) and of a Monte Carlo study (`monte-carlo`).
 //!
 //! The page of a log says what the estimator reported (the final estimate and status, or why
@@ -8,13 +8,16 @@
 //! clock steps, the first events), the accuracy against the truth when there is a truth file,
 //! and shows the plots. Statuses are named by the core ([`estimator_core::Status::name`]).
 
-use crate::figures::{monte_carlo_figure, timeline_figures};
-use crate::html_report::{command_line, Block, Figure, Page, Section};
-use crate::monte_carlo::Summary;
-use crate::replay::{significant_4, Replay};
-use crate::report::{accuracy_table, format_honesty, rms_table, rms_title, Report};
-use crate::time_stamps::format_utc;
-use crate::timeline::{EstimateArcsec, EventKind, Timeline};
+use crate::formats::time_stamps::format_utc;
+use crate::replay::summary::{describe_health, describe_limit, pattern_summary, significant_4};
+use crate::replay::Replay;
+use crate::report::figures::monte_carlo_figure;
+use crate::report::figures::report_page::timeline_figures;
+use crate::report::html::{command_line, Block, Figure, Page, Section};
+use crate::report::tables::{accuracy_table, format_honesty, rms_table, rms_title};
+use crate::report::timeline::{EstimateArcsec, EventKind, Timeline};
+use crate::report::Report;
+use crate::study::monte_carlo::Summary;
 use anyhow::Context;
 use estimator_core::RejectReason;
 use std::path::{Path, PathBuf};
@@ -23,7 +26,7 @@ use std::path::{Path, PathBuf};
 pub const PAGE: &str = "report.html";
 
 /// Every file a report directory may get.
-/// (`run --report` also writes the paper's figures, named by [`crate::figures::write_figures`].)
+/// (`run --report` also writes the paper's figures, named by [`crate::report::figures::paper::write_figures`].)
 pub const FILES: [&str; 7] = [
     PAGE,
     "estimates.png",
@@ -35,9 +38,9 @@ pub const FILES: [&str; 7] = [
 ];
 
 /// Refuses a report directory in which a report would overwrite one of the run's inputs.
-pub fn check_dir(dir: &Path, inputs: &[crate::output_file::Input]) -> anyhow::Result<()> {
+pub fn check_dir(dir: &Path, inputs: &[crate::formats::output_file::Input]) -> anyhow::Result<()> {
     FILES.iter().try_for_each(|name| {
-        crate::output_file::check_not_input(&dir.join(name), "--report", inputs)
+        crate::formats::output_file::check_not_input(&dir.join(name), "--report", inputs)
     })
 }
 
@@ -204,6 +207,34 @@ pub fn write_replay_report(
 ) -> anyhow::Result<PathBuf> {
     create_dir(dir)?;
     let figures = timeline_figures(dir, tl, method, r.rotation.period_s)?;
+    let mut sections = vec![
+        Section::new("Summary").with(Block::Facts(replay_facts(log, method, r, tl))),
+        final_estimate_section(
+            tl.final_estimate(),
+            r.final_status.map(|s| s.name()),
+            r.holdup.map(|h| h.to_string()),
+        ),
+        Section::new("What was learned from the log").with(Block::Facts(learned_facts(r))),
+    ];
+    if let Some(rep) = report {
+        sections.push(accuracy_sections(rep, method));
+    }
+    sections.push(figures_section(figures));
+    sections.extend(extra);
+    sections.push(events_section(tl));
+    let page = Page {
+        title: format!("RINS installation errors: {log}"),
+        command: command_line(),
+        sections,
+    };
+    let path = dir.join(PAGE);
+    page.write(&path)?;
+    Ok(path)
+}
+
+/// The summary of a replay: the log, the method, what happened to the rows, the alarms and the
+/// limit the log sets, and the timeline's times.
+fn replay_facts(log: &str, method: &str, r: &Replay, tl: &Timeline) -> Vec<(String, String)> {
     let c = &r.counters;
     let mut rows = vec![
         ("log".to_string(), log.to_string()),
@@ -225,12 +256,12 @@ pub fn write_replay_report(
         ("clock steps".into(), c.clock_steps.to_string()),
         (
             "alarms".into(),
-            crate::replay::describe_health(&r.health)
+            describe_health(&r.health)
                 .trim_start_matches("alarms: ")
                 .to_string(),
         ),
     ];
-    if let Some(limit) = crate::replay::describe_limit(&r.health) {
+    if let Some(limit) = describe_limit(&r.health) {
         rows.push((
             "limit".into(),
             limit.trim_start_matches("limit: ").to_string(),
@@ -241,7 +272,12 @@ pub fn write_replay_report(
         rows.insert(2, ("binned".into(), b.describe()));
     }
     rows.extend(timeline_facts(tl));
-    let learned = vec![
+    rows
+}
+
+/// What was learned of the log: the sample interval and the rotation pattern.
+fn learned_facts(r: &Replay) -> Vec<(String, String)> {
+    vec![
         (
             "sample interval".to_string(),
             r.sample_interval_s.map_or("not yet learned".into(), |d| {
@@ -269,31 +305,8 @@ pub fn write_replay_report(
             "samples per window entry".into(),
             r.rotation.samples_per_entry.to_string(),
         ),
-        ("in one line".into(), crate::replay::pattern_summary(r)),
-    ];
-    let mut sections = vec![
-        Section::new("Summary").with(Block::Facts(rows)),
-        final_estimate_section(
-            tl.final_estimate(),
-            r.final_status.map(|s| s.name()),
-            r.holdup.map(|h| h.to_string()),
-        ),
-        Section::new("What was learned from the log").with(Block::Facts(learned)),
-    ];
-    if let Some(rep) = report {
-        sections.push(accuracy_sections(rep, method));
-    }
-    sections.push(figures_section(figures));
-    sections.extend(extra);
-    sections.push(events_section(tl));
-    let page = Page {
-        title: format!("RINS installation errors: {log}"),
-        command: command_line(),
-        sections,
-    };
-    let path = dir.join(PAGE);
-    page.write(&path)?;
-    Ok(path)
+        ("in one line".into(), pattern_summary(r)),
+    ]
 }
 
 /// Writes the plots and `report.html` of a log streamed through the firmware into `dir`.

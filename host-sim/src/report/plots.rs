@@ -14,7 +14,7 @@
 //! are drawn at its edge and **marked**: a triangle at the edge where a line leaves the axis
 //! (pointing up above it, down below it) and `(beyond the axis: triangles)` after its name in the
 //! legend; a band that is cut says `(cut at the axis)`. Every PNG is written through a temporary
-//! file beside its target ([`crate::output_file`]).
+//! file beside its target ([`crate::formats::output_file`]).
 
 use anyhow::{anyhow, Context, Result};
 use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
@@ -23,7 +23,7 @@ use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
 
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
 fn register_font() {
@@ -133,6 +133,7 @@ pub const BLUE_LINE: RGBColor = RGBColor(30, 90, 200);
 /// Colour of their averages of eq (11) in Fig. 3.
 pub const RED_LINE: RGBColor = RGBColor(210, 30, 30);
 
+/// The time span of what a panel draws (0 to 1 when it draws nothing).
 fn x_extent(panel: &Panel) -> (f64, f64) {
     let (lo, hi) = panel
         .series
@@ -155,6 +156,8 @@ fn x_extent(panel: &Panel) -> (f64, f64) {
     }
 }
 
+/// Draws one panel on `area`: its title, axes and mesh, its bands, its lines and the legend; `y` is
+/// its vertical axis (linear or log).
 fn draw_panel<DB, Y>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     panel: &Panel,
@@ -167,7 +170,6 @@ where
     Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
 {
     let (x0, x1) = x_extent(panel);
-    let (y0, y1) = panel.y_range;
     let mut chart = ChartBuilder::on(area)
         .caption(&panel.title, ("sans-serif", 20))
         .margin(10)
@@ -185,64 +187,10 @@ where
         .draw()
         .map_err(|e| anyhow!("plot: {e}"))?;
     for b in &panel.bands {
-        let color = b.color;
-        // One polygon per stretch of finite points (a non-finite point is a gap): the low edge
-        // forward, the high edge back.
-        let polygons: Vec<Vec<(f64, f64)>> = b
-            .points
-            .split(|p| !(p.0.is_finite() && p.1.is_finite() && p.2.is_finite()))
-            .filter(|run| !run.is_empty())
-            .map(|run| {
-                run.iter()
-                    .map(|p| (p.0, p.1.clamp(y0, y1)))
-                    .chain(run.iter().rev().map(|p| (p.0, p.2.clamp(y0, y1))))
-                    .collect()
-            })
-            .collect();
-        let label = if band_is_cut(b, panel.y_range) {
-            format!("{} (cut at the axis)", b.label)
-        } else {
-            b.label.clone()
-        };
-        chart
-            .draw_series(
-                polygons
-                    .into_iter()
-                    .map(|polygon| Polygon::new(polygon, color.mix(0.4).filled())),
-            )
-            .map_err(|e| anyhow!("plot: {e}"))?
-            .label(label)
-            .legend(move |(x, y)| {
-                Rectangle::new([(x, y - 5), (x + 20, y + 5)], color.mix(0.4).filled())
-            });
+        draw_band(&mut chart, b, panel.y_range)?;
     }
     for s in &panel.series {
-        let color = s.color;
-        // A NaN is a gap in the line; values beyond the axis are drawn at its edge.
-        let runs: Vec<Vec<(f64, f64)>> = s
-            .points
-            .split(|p| p.1.is_nan() || !p.0.is_finite())
-            .filter(|run| !run.is_empty())
-            .map(|run| run.iter().map(|&(x, v)| (x, v.clamp(y0, y1))).collect())
-            .collect();
-        chart
-            .draw_series(
-                runs.into_iter()
-                    .map(|run| PathElement::new(run, color.stroke_width(1))),
-            )
-            .map_err(|e| anyhow!("plot: {e}"))?
-            .label(legend_label(s, panel.y_range))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
-        let marks = clip_marks(&s.points, panel.y_range);
-        chart
-            .draw_series(marks.into_iter().take(MAX_CLIP_MARKS).map(|(x, above)| {
-                let tip: i32 = if above { -8 } else { 8 };
-                EmptyElement::at((x, if above { y1 } else { y0 }))
-                    + Polygon::new(vec![(0, tip), (-6, 0), (6, 0)], color.filled())
-            }))
-            .map_err(|e| anyhow!("plot: {e}"))?;
+        draw_line(&mut chart, s, panel.y_range)?;
     }
     chart
         .configure_series_labels()
@@ -255,9 +203,88 @@ where
     Ok(())
 }
 
+/// A chart of a panel: time across, `Y` (linear or log) up.
+type Chart<'a, DB, Y> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>;
+
+/// Draws a band, cut at the axis `y_range`, with its legend entry.
+fn draw_band<DB, Y>(chart: &mut Chart<'_, DB, Y>, b: &Band, y_range: (f64, f64)) -> Result<()>
+where
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64>,
+{
+    let (y0, y1) = y_range;
+    let color = b.color;
+    // One polygon per stretch of finite points (a non-finite point is a gap): the low edge
+    // forward, the high edge back.
+    let polygons: Vec<Vec<(f64, f64)>> = b
+        .points
+        .split(|p| !(p.0.is_finite() && p.1.is_finite() && p.2.is_finite()))
+        .filter(|run| !run.is_empty())
+        .map(|run| {
+            run.iter()
+                .map(|p| (p.0, p.1.clamp(y0, y1)))
+                .chain(run.iter().rev().map(|p| (p.0, p.2.clamp(y0, y1))))
+                .collect()
+        })
+        .collect();
+    let label = if band_is_cut(b, y_range) {
+        format!("{} (cut at the axis)", b.label)
+    } else {
+        b.label.clone()
+    };
+    chart
+        .draw_series(
+            polygons
+                .into_iter()
+                .map(|polygon| Polygon::new(polygon, color.mix(0.4).filled())),
+        )
+        .map_err(|e| anyhow!("plot: {e}"))?
+        .label(label)
+        .legend(move |(x, y)| {
+            Rectangle::new([(x, y - 5), (x + 20, y + 5)], color.mix(0.4).filled())
+        });
+    Ok(())
+}
+
+/// Draws a line, cut at the axis `y_range` and marked where it leaves it, with its legend entry.
+fn draw_line<DB, Y>(chart: &mut Chart<'_, DB, Y>, s: &Series, y_range: (f64, f64)) -> Result<()>
+where
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+    Y: Ranged<ValueType = f64>,
+{
+    let (y0, y1) = y_range;
+    let color = s.color;
+    // A NaN is a gap in the line; values beyond the axis are drawn at its edge.
+    let runs: Vec<Vec<(f64, f64)>> = s
+        .points
+        .split(|p| p.1.is_nan() || !p.0.is_finite())
+        .filter(|run| !run.is_empty())
+        .map(|run| run.iter().map(|&(x, v)| (x, v.clamp(y0, y1))).collect())
+        .collect();
+    chart
+        .draw_series(
+            runs.into_iter()
+                .map(|run| PathElement::new(run, color.stroke_width(1))),
+        )
+        .map_err(|e| anyhow!("plot: {e}"))?
+        .label(legend_label(s, y_range))
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+    let marks = clip_marks(&s.points, y_range);
+    chart
+        .draw_series(marks.into_iter().take(MAX_CLIP_MARKS).map(|(x, above)| {
+            let tip: i32 = if above { -8 } else { 8 };
+            EmptyElement::at((x, if above { y1 } else { y0 }))
+                + Polygon::new(vec![(0, tip), (-6, 0), (6, 0)], color.filled())
+        }))
+        .map_err(|e| anyhow!("plot: {e}"))?;
+    Ok(())
+}
+
 /// Draws panels stacked vertically into one PNG of `width` x (`panel_height` x panels).
 pub fn draw_png(path: &Path, panels: &[Panel], width: u32, panel_height: u32) -> Result<()> {
-    crate::output_file::write_via_temp(path, |temp| {
+    crate::formats::output_file::write_via_temp(path, |temp| {
         draw_png_at(temp, path, panels, width, panel_height)
     })
 }
@@ -424,7 +451,7 @@ pub struct Lane {
 
 /// A timeline: one lane per row, the first at the top, over `x_range` (time, s).
 pub fn lanes_figure(path: &Path, title: &str, lanes: &[Lane], x_range: (f64, f64)) -> Result<()> {
-    crate::output_file::write_via_temp(path, |temp| {
+    crate::formats::output_file::write_via_temp(path, |temp| {
         register_font();
         let height = 120 + 28 * lanes.len().max(1) as u32;
         let root = BitMapBackend::new(temp, (1000, height)).into_drawing_area();

@@ -9,11 +9,12 @@
 //! value, a stamp not after the last one) are counted ([`BinningSummary::refused`]) and are in no
 //! bin. A bin's row is numbered with the line of the last row in it.
 //!
-//! [`RowFilter`]: crate::log_csv::RowFilter
+//! [`RowFilter`]: crate::formats::log_csv::RowFilter
 
-use crate::log_csv::{LogError, LogLine, LogLines};
-use crate::replay::{row_of, sample_of, significant_4};
-use crate::time_stamps::{IntervalCheck, IntervalError};
+use crate::formats::log_csv::{LogError, LogLine, LogLines};
+use crate::formats::time_stamps::{IntervalCheck, IntervalError};
+use crate::replay::summary::significant_4;
+use crate::replay::{row_of, sample_of};
 use estimator_core::binning::{BinIntervalError, Binner};
 use estimator_core::{RejectCounts, RejectReason};
 
@@ -227,7 +228,7 @@ impl<I: LogLines> LogLines for Lines<I> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::Row;
+    use crate::sim::scenario::Row;
 
     fn line(line: usize, time_s: f64, roll_deg: f64) -> Result<LogLine, LogError> {
         Ok(LogLine {

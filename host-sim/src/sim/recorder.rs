@@ -1,6 +1,6 @@
 //! The data recorder between the RINS and the log: lost rows, outages and loose time stamps.
 //!
-//! The generator ([`crate::scenario`]) produces one row per sample instant `t_k = k *
+//! The generator ([`crate::sim::scenario`]) produces one row per sample instant `t_k = k *
 //! sample_interval_s`; the recorder decides which of them reach the log and with what time stamp:
 //!
 //! - each row is dropped independently with probability `drop_fraction`;
@@ -22,7 +22,7 @@
 //! and noise of a seed nor which rows another setting keeps. Outage start times are drawn once,
 //! from a third stream ([`draw_outage_starts_s`]), and recorded in the truth file with the rest.
 
-use crate::scenario::Row;
+use crate::sim::scenario::Row;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
