@@ -190,7 +190,7 @@ pub mod turn_hold;
 
 use crate::config::Config;
 use crate::correlation::{
-    ReferenceFilter, FULL_WEIGHT, HEEL_STATE, ROLL_PAIR, STATES, TURN_RATE_UNIT_RAD_S,
+    Measurement, ReferenceFilter, FULL_WEIGHT, HEEL_STATE, ROLL_PAIR, STATES, TURN_RATE_UNIT_RAD_S,
 };
 use crate::gap_fill::{FillVariance, GridSample};
 use crate::kalman::{ConstantStateKalman, KalmanError};
@@ -356,6 +356,16 @@ impl CleanState {
         stats: [ResidualStats::UNCONFIGURED; 2],
         roll_information: [[0.0; STATES]; STATES],
     };
+}
+
+/// What became of a window's measurement in an update of its pair.
+#[derive(Clone, Copy, Debug)]
+struct Outcome {
+    /// The filter took some channel of it.
+    applied: bool,
+    /// It was held out, by the innovation gate or the change detector's hold: its residuals
+    /// still go on to the change detector.
+    held_out: bool,
 }
 
 /// The estimate of one step: x1..x4, their 1-sigma, whether the model is inconsistent and
@@ -599,7 +609,9 @@ impl<const CAP: usize> Windowed<CAP> {
         })
     }
 
-    /// [`Windowed::update`] but for the report.
+    /// [`Windowed::update`] but for the report: the random walk since the last update, the pair
+    /// whose turn it is takes the window's measurement ([`Windowed::apply_measurement`]), and its
+    /// residuals go on to the checks ([`Windowed::average_residuals`]) and to the change detector.
     // Called once, on the step's path.
     #[inline(always)]
     fn update_filter(
@@ -615,28 +627,8 @@ impl<const CAP: usize> Windowed<CAP> {
         let m = self.window.sums().measurement_of(pair)?;
         self.next_pair = 1 - pair as u8;
         let bin = self.window.bin() as Real;
-        let elapsed_s = interval * bin * self.entries_since_update as Real;
-        self.changed_entries = self
-            .changed_entries
-            .saturating_sub(self.entries_since_update);
-        self.entries_since_update = 0;
-        let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
-        let (qp, qr) = (
-            q * self.pairs[0].stats.drift_share,
-            q * self.pairs[1].stats.drift_share,
-        );
-        self.kf.predict(&[qp, qp, qr, qr, 0.0]);
-        let sums = self.window.sums();
-        let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
-        let mut r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
-        // Entries left out or weighted down near lost rows: the window carries their share less
-        // information (its weight over that of a full window of full-weight entries).
-        let full = (self.window.len() as u32).saturating_mul(u32::from(FULL_WEIGHT));
-        if sums.weight < full && sums.weight > 0 {
-            r0 *= full as Real / sums.weight as Real;
-        }
-        self.pairs[0].product_variance_rad2 = r0 + 0.5 * filled * fill_variance.pitch_rad2;
-        self.pairs[1].product_variance_rad2 = r0 + 0.5 * filled * fill_variance.roll_rad2;
+        self.predict(config, interval, bin);
+        self.weigh_product_noise(config, bin, fill_variance);
         if core::mem::take(&mut self.clean_state_due) && !self.change.holding() {
             self.keep_clean_state();
         }
@@ -670,17 +662,94 @@ impl<const CAP: usize> Windowed<CAP> {
         let gate = (detecting
             && self.pairs[pair].spread_count >= (horizon / RESIDUAL_PERIODS as u32).max(1))
         .then_some(GATE_SIGMAS);
-        // Whether the measurement was taken (applied, or held out by the gate or the detector's
-        // hold: its residuals still go on to the checks).
-        let (mut applied, mut taken) = (false, false);
+        let outcome = self.apply_measurement(pair, &m, r, r_full, gate);
+        self.report_at_bump_end(config, pair, weight.ends_bump);
+        if !(outcome.applied || outcome.held_out) {
+            return None;
+        }
+        if outcome.applied {
+            self.updates = self.updates.saturating_add(1);
+        }
+        let settled = !self.start.holds();
+        let residual = self.average_residuals(config, pair, &m, outcome.applied, settled, horizon);
+        let (alarm, tested) = if detecting && settled {
+            self.pairs[pair].learn_spread(horizon, residual, outcome.held_out);
+            self.detect_change(config, pair, residual, &m.rows, interval * bin)
+        } else {
+            (None, false)
+        };
+        // A block's test is the costliest part of an update: after it, the pair's report waits
+        // for the pair's next update, two windows later (a change declared has refreshed both).
+        if !(tested || self.start.holds()) {
+            self.refresh_report(config, pair);
+        }
+        alarm
+    }
+
+    /// The prediction over the entries since the last update (`bin` samples of `interval` s
+    /// each): each pair's errors take the configured random walk times the pair's drift share
+    /// (see "Learning the noise and the drift" in the module doc); the heel state takes none.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn predict(&mut self, config: &Config, interval: Real, bin: Real) {
+        let elapsed_s = interval * bin * self.entries_since_update as Real;
+        self.changed_entries = self
+            .changed_entries
+            .saturating_sub(self.entries_since_update);
+        self.entries_since_update = 0;
+        let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
+        let (qp, qr) = (
+            q * self.pairs[0].stats.drift_share,
+            q * self.pairs[1].stats.drift_share,
+        );
+        self.kf.predict(&[qp, qp, qr, qr, 0.0]);
+    }
+
+    /// Each pair's per-product variance for the window now, rad^2: the configured noise over the
+    /// `bin` samples of an entry, raised by the share of weight the window lacks and by its
+    /// filled samples' interpolation error (see "Filled samples and bins" in the module doc).
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn weigh_product_noise(&mut self, config: &Config, bin: Real, fill_variance: FillVariance) {
+        let sums = self.window.sums();
+        let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
+        let mut r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
+        // Entries left out or weighted down near lost rows: the window carries their share less
+        // information (its weight over that of a full window of full-weight entries).
+        let full = (self.window.len() as u32).saturating_mul(u32::from(FULL_WEIGHT));
+        if sums.weight < full && sums.weight > 0 {
+            r0 *= full as Real / sums.weight as Real;
+        }
+        self.pairs[0].product_variance_rad2 = r0 + 0.5 * filled * fill_variance.pitch_rad2;
+        self.pairs[1].product_variance_rad2 = r0 + 0.5 * filled * fill_variance.roll_rad2;
+    }
+
+    /// The filter takes the window's measurement `m` for `pair`, each channel of variance `r`
+    /// (the turn channel's `r_full`), gated at `gate` standard deviations when it is set; or holds
+    /// it out while a change may be building up ([`change`]) or a turn the heel state does not
+    /// explain is in the window ([`turn_hold`]).
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn apply_measurement(
+        &mut self,
+        pair: usize,
+        m: &Measurement,
+        r: Real,
+        r_full: Real,
+        gate: Option<Real>,
+    ) -> Outcome {
+        let mut outcome = Outcome {
+            applied: false,
+            held_out: false,
+        };
         let turn = if pair == ROLL_PAIR {
-            self.test_turn(&m, gate.is_some())
+            self.test_turn(m, gate.is_some())
         } else {
             TurnVerdict::default()
         };
         if self.change.holding() {
             // A change may be building up: the filter waits.
-            taken = true;
+            outcome.held_out = true;
         } else if turn.held {
             // The window holds a turn the heel state does not explain: the roll pair waits until
             // it has left the window, from the copy of before it began to pull.
@@ -695,74 +764,111 @@ impl<const CAP: usize> Windowed<CAP> {
                 && !heel_learned(self.kf.covariance()[(HEEL_STATE, HEEL_STATE)])
                 && m.turn_row[HEEL_STATE] > 0.0
             {
-                self.weigh_heel_evidence(&m);
+                self.weigh_heel_evidence(m);
             }
-            let heel_variance = self.kf.covariance()[(HEEL_STATE, HEEL_STATE)];
-            // The turn channel first, with the roll pair: it learns the heel in turns (see
-            // "Heel in turns" in the module doc of [`crate::correlation`]) and only it, x1..x4
-            // taken as they are. Its products are roll times the rate of turn, whose mean square
-            // is the row's last term.
-            if pair == ROLL_PAIR && m.turn_row[HEEL_STATE] > 0.0 && heel_learned(heel_variance) {
-                // The channel's terms in x1..x4 taken at their estimates, their uncertainty added
-                // to the measurement's: a measurement of the heel alone, which moves the other
-                // states only through their covariance with it.
-                let x = self.kf.state();
-                let p = self.kf.covariance();
-                let mut z = m.turn_z;
-                let mut r_turn = 2.0 * r_full * m.turn_row[HEEL_STATE];
-                for j in 0..HEEL_STATE {
-                    z -= m.turn_row[j] * x[j];
-                    r_turn += m.turn_row[j] * m.turn_row[j] * p[(j, j)];
-                }
-                let mut h = [0.0; STATES];
-                h[HEEL_STATE] = m.turn_row[HEEL_STATE];
-                if self.kf.update(&h, z, r_turn).is_ok() {
-                    applied = true;
-                    self.add_roll_information(&h, r_turn);
-                }
+            if pair == ROLL_PAIR {
+                outcome.applied |= self.update_turn_channel(m, r_full);
             }
-            // Until the turn channel has learned the heel, the channels only consider it: its
-            // uncertainty widens the others', its estimate stays (over a window or two, a course
-            // weave near the rotation's frequency cannot tell it from x3, x4).
-            let mut all_but_heel = [true; STATES];
-            all_but_heel[HEEL_STATE] = false;
-            let learned =
-                self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] < HEEL_LEARNED_VARIANCE_RAD2;
-            let updated = (!learned).then_some(&all_but_heel);
-            // A heel held at its negligible variance (no turn has shown one) is left out of the
-            // update: x1..x4 alone, at two thirds of the cost.
-            let heel_active = heel_learned(self.kf.covariance()[(HEEL_STATE, HEEL_STATE)]);
-            for k in 0..2 {
-                // The channel from its pair and rank, not read back from an array: below 4 as
-                // the optimiser sees it (no bound check left in the C library's step).
-                let ch = 2 * (pair & 1) + k;
-                let gate = gate.map(|g| (self.pairs[pair].spread_rad2[k], g));
-                let result = if heel_active {
-                    self.kf
-                        .update_masked(&m.rows[ch], m.z[ch], r, gate, updated)
-                } else {
-                    self.kf
-                        .update_leading::<HEEL_STATE>(&m.rows[ch], m.z[ch], r, gate, updated)
-                };
-                match result {
-                    Ok(_) => {
-                        applied = true;
-                        if pair == ROLL_PAIR {
-                            self.add_roll_information(&m.rows[ch], r);
-                        }
+            let channels = self.update_channels(pair, m, r, gate);
+            outcome.applied |= channels.applied;
+            outcome.held_out |= channels.held_out;
+        }
+        outcome
+    }
+
+    /// The turn channel's update, with the roll pair once the heel in turns is learned: it
+    /// learns the heel (see "Heel in turns" in the module doc of [`crate::correlation`]) and
+    /// only it, x1..x4 taken as they are. Its products are roll times the rate of turn, whose
+    /// mean square is the row's last term. Returns whether the filter took it.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn update_turn_channel(&mut self, m: &Measurement, r_full: Real) -> bool {
+        let heel_variance = self.kf.covariance()[(HEEL_STATE, HEEL_STATE)];
+        if !(m.turn_row[HEEL_STATE] > 0.0 && heel_learned(heel_variance)) {
+            return false;
+        }
+        // The channel's terms in x1..x4 taken at their estimates, their uncertainty added to the
+        // measurement's: a measurement of the heel alone, which moves the other states only
+        // through their covariance with it.
+        let x = self.kf.state();
+        let p = self.kf.covariance();
+        let mut z = m.turn_z;
+        let mut r_turn = 2.0 * r_full * m.turn_row[HEEL_STATE];
+        for j in 0..HEEL_STATE {
+            z -= m.turn_row[j] * x[j];
+            r_turn += m.turn_row[j] * m.turn_row[j] * p[(j, j)];
+        }
+        let mut h = [0.0; STATES];
+        h[HEEL_STATE] = m.turn_row[HEEL_STATE];
+        if self.kf.update(&h, z, r_turn).is_ok() {
+            self.add_roll_information(&h, r_turn);
+            return true;
+        }
+        false
+    }
+
+    /// The two channels of `pair` update the filter in turn, each of variance `r`, gated at
+    /// `gate` standard deviations of its learned spread when it is set.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn update_channels(
+        &mut self,
+        pair: usize,
+        m: &Measurement,
+        r: Real,
+        gate: Option<Real>,
+    ) -> Outcome {
+        let mut outcome = Outcome {
+            applied: false,
+            held_out: false,
+        };
+        // Until the turn channel has learned the heel, the channels only consider it: its
+        // uncertainty widens the others', its estimate stays (over a window or two, a course
+        // weave near the rotation's frequency cannot tell it from x3, x4).
+        let mut all_but_heel = [true; STATES];
+        all_but_heel[HEEL_STATE] = false;
+        let learned = self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] < HEEL_LEARNED_VARIANCE_RAD2;
+        let updated = (!learned).then_some(&all_but_heel);
+        // A heel held at its negligible variance (no turn has shown one) is left out of the
+        // update: x1..x4 alone, at two thirds of the cost.
+        let heel_active = heel_learned(self.kf.covariance()[(HEEL_STATE, HEEL_STATE)]);
+        for k in 0..2 {
+            // The channel from its pair and rank, not read back from an array: below 4 as the
+            // optimiser sees it (no bound check left in the C library's step).
+            let ch = 2 * (pair & 1) + k;
+            let gate = gate.map(|g| (self.pairs[pair].spread_rad2[k], g));
+            let result = if heel_active {
+                self.kf
+                    .update_masked(&m.rows[ch], m.z[ch], r, gate, updated)
+            } else {
+                self.kf
+                    .update_leading::<HEEL_STATE>(&m.rows[ch], m.z[ch], r, gate, updated)
+            };
+            match result {
+                Ok(_) => {
+                    outcome.applied = true;
+                    if pair == ROLL_PAIR {
+                        self.add_roll_information(&m.rows[ch], r);
                     }
-                    Err(KalmanError::Gated) => {
-                        taken = true;
-                        self.gated = self.gated.saturating_add(1);
-                    }
-                    Err(_) => {}
                 }
+                Err(KalmanError::Gated) => {
+                    outcome.held_out = true;
+                    self.gated = self.gated.saturating_add(1);
+                }
+                Err(_) => {}
             }
         }
-        if weight.ends_bump {
-            // The estimate to hold until the next bump ends: the filter's now, with this pair's
-            // report, and the other pair's at the next update (a window of weight 0 too: the
-            // next bump's first), one report a step as always (not refreshed in between).
+        outcome
+    }
+
+    /// At the end of one of the first windows' bumps ([`start`]), the estimate to hold until the
+    /// next bump ends: the filter's now, with this pair's report, and the other pair's at its
+    /// next update (a window of weight 0 too: the next bump's first), one report a step as
+    /// always (not refreshed in between).
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn report_at_bump_end(&mut self, config: &Config, pair: usize, ends_bump: bool) {
+        if ends_bump {
             let x = self.kf.state();
             self.held_x_rad = (*x).into();
             self.refresh_report(config, pair);
@@ -770,19 +876,29 @@ impl<const CAP: usize> Windowed<CAP> {
         } else if core::mem::take(&mut self.held_report_due) {
             self.refresh_report(config, pair);
         }
-        if !(applied || taken) {
-            return None;
-        }
-        if applied {
-            self.updates = self.updates.saturating_add(1);
-        }
-        // What the filter held out (the gate, the detector's hold) stays out of the residual
-        // averages too: the check and the learned noise and drift are about the data the filter
-        // took; the detector sees everything. So do the windows of the first bumps ([`start`]):
-        // the filter has taken a few windows, most of them at a fraction of their weight, and a
-        // window's residual is then most of its sway (measured: the 1-sigma 20 % too large at
-        // 5,000 s on the sea scenario while they were averaged).
-        let settled = !self.start.holds();
+    }
+
+    /// The residual bookkeeping after an update of `pair` with window `m` (`applied`: the filter
+    /// took some channel of it; `settled`: the first windows' bumps are over): the pair's
+    /// residual average and the check, the learned noise and drift, the long-run batches.
+    /// Returns the pair's two post-fit residuals, rad.
+    ///
+    /// What the filter held out (the gate, the detector's hold) stays out of the residual
+    /// averages: the check and the learned noise and drift are about the data the filter took;
+    /// the detector sees everything. So do the windows of the first bumps ([`start`]): the filter
+    /// has taken a few windows, most of them at a fraction of their weight, and a window's
+    /// residual is then mostly its sway, which would inflate the learned noise.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn average_residuals(
+        &mut self,
+        config: &Config,
+        pair: usize,
+        m: &Measurement,
+        applied: bool,
+        settled: bool,
+        horizon: u32,
+    ) -> [Real; 2] {
         let residual = self.pairs[pair].average_residuals(
             pair,
             horizon,
@@ -808,18 +924,7 @@ impl<const CAP: usize> Windowed<CAP> {
                 .long_run
                 .add(residual, (len / 16).max(1), len, q);
         }
-        let (alarm, tested) = if detecting && settled {
-            self.pairs[pair].learn_spread(horizon, residual, taken);
-            self.detect_change(config, pair, residual, &m.rows, interval * bin)
-        } else {
-            (None, false)
-        };
-        // A block's test is the costliest part of an update: after it, the pair's report waits
-        // for the pair's next update, two windows later (a change declared has refreshed both).
-        if !(tested || self.start.holds()) {
-            self.refresh_report(config, pair);
-        }
-        alarm
+        residual
     }
 
     /// Whether the heel in turns is to be learned: the turn channel's measurement of it (x1..x4
@@ -831,7 +936,7 @@ impl<const CAP: usize> Windowed<CAP> {
     /// state: its estimate would only scatter the roll channels' residuals.
     #[cold]
     #[inline(never)]
-    fn weigh_heel_evidence(&mut self, m: &crate::correlation::Measurement) {
+    fn weigh_heel_evidence(&mut self, m: &Measurement) {
         let x = self.kf.state();
         let mut z = m.turn_z;
         for j in 0..HEEL_STATE {
@@ -858,11 +963,7 @@ impl<const CAP: usize> Windowed<CAP> {
     /// The turn hold's verdict on the roll pair's update of window `m` ([`turn_hold`]); none
     /// while the heading does not change. `spread_known`: the roll channels' spreads are learned
     /// (as for the innovation gate).
-    fn test_turn(
-        &mut self,
-        m: &crate::correlation::Measurement,
-        spread_known: bool,
-    ) -> TurnVerdict {
+    fn test_turn(&mut self, m: &Measurement, spread_known: bool) -> TurnVerdict {
         if !(m.turn_row[HEEL_STATE] > 0.0) {
             return TurnVerdict::default();
         }
