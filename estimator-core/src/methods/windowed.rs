@@ -183,49 +183,31 @@
 
 pub mod change;
 pub(crate) mod checkpoint;
+pub mod heel;
 pub mod long_run;
 pub mod pair;
+mod relearn;
+mod report;
 pub mod start;
 pub mod turn_hold;
+mod update;
 
 use crate::config::Config;
-use crate::correlation::{
-    Measurement, ReferenceFilter, FULL_WEIGHT, HEEL_STATE, ROLL_PAIR, STATES, TURN_RATE_UNIT_RAD_S,
-};
-use crate::gap_fill::{FillVariance, GridSample};
-use crate::kalman::{ConstantStateKalman, KalmanError};
+use crate::correlation::{ReferenceFilter, STATES, TURN_RATE_UNIT_RAD_S};
+use crate::gap_fill::GridSample;
+use crate::kalman::ConstantStateKalman;
 use crate::math::{wrap_pi, Compare};
 use crate::moving_average::CorrelationWindow;
 use crate::Real;
-use change::{persistence_blocks, Alarm, BlockContext, ChangeDetector};
-use pair::{channels, Pair, ResidualStats};
-
-/// The prior 1-sigma of the heel state ([`crate::correlation::HEEL_STATE`]), rad: a heel of 10 deg
-/// per deg/s of turn rate.
-pub const HEEL_PRIOR_SIGMA_RAD: Real = 0.01;
-
-/// The low-passed rate of turn beyond which the ship turns enough for its heel in turns to be
-/// learned, in units of [`TURN_RATE_UNIT_RAD_S`] (0.029 deg/s): far above what eq (2)'s heading
-/// oscillation left in the heading gives (about 0.001 deg/s), far below a course change or an
-/// autopilot's yawing.
-pub const TURN_EXCITATION: Real = 0.5;
-
-/// The 1-sigma x3 and x4 go back to when the heel in turns starts to be learned, rad (200
-/// arcsec: a course weave's heel leaks into them by hundreds of arcsec).
-pub const HEEL_FORGET_SIGMA_RAD: Real = 1.0e-3;
-
-/// A heel at the unit rate of turn beyond which the first turn channel's measurement makes x3,
-/// x4 be learned again, rad (1.5 s of heel per rad/s of turn; one window's measurement of no heel
-/// at sea scatters by a few 1e-4).
-pub const HEEL_SIGNIFICANT_RAD: Real = 1.0e-3;
-
-/// The heel state's variance below which the correlation channels update it too, rad^2: a heel
-/// known to 2e-5 rad (4 arcsec) at the unit rate of turn.
-pub const HEEL_LEARNED_VARIANCE_RAD2: Real = 4.0e-10;
+use change::ChangeDetector;
+use heel::{HEEL_HELD_SIGMA_RAD, HEEL_PRIOR_SIGMA_RAD, TURN_EXCITATION};
+use pair::{Pair, ResidualStats};
+use start::StartTaper;
+use turn_hold::TurnHold;
 
 /// The prior 1-sigma of each state: the configuration's for x1..x4; for the heel in turns,
-/// [`HEEL_PRIOR_SIGMA_RAD`] once the ship has turned (`turning`), else 0: until then the heel
-/// state is held at 0 (a rate of turn that is only the rest of eq (2)'s heading oscillation is
+/// [`HEEL_PRIOR_SIGMA_RAD`] once the ship has turned (`turning`), else [`HEEL_HELD_SIGMA_RAD`]:
+/// until then the heel state is held at 0 (a rate of turn that is only the rest of eq (2)'s heading oscillation is
 /// locked to the rotation, and would trade the heel for x3, x4).
 fn prior_sigma_rad(config: &Config, turning: bool) -> [Real; STATES] {
     let p = config.prior_sigma_rad;
@@ -236,17 +218,6 @@ fn prior_sigma_rad(config: &Config, turning: bool) -> [Real; STATES] {
     };
     [p, p, p, p, heel]
 }
-
-/// The heel state's 1-sigma while it is held at 0, rad: next to nothing (0.002 arcsec of roll at a
-/// brisk turn), but not zero, so that the covariance stays positive definite.
-pub const HEEL_HELD_SIGMA_RAD: Real = 1.0e-9;
-
-/// Whether the heel state is being learned (its variance above the held one's).
-fn heel_learned(p: Real) -> bool {
-    p > 4.0 * HEEL_HELD_SIGMA_RAD * HEEL_HELD_SIGMA_RAD
-}
-use start::StartTaper;
-use turn_hold::{TurnHold, TurnVerdict, ROLL_HOLD_SIGMAS};
 
 /// Time constant of the residual average, in rotation periods.
 pub const RESIDUAL_PERIODS: usize = 4;
@@ -284,7 +255,7 @@ pub struct Windowed<const CAP: usize> {
     window: CorrelationWindow<CAP>,
     /// The low-pass of the correlation references.
     reference: ReferenceFilter,
-    /// The 4-state filter of x1..x4.
+    /// The filter of x1..x4 and the heel in turns.
     kf: ConstantStateKalman<Real, STATES>,
     /// Measurement steps applied so far.
     updates: u32,
@@ -358,16 +329,6 @@ impl CleanState {
     };
 }
 
-/// What became of a window's measurement in an update of its pair.
-#[derive(Clone, Copy, Debug)]
-struct Outcome {
-    /// The filter took some channel of it.
-    applied: bool,
-    /// It was held out, by the innovation gate or the change detector's hold: its residuals
-    /// still go on to the change detector.
-    held_out: bool,
-}
-
 /// The estimate of one step: x1..x4, their 1-sigma, whether the model is inconsistent and
 /// whether errors are being learned again after a change.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -402,8 +363,9 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// An empty window and a filter of zeros: what an estimator holds before
     /// [`crate::Estimator::init_in`] resets it to a configuration.
-    // Inlined, so that `Estimator::init_in` writes it into its place: called, it was built on
-    // the stack and copied (22 KB of stack in the C library's `rins_estimator_init`).
+    // Inlined, so that `Estimator::init_in` writes it into its place: called, it would be built
+    // on the stack and copied, and the state is tens of KB (the C library's
+    // `rins_estimator_init` runs on the caller's stack).
     #[inline(always)]
     pub(crate) fn unconfigured() -> Self {
         Windowed {
@@ -507,17 +469,6 @@ impl<const CAP: usize> Windowed<CAP> {
         ([level(p), level(r)], [p.noise_scale(), r.noise_scale()])
     }
 
-    /// Each error's reported 1-sigma, rad, as its pair last refreshed it.
-    fn reported_sigma_rad(&self) -> [Real; 4] {
-        let [p, r] = &self.pairs;
-        [
-            p.reported_sigma_rad[0],
-            p.reported_sigma_rad[1],
-            r.reported_sigma_rad[0],
-            r.reported_sigma_rad[1],
-        ]
-    }
-
     /// The detector of changes of the errors.
     pub fn change_detector(&self) -> &ChangeDetector {
         &self.change
@@ -575,700 +526,12 @@ impl<const CAP: usize> Windowed<CAP> {
         pushed.removed
     }
 
-    /// Updates the filter with the window's measurement, if the window is full and has new
-    /// entries. `interval` is the sample interval, s, `fill_variance` a filled single sample's
-    /// error variance of roll and of pitch ([`crate::gap_fill::GapFiller::single_fill_variance`]).
-    /// Returns the change of the errors this update declared, if any (see [`change`]).
-    pub fn update(
-        &mut self,
-        config: &Config,
-        interval: Real,
-        fill_variance: FillVariance,
-    ) -> Option<Alarm> {
-        let alarm = self.update_filter(config, interval, fill_variance);
-        self.report = self.estimate_now();
-        alarm
-    }
-
-    /// The estimate to report now: the filter's, or, while the first windows' bumps go on, the
-    /// one held at the end of the last bump (none before the first ends).
-    pub(crate) fn estimate_now(&self) -> Option<MethodEstimate> {
-        if !self.start.holds() {
-            return self.live_estimate();
-        }
-        self.start.has_held().then_some(MethodEstimate {
-            x_rad: [
-                self.held_x_rad[0],
-                self.held_x_rad[1],
-                self.held_x_rad[2],
-                self.held_x_rad[3],
-            ],
-            sigma_rad: self.reported_sigma_rad(),
-            mismatch: false,
-            relearning: false,
-        })
-    }
-
-    /// [`Windowed::update`] but for the report: the random walk since the last update, the pair
-    /// whose turn it is takes the window's measurement ([`Windowed::apply_measurement`]), and its
-    /// residuals go on to the checks ([`Windowed::average_residuals`]) and to the change detector.
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn update_filter(
-        &mut self,
-        config: &Config,
-        interval: Real,
-        fill_variance: FillVariance,
-    ) -> Option<Alarm> {
-        if !self.window.is_full() || self.entries_since_update == 0 {
-            return None;
-        }
-        let pair = usize::from(self.next_pair.min(1));
-        let m = self.window.sums().measurement_of(pair)?;
-        self.next_pair = 1 - pair as u8;
-        let bin = self.window.bin() as Real;
-        self.predict(config, interval, bin);
-        self.weigh_product_noise(config, bin, fill_variance);
-        if core::mem::take(&mut self.clean_state_due) && !self.change.holding() {
-            self.keep_clean_state();
-        }
-        if self.pairs[pair].relearning {
-            if self.relearn_from_block(pair, &m.rows, &m.z, interval * bin) {
-                self.refresh_report(config, 0);
-                self.refresh_report(config, 1);
-            }
-            return None;
-        }
-        // Each pair takes every other window, so each of its updates carries two entries' worth;
-        // the first windows come with the weights of [`start`].
-        let weight = self.start.weight(
-            self.window.newest_number(),
-            self.window.first_number(),
-            self.window.len() as u32,
-            self.window.bin(),
-            self.updates == 0,
-        );
-        let mut r = 0.5 * self.pairs[pair].product_variance_rad2;
-        // The turn channel's, at full weight from the first window on: the heel it learns is what
-        // the first windows need to tell x3, x4 from the heel of a course weave.
-        let r_full = r;
-        if weight.value < 1.0 {
-            // A window of weight 0 (at the ends of a bump) adds next to nothing, but is taken as
-            // every window is: one update a step.
-            r /= weight.value.larger(start::MIN_WEIGHT);
-        }
-        let detecting = config.change_detection_step_rad > 0.0;
-        let horizon = self.residual_horizon();
-        let gate = (detecting
-            && self.pairs[pair].spread_count >= (horizon / RESIDUAL_PERIODS as u32).max(1))
-        .then_some(GATE_SIGMAS);
-        let outcome = self.apply_measurement(pair, &m, r, r_full, gate);
-        self.report_at_bump_end(config, pair, weight.ends_bump);
-        if !(outcome.applied || outcome.held_out) {
-            return None;
-        }
-        if outcome.applied {
-            self.updates = self.updates.saturating_add(1);
-        }
-        let settled = !self.start.holds();
-        let residual = self.average_residuals(config, pair, &m, outcome.applied, settled, horizon);
-        let (alarm, tested) = if detecting && settled {
-            self.pairs[pair].learn_spread(horizon, residual, outcome.held_out);
-            self.detect_change(config, pair, residual, &m.rows, interval * bin)
-        } else {
-            (None, false)
-        };
-        // A block's test is the costliest part of an update: after it, the pair's report waits
-        // for the pair's next update, two windows later (a change declared has refreshed both).
-        if !(tested || self.start.holds()) {
-            self.refresh_report(config, pair);
-        }
-        alarm
-    }
-
-    /// The prediction over the entries since the last update (`bin` samples of `interval` s
-    /// each): each pair's errors take the configured random walk times the pair's drift share
-    /// (see "Learning the noise and the drift" in the module doc); the heel state takes none.
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn predict(&mut self, config: &Config, interval: Real, bin: Real) {
-        let elapsed_s = interval * bin * self.entries_since_update as Real;
-        self.changed_entries = self
-            .changed_entries
-            .saturating_sub(self.entries_since_update);
-        self.entries_since_update = 0;
-        let q = config.drift_rad_per_sqrt_s * config.drift_rad_per_sqrt_s * elapsed_s;
-        let (qp, qr) = (
-            q * self.pairs[0].stats.drift_share,
-            q * self.pairs[1].stats.drift_share,
-        );
-        self.kf.predict(&[qp, qp, qr, qr, 0.0]);
-    }
-
-    /// Each pair's per-product variance for the window now, rad^2: the configured noise over the
-    /// `bin` samples of an entry, raised by the share of weight the window lacks and by its
-    /// filled samples' interpolation error (see "Filled samples and bins" in the module doc).
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn weigh_product_noise(&mut self, config: &Config, bin: Real, fill_variance: FillVariance) {
-        let sums = self.window.sums();
-        let filled = sums.fill_weight as Real / (sums.count as Real * bin * bin);
-        let mut r0 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin;
-        // Entries left out or weighted down near lost rows: the window carries their share less
-        // information (its weight over that of a full window of full-weight entries).
-        let full = (self.window.len() as u32).saturating_mul(u32::from(FULL_WEIGHT));
-        if sums.weight < full && sums.weight > 0 {
-            r0 *= full as Real / sums.weight as Real;
-        }
-        self.pairs[0].product_variance_rad2 = r0 + 0.5 * filled * fill_variance.pitch_rad2;
-        self.pairs[1].product_variance_rad2 = r0 + 0.5 * filled * fill_variance.roll_rad2;
-    }
-
-    /// The filter takes the window's measurement `m` for `pair`, each channel of variance `r`
-    /// (the turn channel's `r_full`), gated at `gate` standard deviations when it is set; or holds
-    /// it out while a change may be building up ([`change`]) or a turn the heel state does not
-    /// explain is in the window ([`turn_hold`]).
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn apply_measurement(
-        &mut self,
-        pair: usize,
-        m: &Measurement,
-        r: Real,
-        r_full: Real,
-        gate: Option<Real>,
-    ) -> Outcome {
-        let mut outcome = Outcome {
-            applied: false,
-            held_out: false,
-        };
-        let turn = if pair == ROLL_PAIR {
-            self.test_turn(m, gate.is_some())
-        } else {
-            TurnVerdict::default()
-        };
-        if self.change.holding() {
-            // A change may be building up: the filter waits.
-            outcome.held_out = true;
-        } else if turn.held {
-            // The window holds a turn the heel state does not explain: the roll pair waits until
-            // it has left the window, from the copy of before it began to pull.
-            if turn.started {
-                self.restore_clean_state();
-            }
-        } else {
-            if pair == ROLL_PAIR
-                && self.turning
-                && self.updates > 0
-                && !self.start.holds()
-                && !heel_learned(self.kf.covariance()[(HEEL_STATE, HEEL_STATE)])
-                && m.turn_row[HEEL_STATE] > 0.0
-            {
-                self.weigh_heel_evidence(m);
-            }
-            if pair == ROLL_PAIR {
-                outcome.applied |= self.update_turn_channel(m, r_full);
-            }
-            let channels = self.update_channels(pair, m, r, gate);
-            outcome.applied |= channels.applied;
-            outcome.held_out |= channels.held_out;
-        }
-        outcome
-    }
-
-    /// The turn channel's update, with the roll pair once the heel in turns is learned: it
-    /// learns the heel (see "Heel in turns" in the module doc of [`crate::correlation`]) and
-    /// only it, x1..x4 taken as they are. Its products are roll times the rate of turn, whose
-    /// mean square is the row's last term. Returns whether the filter took it.
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn update_turn_channel(&mut self, m: &Measurement, r_full: Real) -> bool {
-        let heel_variance = self.kf.covariance()[(HEEL_STATE, HEEL_STATE)];
-        if !(m.turn_row[HEEL_STATE] > 0.0 && heel_learned(heel_variance)) {
-            return false;
-        }
-        // The channel's terms in x1..x4 taken at their estimates, their uncertainty added to the
-        // measurement's: a measurement of the heel alone, which moves the other states only
-        // through their covariance with it.
-        let x = self.kf.state();
-        let p = self.kf.covariance();
-        let mut z = m.turn_z;
-        let mut r_turn = 2.0 * r_full * m.turn_row[HEEL_STATE];
-        for j in 0..HEEL_STATE {
-            z -= m.turn_row[j] * x[j];
-            r_turn += m.turn_row[j] * m.turn_row[j] * p[(j, j)];
-        }
-        let mut h = [0.0; STATES];
-        h[HEEL_STATE] = m.turn_row[HEEL_STATE];
-        if self.kf.update(&h, z, r_turn).is_ok() {
-            self.add_roll_information(&h, r_turn);
-            return true;
-        }
-        false
-    }
-
-    /// The two channels of `pair` update the filter in turn, each of variance `r`, gated at
-    /// `gate` standard deviations of its learned spread when it is set.
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn update_channels(
-        &mut self,
-        pair: usize,
-        m: &Measurement,
-        r: Real,
-        gate: Option<Real>,
-    ) -> Outcome {
-        let mut outcome = Outcome {
-            applied: false,
-            held_out: false,
-        };
-        // Until the turn channel has learned the heel, the channels only consider it: its
-        // uncertainty widens the others', its estimate stays (over a window or two, a course
-        // weave near the rotation's frequency cannot tell it from x3, x4).
-        let mut all_but_heel = [true; STATES];
-        all_but_heel[HEEL_STATE] = false;
-        let learned = self.kf.covariance()[(HEEL_STATE, HEEL_STATE)] < HEEL_LEARNED_VARIANCE_RAD2;
-        let updated = (!learned).then_some(&all_but_heel);
-        // A heel held at its negligible variance (no turn has shown one) is left out of the
-        // update: x1..x4 alone, at two thirds of the cost.
-        let heel_active = heel_learned(self.kf.covariance()[(HEEL_STATE, HEEL_STATE)]);
-        for k in 0..2 {
-            // The channel from its pair and rank, not read back from an array: below 4 as the
-            // optimiser sees it (no bound check left in the C library's step).
-            let ch = 2 * (pair & 1) + k;
-            let gate = gate.map(|g| (self.pairs[pair].spread_rad2[k], g));
-            let result = if heel_active {
-                self.kf
-                    .update_masked(&m.rows[ch], m.z[ch], r, gate, updated)
-            } else {
-                self.kf
-                    .update_leading::<HEEL_STATE>(&m.rows[ch], m.z[ch], r, gate, updated)
-            };
-            match result {
-                Ok(_) => {
-                    outcome.applied = true;
-                    if pair == ROLL_PAIR {
-                        self.add_roll_information(&m.rows[ch], r);
-                    }
-                }
-                Err(KalmanError::Gated) => {
-                    outcome.held_out = true;
-                    self.gated = self.gated.saturating_add(1);
-                }
-                Err(_) => {}
-            }
-        }
-        outcome
-    }
-
-    /// At the end of one of the first windows' bumps ([`start`]), the estimate to hold until the
-    /// next bump ends: the filter's now, with this pair's report, and the other pair's at its
-    /// next update (a window of weight 0 too: the next bump's first), one report a step as
-    /// always (not refreshed in between).
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn report_at_bump_end(&mut self, config: &Config, pair: usize, ends_bump: bool) {
-        if ends_bump {
-            let x = self.kf.state();
-            self.held_x_rad = (*x).into();
-            self.refresh_report(config, pair);
-            self.held_report_due = self.start.holds();
-        } else if core::mem::take(&mut self.held_report_due) {
-            self.refresh_report(config, pair);
-        }
-    }
-
-    /// The residual bookkeeping after an update of `pair` with window `m` (`applied`: the filter
-    /// took some channel of it; `settled`: the first windows' bumps are over): the pair's
-    /// residual average and the check, the learned noise and drift, the long-run batches.
-    /// Returns the pair's two post-fit residuals, rad.
-    ///
-    /// What the filter held out (the gate, the detector's hold) stays out of the residual
-    /// averages: the check and the learned noise and drift are about the data the filter took;
-    /// the detector sees everything. So do the windows of the first bumps ([`start`]): the filter
-    /// has taken a few windows, most of them at a fraction of their weight, and a window's
-    /// residual is then mostly its sway, which would inflate the learned noise.
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn average_residuals(
-        &mut self,
-        config: &Config,
-        pair: usize,
-        m: &Measurement,
-        applied: bool,
-        settled: bool,
-        horizon: u32,
-    ) -> [Real; 2] {
-        let residual = self.pairs[pair].average_residuals(
-            pair,
-            horizon,
-            &m.rows,
-            &m.z,
-            self.kf.state().as_slice(),
-            applied && settled,
-        );
-        if self.change.holding() {
-            self.entries_since_hold = 0;
-        }
-        if applied && settled {
-            let (bin, len) = (self.window.bin(), self.window.len());
-            self.pairs[pair].learn_noise_and_drift(config, bin, len, horizon);
-        }
-        // The first batch a quarter of a period of the pair's updates, from the first update on
-        // ([`long_run`]); the windows that hold what the filter held out are left out of it as
-        // they were of the filter.
-        if applied && self.entries_since_hold >= self.window.len() as u32 {
-            let len = self.window.len() as u32;
-            let q = self.pairs[pair].product_variance_rad2;
-            self.pairs[pair]
-                .long_run
-                .add(residual, (len / 16).max(1), len, q);
-        }
-        residual
-    }
-
-    /// Whether the heel in turns is to be learned: the turn channel's measurement of it (x1..x4
-    /// taken at their estimates), averaged over a period of the roll pair's updates, is beyond
-    /// [`HEEL_SIGNIFICANT_RAD`]. Then it starts to be learned (its prior covariance), and x3 and
-    /// x4, which the roll channels gave with the heel taken as none, are learned again with it
-    /// ([`HEEL_FORGET_SIGMA_RAD`]): a course weave near the rotation's frequency leaks its heel
-    /// into them by hundreds of arcsec. A ship that turns without heeling is never given the
-    /// state: its estimate would only scatter the roll channels' residuals.
-    #[cold]
-    #[inline(never)]
-    fn weigh_heel_evidence(&mut self, m: &Measurement) {
-        let x = self.kf.state();
-        let mut z = m.turn_z;
-        for j in 0..HEEL_STATE {
-            z -= m.turn_row[j] * x[j];
-        }
-        let heel = z / m.turn_row[HEEL_STATE];
-        let n = (self.window.len() as u32 / 2).max(1);
-        self.heel_evidence.1 = self.heel_evidence.1.saturating_add(1).min(n);
-        let alpha = 1.0 / self.heel_evidence.1 as Real;
-        self.heel_evidence.0 += alpha * (heel - self.heel_evidence.0);
-        if self.heel_evidence.1 < n || self.heel_evidence.0.abs() <= HEEL_SIGNIFICANT_RAD {
-            return;
-        }
-        let mut which = [false; STATES];
-        let mut sigma = [HEEL_FORGET_SIGMA_RAD; STATES];
-        which[HEEL_STATE] = true;
-        which[2] = true;
-        which[3] = true;
-        sigma[HEEL_STATE] = HEEL_PRIOR_SIGMA_RAD;
-        self.kf.forget(&which, &sigma);
-        self.forget_roll_information(&which);
-    }
-
-    /// The turn hold's verdict on the roll pair's update of window `m` ([`turn_hold`]); none
-    /// while the heading does not change. `spread_known`: the roll channels' spreads are learned
-    /// (as for the innovation gate).
-    fn test_turn(&mut self, m: &Measurement, spread_known: bool) -> TurnVerdict {
-        if !(m.turn_row[HEEL_STATE] > 0.0) {
-            return TurnVerdict::default();
-        }
-        let x = self.kf.state().as_slice();
-        let innovation =
-            |row: &[Real; STATES], z: Real| row.iter().zip(x).fold(z, |e, (h, xj)| e - h * xj);
-        let mut roll_beyond = false;
-        if spread_known {
-            let [a, b] = channels(ROLL_PAIR);
-            for (k, ch) in [a, b].into_iter().enumerate() {
-                let e = innovation(&m.rows[ch], m.z[ch]);
-                let bound =
-                    ROLL_HOLD_SIGMAS * ROLL_HOLD_SIGMAS * self.pairs[ROLL_PAIR].spread_rad2[k];
-                roll_beyond |= e * e > bound;
-            }
-        }
-        let turn = innovation(&m.turn_row, m.turn_z);
-        self.turn_hold.test(
-            turn,
-            roll_beyond,
-            self.window.newest_number(),
-            self.window.len() as u32,
-        )
-    }
-
     /// The residual average's horizon, in updates of a pair: [`RESIDUAL_PERIODS`] periods of
     /// windows, each pair taking every other one (the count of a pair's residual average
     /// saturates there).
     #[inline(always)]
     fn residual_horizon(&self) -> u32 {
         (RESIDUAL_PERIODS * self.window.len() / 2) as u32
-    }
-
-    /// The model's variance of a block mean of the change detector for blocks of `block` entries,
-    /// rad^2 ([`change::block_variance_factor`]).
-    fn block_floor_rad2(&self, pair: usize, block: u32) -> Real {
-        let len = self.window.len().max(1) as u32;
-        self.pairs[pair.min(1)].product_variance_rad2 * change::block_variance_factor(len, block)
-            / len as Real
-    }
-
-    /// Passes the pair's residuals to the change detector; when it declares a change, the errors
-    /// that changed are learned again (see "Changes of the errors" in the module doc). Returns the
-    /// change declared, if any, and whether a block ended (and was tested).
-    // Called once, on the step's path.
-    #[inline(always)]
-    fn detect_change(
-        &mut self,
-        config: &Config,
-        pair: usize,
-        residual: [Real; 2],
-        rows: &[[Real; STATES]; 4],
-        entry_s: Real,
-    ) -> (Option<Alarm>, bool) {
-        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
-        let pair = pair.min(1);
-        let holding = self.change.holding();
-        self.pairs[pair].block_held &= holding;
-        // A block's updates of a pair: half its entries.
-        let block_entries = change::block_entries(self.window.len() as u32, entry_s);
-        let Some(block) = self
-            .change
-            .accumulate(pair, residual, (block_entries / 2).max(1))
-        else {
-            return (None, false);
-        };
-        // Kept for learning the errors again, should a change be declared while the filter holds.
-        let p = &mut self.pairs[pair];
-        p.last_block.held = p.block_held;
-        if p.block_held {
-            let [a, b] = channels(pair);
-            p.last_block.rad = block;
-            p.last_block.rows = [rows[a], rows[b]];
-        }
-        p.block_held = true;
-        let len = self.window.len() as u32;
-        let horizon = self.residual_horizon().max(1);
-        let ctx = BlockContext {
-            persistence_blocks: persistence_blocks(len, block_entries, entry_s),
-            floor_rad2: self.block_floor_rad2(pair, block_entries),
-            step_rad: config.change_detection_step_rad,
-            settled: self.pairs[pair].stats.count >= horizon,
-            armed: self.pairs.iter().all(|p| p.stats.count >= horizon),
-            max_widening_rad: config.prior_sigma_rad,
-            blocks_per_half_period: change::blocks_per_half_period(len, block_entries),
-        };
-        let was_holding = self.change.holding();
-        let alarm = self.change.test(pair, block, self.pairs[pair].gains, &ctx);
-        // Kept at the next update: this one has the block's work already.
-        self.clean_state_due |= alarm.is_none() && pair == 1 && !self.change.holding();
-        if self.change.holding() && !was_holding {
-            // The block that started the hold was taken: back to before it. Each pair's report
-            // follows at its next update without a block's test (the other pair's block ends at
-            // its next update, so some three windows on); refreshing the other pair's here too
-            // took a hold's first step to 5,050 instructions on a lossy 360 s log.
-            self.restore_clean_state();
-        }
-        let Some(mut alarm) = alarm else {
-            return (None, true);
-        };
-        // The roll channels carry the leakage of x1 and x2: a change of those can hide a change
-        // of x3 or x4 on their channels (their shifts cancel), so x3 and x4 are learned again
-        // with any change. The pitch channels see x1 and x2 alone.
-        if alarm.changed[0] || alarm.changed[1] {
-            alarm.changed[2] = true;
-            alarm.changed[3] = true;
-        }
-        self.relearn(config, &alarm.changed);
-        (Some(alarm), true)
-    }
-
-    /// Keeps a copy of the filter and its residual statistics ([`CleanState`]).
-    /// Field by field, in place: a whole `CleanState` built first took its size again on the
-    /// stack (at a restore, on top of the image's parts).
-    fn keep_clean_state(&mut self) {
-        let c = &mut self.clean;
-        c.kf.clone_from(&self.kf);
-        c.roll_information = self.roll_information;
-        for (kept, p) in c.stats.iter_mut().zip(&self.pairs) {
-            *kept = p.stats;
-        }
-    }
-
-    /// Goes back to the copy of [`Windowed::keep_clean_state`].
-    fn restore_clean_state(&mut self) {
-        let c = &self.clean;
-        self.kf = c.kf.clone();
-        self.roll_information = c.roll_information;
-        for (p, kept) in self.pairs.iter_mut().zip(&c.stats) {
-            p.stats = *kept;
-        }
-    }
-
-    /// Starts learning the errors `changed` again: their covariance back to the prior, the
-    /// residual check of their pairs (polluted by the step) back to its start and the long
-    /// averages of the noise and the drift down to the weight of one horizon (see "Changes of the
-    /// errors" in the module doc), the detector's blocks started over; both pairs' updates then
-    /// wait for one block of residuals against the estimate held now
-    /// ([`Windowed::relearn_from_block`]: a pair updated from a single window would take that
-    /// window's sway for the change, and through the leakage of x1, x2 into the roll channels the
-    /// roll pair's update would move a forgotten x1 or x2). The other errors, and the statistics
-    /// of a pair whose channels showed nothing, keep what they learnt.
-    fn relearn(&mut self, config: &Config, changed: &[bool; 4]) {
-        // Back to before the change began to pull at the filter: through the leakage of x1, x2
-        // into the roll channels, the errors that did not change were pulled too.
-        self.restore_clean_state();
-        self.clean_state_due = false;
-        let prior = prior_sigma_rad(config, true);
-        let forget: [bool; STATES] =
-            core::array::from_fn(|i| changed.get(i).copied().unwrap_or(false));
-        self.kf.forget(&forget, &prior);
-        self.forget_roll_information(&forget);
-        let horizon = self.residual_horizon();
-        for (pair, p) in self.pairs.iter_mut().enumerate() {
-            let [a, b] = channels(pair);
-            if changed[a] || changed[b] {
-                p.stats.relearn(horizon);
-            }
-        }
-        self.held_x_rad = (*self.kf.state()).into();
-        self.changed_entries = self.window.len() as u32;
-        self.change.restart_blocks();
-        for p in &mut self.pairs {
-            p.relearning = true;
-            p.block_held = true;
-        }
-        self.refresh_report(config, 0);
-        self.refresh_report(config, 1);
-    }
-
-    /// An update of a pair while the errors are learned again. Its last block of residuals, when
-    /// the filter held through all of it, was formed against the estimate the filter went back to
-    /// and holds now, and (a change being declared only after a run longer than a passing
-    /// disturbance) from windows wholly after the change began: it is applied at once. Otherwise
-    /// the residuals against the estimate held now are summed over one more block first. Applied
-    /// as one measurement per channel, of the learned variance of a block mean over the pair's
-    /// noise scale (in the filter's units, see "Changes of the errors" in the module doc): with
-    /// the prior's covariance the filter takes the changed errors from it, as from a window at a
-    /// cold start but with the block's far smaller sway; the pair updates from windows again from
-    /// then on.
-    /// Returns whether the block was applied (the filter changed).
-    fn relearn_from_block(
-        &mut self,
-        pair: usize,
-        rows: &[[Real; STATES]; 4],
-        z: &[Real; 4],
-        entry_s: Real,
-    ) -> bool {
-        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
-        let pair = pair.min(1);
-        let held = self.held_x_rad;
-        let fit = |row: &[Real; STATES]| -> Real { (0..STATES).map(|i| row[i] * held[i]).sum() };
-        let block_entries = change::block_entries(self.window.len() as u32, entry_s);
-        let chs = channels(pair);
-        let (block, rows) = if self.pairs[pair].last_block.held {
-            let last = &mut self.pairs[pair].last_block;
-            last.held = false;
-            (last.rad, last.rows)
-        } else {
-            let pair_rows = [rows[chs[0]], rows[chs[1]]];
-            let residual = [
-                z[chs[0]] - fit(&pair_rows[0]),
-                z[chs[1]] - fit(&pair_rows[1]),
-            ];
-            let Some(block) = self
-                .change
-                .accumulate(pair, residual, (block_entries / 2).max(1))
-            else {
-                return false;
-            };
-            (block, pair_rows)
-        };
-        let floor = self.block_floor_rad2(pair, block_entries);
-        let mut applied = false;
-        let p = &mut self.pairs[pair];
-        for (k, ch) in chs.into_iter().enumerate() {
-            let target = block[k] + fit(&rows[k]);
-            applied |= self
-                .kf
-                .update(
-                    &rows[k],
-                    target,
-                    self.change.block_variance(ch, floor) / p.stats.noise_scale,
-                )
-                .is_ok();
-            p.gains[k] = rows[k][ch].abs();
-        }
-        if applied {
-            self.updates = self.updates.saturating_add(1);
-        }
-        p.relearning = false;
-        true
-    }
-
-    /// Refreshes what is reported of the errors of `pair` (after its update, or after anything
-    /// that changed the filter): [`Pair::refresh_report`] with the filter's variance of the pair's
-    /// errors and the change detector's widening. Once per update of the pair, not every step:
-    /// the other pair's report is at most one update old.
-    fn refresh_report(&mut self, config: &Config, pair: usize) {
-        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
-        let pair = pair.min(1);
-        let [a, b] = channels(pair);
-        let widening = self.change.widening_rad();
-        let scaled = [self.scaled_variance(a), self.scaled_variance(b)];
-        self.pairs[pair].refresh_report(
-            config,
-            self.window.bin(),
-            self.window.len(),
-            scaled,
-            [widening[a], widening[b]],
-        );
-    }
-
-    /// The variance of error `i`, each pair's share of the filter's covariance rescaled by that
-    /// pair's noise scale: `lambda_pitch (P_ii - C_ii) + lambda_roll C_ii`, `C = P I P` the roll
-    /// pair's share (`I` its information, [`Windowed::roll_information`]), within `[0, P_ii]`; at
-    /// least the error's own pair's scale times `P_ii`.
-    fn scaled_variance(&self, i: usize) -> Real {
-        let i = i.min(STATES - 1);
-        let p = self.kf.covariance();
-        let p_ii = p[(i, i)].larger(0.0);
-        // p_i' I p_i, p_i = P's column i, from I's upper triangle.
-        let info = &self.roll_information;
-        let mut roll_share: Real = 0.0;
-        for j in 0..STATES {
-            let pj = p[(j, i)];
-            let mut v: Real = 0.5 * info[j][j] * pj;
-            for k in j + 1..STATES {
-                v += info[j][k] * p[(k, i)];
-            }
-            roll_share += 2.0 * pj * v;
-        }
-        let roll_share = roll_share.larger(0.0).smaller(p_ii);
-        let (pitch, roll) = (self.pairs[0].noise_scale(), self.pairs[1].noise_scale());
-        // Never below the error's own pair's scale times its variance: a roll pair quieter than
-        // the pitch pair does not make x1, x2 surer than their own channels' noise says.
-        let own = if i < 2 { pitch } else { roll };
-        (pitch * (p_ii - roll_share) + roll * roll_share).larger(own * p_ii)
-    }
-
-    /// Adds a roll measurement's information `h h' / r` to [`Windowed::roll_information`].
-    fn add_roll_information(&mut self, h: &[Real; STATES], r: Real) {
-        if !(r > 0.0) {
-            return;
-        }
-        let inv_r = 1.0 / r;
-        // The upper triangle only: what reads it reads that (the lower one stays as it was).
-        for j in 0..STATES {
-            let hj = h[j] * inv_r;
-            for k in j..STATES {
-                self.roll_information[j][k] += hj * h[k];
-            }
-        }
-    }
-
-    /// Forgets the roll pair's information on the states `which` (as the filter forgets them).
-    fn forget_roll_information(&mut self, which: &[bool; STATES]) {
-        for j in 0..STATES {
-            if which[j] {
-                for k in 0..STATES {
-                    self.roll_information[j][k] = 0.0;
-                    self.roll_information[k][j] = 0.0;
-                }
-            }
-        }
     }
 
     /// The rotation pattern was forgotten (a new one is being learned): the window lets go of the
@@ -1299,25 +562,5 @@ impl<const CAP: usize> Windowed<CAP> {
     #[inline]
     pub fn estimate(&self, _config: &Config) -> Option<MethodEstimate> {
         self.report
-    }
-
-    /// The filter's estimate now (see [`Windowed::estimate`]).
-    fn live_estimate(&self) -> Option<MethodEstimate> {
-        if self.updates == 0 {
-            return None;
-        }
-        // Flag only with a full horizon of residuals: the first windows carry sway residuals of
-        // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
-        // stays: it is conservative).
-        let horizon = self.residual_horizon();
-        let mismatch = self.pairs.iter().any(|p| p.mismatch.iter().any(|m| *m))
-            && self.pairs.iter().all(|p| p.stats.count >= horizon);
-        let x = self.kf.state();
-        Some(MethodEstimate {
-            x_rad: [x[0], x[1], x[2], x[3]],
-            sigma_rad: self.reported_sigma_rad(),
-            mismatch,
-            relearning: self.changed_entries > 0 || self.pairs.iter().any(|p| p.relearning),
-        })
     }
 }

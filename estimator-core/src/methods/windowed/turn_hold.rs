@@ -40,6 +40,9 @@
 //! updates, the roll channels' spreads holding meanwhile), nor is a hold (the window restarts).
 //! The measured effect on heel in turns is in docs/sea-day-study.md.
 
+use super::pair::channels;
+use super::Windowed;
+use crate::correlation::{Measurement, HEEL_STATE, ROLL_PAIR, STATES};
 use crate::math::Compare;
 use crate::Real;
 
@@ -140,6 +143,37 @@ impl TurnHold {
     pub fn end(&mut self) {
         self.until = None;
         self.run = 0;
+    }
+}
+
+impl<const CAP: usize> Windowed<CAP> {
+    /// The turn hold's verdict on the roll pair's update of window `m` (see the module doc); none
+    /// while the heading does not change. `spread_known`: the roll channels' spreads are learned
+    /// (as for the innovation gate).
+    pub(super) fn test_turn(&mut self, m: &Measurement, spread_known: bool) -> TurnVerdict {
+        if !(m.turn_row[HEEL_STATE] > 0.0) {
+            return TurnVerdict::default();
+        }
+        let x = self.kf.state().as_slice();
+        let innovation =
+            |row: &[Real; STATES], z: Real| row.iter().zip(x).fold(z, |e, (h, xj)| e - h * xj);
+        let mut roll_beyond = false;
+        if spread_known {
+            let [a, b] = channels(ROLL_PAIR);
+            for (k, ch) in [a, b].into_iter().enumerate() {
+                let e = innovation(&m.rows[ch], m.z[ch]);
+                let bound =
+                    ROLL_HOLD_SIGMAS * ROLL_HOLD_SIGMAS * self.pairs[ROLL_PAIR].spread_rad2[k];
+                roll_beyond |= e * e > bound;
+            }
+        }
+        let turn = innovation(&m.turn_row, m.turn_z);
+        self.turn_hold.test(
+            turn,
+            roll_beyond,
+            self.window.newest_number(),
+            self.window.len() as u32,
+        )
     }
 }
 
