@@ -1,185 +1,35 @@
-//! Our method (the default): one 4-state filter fed by all four correlation channels, each averaged
-//! over a moving window of exactly one rotation period.
+//! Our method (the default): one filter of x1..x4 and the heel in turns, fed by the four
+//! correlation channels of [`crate::correlation`], each averaged over a moving window of exactly
+//! one rotation period ([`crate::moving_average::CorrelationWindow`]).
 //!
-//! # Measurement
-//! Every sample, for the window of the last `W` samples (W = one period of the rotation pattern),
-//! the centred correlation of each channel of [`crate::correlation`] is
+//! What holds, and why (the derivation, with the paper's equations, is in docs/method.md, "The
+//! windowed method in full"; what the 1-sigma covers is measured in docs/uncertainty.md):
 //!
-//! ```text
-//! z = H x + v,    H = the same correlation and averaging applied to eq (2)'s rows
-//! ```
+//! - **Measurement** `z = H x + v`, `H` eq (2)'s rows pushed through the same correlation and
+//!   averaging over the angles observed in the window: eq (11) applied to the product, the
+//!   increment of the correlation integral over one whole period. A constant attitude error
+//!   cancels, there is no `a0 / (w_r t)` transient, and the leakage of x1, x2 into the roll
+//!   channels is modelled exactly instead of eq (12)'s `1/t` term.
+//! - **One update a step** (`windowed/update.rs`): the pitch pair (x1, x2) and the roll pair (x3,
+//!   x4) take every other window in turn, each with half the per-product variance `r`. `r` is the
+//!   per-product variance, not the window mean's: consecutive windows share all but one entry, so
+//!   the sequence carries no more information than the raw products.
+//! - **Consistency** ([`pair`]): each channel's post-fit residual is averaged over
+//!   [`RESIDUAL_PERIODS`] periods; what is beyond its noise widens the 1-sigma and reports
+//!   `model_mismatch`. From those residual means each pair learns its noise scale (which rescales
+//!   its share of the covariance) and its drift share (how much of the configured random walk its
+//!   errors take), see [`LONG_HORIZONS`], [`BIAS_SHARE_NOISE`], [`BIAS_SHARE_DRIFT`].
+//! - **Changes of the errors** ([`change`], `windowed/relearn.rs`): residual blocks are tested
+//!   for a step; the filter holds while one builds up and learns the changed errors again once it
+//!   is declared, from the clean copy ([`CleanState`]) kept before the change began to pull.
+//! - **The first windows** ([`start`]) enter with the weights of smooth bumps; **turns** are
+//!   learned ([`heel`]) or held ([`turn_hold`]); a channel whose innovation is beyond
+//!   [`GATE_SIGMAS`] of its learned spread is left out.
+//! - **Report** (`windowed/report.rs`): the estimate and each error's 1-sigma, refreshed once per
+//!   update of a pair; [`Windowed::estimate`] returns it without computing.
 //!
-//! with `H` from the angles observed in that window ([`crate::correlation::CorrelationSums::measurement`]),
-//! so any rotation pattern works and a constant attitude offset cancels.
-//!
-//! This is eq (11) applied to the product itself rather than to the running correlation of eq (8):
-//! `mean over [t-W, t]` = `(I(t) - I(t-W)) / W`, the increment of the correlation integral over one
-//! whole rotation period. A constant attitude error times `sin rho` sums to exactly zero over a whole
-//! period, so there is no `a0 / (w_r t)` start-up transient, and the x1, x2 leakage into the roll
-//! channels is a slow term with known coefficients instead of the `1/t` term of eq (12). Those
-//! coefficients are averaged over the same window as the products, so the row belongs to the same
-//! moment as the measurement: the middle of the window, `t - (W-1)/2` samples.
-//!
-//! # Pitch and roll in turn
-//! The two pitch channels (x1, x2) and the two roll channels (x3, x4 and the leakage of x1, x2)
-//! update the filter in turn, each pair every other window, each update with half the per-product
-//! variance. By the argument above the information is the same (a pair's window moved by two
-//! samples since its last update), and a step costs two scalar Kalman updates instead of four:
-//! what keeps the Cortex-M4F's step within its budget.
-//!
-//! # Filled samples and bins
-//! A window with filled samples ([`crate::gap_fill`]) carries their interpolation error: the
-//! per-product variance `r` is raised by the window's mean fill variance times 1/2 (the mean square
-//! of a reference), with the fill variance measured from the data. With bins of `b` samples
-//! ([`crate::moving_average::CorrelationWindow`]), an entry is the mean of `b` samples: `r / b`, and
-//! a filled sample's error counts `1 / b^2`. At most one update is made per step: after a filled
-//! gap several entries can come at once, and the filter takes the newest window only (its
-//! information is then slightly understated, never overstated).
-//!
-//! # Noise of an overlapping-window measurement
-//! Consecutive windows share W-1 of their W samples, so consecutive measurements are almost the same
-//! measurement. For a white per-sample product noise of variance `q`, the window mean has variance
-//! `q/W`, but its autocorrelation is a triangle W samples long, and the information the whole
-//! sequence carries about a constant equals that of the raw products: `N` steps give variance `q/N`,
-//! not `q/(W N)`. Feeding every window to the filter with `r = q` (the per-product variance) makes
-//! the filter's covariance match that. Using `r = q/W` would make the 1-sigma ~22 times too small.
-//!
-//! The sway does not average like white noise: its product with `sin rho` has no power near zero
-//! frequency, and the sum of the sliding windows weights the raw products by a trapezoid whose
-//! ramps are W samples long, so the sway residual falls like `A / (w_y^2 W N)` (about 20/N arcsec
-//! for 3 deg at 6 s): negligible after the first few hundred windows.
-//!
-//! # Consistency: saying so when the model does not hold
-//! The covariance only knows the noise it was told about. Effects eq (2) does not contain (errors
-//! that drift, coloured attitude noise) bias the measurements without touching `P`, and the 1-sigma
-//! would then understate the error many times over. So each channel's post-fit residual
-//! `z - H x` is averaged exponentially over `RESIDUAL_PERIODS` rotation periods. Under the model
-//! the average is zero-mean noise of 1-sigma `s_e = sigma_m / sqrt(n)` (n the samples averaged, at
-//! least one window, at most the averaging time). The part of |mean| above `2 s_e`, divided by the
-//! channel's gain (1/2 for x1, x2; cos L / 2 for x3, x4), is added in quadrature to the reported
-//! 1-sigma, and a mean beyond `4 s_e`, once a full horizon of residuals has been averaged, is
-//! reported as [`crate::Status::ModelMismatch`]. With a
-//! consistent model this changes nothing (tested on the paper scenario); with errors drifting at
-//! 20 arcsec/day it raises the 1-sigma to the size of the lag (tested in `host-sim`).
-//!
-//! # Learning the noise and the drift
-//! Two numbers of the model are not known in advance: how noisy the products really are
-//! (`Config::measurement_sigma_rad` is a default: 10 arcsec of white attitude noise, where a
-//! quiet RINS has 5 and coloured noise acts like hundreds), and whether the errors drift
-//! (`Config::drift_rad_per_sqrt_s` is a default random walk that caps the filter's memory at
-//! about `sqrt(r / q)`, some 5000 s, even when the errors are constant). Both are learned from the
-//! residual means the check above already forms, by covariance matching on that sequence: once a
-//! full horizon of residuals has been averaged, each update of a pair feeds two long averages
-//! per channel, of time constant [`LONG_HORIZONS`] horizons (a plain running mean until then):
-//!
-//! ```text
-//! m_long  = E[m]                  the persistent part of the residual mean m
-//! power   = E[m^2 / s_e^2]        s_e^2 = r / n, the model's variance of m (as in the check)
-//! ```
-//!
-//! - **Noise scale** `lambda` = the sum of the pair's two powers (the mean power times 2: an
-//!   exponential mean of time constant `n` samples has half the variance `r / n` of an `n`-sample
-//!   boxcar, so a power of 1/2 per channel is what the model predicts). The reported variance is
-//!   `lambda P_ii + model_i^2`: `P` is the covariance for the configured noise, `lambda` rescales
-//!   it to the noise measured (with the sea scenario's 5 arcsec, `lambda` ~ 1/4; with 20 arcsec of
-//!   coloured noise, tens). At least [`MIN_NOISE_SCALE`]. The filter itself keeps the configured
-//!   `r`: a drift's lag also raises the power, and a larger `r` would lengthen the memory and
-//!   the lag with it, a runaway.
-//! - **Drift share**: the share of the power that is persistent, `sum m_long^2 / s_e^2` over the
-//!   power. Noise, white or coloured, averages out of `m_long` (its share is about 1 /
-//!   [`LONG_HORIZONS`] times the horizons `m` stays correlated); a drift's lag does not (share
-//!   near 1). The random walk applied to the pair's errors is the configured `q` times
-//!   `clamp((share - BIAS_SHARE_NOISE) / (BIAS_SHARE_DRIFT - BIAS_SHARE_NOISE), 0, 1)`: zero for
-//!   noise (constant errors: the memory grows without bound and the error keeps falling like
-//!   `1 / sqrt(t)`, also under coloured noise, where a short memory loses to the traditional
-//!   baseline), the full configured walk for a drift (measured: 20 arcsec/day followed within
-//!   2 arcsec, docs/uncertainty.md).
-//!
-//! - **Lag**: where a drift is seen (share above zero), the persistent residual mean over the
-//!   channel's gain, `|m_long| / g`, is the error the filter's lag leaves; the reported 1-sigma
-//!   takes the larger of it and the check's widening in quadrature with `lambda P_ii` (measured:
-//!   71 % of the errors within 2 sigma at 5000 s under a 20 arcsec/day drift without it, 85 % with
-//!   it; clean coverage unchanged at 95-97.5 %).
-//!
-//! Why this and not a bank of filters with several random-walk levels: a bank multiplies the
-//! Kalman updates, the bulk of the step, by its size, and the step on the Cortex-M4F has little
-//! room under its budget. This costs per update a dozen multiply-adds on residual
-//! means already formed and four divisions (the running-mean weight, the configured `r` per bin,
-//! `n / r` and the share), plus a division per error in every estimate (the lag); what each added to the step's maximum
-//! on the Cortex-M4F is in docs/uncertainty.md (`host-sim/tests/qemu/qemu_budgets.rs`). The reported 1-sigma (the lag included) is now computed
-//! once per update of a pair, for that pair's two errors, not every step for all four (the other
-//! pair's is at most one update old; four values more in the checkpoint): what made room for the
-//! change detector below. Before the first full horizon both stay at their defaults (scale 1,
-//! full walk), so the start is as before.
-//!
-//! # Changes of the errors
-//! A re-installation or a shock moves the errors by a step. The filter, whose memory has grown
-//! with the log, would follow it only as fast as the random walk lets it (hours to days); the
-//! residual check would say `model_mismatch` and widen the 1-sigma by a part of the step. Instead
-//! ([`change`] has the derivation and the thresholds):
-//!
-//! 1. **Detection**: the pair's residuals, averaged again over blocks of half a period (a quarter
-//!    or less at periods over 480 s, at most 240 s), are tested
-//!    for a shift of at least half the smallest step (`Config::change_detection_step_rad`, 20
-//!    arcsec; 0 turns all of this off) by a log-likelihood ratio summed over a run of blocks, with
-//!    the run's long-run variance; a change is declared when the sum reaches 20 and the run has
-//!    lasted longer than a passing disturbance can make it (2.5 periods at 480 s).
-//! 2. **While a change builds up**: the 1-sigma of the error whose channel shows it is widened by
-//!    the block's shift over the gain; once a block is in a run and significant (beyond 3 of its
-//!    standard deviations), the filter holds its updates and goes back to the state it had at the
-//!    end of the last block that did not hold ([`CleanState`]: the filter and the residual
-//!    statistics), so that neither a change nor a passing disturbance (a turn's heel) pulls at it.
-//!    A hold never outlasts the persistence: a longer run is a change, or an inconsistency the
-//!    filter must work through. What the filter holds out stays out of the residual averages.
-//!    Before the blocks are tested (their first 8 periods), a block 10 sigma out holds the filter
-//!    alike ([`change`], "Before the first test": a turn's heel).
-//! 3. **Learning again**: when a change is declared, the filter goes back to the clean state, the
-//!    errors that changed get the prior's covariance ([`ConstantStateKalman::forget`]) and their
-//!    pairs' residual check starts afresh; x3 and x4 are learned again with any change of x1
-//!    or x2 (through the leakage, a change of x1 or x2 can cancel one of x3 or x4 on their
-//!    channels). Each pair then applies one block of residuals against the held estimate as a
-//!    single measurement per channel of the learned block variance: the last block, when the
-//!    filter held through it (a change is declared after a run longer than a passing disturbance,
-//!    so that block saw only windows after the change began), or else the next one. A window at
-//!    a cold start carries tens of arcsec of sway; a block, a fraction of an arcsec. The status is
-//!    [`crate::Status::ErrorsChanged`] for one period from the declaration.
-//!
-//!    - **The block's weight.** `P` is the covariance for the configured noise; the errors' is
-//!      `lambda P` (the noise scale above). A block mean is measured with its actual variance
-//!      `s^2`, so in the filter's units it enters with `s^2 / lambda`: the gain is then
-//!      `lambda P h / (lambda h' P h + s^2)`, what the errors' covariance and the block's call for.
-//!      With `s^2` alone, a pair that did not change (`lambda` about 1/4 on the sea scenario)
-//!      took its block four times too strongly: measured, one log's x2 (unchanged, 1-sigma
-//!      0.05 arcsec) moved 0.027 arcsec with the block of a 150 arcsec step of x3, from 0.12 to
-//!      0.15 off, and stayed beyond 3 sigma for the rest of the log. A pair that changed has
-//!      `lambda` = 1 (below).
-//!    - **The noise learned again.** The noise of the data did not change with the errors. The
-//!      check's residual average starts afresh (its mean was the step's); the noise scale is 1 and
-//!      the random walk the configured one until a full horizon of residuals is averaged again,
-//!      as at a cold start, since the residuals of a transition are more than noise. Then the long
-//!      averages (the noise scale, the drift share) go on from what they learned before the
-//!      change, with the weight of one horizon: what they learned before is the prior of what
-//!      they learn after. Started afresh, they learned the noise from the first few residual
-//!      means, strongly correlated: measured, after a 150 arcsec step of x1 at a 720 s period one
-//!      log's 1-sigma of x1 fell to 0.06 arcsec (0.14 before the step) while x1 was 0.18 to
-//!      0.24 off; and on a four-position 360 s rotation x3 was 0.92 off with a 1-sigma of 0.21.
-//!
-//! # The first windows
-//! Until the filter has taken a quarter of a period of windows, the windows enter it with the
-//! weights of smooth bumps and the estimate is reported at each bump's end ([`start`] has the
-//! derivation): the first estimate, due within 1.25 periods, is then not the sway that a few tens
-//! of equally weighted windows let through.
-//!
-//! # Innovation gate
-//! With change detection on, a channel's measurement is left out when its innovation is beyond
-//! [`GATE_SIGMAS`] = 8 standard deviations of `h' P h + s`, `s` the learned mean square of that
-//! channel's residuals (a running mean over [`SPREAD_HORIZONS`] horizons, learned from the first
-//! update, each residual clipped at [`SPREAD_CLIP_SIGMAS`]; one held out enters with the weight of
-//! a full average, so a disturbance cannot widen the gate that holds it out). It protects the
-//! first hours, before the detector is armed, from a disturbance tens of times the usual residual
-//! (a turn of several degrees of heel). At 5 sigma it also held out the tails of the sway's
-//! residuals that a cold start needs (p95 at 5,000 s 0.52 instead of 0.40 arcsec on the sea
-//! scenario); at 8 it holds out none of them.
+//! The state's layout is the checkpoint's (`windowed/checkpoint.rs`): a field added here is a field
+//! of the image.
 
 pub mod change;
 pub(crate) mod checkpoint;
@@ -223,7 +73,7 @@ fn prior_sigma_rad(config: &Config, turning: bool) -> [Real; STATES] {
 pub const RESIDUAL_PERIODS: usize = 4;
 
 /// Time constant of the long averages of the residual mean (its mean and its power), in multiples
-/// of the residual average's horizon (see "Learning the noise and the drift" in the module doc).
+/// of the residual average's horizon (see docs/method.md, "Learning the noise and the drift").
 pub const LONG_HORIZONS: u32 = 32;
 
 /// Bias share at and below which the residual mean is taken as noise (no drift: the random walk
@@ -235,7 +85,7 @@ pub const BIAS_SHARE_NOISE: Real = 0.35;
 pub const BIAS_SHARE_DRIFT: Real = 0.7;
 
 /// Innovation gate, in standard deviations of a window's residual (see "Innovation gate" in the
-/// module doc).
+/// docs/method.md).
 pub const GATE_SIGMAS: Real = 8.0;
 
 /// Time constant of the learned spread of the residuals, in horizons of the residual average.
@@ -268,7 +118,7 @@ pub struct Windowed<const CAP: usize> {
     /// The information the roll pair's measurements gave the filter, `sum h h' / r` (symmetric;
     /// its upper triangle `[j][k]`, `j <= k`, is kept, the lower one is not used): the roll
     /// pair's share of the filter's covariance is about `P I P`, which its noise scale rescales
-    /// (see "The 1-sigma" in the module doc).
+    /// (`windowed/report.rs`).
     roll_information: [[Real; STATES]; STATES],
     /// The detector of changes of the errors ([`change`]).
     change: ChangeDetector,

@@ -4,7 +4,7 @@
 //! A ship heels outward in a turn, in proportion to its rate of turn; the roll channels see that
 //! heel where the rate correlates with the rotation, and their rows carry it in the fifth column
 //! ([`crate::correlation::HEEL_STATE`]; the derivation is in the module doc of
-//! [`crate::correlation`], "Heel in turns", and in docs/method.md, "Heel in turns").
+//! [`crate::correlation`], "Heel in turns", and in docs/method.md, "Our default", item 3).
 //!
 //! - Until the ship turns (its low-passed rate beyond [`TURN_EXCITATION`]) the state is held at
 //!   [`HEEL_HELD_SIGMA_RAD`]: a rate that is only the rest of eq (2)'s heading oscillation is

@@ -2,8 +2,8 @@
 //! over correlated residuals needs.
 //!
 //! The filter averages the windows' measurements as if their noise were white: after `N` entries
-//! its variance of an error is about `q / N` for a per-product variance `q` (module doc of
-//! [`super`], "Noise of an overlapping-window measurement"). What the residuals hold beyond white
+//! its variance of an error is about `q / N` for a per-product variance `q` (docs/method.md,
+//! "Noise of an overlapping-window measurement"). What the residuals hold beyond white
 //! noise (the slow heel and trim that the correlation turns into a ripple near the rotation
 //! frequency, the errors of filled and missing samples, the sway's leak through the windows, a
 //! disturbance that lasts) averages down otherwise, and the variance of the filter's estimate is

@@ -18,7 +18,7 @@
 //!   then go on from what they learned before, with the weight of one horizon (the data's noise
 //!   did not change with the errors).
 //!
-//! The derivation is in docs/method.md, "Changes of the errors".
+//! The derivation is in docs/method.md, "Changes of the errors: what the filter does".
 
 use super::change::{self, persistence_blocks, Alarm, BlockContext};
 use super::pair::channels;
@@ -29,7 +29,7 @@ use crate::Real;
 
 impl<const CAP: usize> Windowed<CAP> {
     /// Passes the pair's residuals to the change detector; when it declares a change, the errors
-    /// that changed are learned again (see "Changes of the errors" in the module doc). Returns the
+    /// that changed are learned again (see the module doc). Returns the
     /// change declared, if any, and whether a block ended (and was tested).
     // Called once, on the step's path.
     #[inline(always)]
@@ -131,7 +131,7 @@ impl<const CAP: usize> Windowed<CAP> {
     /// Starts learning the errors `changed` again: their covariance back to the prior, the
     /// residual check of their pairs (polluted by the step) back to its start and the long
     /// averages of the noise and the drift down to the weight of one horizon (see "Changes of the
-    /// errors" in the module doc), the detector's blocks started over; both pairs' updates then
+    /// errors: what the filter does" in docs/method.md), the detector's blocks started over; both pairs' updates then
     /// wait for one block of residuals against the estimate held now
     /// ([`Windowed::relearn_from_block`]: a pair updated from a single window would take that
     /// window's sway for the change, and through the leakage of x1, x2 into the roll channels the
@@ -171,7 +171,7 @@ impl<const CAP: usize> Windowed<CAP> {
     /// disturbance) from windows wholly after the change began: it is applied at once. Otherwise
     /// the residuals against the estimate held now are summed over one more block first. Applied
     /// as one measurement per channel, of the learned variance of a block mean over the pair's
-    /// noise scale (in the filter's units, see "Changes of the errors" in the module doc): with
+    /// noise scale (in the filter's units, see the module doc): with
     /// the prior's covariance the filter takes the changed errors from it, as from a window at a
     /// cold start but with the block's far smaller sway; the pair updates from windows again from
     /// then on.

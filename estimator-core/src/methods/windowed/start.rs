@@ -8,7 +8,7 @@
 //! the run of windows: `g = rect_W * rect_N`, a trapezoid with ramps `N` long. A sway component
 //! at angular frequency `w` (periods of 6-14 s, degrees of amplitude `A`) leaks through the
 //! trapezoid's two kinks: `|G(w)| / G(0) <= 4 / (w^2 W N)` for `w N >> 1`. Long after the start
-//! that is nothing (module doc of [`super`]: about `20 / N` arcsec), but the first estimate is due
+//! that is nothing (docs/method.md, "Noise of an overlapping-window measurement"), but the first estimate is due
 //! within 1.25 periods of the start, and a one-way rotation makes its period known after about one
 //! period and the filler's delay (31 rows): at a 360 s period `N` is then about 30 windows, and
 //! 5 deg of sway at 14 s leaks `4 A / (w^2 W N)` = 33 arcsec into a channel (measured: 10 to 56

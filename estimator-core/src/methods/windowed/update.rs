@@ -16,7 +16,7 @@
 //!    and drift ([`super::pair`]), the long-run batches ([`super::long_run`]) and the change
 //!    detector; what the filter held out stays out of all but the detector.
 //!
-//! The derivation of each step is in the module doc of [`super`] and in docs/method.md.
+//! The derivation of each step is in docs/method.md, "The windowed method in full".
 
 use super::change::Alarm;
 use super::heel::{heel_learned, HEEL_LEARNED_VARIANCE_RAD2};
@@ -134,7 +134,7 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// The prediction over the entries since the last update (`bin` samples of `interval` s
     /// each): each pair's errors take the configured random walk times the pair's drift share
-    /// (see "Learning the noise and the drift" in the module doc); the heel state takes none.
+    /// (see "Learning the noise and the drift" in docs/method.md); the heel state takes none.
     // Called once, on the step's path.
     #[inline(always)]
     fn predict(&mut self, config: &Config, interval: Real, bin: Real) {
@@ -153,7 +153,7 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// Each pair's per-product variance for the window now, rad^2: the configured noise over the
     /// `bin` samples of an entry, raised by the share of weight the window lacks and by its
-    /// filled samples' interpolation error (see "Filled samples and bins" in the module doc).
+    /// filled samples' interpolation error (see "Filled samples and bins" in docs/method.md).
     // Called once, on the step's path.
     #[inline(always)]
     fn weigh_product_noise(&mut self, config: &Config, bin: Real, fill_variance: FillVariance) {
