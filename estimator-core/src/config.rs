@@ -77,7 +77,7 @@ pub struct Config {
     /// following them. Chosen by measurement (docs/results.md, "Model mismatch"): it costs about
     /// 0.1 arcsec of steady-state noise and cuts the lag behind a 20 arcsec/day drift from 8 to 2 arcsec.
     /// The windowed method applies it in full only while its residuals show a persistent bias, and
-    /// none while they are noise ([`crate::methods::windowed`], "Learning the noise and the drift").
+    /// none while they are noise (docs/method.md, "Learning the noise and the drift").
     pub drift_rad_per_sqrt_s: Real,
     /// 1-sigma of raw roll or pitch about eq (2) for the traditional baseline: the sway. Default
     /// 3 deg / sqrt(2), the RMS of the paper's 3 deg roll sway.
@@ -100,8 +100,9 @@ pub struct Config {
     /// The smallest step of an installation error the change detector is sized for (windowed
     /// method): a step of the errors (a re-installation, a shock) at least this large is detected
     /// from the residuals, reported as [`crate::Status::ErrorsChanged`], and the errors that
-    /// changed are learned again from the next window on (see [`crate::methods::windowed`],
-    /// "Changes of the errors"). Default 20 arcsec; 0 turns detection off.
+    /// changed are learned again from the next window on (see
+    /// [`crate::methods::windowed::change`] and docs/method.md, "Changes of the errors: what the
+    /// filter does"). Default 20 arcsec; 0 turns detection off.
     pub change_detection_step_rad: Real,
     /// Known values of the installation errors (a dockside or factory calibration, or what an
     /// earlier run learned): the filter starts from them, and they are reported (and compensate

@@ -20,8 +20,8 @@
 //! # Longer runs: left out, with a taper
 //! A run of lost rows longer than `max_filled_gap_samples` (2 by default) is not filled: three or
 //! more lost in a row leave a polynomial 10 % or more of the sway off, and a recorder that loses
-//! them at a regular cadence makes that error the same every time (measured: 3 rows lost every
-//! 60 s left 3.9 arcsec on a sea log, with a 1-sigma of 0.89). Nor is it just left out of the
+//! them at a regular cadence makes that error the same every time, so that it does not average
+//! out (docs/real-logs.md). Nor is it just left out of the
 //! sums: a hole in the sum takes out a piece of the sway that no longer cancels (a 10-row hole is
 //! about one sway cycle: tens of arcsec, which averages down slowly, and not at all when the holes
 //! come at a cadence). Instead the rows around the hole are weighted down smoothly: each sample's
@@ -35,12 +35,9 @@
 //! enter the measurement and its rows alike ([`crate::correlation::CorrelationSums`]), so nothing
 //! is biased; what it costs is information, about `2 TAPER_HALF` samples a hole.
 //!
-//! Measured on 45,000 s sea logs (one-channel least squares over the whole log, the leakage of the
-//! sway alone; the windowed estimator sees the same sums): 10 rows lost every 120 s left 1.2-77
-//! arcsec left out plain, 0.01-0.2 with the taper; 4 rows every 60 s 0.2-27, with the taper
-//! 0.04-0.2; 3 rows every 60 s filled by the polynomial 0.5-7.8, tapered 0.02-0.2 (a short study
-//! in Python of the sway spectrum of `host-sim`'s sea scenario, seeds 0-2; the estimator's own
-//! figures are in docs/real-logs.md).
+//! The taper leaves in the sums only the sway the Hann window's side lobes pass, where rows left
+//! out plain, or three or more filled by the polynomial, leave a piece of a sway cycle each; the
+//! estimator's figures on logs with lost rows are in docs/real-logs.md and docs/gap-study.md.
 //!
 //! A run of an eighth of a rotation period or more (or a clock step) restarts the window instead
 //! (the estimator decides, [`crate::estimator`]).

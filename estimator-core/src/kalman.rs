@@ -15,11 +15,12 @@
 //! `D = A P = P - K b'` (with `b = P h`), `D h = b - K (h' b)`, then
 //! `A P A' + r K K' = D - (D h) K' + r K K'`, term by term
 //! `P_ij - K_i b_j - (b_i - K_i h'b) K_j + r K_i K_j`: `O(N^2)` instead of the `O(N^3)` of dense
-//! products, in place, for any gain (the Schmidt "consider" update zeroes some of it). Together with the Newton square root of [`crate::math`], this
-//! is what brought the step on the Cortex-M4F within its instruction budget (measured by
-//! `host-sim/tests/qemu/qemu_budgets.rs`; the figures in docs/firmware.md). Only the upper triangle is computed; the lower one
-//! is its mirror, so the result is symmetric by construction. A measurement whose innovation variance is not positive and
-//! finite, or whose value is not finite, is refused and leaves the filter untouched.
+//! products, in place, for any gain (the Schmidt "consider" update zeroes some of it). Together
+//! with the Newton square root of [`crate::math`], this keeps the step on the Cortex-M4F within its
+//! instruction budget (checked by `host-sim/tests/qemu/qemu_budgets.rs`; the figures in
+//! docs/firmware.md). Only the upper triangle is computed; the lower one is its mirror, so the
+//! result is symmetric by construction. A measurement whose innovation variance is not positive
+//! and finite, or whose value is not finite, is refused and leaves the filter untouched.
 //!
 //! In `f32` the ratio of prior variance to measurement variance must stay well below 1/eps
 //! (1.7e7): the estimator's is about 2e4 (1000 arcsec prior, 7 arcsec measurement).

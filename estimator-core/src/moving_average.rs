@@ -147,11 +147,11 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 ///
 /// # One period of time, not of entries
 /// Each entry carries its number on the sample grid (the grid index, or the bin's number with
-/// bins), and the window holds the entries of the last `len` numbers: rows lost in a run too
-/// long to fill ([`crate::gap_fill`]) are simply absent, and the measurement is built from the
-/// entries that are there (`z = row . x` holds for any subset, see [`crate::correlation`]). An
-/// entry near such a run comes with a weight below [`crate::correlation::FULL_WEIGHT`] (the taper that keeps the
-/// sway out of the sums, [`crate::gap_fill`]), and the sums are weighted.
+/// bins), and the window holds the entries of the last `len` numbers: rows lost in a run too long
+/// to fill ([`crate::gap_fill`]) are simply absent, and the measurement is built from the entries
+/// that are there (`z = row . x` holds for any subset, see [`crate::correlation`]). An entry near
+/// such a run comes with a weight below [`crate::correlation::FULL_WEIGHT`] (the taper that keeps
+/// the sway out of the sums, [`crate::gap_fill`]), and the sums are weighted.
 ///
 /// # Bounded work a push
 /// After a run of lost rows the next entry's number jumps, and the entries of as many numbers
@@ -414,9 +414,10 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         self.ring.iter().copied()
     }
 
-    /// Adds one sample with its low-passed references and its weight (0 to [`crate::correlation::FULL_WEIGHT`]):
-    /// whether it completed an entry (every sample, without bins) and how many old entries went.
-    /// Samples come in grid order; lost ones are simply not pushed.
+    /// Adds one sample with its low-passed references and its weight (0 to
+    /// [`crate::correlation::FULL_WEIGHT`]): whether it completed an entry (every sample, without
+    /// bins) and how many old entries went. Samples come in grid order; lost ones are simply not
+    /// pushed.
     pub fn push(
         &mut self,
         s: &GridSample,

@@ -16,12 +16,12 @@ use crate::Real;
 
 impl<const CAP: usize> Estimator<CAP> {
     /// The attitude of `sample` with eq (2)'s oscillation for the current estimate removed, without
-    /// stepping the estimator: what [`Estimator::step`] returns as [`crate::Output::corrected`] for the
-    /// same sample and estimate, bit for bit, at the cost of eq (2) alone (the sines and cosines
-    /// of rho, rho - s and L and twelve products). For a navigation computer whose attitude comes
-    /// faster than the estimator's grid: every attitude sample is compensated with the estimate of
-    /// the last step, and only the grid's samples are stepped. The sample's time is not used (its
-    /// fields are checked as a step checks them).
+    /// stepping the estimator: what [`Estimator::step`] returns as [`crate::Output::corrected`] for
+    /// the same sample and estimate, bit for bit, at the cost of eq (2) alone (the sines and
+    /// cosines of rho, rho - s and L and twelve products). For a navigation computer whose attitude
+    /// comes faster than the estimator's grid: every attitude sample is compensated with the
+    /// estimate of the last step, and only the grid's samples are stepped. The sample's time is not
+    /// used (its fields are checked as a step checks them).
     ///
     /// Returns [`CompensateError::NoEstimate`] before the filter's first measurement and
     /// [`CompensateError::Rejected`] for a sample a step would refuse on its fields; the estimator
@@ -41,9 +41,9 @@ impl<const CAP: usize> Estimator<CAP> {
         Ok(corrected(&angles, &sample.attitude, &estimate.x_rad))
     }
 
-    /// `sample` with its rotation angle carried forward over [`crate::Config::angle_latency_s`] at the
-    /// rate of the last step on the grid (`rho + rate S`, wrapped to [-pi, pi)): the angle at the
-    /// row's time, when the attitude was taken. The rate is the change of the angle over the
+    /// `sample` with its rotation angle carried forward over [`crate::Config::angle_latency_s`] at
+    /// the rate of the last step on the grid (`rho + rate S`, wrapped to [-pi, pi)): the angle at
+    /// the row's time, when the attitude was taken. The rate is the change of the angle over the
     /// last one or two grid intervals (the grid's interval, not the stamps: jittered stamps would
     /// make it jitter); across a longer gap or a clock step the last rate is kept. A latency of 0
     /// returns the sample as it is.

@@ -108,15 +108,15 @@ impl<const CAP: usize> Estimator<CAP> {
     ///
     /// # Bounded work a step
     /// Normally one sample comes out of the filler a step and the window takes it, removing the
-    /// entry that leaves it; the filter then updates. A run of lost rows left out makes the
-    /// samples before it ready at once, but needs no catching up: the window takes one a step, and
-    /// steps over the run at once when it reaches it. A filled row, though, is a sample more for
-    /// the window than the log gave a step for: the filler's `backlog`, made up by a second sample
-    /// in a later step. And the window must drop the entries of a run's grid numbers a period
-    /// later, a few a push. A step takes a second sample only while samples are waiting and when
-    /// the first was not filled (a fill is the costliest sample; the second is never one), and does not update
-    /// the filter when it took two, when it filled one, or when the window removed more than one
-    /// entry (its work was then a second sample's); the window takes no measurement while it
+    /// entry that leaves it; the filter then updates. A run of lost rows left out makes the samples
+    /// before it ready at once, but needs no catching up: the window takes one a step, and steps
+    /// over the run at once when it reaches it. A filled row, though, is a sample more for the
+    /// window than the log gave a step for: the filler's `backlog`, made up by a second sample in a
+    /// later step. And the window must drop the entries of a run's grid numbers a period later, a
+    /// few a push. A step takes a second sample only while samples are waiting and when the first
+    /// was not filled (a fill is the costliest sample; the second is never one), and does not
+    /// update the filter when it took two, when it filled one, or when the window removed more than
+    /// one entry (its work was then a second sample's); the window takes no measurement while it
     /// holds more than one period.
     fn take(&mut self, feed: &Feed, stamp_s: f64) {
         let mut work = 0;

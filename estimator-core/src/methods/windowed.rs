@@ -57,8 +57,8 @@ use turn_hold::TurnHold;
 
 /// The prior 1-sigma of each state: the configuration's for x1..x4; for the heel in turns,
 /// [`HEEL_PRIOR_SIGMA_RAD`] once the ship has turned (`turning`), else [`HEEL_HELD_SIGMA_RAD`]:
-/// until then the heel state is held at 0 (a rate of turn that is only the rest of eq (2)'s heading oscillation is
-/// locked to the rotation, and would trade the heel for x3, x4).
+/// until then the heel state is held at 0 (a rate of turn that is only the rest of eq (2)'s heading
+/// oscillation is locked to the rotation, and would trade the heel for x3, x4).
 fn prior_sigma_rad(config: &Config, turning: bool) -> [Real; STATES] {
     let p = config.prior_sigma_rad;
     let heel = if turning {

@@ -231,7 +231,8 @@ impl ChangeDetector {
         self.holding.iter().any(|h| *h)
     }
 
-    /// The learned lag-one correlation of each channel's block means (docs/method.md, "Correlated blocks").
+    /// The learned lag-one correlation of each channel's block means (docs/method.md, "Correlated
+    /// blocks").
     pub fn block_correlation(&self) -> [Real; 4] {
         core::array::from_fn(|ch| {
             if self.mean_square_rad2[ch] > 0.0 {

@@ -33,8 +33,8 @@
 //! # What chance gives
 //! Over `n` batches the scale of white residuals is a chi-square's mean, about 1 give or take
 //! `sqrt(2 / n)`: taken as it is, the larger of it and the residual power's scale would make the
-//! 1-sigma of a clean log too large by that chance alone (measured: 94 % of the errors within
-//! 1 sigma at 5,000 s on clean sea logs, where 68 % is honest). The scale is therefore taken less
+//! 1-sigma of a clean log too large by that chance alone (docs/uncertainty.md has the coverage
+//! this gives). The scale is therefore taken less
 //! [`CHANCE_SIGMAS`] times `sqrt(2 / n)`: a scale that only chance raised above the model's
 //! leaves the 1-sigma to the residual power's, while one that a heel raises tens or thousands of
 //! times above it loses nothing that matters.

@@ -6,8 +6,8 @@
 //! [`channels`] of the four.
 //!
 //! The derivations (the residual check, the noise scale and the drift share, the report, the
-//! learned spread) are in docs/method.md, "The windowed method in full"; this module holds their state and the
-//! arithmetic that updates it, one pair at a time.
+//! learned spread) are in docs/method.md, "The windowed method in full"; this module holds their
+//! state and the arithmetic that updates it, one pair at a time.
 
 use crate::config::Config;
 use crate::correlation::STATES;
@@ -27,8 +27,8 @@ pub const fn channels(pair: usize) -> [usize; 2] {
 }
 
 /// The residual statistics of a pair learned alongside the filter: what goes back with the filter
-/// to the clean state while a change builds up (see "Changes of the errors: what the filter does" in
-/// docs/method.md).
+/// to the clean state while a change builds up (see "Changes of the errors: what the filter does"
+/// in docs/method.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ResidualStats {
     /// Exponential mean of each channel's post-fit residual, rad.

@@ -7,12 +7,13 @@
 //!   A hold (a block in a run and significant, or a turn the heel state does not explain) goes back
 //!   to it, so that neither a change nor a passing disturbance pulls at the filter.
 //! - **Learning again**: when a change is declared the filter goes back to the clean copy, the
-//!   errors that changed take the prior's covariance ([`crate::kalman::ConstantStateKalman::forget`]),
-//!   and x3, x4 go with any change of x1, x2 (through the leakage a change of x1 or x2 can cancel
-//!   one of x3 or x4 on their channels). Each pair then applies one block of residuals against the
-//!   held estimate as one measurement per channel, of the learned block variance over the pair's
-//!   noise scale: in the filter's units the gain is then `lambda P h / (lambda h' P h + s^2)`,
-//!   what the errors' covariance and the block's variance call for.
+//!   errors that changed take the prior's covariance
+//!   ([`crate::kalman::ConstantStateKalman::forget`]), and x3, x4 go with any change of x1, x2
+//!   (through the leakage a change of x1 or x2 can cancel one of x3 or x4 on their channels). Each
+//!   pair then applies one block of residuals against the held estimate as one measurement per
+//!   channel, of the learned block variance over the pair's noise scale: in the filter's units the
+//!   gain is then `lambda P h / (lambda h' P h + s^2)`, what the errors' covariance and the block's
+//!   variance call for.
 //! - **The noise learned again**: the residual check starts afresh, the noise scale is 1 and the
 //!   random walk the configured one until a full horizon is averaged again; the long averages
 //!   then go on from what they learned before, with the weight of one horizon (the data's noise
@@ -128,15 +129,15 @@ impl<const CAP: usize> Windowed<CAP> {
         }
     }
 
-    /// Starts learning the errors `changed` again: their covariance back to the prior, the
-    /// residual check of their pairs (polluted by the step) back to its start and the long
-    /// averages of the noise and the drift down to the weight of one horizon (see "Changes of the
-    /// errors: what the filter does" in docs/method.md), the detector's blocks started over; both pairs' updates then
-    /// wait for one block of residuals against the estimate held now
+    /// Starts learning the errors `changed` again: their covariance back to the prior, the residual
+    /// check of their pairs (polluted by the step) back to its start and the long averages of the
+    /// noise and the drift down to the weight of one horizon (see "Changes of the errors: what the
+    /// filter does" in docs/method.md), the detector's blocks started over; both pairs' updates
+    /// then wait for one block of residuals against the estimate held now
     /// ([`Windowed::relearn_from_block`]: a pair updated from a single window would take that
     /// window's sway for the change, and through the leakage of x1, x2 into the roll channels the
-    /// roll pair's update would move a forgotten x1 or x2). The other errors, and the statistics
-    /// of a pair whose channels showed nothing, keep what they learnt.
+    /// roll pair's update would move a forgotten x1 or x2). The other errors, and the statistics of
+    /// a pair whose channels showed nothing, keep what they learnt.
     pub(super) fn relearn(&mut self, config: &Config, changed: &[bool; 4]) {
         // Back to before the change began to pull at the filter: through the leakage of x1, x2
         // into the roll channels, the errors that did not change were pulled too.

@@ -170,9 +170,9 @@ impl<const CAP: usize> Windowed<CAP> {
         self.pairs[1].product_variance_rad2 = r0 + 0.5 * filled * fill_variance.roll_rad2;
     }
 
-    /// The filter takes the window's measurement `m` for `pair`, each channel of variance `r`
-    /// (the turn channel's `r_full`), gated at `gate` standard deviations when it is set; or holds
-    /// it out while a change may be building up ([`super::change`]) or a turn the heel state does not
+    /// The filter takes the window's measurement `m` for `pair`, each channel of variance `r` (the
+    /// turn channel's `r_full`), gated at `gate` standard deviations when it is set; or holds it
+    /// out while a change may be building up ([`super::change`]) or a turn the heel state does not
     /// explain is in the window ([`super::turn_hold`]).
     // Called once, on the step's path.
     #[inline(always)]
@@ -281,11 +281,11 @@ impl<const CAP: usize> Windowed<CAP> {
     /// residual average and the check, the learned noise and drift, the long-run batches.
     /// Returns the pair's two post-fit residuals, rad.
     ///
-    /// What the filter held out (the gate, the detector's hold) stays out of the residual
-    /// averages: the check and the learned noise and drift are about the data the filter took;
-    /// the detector sees everything. So do the windows of the first bumps ([`super::start`]): the filter
-    /// has taken a few windows, most of them at a fraction of their weight, and a window's
-    /// residual is then mostly its sway, which would inflate the learned noise.
+    /// What the filter held out (the gate, the detector's hold) stays out of the residual averages:
+    /// the check and the learned noise and drift are about the data the filter took; the detector
+    /// sees everything. So do the windows of the first bumps ([`super::start`]): the filter has
+    /// taken a few windows, most of them at a fraction of their weight, and a window's residual is
+    /// then mostly its sway, which would inflate the learned noise.
     // Called once, on the step's path.
     #[inline(always)]
     fn average_residuals(
@@ -313,8 +313,8 @@ impl<const CAP: usize> Windowed<CAP> {
             self.pairs[pair].learn_noise_and_drift(config, bin, len, horizon);
         }
         // The first batch a quarter of a period of the pair's updates, from the first update on
-        // ([`super::long_run`]); the windows that hold what the filter held out are left out of it as
-        // they were of the filter.
+        // ([`super::long_run`]); the windows that hold what the filter held out are left out of it
+        // as they were of the filter.
         if applied && self.entries_since_hold >= self.window.len() as u32 {
             let len = self.window.len() as u32;
             let q = self.pairs[pair].product_variance_rad2;
