@@ -84,7 +84,7 @@ pub const BIAS_SHARE_NOISE: Real = 0.35;
 /// [`BIAS_SHARE_NOISE`]).
 pub const BIAS_SHARE_DRIFT: Real = 0.7;
 
-/// Innovation gate, in standard deviations of a window's residual (see "Innovation gate" in the
+/// Innovation gate, in standard deviations of a window's residual (see "Innovation gate" in
 /// docs/method.md).
 pub const GATE_SIGMAS: Real = 8.0;
 

@@ -30,8 +30,8 @@ use crate::Real;
 
 impl<const CAP: usize> Windowed<CAP> {
     /// Passes the pair's residuals to the change detector; when it declares a change, the errors
-    /// that changed are learned again (see the module doc). Returns the
-    /// change declared, if any, and whether a block ended (and was tested).
+    /// that changed are learned again (see the module doc). Returns the change declared, if any,
+    /// and whether a block ended (and was tested).
     // Called once, on the step's path.
     #[inline(always)]
     pub(super) fn detect_change(

@@ -16,6 +16,13 @@
 //!    and drift ([`super::pair`]), the long-run batches ([`super::long_run`]) and the change
 //!    detector; what the filter held out stays out of all but the detector.
 //!
+//! The measurement (`apply_measurement`, with the channels' `update_channels`) and the residual
+//! bookkeeping (`average_residuals`) run once a step yet stay out of line: inlined, the compiler
+//! copies their calls for each constant that the pair, the gate or the outcome takes, and the
+//! STM32F405's image outgrows its flash budget; out of line, the step runs no more instructions
+//! than when all of it was one function (the figures: docs/firmware.md). The other steps are
+//! inlined.
+//!
 //! The derivation of each step is in docs/method.md, "The windowed method in full".
 
 use super::change::Alarm;
@@ -174,8 +181,8 @@ impl<const CAP: usize> Windowed<CAP> {
     /// turn channel's `r_full`), gated at `gate` standard deviations when it is set; or holds it
     /// out while a change may be building up ([`super::change`]) or a turn the heel state does not
     /// explain is in the window ([`super::turn_hold`]).
-    // Called once, on the step's path.
-    #[inline(always)]
+    // Called once, on the step's path; out of line on purpose (see the module doc).
+    #[inline(never)]
     fn apply_measurement(
         &mut self,
         pair: usize,
@@ -224,8 +231,8 @@ impl<const CAP: usize> Windowed<CAP> {
 
     /// The two channels of `pair` update the filter in turn, each of variance `r`, gated at
     /// `gate` standard deviations of its learned spread when it is set.
-    // Called once, on the step's path.
-    #[inline(always)]
+    // Called once, on the step's path; out of line on purpose (see the module doc).
+    #[inline(never)]
     fn update_channels(
         &mut self,
         pair: usize,
@@ -286,8 +293,8 @@ impl<const CAP: usize> Windowed<CAP> {
     /// sees everything. So do the windows of the first bumps ([`super::start`]): the filter has
     /// taken a few windows, most of them at a fraction of their weight, and a window's residual is
     /// then mostly its sway, which would inflate the learned noise.
-    // Called once, on the step's path.
-    #[inline(always)]
+    // Called once, on the step's path; out of line on purpose (see the module doc).
+    #[inline(never)]
     fn average_residuals(
         &mut self,
         config: &Config,
