@@ -211,7 +211,10 @@ impl<const CAP: usize> Windowed<CAP> {
         let floor = self.block_floor_rad2(pair, block_entries);
         let mut applied = false;
         let p = &mut self.pairs[pair];
-        for (k, ch) in chs.into_iter().enumerate() {
+        for k in 0..2 {
+            // The channel from its pair and rank (`chs[k]`), not read back from an array: below 4
+            // as the optimiser sees it (no bound check left in the C library's step).
+            let ch = 2 * pair + k;
             let target = block[k] + fit(&rows[k]);
             applied |= self
                 .kf

@@ -240,6 +240,8 @@ impl<const CAP: usize> Windowed<CAP> {
         r: Real,
         gate: Option<Real>,
     ) -> Outcome {
+        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
+        let pair = pair.min(1);
         let mut outcome = Outcome {
             applied: false,
             held_out: false,
@@ -304,6 +306,8 @@ impl<const CAP: usize> Windowed<CAP> {
         settled: bool,
         horizon: u32,
     ) -> [Real; 2] {
+        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
+        let pair = pair.min(1);
         let residual = self.pairs[pair].average_residuals(
             pair,
             horizon,
