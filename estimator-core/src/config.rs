@@ -77,7 +77,7 @@ pub struct Config {
     /// following them. Chosen by measurement (docs/results.md, "Model mismatch"): it costs about
     /// 0.1 arcsec of steady-state noise and cuts the lag behind a 20 arcsec/day drift from 8 to 2 arcsec.
     /// The windowed method applies it in full only while its residuals show a persistent bias, and
-    /// none while they are noise ([`crate::methods::windowed`], "Learning the noise and the drift").
+    /// none while they are noise (docs/method.md, "Learning the noise and the drift").
     pub drift_rad_per_sqrt_s: Real,
     /// 1-sigma of raw roll or pitch about eq (2) for the traditional baseline: the sway. Default
     /// 3 deg / sqrt(2), the RMS of the paper's 3 deg roll sway.
@@ -100,8 +100,9 @@ pub struct Config {
     /// The smallest step of an installation error the change detector is sized for (windowed
     /// method): a step of the errors (a re-installation, a shock) at least this large is detected
     /// from the residuals, reported as [`crate::Status::ErrorsChanged`], and the errors that
-    /// changed are learned again from the next window on (see [`crate::methods::windowed`],
-    /// "Changes of the errors"). Default 20 arcsec; 0 turns detection off.
+    /// changed are learned again from the next window on (see
+    /// [`crate::methods::windowed::change`] and docs/method.md, "Changes of the errors: what the
+    /// filter does"). Default 20 arcsec; 0 turns detection off.
     pub change_detection_step_rad: Real,
     /// Known values of the installation errors (a dockside or factory calibration, or what an
     /// earlier run learned): the filter starts from them, and they are reported (and compensate
@@ -278,16 +279,9 @@ impl Config {
     }
 
     /// Checks the configuration against a ring capacity; the error names the first parameter
-    /// out of bounds.
+    /// out of bounds. The checks run in a fixed order: the method, the capacity and the pinned
+    /// period and interval, the sigmas and random walks, the other limits, the known values.
     pub fn check(&self, capacity: usize) -> Result<(), ConfigError> {
-        use Bound::*;
-        let fail = |name: &'static str, value: Real, bound: Bound| {
-            Err(ConfigError::Parameter {
-                name,
-                value: value as f64,
-                bound,
-            })
-        };
         if self.method == Method::Paper && !cfg!(feature = "paper-method") {
             return Err(ConfigError::MethodUnavailable);
         }
@@ -309,6 +303,16 @@ impl Config {
         {
             return Err(ConfigError::SampleInterval { value_s: d });
         }
+        self.check_noise()?;
+        self.check_limits()?;
+        self.check_prior()
+    }
+
+    /// The sigmas and random walks: positive (or non-negative) and finite, at most 1 rad (the
+    /// random walk over the longest interval), their squares not underflowing, and the prior at
+    /// most 1000 times each measurement sigma.
+    fn check_noise(&self) -> Result<(), ConfigError> {
+        use Bound::*;
         let positive = [
             ("prior_sigma_rad", self.prior_sigma_rad),
             ("measurement_sigma_rad", self.measurement_sigma_rad),
@@ -336,9 +340,8 @@ impl Config {
         }
         // Every sigma, and the random walk of one step, at most 1 rad: no installation error or
         // attitude noise comes near a radian, and with that bound no variance can overflow (the
-        // prior plus 2^32 steps of random walk stays below 5e9 rad^2). Found by fuzzing the
-        // checkpoint restore: a random walk of 9e18 rad/sqrt(s) passed a finiteness check and
-        // overflowed the covariance two steps later; a sigma of 1e20 rad squared to infinity.
+        // prior plus 2^32 steps of random walk stays below 5e9 rad^2). A finiteness check alone
+        // lets a random walk or a sigma through whose square or sum overflows the covariance.
         // The longest interval there can be (a learned one is not known yet).
         let interval_s = self.sample_interval_s.unwrap_or(SAMPLE_INTERVAL_RANGE_S.1);
         let dt = interval_s as Real;
@@ -359,8 +362,7 @@ impl Config {
         }
         // In f32 a prior far wider than the measurement noise makes the first updates lose the
         // covariance's definiteness (`crate::kalman`: the variance ratio must stay well below
-        // 1/eps). Prior at most 1000 times each measurement sigma (variance ratio 1e6; the
-        // defaults' are 141 and 0.13).
+        // 1/eps). Prior at most 1000 times each measurement sigma (variance ratio 1e6).
         let widest = 1000.0 * self.measurement_sigma_rad.min(self.traditional_sigma_rad);
         if self.prior_sigma_rad > widest {
             return fail(
@@ -369,6 +371,13 @@ impl Config {
                 AtMost(widest as f64),
             );
         }
+        Ok(())
+    }
+
+    /// The other limits: the longest gap filled, the smallest step detected, the period's
+    /// tolerance and the rotation angle's latency.
+    fn check_limits(&self) -> Result<(), ConfigError> {
+        use Bound::*;
         // A filled sample is interpolated from its neighbours, which a longer gap does not have;
         // at most 50 % off the period, or the pattern is not the one detected.
         if self.max_filled_gap_samples > MAX_FILLABLE_GAP {
@@ -403,6 +412,13 @@ impl Config {
                 AtMost(MAX_ANGLE_LATENCY_S),
             );
         }
+        Ok(())
+    }
+
+    /// The known values ([`Config::prior`]), if any: each error at most 1 rad, each 1-sigma
+    /// positive, finite, at most `prior_sigma_rad` and its square not underflowing.
+    fn check_prior(&self) -> Result<(), ConfigError> {
+        use Bound::*;
         if let Some(prior) = &self.prior {
             const X: [&str; 4] = [
                 "prior.x_rad[0]",
@@ -434,4 +450,13 @@ impl Config {
         }
         Ok(())
     }
+}
+
+/// The error for parameter `name` of value `value` out of `bound`.
+fn fail(name: &'static str, value: Real, bound: Bound) -> Result<(), ConfigError> {
+    Err(ConfigError::Parameter {
+        name,
+        value: value as f64,
+        bound,
+    })
 }

@@ -28,21 +28,23 @@
 //! When there is no estimate, [`Estimator::progress`] says what holds it back.
 
 pub(crate) mod checkpoint;
+mod compensate;
+mod feed;
+
+use compensate::corrected;
+pub use compensate::CompensateError;
 
 use core::ptr::addr_of_mut;
 
 use crate::config::{Config, ConfigError, ROTATION_PERIOD_RANGE_S};
 use crate::correlation::ReferenceFilter;
-use crate::gap_fill::{GapFiller, GridSample, Passed};
-use crate::installation::Angles;
-use crate::math::{sin_cos, wrap_pi};
-use crate::methods::windowed::change::Alarm;
+use crate::gap_fill::GapFiller;
 use crate::methods::MethodState;
 use crate::output::{
     Counters, ErrorChange, Estimate, Health, Holdup, Output, RejectCounts, RotationSummary, Status,
 };
-use crate::rotation_pattern::{Limits, PatternEvent, RotationFault, RotationMonitor};
-use crate::sample::{Attitude, Sample, SampleError};
+use crate::rotation_pattern::{Limits, RotationFault, RotationMonitor};
+use crate::sample::{Sample, SampleError};
 use crate::sway_gate::SwayMonitor;
 use crate::time_grid::{Placement, TimeGrid};
 use crate::Real;
@@ -394,84 +396,6 @@ impl<const CAP: usize> Estimator<CAP> {
         })
     }
 
-    /// The attitude of `sample` with eq (2)'s oscillation for the current estimate removed, without
-    /// stepping the estimator: what [`Estimator::step`] returns as [`Output::corrected`] for the
-    /// same sample and estimate, bit for bit, at the cost of eq (2) alone (the sines and cosines
-    /// of rho, rho - s and L and twelve products). For a navigation computer whose attitude comes
-    /// faster than the estimator's grid: every attitude sample is compensated with the estimate of
-    /// the last step, and only the grid's samples are stepped. The sample's time is not used (its
-    /// fields are checked as a step checks them).
-    ///
-    /// Returns [`CompensateError::NoEstimate`] before the filter's first measurement and
-    /// [`CompensateError::Rejected`] for a sample a step would refuse on its fields; the estimator
-    /// is never changed.
-    pub fn compensate(&self, sample: &Sample) -> Result<Attitude, CompensateError> {
-        sample.check().map_err(CompensateError::Rejected)?;
-        let estimate = self
-            .method
-            .estimate(&self.config)
-            .ok_or(CompensateError::NoEstimate)?;
-        let sample = &self.carried(sample);
-        let angles = Angles::new(
-            sample.rotation_rad,
-            sample.platform_rad,
-            self.latitude_sin_cos(sample.latitude_rad),
-        );
-        Ok(corrected(&angles, &sample.attitude, &estimate.x_rad))
-    }
-
-    /// `sample` with its rotation angle carried forward over [`Config::angle_latency_s`] at the
-    /// rate of the last step on the grid (`rho + rate S`, wrapped to [-pi, pi)): the angle at the
-    /// row's time, when the attitude was taken. The rate is the change of the angle over the
-    /// last one or two grid intervals (the grid's interval, not the stamps: jittered stamps would
-    /// make it jitter); across a longer gap or a clock step the last rate is kept. A latency of 0
-    /// returns the sample as it is.
-    fn carry_rotation(&mut self, sample: &Sample, placement: Placement) -> Sample {
-        if !self.latency_set() {
-            return *sample;
-        }
-        if let (Some(last), Placement::OnGrid { intervals }, Some(interval_s)) = (
-            self.run.last_rotation_rad,
-            placement,
-            self.run.grid.placing_interval_s(),
-        ) {
-            if (1..=2).contains(&intervals) {
-                self.run.rotation_rate_rad_s = wrap_pi(sample.rotation_rad - last)
-                    / (f64::from(intervals) * interval_s) as Real;
-            }
-        }
-        self.run.last_rotation_rad = Some(sample.rotation_rad);
-        self.carried(sample)
-    }
-
-    /// `sample` with its rotation angle carried forward at the last rate (see
-    /// [`Estimator::carry_rotation`]); unchanged while the latency is 0.
-    fn carried(&self, sample: &Sample) -> Sample {
-        let mut s = *sample;
-        if self.latency_set() {
-            s.rotation_rad = wrap_pi(
-                s.rotation_rad + self.run.rotation_rate_rad_s * self.config.angle_latency_s as Real,
-            );
-        }
-        s
-    }
-
-    /// Whether a latency is configured: its bits, not a double-precision comparison (a library call
-    /// on the Cortex-M4F, on every step).
-    fn latency_set(&self) -> bool {
-        self.config.angle_latency_s.to_bits() << 1 != 0
-    }
-
-    /// `(sin L, cos L)` of `latitude_rad`: the step's cached values when the latitude is the one it
-    /// cached (so that [`Estimator::compensate`] computes what the step does, bit for bit).
-    fn latitude_sin_cos(&self, latitude_rad: Real) -> (Real, Real) {
-        if latitude_rad == self.run.latitude_trig.0 {
-            (self.run.latitude_trig.1, self.run.latitude_trig.2)
-        } else {
-            sin_cos(latitude_rad)
-        }
-    }
-
     /// Processes one sample. On error nothing changes but the rejection counter.
     pub fn step(&mut self, sample: &Sample) -> Result<Output, SampleError> {
         let placed = match sample
@@ -542,251 +466,6 @@ impl<const CAP: usize> Estimator<CAP> {
             corrected,
             health: self.health(),
         })
-    }
-
-    /// Places an accepted sample on the grid, passes it through the gap filler and the window
-    /// takes what comes out; returns the status of the newest sample the window took.
-    fn feed(
-        &mut self,
-        sample: &Sample,
-        angles: &Angles,
-        placement: Placement,
-        interval_s: f64,
-        stamp_s: f64,
-    ) -> Status {
-        let (feed, restart) = match self.run.feed {
-            None => (self.start_feeding(interval_s), false),
-            Some(feed) => {
-                let (step, restart) = match placement {
-                    Placement::OnGrid { intervals } => (
-                        intervals,
-                        intervals.saturating_sub(1) >= self.restart_gap_samples(&feed),
-                    ),
-                    Placement::Learning | Placement::ClockStep => (1, true),
-                };
-                self.run.index = self.run.index.wrapping_add(step);
-                (feed, restart)
-            }
-        };
-        let grid_sample = GridSample {
-            index: self.run.index,
-            roll_rad: sample.attitude.roll_rad,
-            pitch_rad: sample.attitude.pitch_rad,
-            rotation_rad: sample.rotation_rad,
-            rotation_minus_platform_rad: wrap_pi(sample.rotation_rad - sample.platform_rad),
-            latitude_rad: sample.latitude_rad,
-            // The heading with eq (2)'s oscillation for the estimate so far taken out: its rate is
-            // the ship's turn (the heel in turns), not the installation errors' oscillation.
-            heading_rad: match self.method.estimate(&self.config) {
-                Some(e) => {
-                    let row = angles.heading_row();
-                    let d: Real = row.iter().zip(&e.x_rad).map(|(a, b)| a * b).sum();
-                    wrap_pi(sample.attitude.heading_rad - d)
-                }
-                None => sample.attitude.heading_rad,
-            },
-            angles: *angles,
-            fill_weight: 0,
-        };
-        self.run
-            .filler
-            .push(&grid_sample, restart, self.config.max_filled_gap_samples);
-        self.take(&feed, stamp_s);
-        self.run.window_status
-    }
-
-    /// Lost rows in a row from which the window restarts rather than leaving them out: an eighth
-    /// of the rotation period once known (a gap of an eighth of a period or more is not bridged);
-    /// half the shortest period while it is being learned (the samples since the first row are kept
-    /// for the first window, and gaps must not restart the period's detection).
-    fn restart_gap_samples(&self, feed: &Feed) -> u32 {
-        let fill = self.config.max_filled_gap_samples + 1;
-        match self.run.rotation.period_samples() {
-            Some(p) => (p / 8).max(fill),
-            None => (feed.limits.min_period_samples / 2).max(fill),
-        }
-    }
-
-    /// The first sample on a known grid: the grid's constants are fixed, the rotation monitor
-    /// starts (with the pinned period in samples, if any, and the window set to it).
-    fn start_feeding(&mut self, interval_s: f64) -> Feed {
-        let feed = Feed::new(interval_s, &self.config);
-        self.run.feed = Some(feed);
-        self.run.index = 0;
-        let pinned = self
-            .config
-            .rotation_period_s
-            .map(|t| libm::round(t / interval_s).max(2.0) as u32);
-        self.run.rotation = RotationMonitor::new(pinned);
-        if let Some(p) = pinned {
-            self.method.configure(p);
-        }
-        self.run.window_status = Status::DetectingPattern;
-        feed
-    }
-
-    /// The window takes what the filler passes on, then the filter updates once. `stamp_s` is the
-    /// time stamp of the newest sample received (at grid index `self.run.index`).
-    ///
-    /// # Bounded work a step
-    /// Normally one sample comes out of the filler a step and the window takes it, removing the
-    /// entry that leaves it; the filter then updates. A run of lost rows left out makes the
-    /// samples before it ready at once, but needs no catching up: the window takes one a step, and
-    /// steps over the run at once when it reaches it. A filled row, though, is a sample more for
-    /// the window than the log gave a step for: the filler's `backlog`, made up by a second sample
-    /// in a later step. And the window must drop the entries of a run's grid numbers a period
-    /// later, a few a push. A step takes a second sample only while samples are waiting and when the first was
-    /// not filled (a fill is the costliest sample; the second is never one), and does not update
-    /// the filter when it took two, when it filled one, or when the window removed more than one
-    /// entry (its work was then a second sample's); the window takes no measurement while it
-    /// holds more than one period.
-    fn take(&mut self, feed: &Feed, stamp_s: f64) {
-        let mut work = 0;
-        let mut took = 0;
-        let mut filled = false;
-        while took < MAX_SAMPLES_PER_STEP && work < MAX_WORK_PER_STEP {
-            if took > 0 && (filled || self.run.filler.backlog() == 0) {
-                break;
-            }
-            // A second sample is never a filled one (a fill is the costliest sample).
-            let Some(passed) = self.run.filler.pass_on(took == 0) else {
-                break;
-            };
-            filled = passed.sample.fill_weight > 0;
-            took += 1;
-            work += 1 + self.take_one(&passed, feed, stamp_s);
-        }
-        // A filled sample is a sample's work and a fill's: the filter waits for the next step.
-        if took > 0 && work <= 2 && !filled {
-            if let Some(alarm) =
-                self.method
-                    .update(&self.config, feed, self.run.filler.single_fill_variance())
-            {
-                self.record_error_change(&alarm, feed, stamp_s);
-            }
-        }
-    }
-
-    /// Keeps a change of the errors the filter declared at the sample stamped `stamp_s`. Out of
-    /// line and cold: on the step's path the compiler otherwise began its double-precision
-    /// arithmetic before knowing whether there was a change (measured: 80 instructions a step on
-    /// the Cortex-M4F).
-    #[cold]
-    #[inline(never)]
-    fn record_error_change(&mut self, alarm: &Alarm, feed: &Feed, stamp_s: f64) {
-        // The run's first block began `run_blocks` blocks of half a window before this update.
-        let entry_s = feed.interval_s * f64::from(self.rotation().samples_per_entry);
-        let window_s = entry_s * self.method.window_len() as f64;
-        self.run.counters.changes_detected = self.run.counters.changes_detected.saturating_add(1);
-        self.run.error_change = Some(ErrorChange {
-            detected_s: stamp_s,
-            seen_since_s: stamp_s - f64::from(alarm.run_blocks) * 0.5 * window_s,
-            relearned: alarm.changed,
-        });
-    }
-
-    /// The window takes one sample; returns how many old entries it removed.
-    fn take_one(&mut self, passed: &Passed, feed: &Feed, stamp_s: f64) -> u32 {
-        let s = &passed.sample;
-        if passed.restart {
-            self.restart_window();
-            self.run.rotation.restart();
-        }
-        if s.fill_weight > 0 {
-            self.run.counters.filled = self.run.counters.filled.saturating_add(1);
-        }
-        let observed = self
-            .run
-            .rotation
-            .observe(s.index, s.rotation_rad, &feed.limits);
-        if self.run.rotation.period_samples().is_none() {
-            // The pattern is being learned anew: no window of the old period goes on filling.
-            self.method.forget_period();
-        }
-        match observed {
-            Err(fault) => {
-                if !matches!(self.run.window_status, Status::RotationFault(_)) {
-                    let behind = f64::from(self.run.index.wrapping_sub(s.index));
-                    self.run.fault = Some((fault, stamp_s - behind * feed.interval_s));
-                }
-                self.restart_window();
-                if fault != RotationFault::RateMismatch {
-                    self.run.rotation.after_fault();
-                }
-                self.run.window_status = Status::RotationFault(fault);
-                return 0;
-            }
-            Ok(PatternEvent::PeriodKnown(period)) => self.method.configure(period),
-            Ok(PatternEvent::None) => {}
-        }
-        // The window keeps the samples from the first row on while the period is being learned,
-        // so that it holds a whole period as soon as the period is known.
-        let removed = self.method.push(
-            &self.config,
-            feed,
-            s,
-            passed.weight,
-            self.run.rotation.period_samples().is_some(),
-        );
-        self.run.window_status = if self.run.rotation.period_samples().is_none() {
-            Status::DetectingPattern
-        } else if self.method.window_full() {
-            Status::Estimating
-        } else {
-            Status::WarmingUp
-        };
-        removed
-    }
-
-    fn restart_window(&mut self) {
-        self.method.restart_window();
-        self.run.counters.window_restarts = self.run.counters.window_restarts.saturating_add(1);
-        self.run.window_status = if self.run.rotation.period_samples().is_some() {
-            Status::WarmingUp
-        } else {
-            Status::DetectingPattern
-        };
-    }
-
-    fn angles(&mut self, sample: &Sample) -> Angles {
-        if sample.latitude_rad != self.run.latitude_trig.0 {
-            let (s, c) = sin_cos(sample.latitude_rad);
-            self.run.latitude_trig = (sample.latitude_rad, s, c);
-        }
-        Angles::new(
-            sample.rotation_rad,
-            sample.platform_rad,
-            (self.run.latitude_trig.1, self.run.latitude_trig.2),
-        )
-    }
-}
-
-/// `attitude` with eq (2)'s oscillation for `x_rad` at `angles` removed; the heading wrapped to
-/// [-pi, pi].
-fn corrected(angles: &Angles, attitude: &Attitude, x_rad: &[Real; 4]) -> Attitude {
-    let d = angles.oscillation(x_rad);
-    Attitude {
-        heading_rad: wrap_pi(attitude.heading_rad - d.heading_rad),
-        roll_rad: attitude.roll_rad - d.roll_rad,
-        pitch_rad: attitude.pitch_rad - d.pitch_rad,
-    }
-}
-
-/// Why [`Estimator::compensate`] returned no attitude.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CompensateError {
-    /// There is no estimate yet: the attitude is the RINS's own.
-    NoEstimate,
-    /// A field of the sample is one a step would refuse (NaN, infinite, out of range).
-    Rejected(SampleError),
-}
-
-impl core::fmt::Display for CompensateError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            CompensateError::NoEstimate => f.write_str("no estimate yet"),
-            CompensateError::Rejected(e) => write!(f, "sample refused: {e}"),
-        }
     }
 }
 

@@ -20,8 +20,8 @@
 //! # Longer runs: left out, with a taper
 //! A run of lost rows longer than `max_filled_gap_samples` (2 by default) is not filled: three or
 //! more lost in a row leave a polynomial 10 % or more of the sway off, and a recorder that loses
-//! them at a regular cadence makes that error the same every time (measured: 3 rows lost every
-//! 60 s left 3.9 arcsec on a sea log, with a 1-sigma of 0.89). Nor is it just left out of the
+//! them at a regular cadence makes that error the same every time, so that it does not average
+//! out (docs/real-logs.md). Nor is it just left out of the
 //! sums: a hole in the sum takes out a piece of the sway that no longer cancels (a 10-row hole is
 //! about one sway cycle: tens of arcsec, which averages down slowly, and not at all when the holes
 //! come at a cadence). Instead the rows around the hole are weighted down smoothly: each sample's
@@ -35,12 +35,9 @@
 //! enter the measurement and its rows alike ([`crate::correlation::CorrelationSums`]), so nothing
 //! is biased; what it costs is information, about `2 TAPER_HALF` samples a hole.
 //!
-//! Measured on 45,000 s sea logs (one-channel least squares over the whole log, the leakage of the
-//! sway alone; the windowed estimator sees the same sums): 10 rows lost every 120 s left 1.2-77
-//! arcsec left out plain, 0.01-0.2 with the taper; 4 rows every 60 s 0.2-27, with the taper
-//! 0.04-0.2; 3 rows every 60 s filled by the polynomial 0.5-7.8, tapered 0.02-0.2 (a short study
-//! in Python of the sway spectrum of `host-sim`'s sea scenario, seeds 0-2; the estimator's own
-//! figures are in docs/real-logs.md).
+//! The taper leaves in the sums only the sway the Hann window's side lobes pass, where rows left
+//! out plain, or three or more filled by the polynomial, leave a piece of a sway cycle each; the
+//! estimator's figures on logs with lost rows are in docs/real-logs.md and docs/gap-study.md.
 //!
 //! A run of an eighth of a rotation period or more (or a clock step) restarts the window instead
 //! (the estimator decides, [`crate::estimator`]).
@@ -172,6 +169,34 @@ fn taper(d: u32) -> u32 {
     }
 }
 
+/// The weight of sample `k` near holes: the product of the tapers from the end of the hole behind
+/// it (`hole_end`) and from the nearest hole ahead (`holes`, whose holes behind `k` are dropped).
+/// Its weight is final once a hole ahead is known (none can come nearer) or [`DELAY`] samples have
+/// come (`newest`); `None` until then.
+// Called once, on the step's path.
+#[inline(always)]
+fn tapered_weight(
+    holes: &mut Deque<u32, HOLES>,
+    hole_end: Option<u32>,
+    k: u32,
+    newest: u32,
+) -> Option<u8> {
+    while let Some(&h) = holes.front() {
+        if h.wrapping_sub(k).wrapping_sub(1) >= 1 << 31 {
+            holes.pop_front();
+        } else {
+            break;
+        }
+    }
+    let hole_after = holes.front().copied();
+    if hole_after.is_none() && newest.wrapping_sub(k) < DELAY {
+        return None;
+    }
+    let d_before = hole_end.map_or(u32::MAX, |e| k.wrapping_sub(e));
+    let d_after = hole_after.map_or(u32::MAX, |h| h.wrapping_sub(k));
+    Some(((taper(d_before) * taper(d_after) + 32) / 64) as u8)
+}
+
 impl Default for GapFiller {
     fn default() -> Self {
         GapFiller::new()
@@ -294,24 +319,13 @@ impl GapFiller {
             let pos = self.history;
             let held = self.line.get(pos)?;
             let received = held.sample.index == k;
-            if !received {
-                let before = if pos > 0 {
-                    self.line.get(pos - 1).map(|h| h.sample.index)
-                } else {
-                    None
-                };
-                let run = before.map_or(u32::MAX, |b| {
-                    held.sample.index.wrapping_sub(b).wrapping_sub(1)
-                });
-                if run > self.max_fill || held.restart {
-                    // A hole: step over it.
-                    self.hole_end = Some(held.sample.index.wrapping_sub(1));
-                    self.hole_rows_ahead = self
-                        .hole_rows_ahead
-                        .saturating_sub(held.sample.index.wrapping_sub(k));
-                    self.next = held.sample.index;
-                    continue;
-                }
+            if !received && self.is_hole_before(pos, held) {
+                // A hole: step over it.
+                let index = held.sample.index;
+                self.hole_end = Some(index.wrapping_sub(1));
+                self.hole_rows_ahead = self.hole_rows_ahead.saturating_sub(index.wrapping_sub(k));
+                self.next = index;
+                continue;
             }
             // The usual case: a received sample, no hole near it.
             if received
@@ -322,38 +336,9 @@ impl GapFiller {
                     return None;
                 }
                 let (sample, restart) = (held.sample, held.restart);
-                self.measure_fill_error(&sample, pos);
-                self.history += 1;
-                if restart {
-                    self.hole_end = None;
-                }
-                self.next = k.wrapping_add(1);
-                if self.history > NEIGHBOURS {
-                    self.line.pop_front();
-                    self.history -= 1;
-                }
-                return Some(Passed {
-                    sample,
-                    weight: FULL_WEIGHT,
-                    restart,
-                });
+                return Some(self.pass_received(k, pos, sample, restart));
             }
-            // Holes behind are done with; the nearest ahead tapers this sample. Its weight is
-            // final once a hole ahead is known (none can come nearer) or `DELAY` samples have come.
-            while let Some(&h) = self.holes.front() {
-                if h.wrapping_sub(k).wrapping_sub(1) >= 1 << 31 {
-                    self.holes.pop_front();
-                } else {
-                    break;
-                }
-            }
-            let hole_after = self.holes.front().copied();
-            if hole_after.is_none() && newest.wrapping_sub(k) < DELAY {
-                return None;
-            }
-            let d_before = self.hole_end.map_or(u32::MAX, |e| k.wrapping_sub(e));
-            let d_after = hole_after.map_or(u32::MAX, |h| h.wrapping_sub(k));
-            let weight = ((taper(d_before) * taper(d_after) + 32) / 64) as u8;
+            let weight = tapered_weight(&mut self.holes, self.hole_end, k, newest)?;
             let (sample, restart) = if received {
                 let (sample, restart) = (held.sample, held.restart);
                 self.measure_fill_error(&sample, pos);
@@ -378,6 +363,45 @@ impl GapFiller {
                 weight: weight.min(FULL_WEIGHT),
                 restart,
             });
+        }
+    }
+
+    /// Whether the rows lost before `held`, the sample at `pos` in the line, are a hole to step
+    /// over: a run longer than `max_fill` (or with no sample before it), or a restart.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn is_hole_before(&self, pos: usize, held: &Held) -> bool {
+        let before = if pos > 0 {
+            self.line.get(pos - 1).map(|h| h.sample.index)
+        } else {
+            None
+        };
+        let run = before.map_or(u32::MAX, |b| {
+            held.sample.index.wrapping_sub(b).wrapping_sub(1)
+        });
+        run > self.max_fill || held.restart
+    }
+
+    /// Passes on the received sample `k` (at `pos` in the line) at full weight: the usual case,
+    /// no hole near it. Measures the fill error on it, and keeps the last [`NEIGHBOURS`] passed
+    /// on.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn pass_received(&mut self, k: u32, pos: usize, sample: GridSample, restart: bool) -> Passed {
+        self.measure_fill_error(&sample, pos);
+        self.history += 1;
+        if restart {
+            self.hole_end = None;
+        }
+        self.next = k.wrapping_add(1);
+        if self.history > NEIGHBOURS {
+            self.line.pop_front();
+            self.history -= 1;
+        }
+        Passed {
+            sample,
+            weight: FULL_WEIGHT,
+            restart,
         }
     }
 
@@ -453,22 +477,7 @@ impl GapFiller {
                     after = Some((offset, &h.sample));
                 }
             });
-        // Each missing neighbour raises the fill's variance; `missing` is the last one missing.
-        // (By the bits of the offsets absent, lowest first: as many passes as neighbours missing.)
-        let mut weight = 1u32;
-        let mut missing = 0i32;
-        let all = ((1u32 << (2 * NEIGHBOURS + 1)) - 1) & !(1 << NEIGHBOURS);
-        let mut absent = all & !present;
-        while absent != 0 {
-            let offset = absent.trailing_zeros() as i32 - NEIGHBOURS as i32;
-            absent &= absent - 1;
-            let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR
-                .get(offset.unsigned_abs() as usize - 1)
-                .copied()
-                .unwrap_or(u32::MAX);
-            weight = weight.saturating_mul(factor);
-            missing = offset;
-        }
+        let (weight, missing) = missing_neighbours(present);
         let ((ob, b), (oa, a)) = (before?, after?);
         let w = match (n, missing) {
             (10, _) => ALL_NEIGHBOURS,
@@ -481,31 +490,77 @@ impl GapFiller {
             roll += wi * v.0;
             pitch += wi * v.1;
         }
-        // Angles linearly, the short way round, between the nearest present samples.
-        let f = (-ob) as Real / (oa - ob) as Real;
-        let ang = |x: Real, y: Real| wrap_pi(x + wrap_pi(y - x) * f);
-        let rotation_rad = ang(b.rotation_rad, a.rotation_rad);
-        let rotation_minus_platform_rad =
-            ang(b.rotation_minus_platform_rad, a.rotation_minus_platform_rad);
-        let latitude_rad = b.latitude_rad + (a.latitude_rad - b.latitude_rad) * f;
-        let heading_rad = ang(b.heading_rad, a.heading_rad);
-        let lat = if latitude_rad == b.latitude_rad {
-            (b.angles.sin_lat, b.angles.cos_lat)
-        } else {
-            sin_cos(latitude_rad)
-        };
-        let weight = weight.min(u32::from(u16::MAX)) as u16;
-        Some(GridSample {
+        Some(filled_sample(
             index,
-            roll_rad: roll,
-            pitch_rad: pitch,
-            rotation_rad,
-            rotation_minus_platform_rad,
-            latitude_rad,
-            heading_rad,
-            angles: Angles::from_rotation(rotation_rad, rotation_minus_platform_rad, lat),
-            fill_weight: weight,
-        })
+            (roll, pitch),
+            (ob, b),
+            (oa, a),
+            weight,
+        ))
+    }
+}
+
+/// The fill's variance weight (the product of each missing neighbour's factor,
+/// [`MISSING_NEIGHBOUR_VARIANCE_FACTOR`], saturating) and the offset of the last neighbour
+/// missing (0 when none is), for the neighbours `present` (bit `offset + NEIGHBOURS` set for each
+/// offset present). By the bits of the offsets absent, lowest first: as many passes as neighbours
+/// missing.
+// Called once, in `GapFiller::fill`.
+#[inline(always)]
+fn missing_neighbours(present: u32) -> (u32, i32) {
+    let mut weight = 1u32;
+    let mut missing = 0i32;
+    let all = ((1u32 << (2 * NEIGHBOURS + 1)) - 1) & !(1 << NEIGHBOURS);
+    let mut absent = all & !present;
+    while absent != 0 {
+        let offset = absent.trailing_zeros() as i32 - NEIGHBOURS as i32;
+        absent &= absent - 1;
+        let factor = MISSING_NEIGHBOUR_VARIANCE_FACTOR
+            .get(offset.unsigned_abs() as usize - 1)
+            .copied()
+            .unwrap_or(u32::MAX);
+        weight = weight.saturating_mul(factor);
+        missing = offset;
+    }
+    (weight, missing)
+}
+
+/// The filled sample `index`: its roll and pitch (interpolated from the neighbours), the angles
+/// linearly, the short way round, between the nearest present samples `before` and
+/// `after` (each with its offset from `index`), and its fill weight `weight` (at most
+/// `u16::MAX`).
+// Called once, in `GapFiller::fill`.
+#[inline(always)]
+fn filled_sample(
+    index: u32,
+    (roll, pitch): (Real, Real),
+    (ob, b): (i32, &GridSample),
+    (oa, a): (i32, &GridSample),
+    weight: u32,
+) -> GridSample {
+    let f = (-ob) as Real / (oa - ob) as Real;
+    let ang = |x: Real, y: Real| wrap_pi(x + wrap_pi(y - x) * f);
+    let rotation_rad = ang(b.rotation_rad, a.rotation_rad);
+    let rotation_minus_platform_rad =
+        ang(b.rotation_minus_platform_rad, a.rotation_minus_platform_rad);
+    let latitude_rad = b.latitude_rad + (a.latitude_rad - b.latitude_rad) * f;
+    let heading_rad = ang(b.heading_rad, a.heading_rad);
+    let lat = if latitude_rad == b.latitude_rad {
+        (b.angles.sin_lat, b.angles.cos_lat)
+    } else {
+        sin_cos(latitude_rad)
+    };
+    let weight = weight.min(u32::from(u16::MAX)) as u16;
+    GridSample {
+        index,
+        roll_rad: roll,
+        pitch_rad: pitch,
+        rotation_rad,
+        rotation_minus_platform_rad,
+        latitude_rad,
+        heading_rad,
+        angles: Angles::from_rotation(rotation_rad, rotation_minus_platform_rad, lat),
+        fill_weight: weight,
     }
 }
 

@@ -15,11 +15,12 @@
 //! `D = A P = P - K b'` (with `b = P h`), `D h = b - K (h' b)`, then
 //! `A P A' + r K K' = D - (D h) K' + r K K'`, term by term
 //! `P_ij - K_i b_j - (b_i - K_i h'b) K_j + r K_i K_j`: `O(N^2)` instead of the `O(N^3)` of dense
-//! products, in place, for any gain (the Schmidt "consider" update zeroes some of it). Together with the Newton square root of [`crate::math`], this
-//! is what brought the step on the Cortex-M4F within its instruction budget (measured by
-//! `host-sim/tests/qemu/qemu_budgets.rs`; the figures in docs/firmware.md). Only the upper triangle is computed; the lower one
-//! is its mirror, so the result is symmetric by construction. A measurement whose innovation variance is not positive and
-//! finite, or whose value is not finite, is refused and leaves the filter untouched.
+//! products, in place, for any gain (the Schmidt "consider" update zeroes some of it). Together
+//! with the Newton square root of [`crate::math`], this keeps the step on the Cortex-M4F within its
+//! instruction budget (checked by `host-sim/tests/qemu/qemu_budgets.rs`; the figures in
+//! docs/firmware.md). Only the upper triangle is computed; the lower one is its mirror, so the
+//! result is symmetric by construction. A measurement whose innovation variance is not positive
+//! and finite, or whose value is not finite, is refused and leaves the filter untouched.
 //!
 //! In `f32` the ratio of prior variance to measurement variance must stay well below 1/eps
 //! (1.7e7): the estimator's is about 2e4 (1000 arcsec prior, 7 arcsec measurement).
@@ -162,16 +163,7 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         if !z.is_finite() || !r.is_finite() || r < T::zero() || !sum_is_finite(h) {
             return Err(KalmanError::NonFinite);
         }
-        let mut ph = [T::zero(); N];
-        let mut hph = T::zero();
-        for i in 0..n {
-            let mut v = T::zero();
-            for j in 0..n {
-                v += self.p[(i, j)] * h[j];
-            }
-            ph[i] = v;
-            hph += h[i] * v;
-        }
+        let (ph, hph) = self.projected::<M>(h);
         let s = hph + r;
         if !(s > T::zero()) || !s.is_finite() {
             return Err(KalmanError::Degenerate);
@@ -213,6 +205,45 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         if !x_sum.is_finite() {
             return Err(KalmanError::NonFinite);
         }
+        if !self.joseph_upper::<M>(&k, &ph, &dh, r) {
+            return Err(KalmanError::NonFinite);
+        }
+        for i in 0..n {
+            self.x[i] = x[i];
+            for j in i + 1..n {
+                self.p[(j, i)] = self.p[(i, j)];
+            }
+        }
+        Ok(innovation)
+    }
+
+    /// `P h` and `h' P h` on the leading `M` states (the rest of `P h` 0).
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn projected<const M: usize>(&self, h: &[T; N]) -> ([T; N], T) {
+        let n = if M < N { M } else { N };
+        let mut ph = [T::zero(); N];
+        let mut hph = T::zero();
+        for i in 0..n {
+            let mut v = T::zero();
+            for j in 0..n {
+                v += self.p[(i, j)] * h[j];
+            }
+            ph[i] = v;
+            hph += h[i] * v;
+        }
+        (ph, hph)
+    }
+
+    /// Joseph's form of the covariance for gain `k` on the leading `M` states, `b = ph`,
+    /// `D h = dh`, written over the upper triangle in place (each term reads only its own old
+    /// value; the lower triangle is still the old mirror). Returns whether it is finite; when it
+    /// is not, the upper triangle is undone from the mirror and the diagonal kept, so that the
+    /// filter is left untouched.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn joseph_upper<const M: usize>(&mut self, k: &[T; N], ph: &[T; N], dh: &[T; N], r: T) -> bool {
+        let n = if M < N { M } else { N };
         let mut diagonal = [T::zero(); N];
         let mut p_sum = T::zero();
         for i in 0..n {
@@ -230,15 +261,9 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
                     self.p[(i, j)] = self.p[(j, i)];
                 }
             }
-            return Err(KalmanError::NonFinite);
+            return false;
         }
-        for i in 0..n {
-            self.x[i] = x[i];
-            for j in i + 1..n {
-                self.p[(j, i)] = self.p[(i, j)];
-            }
-        }
-        Ok(innovation)
+        true
     }
 
     /// Forgets what is known of the states `which`: their variance becomes `prior_sigma^2` and their

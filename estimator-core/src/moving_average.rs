@@ -17,12 +17,15 @@
 //! (a floating-point running sum accumulates rounding as a random walk: 0.3 arcsec after two days
 //! in `f32`). Each value is rounded once, on the way in.
 
+mod bins;
+
+pub use bins::{Bin, WindowLayout};
+
 use heapless::Deque;
 
-use crate::correlation::{CorrelationSums, QuantizedSample, References, FULL_WEIGHT};
+use crate::correlation::{CorrelationSums, QuantizedSample, References};
 use crate::gap_fill::GridSample;
-use crate::installation::Angles;
-use crate::math::{round, sin_cos, wrap_pi};
+use crate::math::round;
 use crate::Real;
 
 /// Fixed-point counts per unit.
@@ -144,11 +147,11 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 ///
 /// # One period of time, not of entries
 /// Each entry carries its number on the sample grid (the grid index, or the bin's number with
-/// bins), and the window holds the entries of the last `len` numbers: rows lost in a run too
-/// long to fill ([`crate::gap_fill`]) are simply absent, and the measurement is built from the
-/// entries that are there (`z = row . x` holds for any subset, see [`crate::correlation`]). An
-/// entry near such a run comes with a weight below [`FULL_WEIGHT`] (the taper that keeps the
-/// sway out of the sums, [`crate::gap_fill`]), and the sums are weighted.
+/// bins), and the window holds the entries of the last `len` numbers: rows lost in a run too long
+/// to fill ([`crate::gap_fill`]) are simply absent, and the measurement is built from the entries
+/// that are there (`z = row . x` holds for any subset, see [`crate::correlation`]). An entry near
+/// such a run comes with a weight below [`crate::correlation::FULL_WEIGHT`] (the taper that keeps
+/// the sway out of the sums, [`crate::gap_fill`]), and the sums are weighted.
 ///
 /// # Bounded work a push
 /// After a run of lost rows the next entry's number jumps, and the entries of as many numbers
@@ -159,14 +162,10 @@ impl<const CH: usize, const CAP: usize> WindowAverage<CH, CAP> {
 /// more than a few entries' work, whatever the gap.
 ///
 /// # Bins
-/// When one period holds more samples than the ring's capacity (a 10 Hz log, a long period),
-/// consecutive samples are averaged into bins of `bin` samples (roll, pitch, latitude, the
-/// references, and the angles as offsets from the bin's first sample, each weighted by the
-/// sample's weight), and each bin is one entry, of the mean weight of its samples: the window still
-/// spans one period (exactly, when `bin` divides the period; the nearest whole number of bins
-/// otherwise). Averaging within a bin slightly low-passes the sway (it helps) and the oscillation
-/// of eq (2) (a relative error of about `(w_r b dt)^2 / 24`, 1e-5 for 5 samples of 0.1 s at 480 s).
-/// Its measured cost is in docs/real-logs.md (Bins).
+/// When one period holds more samples than the ring's capacity, consecutive samples are averaged
+/// into bins of `bin` samples, each bin one entry of the mean weight of its samples
+/// ([`WindowLayout`]; `moving_average/bins.rs`): the window still spans one period (exactly, when
+/// `bin` divides the period; the nearest whole number of bins otherwise).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CorrelationWindow<const CAP: usize> {
     /// The entries in the window, oldest first.
@@ -212,7 +211,7 @@ pub struct Entry {
     pub sample: QuantizedSample,
     /// The entry's number (grid index, or bin number with bins), low 16 bits.
     pub number: u16,
-    /// Its weight in the sums, 0 to [`FULL_WEIGHT`].
+    /// Its weight in the sums, 0 to [`crate::correlation::FULL_WEIGHT`].
     pub weight: u8,
     /// How much of it was filled ([`crate::gap_fill`]): its fill weight, coded.
     pub fill: FillCode,
@@ -285,100 +284,6 @@ impl FillCode {
         } else {
             let k = c - 128;
             (16 + (k & 15)) << ((k >> 4) + 3)
-        }
-    }
-}
-
-/// A bin being filled: the sums of its samples' values times their weights.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Bin {
-    /// Samples in the bin.
-    pub count: u32,
-    /// The bin's number.
-    pub number: u32,
-    /// Sum of the samples' weights (a full weight counts 1).
-    pub weight: Real,
-    /// Sum of roll, rad.
-    pub roll_rad: Real,
-    /// Sum of pitch, rad.
-    pub pitch_rad: Real,
-    /// Sum of latitude, rad.
-    pub latitude_rad: Real,
-    /// Sum of the low-passed references.
-    pub reference: [Real; 4],
-    /// Sum of the rates of turn, in units of [`crate::correlation::TURN_RATE_UNIT_RAD_S`].
-    pub turn_rate: Real,
-    /// Sum of the turn channel's references, in the same units.
-    pub turn_reference: Real,
-    /// The first sample's rotation angle, rad.
-    pub rotation0_rad: Real,
-    /// Sum of the rotation angles' offsets from `rotation0_rad`, rad.
-    pub rotation_offset_rad: Real,
-    /// The first sample's rotation-minus-platform angle, rad.
-    pub rotation_minus_platform0_rad: Real,
-    /// Sum of the rotation-minus-platform angles' offsets from `rotation_minus_platform0_rad`, rad.
-    pub rotation_minus_platform_offset_rad: Real,
-    /// Sum of the samples' fill weights (unweighted, see [`crate::gap_fill`]).
-    pub fill_weight: u32,
-}
-
-impl Bin {
-    /// Nothing in it.
-    pub const ZERO: Bin = Bin {
-        number: 0,
-        weight: 0.0,
-        count: 0,
-        roll_rad: 0.0,
-        pitch_rad: 0.0,
-        latitude_rad: 0.0,
-        reference: [0.0; 4],
-        turn_rate: 0.0,
-        turn_reference: 0.0,
-        rotation0_rad: 0.0,
-        rotation_offset_rad: 0.0,
-        rotation_minus_platform0_rad: 0.0,
-        rotation_minus_platform_offset_rad: 0.0,
-        fill_weight: 0,
-    };
-}
-
-/// How one period is held by the window: samples per entry and entries in a full window.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct WindowLayout {
-    /// Samples per entry (1 without bins).
-    pub samples_per_entry: u32,
-    /// Entries in a full window.
-    pub entries: usize,
-}
-
-impl WindowLayout {
-    /// How a period of `period_samples` is held by a ring of `capacity` entries. One sample per
-    /// entry when the period fits; otherwise the smallest bin that divides the period into at most
-    /// `capacity` entries, or, when none does within twice the smallest possible bin, that
-    /// smallest bin and the nearest whole number of entries.
-    pub fn for_period(period_samples: u32, capacity: usize) -> WindowLayout {
-        let capacity = capacity.max(2) as u32;
-        let period = period_samples.max(2);
-        if period <= capacity {
-            return WindowLayout {
-                samples_per_entry: 1,
-                entries: period as usize,
-            };
-        }
-        // At least 1 (the period is over the capacity), said so: no division by zero below.
-        let smallest = period.div_ceil(capacity).max(1);
-        for bin in smallest..=2 * smallest {
-            if period.is_multiple_of(bin) && period / bin <= capacity {
-                return WindowLayout {
-                    samples_per_entry: bin,
-                    entries: (period / bin) as usize,
-                };
-            }
-        }
-        let entries = ((period + smallest / 2) / smallest).clamp(2, capacity);
-        WindowLayout {
-            samples_per_entry: smallest,
-            entries: entries as usize,
         }
     }
 }
@@ -509,9 +414,10 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         self.ring.iter().copied()
     }
 
-    /// Adds one sample with its low-passed references and its weight (0 to [`FULL_WEIGHT`]):
-    /// whether it completed an entry (every sample, without bins) and how many old entries went.
-    /// Samples come in grid order; lost ones are simply not pushed.
+    /// Adds one sample with its low-passed references and its weight (0 to
+    /// [`crate::correlation::FULL_WEIGHT`]): whether it completed an entry (every sample, without
+    /// bins) and how many old entries went. Samples come in grid order; lost ones are simply not
+    /// pushed.
     pub fn push(
         &mut self,
         s: &GridSample,
@@ -528,88 +434,7 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
                 removed,
             };
         }
-        let origin = *self.origin.get_or_insert(s.index);
-        let number = s.index.wrapping_sub(origin) / self.bin;
-        let mut out = Pushed {
-            completed: false,
-            removed: 0,
-        };
-        if self.partial.count > 0 && self.partial.number != number {
-            // The rest of the bin was lost: the bin is what it has.
-            out = self.close_bin();
-        }
-        let w = Real::from(weight.min(FULL_WEIGHT)) * (1.0 / FULL_WEIGHT as Real);
-        let b = &mut self.partial;
-        if b.count == 0 {
-            *b = Bin {
-                number,
-                rotation0_rad: s.rotation_rad,
-                rotation_minus_platform0_rad: s.rotation_minus_platform_rad,
-                ..Bin::default()
-            };
-        }
-        b.count += 1;
-        b.weight += w;
-        b.roll_rad += w * s.roll_rad;
-        b.pitch_rad += w * s.pitch_rad;
-        b.latitude_rad += w * s.latitude_rad;
-        for ch in 0..4 {
-            b.reference[ch] += w * reference.channels[ch];
-        }
-        b.turn_rate += w * turn_rate;
-        b.turn_reference += w * reference.turn;
-        b.rotation_offset_rad += w * wrap_pi(s.rotation_rad - b.rotation0_rad);
-        b.rotation_minus_platform_offset_rad +=
-            w * wrap_pi(s.rotation_minus_platform_rad - b.rotation_minus_platform0_rad);
-        b.fill_weight += u32::from(s.fill_weight);
-        if b.count >= self.bin {
-            let closed = self.close_bin();
-            out = Pushed {
-                completed: out.completed || closed.completed,
-                removed: out.removed + closed.removed,
-            };
-        }
-        out
-    }
-
-    /// Turns the bin being filled into an entry (none when all its samples had weight 0).
-    fn close_bin(&mut self) -> Pushed {
-        let b = self.partial;
-        self.partial = Bin::default();
-        if !(b.weight > 0.0) {
-            return Pushed {
-                completed: false,
-                removed: 0,
-            };
-        }
-        let n = b.weight;
-        let rotation = wrap_pi(b.rotation0_rad + b.rotation_offset_rad / n);
-        let rotation_minus_platform =
-            wrap_pi(b.rotation_minus_platform0_rad + b.rotation_minus_platform_offset_rad / n);
-        let angles = Angles::from_rotation(
-            rotation,
-            rotation_minus_platform,
-            sin_cos(b.latitude_rad / n),
-        );
-        let q = QuantizedSample::new(
-            b.roll_rad / n,
-            b.pitch_rad / n,
-            &angles,
-            &References {
-                channels: b.reference.map(|r| r / n),
-                turn: b.turn_reference / n,
-            },
-            b.turn_rate / n,
-        );
-        let fill = FillCode::of(b.fill_weight);
-        // The bin's weight: the mean of its samples' (lost samples count 0).
-        let weight =
-            round(n * FULL_WEIGHT as Real / self.bin as Real).clamp(0.0, FULL_WEIGHT as Real) as u8;
-        let removed = self.push_entry(b.number, q, fill, weight);
-        Pushed {
-            completed: true,
-            removed,
-        }
+        self.push_to_bin(s, reference, turn_rate, weight)
     }
 
     /// Adds an entry, removing up to [`MAX_REMOVALS_PER_PUSH`] entries older than one period (and

@@ -1,148 +1,33 @@
 //! Changes of the installation errors, detected from the filter's residuals.
 //!
-//! A re-installation or a shock moves the errors by a step `D` at some time `t0`. The filter, whose
-//! memory grows without bound while the errors look constant, barely moves; the step shows in its
-//! post-fit residuals `e = z - H x` instead. This detector decides, from those residuals, that the
-//! errors have changed, and which, so that [`super::Windowed`] can learn them again.
+//! A re-installation or a shock moves the errors by a step `D`. The filter, whose memory grows
+//! without bound while the errors look constant, barely moves; the step shows in its post-fit
+//! residuals `e = z - H x`, ramping over one window to `H D` and staying there. This detector
+//! decides from those residuals that the errors have changed, and which, so that
+//! [`super::Windowed`] can learn them again. What holds (the derivation, with the false-alarm
+//! bound, is in docs/method.md, "The change detector"; what logs show, in docs/uncertainty.md,
+//! "Changes of the errors"):
 //!
-//! # What the residual does after a step
-//! Each measurement `z` is the mean over the last window of `W` entries (one rotation period), so
-//! after the step the residual of channel `c` ramps from 0 at `t0` to `(H D)_c` at `t0 + W` and
-//! stays there. For a step of one error `x_i` alone, `(H D)_c` is about `g_c D` on its own channel
-//! `c = i` (`g_c` the channel's gain: 1/2 for x1, x2; `cos L / 2` for x3, x4), so the smallest step
-//! the detector is sized for, `Config::change_detection_step_rad = d`, shifts the residual by
-//! `a_c = g_c d`: 10 arcsec on a pitch channel for the default 20 arcsec.
+//! - **Blocks**: each pair's residuals are averaged over blocks of half a period, or a quarter, an
+//!   eighth... at long periods, at most [`MAX_BLOCK_S`] ([`block_entries`]): a block mean weighs
+//!   the products with a trapezoid that takes the sway down far below a window's residual.
+//! - **Variance**: a block mean's variance `s^2` is learned from the blocks (clipped at
+//!   [`WINSOR_SIGMAS`], over [`VARIANCE_BLOCKS`]), never below the model's
+//!   ([`block_variance_factor`]); with the learned lag-one correlation `rho` the run's variance is
+//!   the AR(1) long-run one, `s^2 (1 + rho) / (1 - rho)`.
+//! - **Test**: the log-likelihood ratio between no change and a change of the smallest size
+//!   (`Config::change_detection_step_rad` times the channel's gain) is summed over a run of blocks
+//!   beyond half that shift, through at most one dip at a time. A change is declared when the sum
+//!   reaches [`LLR_THRESHOLD`] and the run has lasted [`persistence_blocks`], longer than a passing
+//!   disturbance can make it. By Markov's inequality a run reaches the threshold `h` with
+//!   probability at most `exp(-h)` per block, channel and direction.
+//! - **Hold**: a block in a run and beyond [`HOLD_SIGMAS`] holds the filter's updates, and the
+//!   block's excess widens the 1-sigma, until the change is declared or the run ends; before the
+//!   first test ([`MIN_VARIANCE_BLOCKS`]) only a block beyond [`UNTESTED_HOLD_SIGMAS`] holds, from
+//!   [`HOLD_FROM_BLOCKS`] on, and nothing is declared.
 //!
-//! # The statistic: block means of the residuals
-//! One residual is the mean of a window and carries the sway's residual of that window: tens of
-//! arcsec at sea (the product of a 6 deg, 10 s sway and the reference, averaged over 480 s, falls
-//! only like `1 / (pi f W)`). Consecutive residuals share `W - 1` of their `W` entries, so they are
-//! no independent tests either. So the residuals are averaged once more, over **blocks of half a
-//! period** of each pair's updates (`W / 4` updates, `W / 2` entries): the block mean `b` weighs the
-//! raw products with a trapezoid `1.5 W` long, whose response to the sway falls like
-//! `1 / (pi f W)(pi f W / 2)`, below an arcsec (measured on the sea scenario: 0.2 to 1.2 arcsec,
-//! against 10 to 50 for a window's residual). At periods over 480 s a block is a quarter of the
-//! period, or an eighth..., the longest of these within [`MAX_BLOCK_S`] = 240 s
-//! ([`block_entries`]): the trapezoid `W + B` long still takes the sway down as far
-//! (`1 / (pi f W)(pi f B)`, with `W B` at least that of a 480 s period), and the run a change must
-//! last (below) shrinks with the block: at 720 s a 20 arcsec step was declared up to 2,044 s after
-//! it with half-period blocks, 1,864 s with 180 s blocks (docs/uncertainty.md).
-//!
-//! Under the model, `b` is zero-mean with a variance `s^2` learned from the blocks themselves (a
-//! running mean of `b^2` over [`VARIANCE_BLOCKS`] blocks, each `b^2` clipped at
-//! [`WINSOR_SIGMAS`]^2 `s^2`; a block that holds the filter, below, is left out: disturbances an
-//! hour apart would otherwise raise `s` without bound), never below the model's: white products
-//! of variance `q` give `s^2 = q (1 - 1/6) / W` (the trapezoid's sum of squared weights). Learning
-//! `s` from the data, not from the configured noise, is what keeps coloured noise and a rough sea
-//! from reading as steps: their block means are larger, and so is `s` (about 5 arcsec under
-//! 20 arcsec of coloured noise). It is learned once the residual average has a full horizon (the
-//! filter settled), and tested after [`MIN_VARIANCE_BLOCKS`] = 16 blocks (8 periods; with 8,
-//! coloured noise made 5 false declarations in 200 runs within the first two hours, before the
-//! variance and the correlation below were learned; with 16, none in 600). Both counts are of
-//! half-period blocks: with shorter blocks (periods over 480 s) they are multiplied by the blocks
-//! in half a period, so that the variance is learned from as much time (with 180 s blocks at 720 s
-//! and 16 of them, coloured noise made a false declaration in 200 runs; with 32, none).
-//!
-//! # Correlated blocks
-//! Consecutive blocks are not independent: their trapezoids overlap, and the filter's own error,
-//! which the residuals carry, persists from block to block (under coloured noise, for hours). A
-//! run of positively correlated blocks sums its log-likelihood ratio as if each block were new
-//! evidence. So the ratio is formed with the long-run variance of an AR(1) process of the blocks'
-//! learned lag-one correlation `rho` (the running mean of the product of consecutive block means,
-//! clipped alike, over `s^2`): `s_run^2 = s^2 (1 + rho) / (1 - rho)`, the variance per block of a
-//! long sum of such blocks, `rho` taken in `[0, `[`MAX_BLOCK_CORRELATION`]`]`. Measured: `rho` is
-//! negative on the sea scenario (the sway's residual alternates from one half period to the next;
-//! taken as 0), 0.45 to 0.7 under 20 arcsec of coloured noise (`s_run` 1.6 to 2.4 times `s`).
-//!
-//! # The test: a log-likelihood ratio over a run of blocks
-//! Between "no change" (`b ~ N(0, s^2)`) and "a change of the smallest size" (`b ~ N(+-a, s^2)`),
-//! the log-likelihood ratio of one block is `(+-a b - a^2 / 2) / s^2` (with `s_run^2`, above), with
-//! no square root. Per
-//! channel and direction it is summed over a **run**: consecutive blocks in which it is positive
-//! (the block mean beyond `a / 2`), with at most one block at a time where it is not (a dip,
-//! below); a second such block in a row, or a dip that takes the sum to zero, ends the run and
-//! clears the sum (what a CUSUM does when its sum falls to zero, except that two blocks below
-//! `a / 2` end it whatever the sum: a change is expected to stay beyond `a / 2`). A change is
-//! declared when, for some channel and direction,
-//!
-//! - the sum reaches [`LLR_THRESHOLD`] `= 20`, and
-//! - the run has lasted [`persistence_blocks`] blocks beyond `a / 2` (its dips not counted):
-//!   longer than any passing disturbance.
-//!
-//! **False alarms.** Under "no change", `E[exp(llr)] = 1` for each block, so by Markov's inequality
-//! a run starting at a given block reaches a sum of `h` with probability at most `exp(-h)`,
-//! whatever its length. With 4 channels, 2 directions and a block every half period, a false alarm
-//! comes at most `8 x 2 x (periods a year) x exp(-20)` times a year: 0.0022 for a 480 s period
-//! (one in 460 years of sea time), 0.017 for the shortest period, 60 s (one in 57 years). That
-//! bound holds for independent Gaussian blocks of the learned variance, and, through the long-run
-//! variance, approximately for correlated ones; what logs with what is neither (sway, coloured
-//! noise, heel in turns, drifting errors) show is measured: docs/uncertainty.md.
-//!
-//! **Persistence.** A passing disturbance (a turn's heel, a few minutes of roll offset) biases
-//! every window that contains it: the residuals over `W + D` for a disturbance of `D`, up to four
-//! consecutive blocks for `D = W / 2`. A step never passes. A run must therefore last until a block
-//! lies wholly after the longest disturbance the detector is to ignore, `D = max(B,
-//! `[`PASSING_S`]`)` for blocks of `B`: the residuals over `W + D` overlap at most
-//! `ceil((W + D) / B)` blocks and one more, so a run must last one block longer than that;
-//! `3 + ceil(2 D / W)` blocks for half-period blocks, 5 for a 480 s period (2.5 periods), 7 blocks
-//! of 180 s (1,260 s) for a 720 s period. A 20 arcsec
-//! step on a calm sea is detected within about three periods (the ramp of the first block, then
-//! the run); when it is, the window holds only samples from after the step, so the errors can be
-//! learned again from the next update on.
-//!
-//! **A dip in a run.** A step of the smallest size shifts its channel's blocks by about `a`, and
-//! the blocks' noise can take one of them below `a / 2`. With four-position rotation at 360 s, a
-//! 20 arcsec step of x3 shifted the roll channel's blocks by 5.9 to 7.7 arcsec (`a` 6.7, `s` 1.3;
-//! the blocks alternate from one half period to the next, a learned lag-one correlation of -0.4),
-//! and one block at 2.3 arcsec restarted the run: declared 1,784 s (4.96 periods) after the step,
-//! where the other runs of that line took 1,064 to 1,244 s. So a run goes on through one such
-//! block (a **dip**): its ratio, negative, is added to the sum, and it does not count towards the
-//! persistence. The false-alarm bound above stands: the sum is still that of every block since
-//! the run began, dips included. What a dip costs: a passing disturbance's run, then one block of
-//! noise short of `a / 2` and one beyond it, is as long as a run with the disturbance and the
-//! block beyond it alone; measured, no declaration more on the logs without a change
-//! (docs/uncertainty.md). That line is now declared within 1,244 s (3.46 periods). Runs go on
-//! through dips only once the blocks are tested.
-//!
-//! **Drift.** Errors that drift are followed by the filter with a lag (about 2 arcsec for
-//! 20 arcsec a day); the residual that lag leaves is a fraction of `a / 2`, so a drift never starts
-//! a run.
-//!
-//! # While a change builds up
-//! Until it is declared, the block mean beyond `2 s` widens the reported 1-sigma of the channel's
-//! error by `(|b| - 2 s) / g` (as the residual check does with its longer average), so that the
-//! 1-sigma covers a step from the first block that shows it. And while a channel's block is in a
-//! run and beyond [`HOLD_SIGMAS`]` s` (beyond `a / 2` and significant), the filter holds its
-//! updates: it would otherwise fit what does not fit, and through the leakage of x1, x2 into the
-//! roll channels a step of one pair pulls the other pair's errors too. A disturbance that passes
-//! costs the filter the windows it held; a change is learned again anyway.
-//!
-//! # Before the first test
-//! Blocks are tested once 8 periods of them are learned; at a 720 s period that is some 9,800 s
-//! into a log (the residual average's horizon first, then 32 blocks of 180 s). A disturbance
-//! before then used to go straight into the filter: a turn's heel at 7,200 s (180 s of 0.5 deg)
-//! biased the roll channels' blocks by 250 to 360 arcsec, the filter took a share of it, and its
-//! long memory then left the residuals some 20 arcsec off for hours, a run that the detector,
-//! once armed, declared a change of x3 and x4 (in 20 of 200 sea logs with 3 deg of heel, 81 of 200
-//! with 0.5 deg). So from [`HOLD_FROM_BLOCKS`] = 4 half periods of blocks learned on, runs are
-//! counted and a block in a run and beyond [`UNTESTED_HOLD_SIGMAS`] = 10 standard deviations of
-//! the variance learned so far holds the filter as above, for no longer than the persistence;
-//! nothing is summed, widened or declared until the blocks are tested. Ten, not the tested
-//! blocks' 3: a variance learned from a few blocks is itself uncertain, and at 3 the blocks of a
-//! rough sea held the filter in some of the 200 runs of the README's Monte Carlo (p95 of x4 at
-//! 5,000 s 0.51 arcsec, 0.48 without); a turn's blocks are hundreds of deviations out. Unlike a tested block that holds, such a block is still
-//! learned into the variance (clipped at [`WINSOR_SIGMAS`]): left out, under 20 arcsec of
-//! coloured noise the few blocks beyond 3 sigma of an early variance were missing from it, and a
-//! channel's variance learned too small made one false declaration in 200 logs at 480 s. A
-//! change before the first test is held for at most the persistence, then learned by the filter
-//! as before, and can be declared once the blocks are tested.
-//! Measured (docs/uncertainty.md): no declaration in 200 sea logs with turns at 720 s, with 3 or
-//! 0.5 deg of heel.
-//!
-//! # Cost
-//! Per update two additions; per block and channel three divisions, a root when the block is
-//! beyond 2 `s`, and two dozen multiply-adds, once a half period (docs/uncertainty.md has the
-//! step's cost on the Cortex-M4F).
+//! Per update the detector costs two additions; per block and channel three divisions, a root
+//! and two dozen multiply-adds.
 
 pub(crate) mod checkpoint;
 
@@ -166,7 +51,7 @@ pub const MIN_VARIANCE_BLOCKS: u32 = 16;
 pub const HOLD_FROM_BLOCKS: u32 = 4;
 
 /// Before the first test, a block in a run and beyond this many standard deviations of the
-/// variance learned so far holds the filter (see "Before the first test").
+/// variance learned so far holds the filter (docs/method.md, "Before the first test").
 pub const UNTESTED_HOLD_SIGMAS: Real = 10.0;
 
 /// Largest lag-one correlation of the blocks taken into the run's variance (a factor of 19 at most).
@@ -341,12 +226,13 @@ impl ChangeDetector {
     }
 
     /// Whether the filter should hold its updates: some channel is in a run whose last block is
-    /// beyond [`HOLD_SIGMAS`] standard deviations (see "While a change builds up").
+    /// beyond [`HOLD_SIGMAS`] standard deviations (docs/method.md, "While a change builds up").
     pub fn holding(&self) -> bool {
         self.holding.iter().any(|h| *h)
     }
 
-    /// The learned lag-one correlation of each channel's block means (see "Correlated blocks").
+    /// The learned lag-one correlation of each channel's block means (docs/method.md, "Correlated
+    /// blocks").
     pub fn block_correlation(&self) -> [Real; 4] {
         core::array::from_fn(|ch| {
             if self.mean_square_rad2[ch] > 0.0 {
@@ -420,7 +306,8 @@ impl ChangeDetector {
         let learned = self.learned_blocks[pair];
         let per_half_period = ctx.blocks_per_half_period.max(1);
         let testing = ctx.armed && learned >= MIN_VARIANCE_BLOCKS.saturating_mul(per_half_period);
-        // Before that, a gross disturbance still holds the filter (see "Before the first test").
+        // Before that, a gross disturbance still holds the filter (docs/method.md, "Before the
+        // first test").
         let guarding = testing || learned >= HOLD_FROM_BLOCKS.saturating_mul(per_half_period);
         let count = learned
             .saturating_add(1)
@@ -431,77 +318,14 @@ impl ChangeDetector {
             let b = block_rad[k];
             let var = self.block_variance(ch, ctx.floor_rad2);
             if guarding {
-                let a = gains[k] * ctx.step_rad;
-                // The run's blocks are not independent: the long-run variance of an AR(1) of the
-                // learned lag-one correlation (see "Correlated blocks" in the module doc).
-                let rho = (self.lag_product_rad2[ch] / var).clamp(0.0, MAX_BLOCK_CORRELATION);
-                let run_var = var * (1.0 + rho) / (1.0 - rho);
-                for dir in 0..2 {
-                    // A rise (0) or a fall (1) of the smallest size: at most one direction gains,
-                    // the one of the block's sign, when |b| > a / 2.
-                    let shift = if dir == 0 { b } else { -b };
-                    let llr = (a * shift - 0.5 * a * a) / run_var;
-                    if llr > 0.0 {
-                        // Before the first test, the run is counted for the hold alone.
-                        self.llr[ch][dir] += if testing { llr } else { 0.0 };
-                        self.run[ch][dir] = self.run[ch][dir].saturating_add(1);
-                        self.dipped[ch][dir] = false;
-                        declared |= self.llr[ch][dir] >= LLR_THRESHOLD
-                            && self.run[ch][dir] >= ctx.persistence_blocks;
-                    } else if testing
-                        && self.run[ch][dir] > 0
-                        && !self.dipped[ch][dir]
-                        && self.llr[ch][dir] + llr > 0.0
-                    {
-                        // A dip (see "A dip in a run"): the run goes on, its sum takes the block's
-                        // ratio, its length does not count the block.
-                        self.llr[ch][dir] += llr;
-                        self.dipped[ch][dir] = true;
-                    } else {
-                        self.llr[ch][dir] = 0.0;
-                        self.run[ch][dir] = 0;
-                        self.dipped[ch][dir] = false;
-                    }
-                }
-                // Held while the run is shorter than a passing disturbance can make it; a longer
-                // one is a change (declared) or an inconsistency the filter must work through.
-                let run = self.run[ch][0].max(self.run[ch][1]);
-                let hold_sigmas = if testing {
-                    HOLD_SIGMAS
-                } else {
-                    UNTESTED_HOLD_SIGMAS
-                };
-                self.holding[ch] = run > 0
-                    && run < ctx.persistence_blocks
-                    && b * b > hold_sigmas * hold_sigmas * var;
-                self.widening_rad[ch] = if testing && b * b > 4.0 * var && gains[k] > 1e-6 {
-                    ((b.abs() - 2.0 * sqrt(var)) / gains[k]).smaller(ctx.max_widening_rad)
-                } else {
-                    0.0
-                };
+                declared |= self.extend_runs(ch, b, gains[k] * ctx.step_rad, var, testing, ctx);
+                self.hold_and_widen(ch, b, gains[k], var, testing, ctx);
             }
             // A block that holds the filter is a disturbance or a change, not the blocks' noise;
             // before the first test, one that holds is learned from all the same (clipped), see
-            // "Before the first test".
+            // docs/method.md, "Before the first test".
             if ctx.settled && !(testing && self.holding[ch]) {
-                // The first block has no variance to be clipped against yet.
-                let b2 = if learned == 0 {
-                    b * b
-                } else {
-                    (b * b).smaller(WINSOR_SIGMAS * WINSOR_SIGMAS * var)
-                };
-                self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) * weight;
-                // The product with the previous block, both clipped alike: the lag-one covariance.
-                if learned > 0 {
-                    // max/min, not clamp: clamp's bounds come from a learned value here, and its
-                    // check of them (a panic that formats floats) cost 31 KB of flash on the
-                    // Cortex-M4F.
-                    let bound = WINSOR_SIGMAS * WINSOR_SIGMAS * var;
-                    let product = (b * self.previous_block_rad[ch])
-                        .larger(-bound)
-                        .smaller(bound);
-                    self.lag_product_rad2[ch] += (product - self.lag_product_rad2[ch]) * weight;
-                }
+                self.learn_block(ch, b, var, learned, weight);
             }
             self.previous_block_rad[ch] = b;
         }
@@ -511,6 +335,119 @@ impl ChangeDetector {
         if !declared {
             return None;
         }
+        Some(self.alarm())
+    }
+
+    /// Adds block mean `b` of channel `ch` (of variance `var`) to the channel's runs, a rise and
+    /// a fall of the smallest shift `a`: a block beyond `a / 2` extends the run, one short of it is
+    /// a dip (`testing` only) or ends it. Before the first test (`testing` false) runs are counted
+    /// for the hold alone. Returns whether a run is now long enough and its sum high enough for a
+    /// change to be declared.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn extend_runs(
+        &mut self,
+        ch: usize,
+        b: Real,
+        a: Real,
+        var: Real,
+        testing: bool,
+        ctx: &BlockContext,
+    ) -> bool {
+        let mut declared = false;
+        // The run's blocks are not independent: the long-run variance of an AR(1) of the learned
+        // lag-one correlation (docs/method.md, "Correlated blocks").
+        let rho = (self.lag_product_rad2[ch] / var).clamp(0.0, MAX_BLOCK_CORRELATION);
+        let run_var = var * (1.0 + rho) / (1.0 - rho);
+        for dir in 0..2 {
+            // A rise (0) or a fall (1) of the smallest size: at most one direction gains, the one
+            // of the block's sign, when |b| > a / 2.
+            let shift = if dir == 0 { b } else { -b };
+            let llr = (a * shift - 0.5 * a * a) / run_var;
+            if llr > 0.0 {
+                // Before the first test, the run is counted for the hold alone.
+                self.llr[ch][dir] += if testing { llr } else { 0.0 };
+                self.run[ch][dir] = self.run[ch][dir].saturating_add(1);
+                self.dipped[ch][dir] = false;
+                declared |= self.llr[ch][dir] >= LLR_THRESHOLD
+                    && self.run[ch][dir] >= ctx.persistence_blocks;
+            } else if testing
+                && self.run[ch][dir] > 0
+                && !self.dipped[ch][dir]
+                && self.llr[ch][dir] + llr > 0.0
+            {
+                // A dip (docs/method.md, "A dip in a run"): the run goes on, its sum takes the
+                // block's ratio, its length does not count the block.
+                self.llr[ch][dir] += llr;
+                self.dipped[ch][dir] = true;
+            } else {
+                self.llr[ch][dir] = 0.0;
+                self.run[ch][dir] = 0;
+                self.dipped[ch][dir] = false;
+            }
+        }
+        declared
+    }
+
+    /// Whether channel `ch`'s block `b` (of variance `var`, channel gain `gain`) holds the filter,
+    /// and by how much it widens the error's 1-sigma (`testing` only): held while the run is
+    /// shorter than a passing disturbance can make it; a longer one is a change (declared) or an
+    /// inconsistency the filter must work through.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn hold_and_widen(
+        &mut self,
+        ch: usize,
+        b: Real,
+        gain: Real,
+        var: Real,
+        testing: bool,
+        ctx: &BlockContext,
+    ) {
+        let run = self.run[ch][0].max(self.run[ch][1]);
+        let hold_sigmas = if testing {
+            HOLD_SIGMAS
+        } else {
+            UNTESTED_HOLD_SIGMAS
+        };
+        self.holding[ch] =
+            run > 0 && run < ctx.persistence_blocks && b * b > hold_sigmas * hold_sigmas * var;
+        self.widening_rad[ch] = if testing && b * b > 4.0 * var && gain > 1e-6 {
+            ((b.abs() - 2.0 * sqrt(var)) / gain).smaller(ctx.max_widening_rad)
+        } else {
+            0.0
+        };
+    }
+
+    /// Learns block mean `b` of channel `ch` into its variance and its lag-one covariance, each a
+    /// running mean of weight `weight`, clipped at [`WINSOR_SIGMAS`] of the variance `var` once
+    /// `learned` blocks are in it.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn learn_block(&mut self, ch: usize, b: Real, var: Real, learned: u32, weight: Real) {
+        // The first block has no variance to be clipped against yet.
+        let b2 = if learned == 0 {
+            b * b
+        } else {
+            (b * b).smaller(WINSOR_SIGMAS * WINSOR_SIGMAS * var)
+        };
+        self.mean_square_rad2[ch] += (b2 - self.mean_square_rad2[ch]) * weight;
+        // The product with the previous block, both clipped alike: the lag-one covariance.
+        if learned > 0 {
+            // max/min, not clamp: clamp's bounds come from a learned value here, and its check of
+            // them is a panic that formats floats, which the firmware's flash has no room for.
+            let bound = WINSOR_SIGMAS * WINSOR_SIGMAS * var;
+            let product = (b * self.previous_block_rad[ch])
+                .larger(-bound)
+                .smaller(bound);
+            self.lag_product_rad2[ch] += (product - self.lag_product_rad2[ch]) * weight;
+        }
+    }
+
+    /// The change declared: the errors whose channels are in a run, and the longest run.
+    // Called once, on the step's path.
+    #[inline(always)]
+    fn alarm(&self) -> Alarm {
         let mut alarm = Alarm {
             changed: [false; 4],
             run_blocks: 0,
@@ -520,7 +457,7 @@ impl ChangeDetector {
             alarm.changed[ch] = run > 0;
             alarm.run_blocks = alarm.run_blocks.max(run);
         }
-        Some(alarm)
+        alarm
     }
 }
 

@@ -2,8 +2,8 @@
 //! over correlated residuals needs.
 //!
 //! The filter averages the windows' measurements as if their noise were white: after `N` entries
-//! its variance of an error is about `q / N` for a per-product variance `q` (module doc of
-//! [`super`], "Noise of an overlapping-window measurement"). What the residuals hold beyond white
+//! its variance of an error is about `q / N` for a per-product variance `q` (docs/method.md,
+//! "Noise of an overlapping-window measurement"). What the residuals hold beyond white
 //! noise (the slow heel and trim that the correlation turns into a ripple near the rotation
 //! frequency, the errors of filled and missing samples, the sway's leak through the windows, a
 //! disturbance that lasts) averages down otherwise, and the variance of the filter's estimate is
@@ -33,8 +33,8 @@
 //! # What chance gives
 //! Over `n` batches the scale of white residuals is a chi-square's mean, about 1 give or take
 //! `sqrt(2 / n)`: taken as it is, the larger of it and the residual power's scale would make the
-//! 1-sigma of a clean log too large by that chance alone (measured: 94 % of the errors within
-//! 1 sigma at 5,000 s on clean sea logs, where 68 % is honest). The scale is therefore taken less
+//! 1-sigma of a clean log too large by that chance alone (docs/uncertainty.md has the coverage
+//! this gives). The scale is therefore taken less
 //! [`CHANCE_SIGMAS`] times `sqrt(2 / n)`: a scale that only chance raised above the model's
 //! leaves the 1-sigma to the residual power's, while one that a heel raises tens or thousands of
 //! times above it loses nothing that matters.

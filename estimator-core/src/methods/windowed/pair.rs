@@ -6,8 +6,8 @@
 //! [`channels`] of the four.
 //!
 //! The derivations (the residual check, the noise scale and the drift share, the report, the
-//! learned spread) are in the module doc of [`super`]; this module holds their state and the
-//! arithmetic that updates it, one pair at a time.
+//! learned spread) are in docs/method.md, "The windowed method in full"; this module holds their
+//! state and the arithmetic that updates it, one pair at a time.
 
 use crate::config::Config;
 use crate::correlation::STATES;
@@ -27,8 +27,8 @@ pub const fn channels(pair: usize) -> [usize; 2] {
 }
 
 /// The residual statistics of a pair learned alongside the filter: what goes back with the filter
-/// to the clean state while a change builds up (see "Changes of the errors" in the module doc of
-/// [`super`]).
+/// to the clean state while a change builds up (see "Changes of the errors: what the filter does"
+/// in docs/method.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ResidualStats {
     /// Exponential mean of each channel's post-fit residual, rad.
@@ -72,7 +72,7 @@ impl ResidualStats {
     /// After a declared change of the pair's errors: the residual check starts afresh, the scale
     /// and the walk go back to their defaults until a full horizon of residuals is averaged again,
     /// and the long averages keep what they learned with the weight of one `horizon` (see
-    /// "Changes of the errors", item 3, in the module doc of [`super`]).
+    /// "Changes of the errors: what the filter does", item 3, in docs/method.md).
     pub fn relearn(&mut self, horizon: u32) {
         self.mean_rad = [0.0; 2];
         self.count = 0;
@@ -102,8 +102,8 @@ pub struct Pair {
     /// Channel gains (diagonal of the rows, about 1/2 for x1, x2 and cos L / 2 for x3, x4) of the
     /// last update, for mapping residuals to x.
     pub gains: [Real; 2],
-    /// Per-product variance of the pair's channels at the last update, rad^2 (`r` of the module
-    /// doc of [`super`], filled samples included).
+    /// Per-product variance of the pair's channels at the last update, rad^2 (`r` of "Noise of an
+    /// overlapping-window measurement" in docs/method.md, filled samples included).
     pub product_variance_rad2: Real,
     /// The usual spread of each channel's residual, rad^2 (mean square, learned).
     pub spread_rad2: [Real; 2],
@@ -153,8 +153,8 @@ impl Pair {
         }
     }
 
-    /// The model's variance of a residual mean, `s_e^2 = r / n` (see "Consistency" in the module
-    /// doc of [`super`]): `r` the per-product variance at the last update (at least the configured
+    /// The model's variance of a residual mean, `s_e^2 = r / n` (see "Consistency" in
+    /// docs/method.md): `r` the per-product variance at the last update (at least the configured
     /// one), `n` the samples averaged (at least one window of `window_len` entries); entries of
     /// `bin` samples.
     fn residual_mean_variance(&self, config: &Config, bin: u32, window_len: usize) -> Real {
@@ -194,7 +194,7 @@ impl Pair {
     }
 
     /// The long averages of the residual means and what they give: the noise scale and the drift
-    /// share (see "Learning the noise and the drift" in the module doc of [`super`]). Starts once
+    /// share (see "Learning the noise and the drift" in docs/method.md). Starts once
     /// a full `horizon` of residuals has been averaged.
     // Called once, on the step's path.
     #[inline(always)]
@@ -242,7 +242,7 @@ impl Pair {
     /// `scaled_variance` (the filter's variance of the pair's errors, each pair's share rescaled
     /// by that pair's noise scale) widened by the residual check, the lag and the change
     /// detector's `widening_rad`, and whether its channel's residual mean is beyond the check's
-    /// bound (see the module doc of [`super`]).
+    /// bound (see "Learning the noise and the drift" in docs/method.md).
     pub fn refresh_report(
         &mut self,
         config: &Config,
@@ -292,8 +292,8 @@ impl Pair {
     /// The usual spread of each channel's residuals: a running mean of the squared residual over
     /// [`SPREAD_HORIZONS`] horizons. A residual the gate held out (`gated`) enters clipped at
     /// [`SPREAD_CLIP_SIGMAS`] and with the weight of a full average, so that a disturbance cannot
-    /// widen the gate it is being held out by (see "Innovation gate" in the module doc of
-    /// [`super`]).
+    /// widen the gate it is being held out by (see "Innovation gate" in
+    /// docs/method.md).
     // Called once, on the step's path.
     #[inline(always)]
     pub fn learn_spread(&mut self, horizon: u32, residual: [Real; 2], gated: bool) {

@@ -5,14 +5,13 @@
 //! Each window is the mean over one period `W` of the products (a boxcar), and the filter, which
 //! starts from a weak prior and takes every window with the same variance, ends up after `N`
 //! windows with a least-squares estimate whose weight on the products is the boxcar convolved with
-//! the run of windows: `g = rect_W * rect_N`, a trapezoid with ramps `N` long. A sway component
-//! at angular frequency `w` (periods of 6-14 s, degrees of amplitude `A`) leaks through the
+//! the run of windows: `g = rect_W * rect_N`, a trapezoid with ramps `N` long. A sway component at
+//! angular frequency `w` (periods of 6-14 s, degrees of amplitude `A`) leaks through the
 //! trapezoid's two kinks: `|G(w)| / G(0) <= 4 / (w^2 W N)` for `w N >> 1`. Long after the start
-//! that is nothing (module doc of [`super`]: about `20 / N` arcsec), but the first estimate is due
-//! within 1.25 periods of the start, and a one-way rotation makes its period known after about one
-//! period and the filler's delay (31 rows): at a 360 s period `N` is then about 30 windows, and
-//! 5 deg of sway at 14 s leaks `4 A / (w^2 W N)` = 33 arcsec into a channel (measured: 10 to 56
-//! arcsec on x at 450 s on four sea logs of each one-way scheme).
+//! that is nothing (docs/method.md, "Noise of an overlapping-window measurement"), but the first
+//! estimate is due within 1.25 periods of the start, and a one-way rotation makes its period known
+//! after about one period and the filler's delay (31 rows): at a 360 s period `N` is then about 30
+//! windows, and 5 deg of sway at 14 s leaks `4 A / (w^2 W N)` = 33 arcsec into a channel.
 //!
 //! # Bumps
 //! So the first windows enter with the weights of a bump: the `k`-th window of a bump of `L`
@@ -24,14 +23,13 @@
 //! window of weight 0) and held until the next one ends. The bumps double in length until they
 //! span a quarter of a period of windows; then the weights rise to 1 over twice the last bump's
 //! length (`3 u^2 - 2 u^3`: a step to 1 would be a kink of `g` inside the data, leaking as much as
-//! an edge), the estimate reported at every update from the end of the last bump on. (Doubling
-//! until the bumps span a period held estimates for up to 0.4 periods while the data improved
-//! them: measured on six logs of every scheme of the paper scenario at 360 s, a mean error of
-//! 1.45 arcsec at two periods instead of 0.64.)
+//! an edge), the estimate reported at every update from the end of the last bump on. (Bumps that
+//! doubled until they spanned a period would hold estimates for up to 0.4 periods while the data
+//! improve them.)
 //!
-//! Measured at 1.25 periods (`host-sim/tests/replay/gap_logs.rs`, four logs of every scheme at
-//! 360, 480 and 720 s, paper and sea): every error within 7.3 arcsec, where at sea at 360 s it
-//! was up to 56.
+//! What the first estimate is worth at 1.25 periods is pinned by
+//! `host-sim/tests/replay/gap_logs.rs` and measured in docs/real-logs.md ("The first windows'
+//! weights").
 //!
 //! # The first bump's length
 //! It ends when the first estimate is due: when the newest entry is 1.25 periods from the first

@@ -15,7 +15,7 @@
 //!
 //! # When a window holds a turn
 //! While the ship turns within the window (the variance of its low-passed rate of turn over the
-//! window beyond [`super::TURN_EXCITATION`] squared; a yaw sway leaves far less), a roll update
+//! window beyond [`super::heel::TURN_EXCITATION`] squared; a yaw sway leaves far less), a roll update
 //! counts towards a hold when
 //! - a roll channel's innovation lies beyond [`ROLL_HOLD_SIGMAS`] times that channel's learned
 //!   spread (the residual spread of [`super::pair`]), or
@@ -41,6 +41,10 @@
 //! updates, the roll channels' spreads holding meanwhile), nor is a hold (the window restarts).
 //! The measured effect on heel in turns is in docs/sea-day-study.md.
 
+use super::heel::TURN_EXCITATION;
+use super::pair::channels;
+use super::Windowed;
+use crate::correlation::{Measurement, HEEL_STATE, ROLL_PAIR, STATES};
 use crate::math::Compare;
 use crate::Real;
 
@@ -141,6 +145,39 @@ impl TurnHold {
     pub fn end(&mut self) {
         self.until = None;
         self.run = 0;
+    }
+}
+
+impl<const CAP: usize> Windowed<CAP> {
+    /// The turn hold's verdict on the roll pair's update of window `m` (see the module doc); none
+    /// unless the ship turns within the window (the variance of its low-passed rate of turn over
+    /// the window, the turn row's last term, beyond [`TURN_EXCITATION`] squared: the yaw sway of
+    /// eq (4) leaves less than a thousandth of it, the sea scenario's course weave a hundred times
+    /// it). `spread_known`: the roll channels' spreads are learned (as for the innovation gate).
+    pub(super) fn test_turn(&mut self, m: &Measurement, spread_known: bool) -> TurnVerdict {
+        if !(m.turn_row[HEEL_STATE] > TURN_EXCITATION * TURN_EXCITATION) {
+            return TurnVerdict::default();
+        }
+        let x = self.kf.state().as_slice();
+        let innovation =
+            |row: &[Real; STATES], z: Real| row.iter().zip(x).fold(z, |e, (h, xj)| e - h * xj);
+        let mut roll_beyond = false;
+        if spread_known {
+            let [a, b] = channels(ROLL_PAIR);
+            for (k, ch) in [a, b].into_iter().enumerate() {
+                let e = innovation(&m.rows[ch], m.z[ch]);
+                let bound =
+                    ROLL_HOLD_SIGMAS * ROLL_HOLD_SIGMAS * self.pairs[ROLL_PAIR].spread_rad2[k];
+                roll_beyond |= e * e > bound;
+            }
+        }
+        let turn = innovation(&m.turn_row, m.turn_z);
+        self.turn_hold.test(
+            turn,
+            roll_beyond,
+            self.window.newest_number(),
+            self.window.len() as u32,
+        )
     }
 }
 

@@ -1,0 +1,163 @@
+//! What the windowed method reports: the estimate (the filter's, or the one held while the
+//! first windows' bumps go on, [`super::start`]) and each error's 1-sigma.
+//!
+//! The filter's covariance `P` is the one for the configured noise; each pair's noise scale
+//! `lambda` ([`super::pair::Pair::noise_scale`]) rescales it to the noise the residuals show.
+//! The roll pair's share of `P` is `C = P I P`, `I = sum h h' / r` the information its
+//! measurements gave ([`Windowed::add_roll_information`]), so the variance of error `i` is
+//! `lambda_pitch (P_ii - C_ii) + lambda_roll C_ii`, within `[0, P_ii]` and at least the error's
+//! own pair's scale times `P_ii` ([`Windowed::scaled_variance`]). The residual check's widening,
+//! the lag a drift leaves and the change detector's widening are added by
+//! [`super::pair::Pair::refresh_report`]. A pair's report is refreshed once per update of the
+//! pair, not every step: the other pair's is at most one update old.
+//!
+//! The derivation is in docs/method.md and docs/uncertainty.md.
+
+use super::pair::channels;
+use super::{MethodEstimate, Windowed};
+use crate::config::Config;
+use crate::correlation::STATES;
+use crate::math::Compare;
+use crate::Real;
+
+impl<const CAP: usize> Windowed<CAP> {
+    /// The estimate to report now: the filter's, or, while the first windows' bumps go on, the
+    /// one held at the end of the last bump (none before the first ends).
+    pub(crate) fn estimate_now(&self) -> Option<MethodEstimate> {
+        if !self.start.holds() {
+            return self.live_estimate();
+        }
+        self.start.has_held().then_some(MethodEstimate {
+            x_rad: [
+                self.held_x_rad[0],
+                self.held_x_rad[1],
+                self.held_x_rad[2],
+                self.held_x_rad[3],
+            ],
+            sigma_rad: self.reported_sigma_rad(),
+            mismatch: false,
+            relearning: false,
+        })
+    }
+
+    /// The filter's estimate now (see [`Windowed::estimate`]).
+    pub(super) fn live_estimate(&self) -> Option<MethodEstimate> {
+        if self.updates == 0 {
+            return None;
+        }
+        // Flag only with a full horizon of residuals: the first windows carry sway residuals of
+        // tens of arcsec that the average has not yet taken down (their widening of the 1-sigma
+        // stays: it is conservative).
+        let horizon = self.residual_horizon();
+        let mismatch = self.pairs.iter().any(|p| p.mismatch.iter().any(|m| *m))
+            && self.pairs.iter().all(|p| p.stats.count >= horizon);
+        let x = self.kf.state();
+        Some(MethodEstimate {
+            x_rad: [x[0], x[1], x[2], x[3]],
+            sigma_rad: self.reported_sigma_rad(),
+            mismatch,
+            relearning: self.changed_entries > 0 || self.pairs.iter().any(|p| p.relearning),
+        })
+    }
+
+    /// Each error's reported 1-sigma, rad, as its pair last refreshed it.
+    pub(super) fn reported_sigma_rad(&self) -> [Real; 4] {
+        let [p, r] = &self.pairs;
+        [
+            p.reported_sigma_rad[0],
+            p.reported_sigma_rad[1],
+            r.reported_sigma_rad[0],
+            r.reported_sigma_rad[1],
+        ]
+    }
+
+    /// At the end of one of the first windows' bumps ([`start`]), the estimate to hold until the
+    /// next bump ends: the filter's now, with this pair's report, and the other pair's at its
+    /// next update (a window of weight 0 too: the next bump's first), one report a step as
+    /// always (not refreshed in between).
+    // Called once, on the step's path.
+    #[inline(always)]
+    pub(super) fn report_at_bump_end(&mut self, config: &Config, pair: usize, ends_bump: bool) {
+        if ends_bump {
+            let x = self.kf.state();
+            self.held_x_rad = (*x).into();
+            self.refresh_report(config, pair);
+            self.held_report_due = self.start.holds();
+        } else if core::mem::take(&mut self.held_report_due) {
+            self.refresh_report(config, pair);
+        }
+    }
+
+    /// Refreshes what is reported of the errors of `pair` (after its update, or after anything
+    /// that changed the filter): [`Pair::refresh_report`] with the filter's variance of the pair's
+    /// errors and the change detector's widening. Once per update of the pair, not every step:
+    /// the other pair's report is at most one update old.
+    pub(super) fn refresh_report(&mut self, config: &Config, pair: usize) {
+        // A pair is 0 or 1; said so, the indexing below needs no bounds check (no panic path).
+        let pair = pair.min(1);
+        let [a, b] = channels(pair);
+        let widening = self.change.widening_rad();
+        let scaled = [self.scaled_variance(a), self.scaled_variance(b)];
+        self.pairs[pair].refresh_report(
+            config,
+            self.window.bin(),
+            self.window.len(),
+            scaled,
+            [widening[a], widening[b]],
+        );
+    }
+
+    /// The variance of error `i`, each pair's share of the filter's covariance rescaled by that
+    /// pair's noise scale: `lambda_pitch (P_ii - C_ii) + lambda_roll C_ii`, `C = P I P` the roll
+    /// pair's share (`I` its information, [`Windowed::roll_information`]), within `[0, P_ii]`; at
+    /// least the error's own pair's scale times `P_ii`.
+    pub(super) fn scaled_variance(&self, i: usize) -> Real {
+        let i = i.min(STATES - 1);
+        let p = self.kf.covariance();
+        let p_ii = p[(i, i)].larger(0.0);
+        // p_i' I p_i, p_i = P's column i, from I's upper triangle.
+        let info = &self.roll_information;
+        let mut roll_share: Real = 0.0;
+        for j in 0..STATES {
+            let pj = p[(j, i)];
+            let mut v: Real = 0.5 * info[j][j] * pj;
+            for k in j + 1..STATES {
+                v += info[j][k] * p[(k, i)];
+            }
+            roll_share += 2.0 * pj * v;
+        }
+        let roll_share = roll_share.larger(0.0).smaller(p_ii);
+        let (pitch, roll) = (self.pairs[0].noise_scale(), self.pairs[1].noise_scale());
+        // Never below the error's own pair's scale times its variance: a roll pair quieter than
+        // the pitch pair does not make x1, x2 surer than their own channels' noise says.
+        let own = if i < 2 { pitch } else { roll };
+        (pitch * (p_ii - roll_share) + roll * roll_share).larger(own * p_ii)
+    }
+
+    /// Adds a roll measurement's information `h h' / r` to [`Windowed::roll_information`].
+    pub(super) fn add_roll_information(&mut self, h: &[Real; STATES], r: Real) {
+        if !(r > 0.0) {
+            return;
+        }
+        let inv_r = 1.0 / r;
+        // The upper triangle only: what reads it reads that (the lower one stays as it was).
+        for j in 0..STATES {
+            let hj = h[j] * inv_r;
+            for k in j..STATES {
+                self.roll_information[j][k] += hj * h[k];
+            }
+        }
+    }
+
+    /// Forgets the roll pair's information on the states `which` (as the filter forgets them).
+    pub(super) fn forget_roll_information(&mut self, which: &[bool; STATES]) {
+        for j in 0..STATES {
+            if which[j] {
+                for k in 0..STATES {
+                    self.roll_information[j][k] = 0.0;
+                    self.roll_information[k][j] = 0.0;
+                }
+            }
+        }
+    }
+}
