@@ -151,9 +151,10 @@ impl TurnHold {
 impl<const CAP: usize> Windowed<CAP> {
     /// The turn hold's verdict on the roll pair's update of window `m` (see the module doc); none
     /// unless the ship turns within the window (the variance of its low-passed rate of turn over
-    /// the window, the turn row's last term, beyond [`TURN_EXCITATION`] squared: the yaw sway of
-    /// eq (4) leaves less than a thousandth of it, the sea scenario's course weave a hundred times
-    /// it). `spread_known`: the roll channels' spreads are learned (as for the innovation gate).
+    /// the window, the turn row's last term, beyond [`TURN_EXCITATION`] squared: the reference's
+    /// low-pass leaves next to nothing of a yaw sway's rate, while a course weave or a turn moves
+    /// the rate by far more). `spread_known`: the roll channels' spreads are learned (as for the
+    /// innovation gate).
     pub(super) fn test_turn(&mut self, m: &Measurement, spread_known: bool) -> TurnVerdict {
         if !(m.turn_row[HEEL_STATE] > TURN_EXCITATION * TURN_EXCITATION) {
             return TurnVerdict::default();
