@@ -107,6 +107,16 @@ fn main() -> ! {
         board.reset_cause,
         board.clock_source,
     );
+    serve(&mut link, &mut service)
+}
+
+/// The service loop: one request in, one answer out, for ever; a bad frame is counted and
+/// answered by nothing. Inlined into `main`, whose frame lives for ever.
+#[inline(always)]
+fn serve<W: firmware::watchdog::Watchdog>(
+    link: &mut link::Link<W>,
+    service: &mut service::Service<'_>,
+) -> ! {
     loop {
         match link.receive() {
             #[cfg(feature = "test-hang")]

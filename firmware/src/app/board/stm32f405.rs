@@ -125,24 +125,13 @@ impl Board {
             ClockSource::InternalFallback | ClockSource::Fixed => Config::hsi(),
         };
         let mut rcc = device.RCC.freeze(config);
-        let watchdog = match environment {
-            Environment::Silicon => {
-                if clock_source == ClockSource::Crystal {
-                    // SAFETY: RCC_CR's CSSON: from now on a crystal failure raises the NMI
-                    // (below), and the hardware switches the core to HSI.
-                    unsafe { (*pac::RCC::ptr()).cr().modify(|_, w| w.csson().set_bit()) };
-                }
-                // Keep the debug port alive while the core sleeps in WFI, for RTT; stop the IWDG
-                // while a debugger halts the core.
-                device.DBGMCU.cr().modify(|_, w| w.dbg_sleep().set_bit());
-                let mut iwdg = IndependentWatchdog::new(device.IWDG);
-                iwdg.stop_on_debug(&device.DBGMCU, true);
-                iwdg.start(IWDG_TIMEOUT_MS.millis());
-                check_brown_out_level(&device.FLASH);
-                BoardWatchdog { enabled: true }
-            }
-            Environment::Qemu => BoardWatchdog { enabled: false },
-        };
+        let watchdog = start_watchdog(
+            environment,
+            clock_source,
+            device.IWDG,
+            &device.DBGMCU,
+            &device.FLASH,
+        );
         let cost_hz = match environment {
             Environment::Silicon => rcc.clocks.hclk().raw(),
             Environment::Qemu => QEMU_CPU_CLOCK_HZ,
@@ -188,6 +177,36 @@ impl Board {
             reset_cause,
             clock_source,
         })
+    }
+}
+
+/// On silicon: the clock security system armed when the crystal runs, the debug port kept alive
+/// in WFI, the independent watchdog started (stopped while a debugger halts the core) and the
+/// brown-out level checked. Under QEMU no watchdog runs.
+fn start_watchdog(
+    environment: Environment,
+    clock_source: ClockSource,
+    iwdg: pac::IWDG,
+    dbgmcu: &pac::DBGMCU,
+    flash: &pac::FLASH,
+) -> BoardWatchdog {
+    match environment {
+        Environment::Silicon => {
+            if clock_source == ClockSource::Crystal {
+                // SAFETY: RCC_CR's CSSON: from now on a crystal failure raises the NMI
+                // (below), and the hardware switches the core to HSI.
+                unsafe { (*pac::RCC::ptr()).cr().modify(|_, w| w.csson().set_bit()) };
+            }
+            // Keep the debug port alive while the core sleeps in WFI, for RTT; stop the IWDG
+            // while a debugger halts the core.
+            dbgmcu.cr().modify(|_, w| w.dbg_sleep().set_bit());
+            let mut iwdg = IndependentWatchdog::new(iwdg);
+            iwdg.stop_on_debug(dbgmcu, true);
+            iwdg.start(IWDG_TIMEOUT_MS.millis());
+            check_brown_out_level(flash);
+            BoardWatchdog { enabled: true }
+        }
+        Environment::Qemu => BoardWatchdog { enabled: false },
     }
 }
 
