@@ -74,6 +74,9 @@ impl Persistence {
 pub struct Service<'a> {
     estimator: &'a mut Estimator,
     binner: Binner,
+    /// Navigation-rate samples the binner refused, by [`estimator_core::RejectReason`] code: they
+    /// never reach the estimator, whose own count leaves them out.
+    nav_rejected: [u32; estimator_core::RejectReason::ALL.len()],
     cost: CostCounter,
     bad_frames: Counters,
     boot_stack_peak_bytes: u32,
@@ -94,6 +97,7 @@ impl<'a> Service<'a> {
         Service {
             estimator,
             binner: Binner::default(),
+            nav_rejected: [0; estimator_core::RejectReason::ALL.len()],
             cost,
             bad_frames: Counters::default(),
             boot_stack_peak_bytes,
@@ -180,6 +184,9 @@ impl<'a> Service<'a> {
             Ok(completed) => completed,
             Err(error) => {
                 let ticks = self.cost.ticks_since(start);
+                if let Some(n) = self.nav_rejected.get_mut(error.reason() as usize) {
+                    *n = n.saturating_add(1);
+                }
                 return Response::Rejected(RejectedReply::new(
                     sample.time_s,
                     &error,
@@ -217,9 +224,14 @@ impl<'a> Service<'a> {
     }
 
     fn counters(&self) -> Counters {
+        // Rejected samples: the estimator's and the binner's, each reason summed.
+        let mut rejected_samples = self.estimator.rejected().0;
+        for (n, nav) in rejected_samples.iter_mut().zip(self.nav_rejected) {
+            *n = n.saturating_add(nav);
+        }
         Counters {
             bad_frames: self.bad_frames.bad_frames,
-            rejected_samples: self.estimator.rejected().0,
+            rejected_samples,
         }
     }
 

@@ -6,7 +6,7 @@
 
 use crate::qemu_support::*;
 use estimator_core::binning::Binner;
-use estimator_core::{Config, Estimator};
+use estimator_core::{Config, Estimator, SampleError};
 use host_sim::formats::log_csv::read_log;
 use host_sim::replay::sample_of;
 use host_sim::stream::Target;
@@ -98,6 +98,34 @@ fn a_100_hz_log_sent_as_navigation_samples_is_binned_stepped_and_compensated_as_
             (got, want) => panic!("sample {k}: bin {got:?}, host {want:?}"),
         }
     }
+    // A sample whose time is not after the last one's: refused with its reason, counted with the
+    // rejected samples, the firmware's binner and estimator unchanged (the next bin's step, at
+    // the next second, is still the host's).
+    let last = sample_of(&lines[lines.len() - 1].row);
+    let Response::Rejected(r) = target
+        .request(&Request::NavSample(SampleMsg::from(&last)))
+        .unwrap()
+    else {
+        panic!("a repeated time was not refused");
+    };
+    assert_eq!(r.error(), Some(SampleError::TimeNotIncreasing));
+    assert_eq!(r.counters.rejected_samples_total(), 1);
+    let mut next = last;
+    next.time_s += 1.0;
+    let expected = binner
+        .push(&next)
+        .unwrap()
+        .map(|bin| host.step(&bin).unwrap());
+    let Response::Nav(reply) = target
+        .request(&Request::NavSample(SampleMsg::from(&next)))
+        .unwrap()
+    else {
+        panic!("not a Nav answer after the refused sample");
+    };
+    let BinOutcome::Step(r) = reply.bin else {
+        panic!("the last bin was not stepped: {:?}", reply.bin);
+    };
+    assert_eq!(r.output(), expected);
     drop(target);
     // One step a second (the first bin completes at 1 s); the first estimate comes at 1.25
     // periods of the window, 105 s in, and every sample from then on is compensated with it.
