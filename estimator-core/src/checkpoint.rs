@@ -89,7 +89,7 @@ use wire::{Reader, Writer};
 /// First four bytes of every image.
 pub const MAGIC: [u8; 4] = *b"RIEC";
 /// Format version written and the only one read.
-pub const VERSION: u16 = 8;
+pub const VERSION: u16 = 9;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 12;
 /// Bytes of the CRC at the end.

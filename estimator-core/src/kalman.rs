@@ -69,6 +69,53 @@ impl core::fmt::Display for KalmanError {
 
 impl core::error::Error for KalmanError {}
 
+/// A measurement the filter took: its innovation `z - h x` and the gain `K` it was applied with
+/// (0 on the states the update left alone).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Applied<T, const N: usize> {
+    /// The innovation `z - h x`, before the update.
+    pub innovation: T,
+    /// The gain `K`.
+    pub gain: [T; N],
+}
+
+/// Carries a share `C` of the covariance through an update of row `h` and gain `k` (an
+/// [`Applied`]): `C+ = (I - k h') C (I - k h')' + r k k'`, with `r` the measurement's variance when
+/// the measurement belongs to the share and 0 when it does not. Joseph's form is linear in `P` and
+/// `r`: the covariance after an update is the sum of the shares so carried, each measurement's
+/// noise added to its own, the prior and the random walk to none. Term by term, with `u = C h`
+/// and `s = h' C h`: `C_ij - k_i u_j - u_i k_j + (s + r) k_i k_j`. Only the upper triangle
+/// (`[j][k]`, `j <= k`) is read and written; a variance rounded below 0 is set to 0.
+pub fn carry_share<T: RealField + Copy, const N: usize>(
+    share: &mut [[T; N]; N],
+    h: &[T; N],
+    k: &[T; N],
+    r: T,
+) {
+    let at = |c: &[[T; N]; N], i: usize, j: usize| if i <= j { c[i][j] } else { c[j][i] };
+    let mut u = [T::zero(); N];
+    let mut s = T::zero();
+    for i in 0..N {
+        let mut v = T::zero();
+        for j in 0..N {
+            v += at(share, i, j) * h[j];
+        }
+        u[i] = v;
+        s += h[i] * v;
+    }
+    let sr = s + r;
+    for i in 0..N {
+        for j in i..N {
+            share[i][j] += -k[i] * u[j] - u[i] * k[j] + sr * k[i] * k[j];
+        }
+        // A share is a covariance: its variances are not negative (rounding of a share near 0
+        // can make one a few ulps below).
+        if share[i][i] < T::zero() {
+            share[i][i] = T::zero();
+        }
+    }
+}
+
 /// State estimate and covariance of `N` constant states.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ConstantStateKalman<T: RealField + Copy, const N: usize> {
@@ -119,6 +166,16 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         self.update_gated(h, z, r, None)
     }
 
+    /// [`ConstantStateKalman::update`], returning the innovation and the gain.
+    pub fn update_with_gain(
+        &mut self,
+        h: &[T; N],
+        z: T,
+        r: T,
+    ) -> Result<Applied<T, N>, KalmanError> {
+        self.update_masked(h, z, r, None, None)
+    }
+
     /// [`ConstantStateKalman::update`], refused ([`KalmanError::Gated`], the filter untouched)
     /// when `gate = Some((spread, g))` and the innovation is beyond `g` times its standard
     /// deviation for a measurement of variance `spread`: `(z - h x)^2 > g^2 (h' P h + spread)`
@@ -132,6 +189,7 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         gate: Option<(T, T)>,
     ) -> Result<T, KalmanError> {
         self.update_masked(h, z, r, gate, None)
+            .map(|a| a.innovation)
     }
 
     /// [`ConstantStateKalman::update_gated`] that moves only the states `updated` (all: `None`).
@@ -142,7 +200,7 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         r: T,
         gate: Option<(T, T)>,
         updated: Option<&[bool; N]>,
-    ) -> Result<T, KalmanError> {
+    ) -> Result<Applied<T, N>, KalmanError> {
         self.update_leading::<N>(h, z, r, gate, updated)
     }
 
@@ -158,7 +216,7 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
         r: T,
         gate: Option<(T, T)>,
         updated: Option<&[bool; N]>,
-    ) -> Result<T, KalmanError> {
+    ) -> Result<Applied<T, N>, KalmanError> {
         let n = if M < N { M } else { N };
         if !z.is_finite() || !r.is_finite() || r < T::zero() || !sum_is_finite(h) {
             return Err(KalmanError::NonFinite);
@@ -214,7 +272,10 @@ impl<T: RealField + Copy, const N: usize> ConstantStateKalman<T, N> {
                 self.p[(j, i)] = self.p[(i, j)];
             }
         }
-        Ok(innovation)
+        Ok(Applied {
+            innovation,
+            gain: k,
+        })
     }
 
     /// `P h` and `h' P h` on the leading `M` states (the rest of `P h` 0).
@@ -317,6 +378,47 @@ mod tests {
     use super::*;
     use rand_chacha::rand_core::{RngCore, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// The shares carried through every update, each group's noise joining its own and the prior
+    /// its own, add up to the filter's covariance after any sequence of updates, masked ones among
+    /// them; and the group that measured nothing keeps a share the updates only take down.
+    #[test]
+    fn carried_shares_add_up_to_the_covariance() {
+        const N: usize = 3;
+        let mut kf = ConstantStateKalman::<f64, N>::new([10.0, 5.0, 2.0]);
+        let mut prior = [[0.0; N]; N];
+        for (i, row) in prior.iter_mut().enumerate() {
+            row[i] = kf.covariance()[(i, i)];
+        }
+        let (mut a, mut b) = ([[0.0; N]; N], [[0.0; N]; N]);
+        let masked = [true, true, false];
+        for step in 0..40 {
+            let t = step as f64 * 0.37;
+            let h = [t.cos(), t.sin(), 0.3 + 0.1 * t.cos()];
+            let (r, group_a) = if step % 3 == 0 {
+                (0.5, false)
+            } else {
+                (0.2, true)
+            };
+            let mask = (step % 5 == 0).then_some(&masked);
+            let applied = kf.update_masked(&h, 0.1 * t, r, None, mask).unwrap();
+            carry_share(&mut prior, &h, &applied.gain, 0.0);
+            carry_share(&mut a, &h, &applied.gain, if group_a { r } else { 0.0 });
+            carry_share(&mut b, &h, &applied.gain, if group_a { 0.0 } else { r });
+        }
+        let p = kf.covariance();
+        for i in 0..N {
+            for j in i..N {
+                let sum = prior[i][j] + a[i][j] + b[i][j];
+                assert!(
+                    (sum - p[(i, j)]).abs() <= 1e-12 * p[(i, i)].max(p[(j, j)]),
+                    "{i},{j}"
+                );
+            }
+            assert!(a[i][i] > 0.0 && b[i][i] > 0.0 && prior[i][i] > 0.0);
+            assert!(prior[i][i] < [10.0f64, 5.0, 2.0][i].powi(2));
+        }
+    }
 
     /// A known linear system: two constants observed through rotating rows with white noise. The
     /// filter must match batch least squares (what a constant-state Kalman filter with a weak prior is).

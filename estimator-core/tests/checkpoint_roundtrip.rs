@@ -522,7 +522,7 @@ fn an_image_of_the_previous_format_version_is_refused_as_such() {
     let mut target: Estimator = Estimator::new(Config::with_method(Method::Traditional)).unwrap();
     let before = target.clone();
     let mut old = good.clone();
-    old[4..6].copy_from_slice(&7u16.to_le_bytes());
+    old[4..6].copy_from_slice(&8u16.to_le_bytes());
     let n = old.len();
     let crc = crc32(&old[..n - 4]);
     old[n - 4..].copy_from_slice(&crc.to_le_bytes());
@@ -530,11 +530,11 @@ fn an_image_of_the_previous_format_version_is_refused_as_such() {
     assert_eq!(
         err,
         CheckpointError::Version {
-            found: 7,
-            expected: 8
+            found: 8,
+            expected: 9
         }
     );
-    assert_eq!(VERSION, 8);
+    assert_eq!(VERSION, 9);
     assert!(err.to_string().contains("older firmware"), "{err}");
     assert!(target == before);
     target.restore(good).unwrap();

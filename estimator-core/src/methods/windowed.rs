@@ -115,11 +115,11 @@ pub struct Windowed<const CAP: usize> {
     next_pair: u8,
     /// What each channel pair learned beside the filter ([`pair`]): pitch, roll.
     pairs: [Pair; 2],
-    /// The information the roll pair's measurements gave the filter, `sum h h' / r` (symmetric;
-    /// its upper triangle `[j][k]`, `j <= k`, is kept, the lower one is not used): the roll
-    /// pair's share of the filter's covariance is about `P I P`, which its noise scale rescales
-    /// (`windowed/report.rs`).
-    roll_information: [[Real; STATES]; STATES],
+    /// The roll pair's share of the filter's covariance (symmetric; its upper triangle
+    /// `[j][k]`, `j <= k`, is kept, the lower one is not used): carried through every update
+    /// with that update's gain, the roll measurements' noise joining it
+    /// ([`crate::kalman::carry_share`]); its noise scale rescales it (`windowed/report.rs`).
+    roll_share: [[Real; STATES]; STATES],
     /// The detector of changes of the errors ([`change`]).
     change: ChangeDetector,
     /// The estimate when the change was declared, rad: the residuals of that block are formed
@@ -167,7 +167,7 @@ pub struct Windowed<const CAP: usize> {
 pub struct CleanState {
     kf: ConstantStateKalman<Real, STATES>,
     stats: [ResidualStats; 2],
-    roll_information: [[Real; STATES]; STATES],
+    roll_share: [[Real; STATES]; STATES],
 }
 
 impl CleanState {
@@ -175,7 +175,7 @@ impl CleanState {
     const UNCONFIGURED: CleanState = CleanState {
         kf: ConstantStateKalman::from_parts([0.0; STATES], [[0.0; STATES]; STATES]),
         stats: [ResidualStats::UNCONFIGURED; 2],
-        roll_information: [[0.0; STATES]; STATES],
+        roll_share: [[0.0; STATES]; STATES],
     };
 }
 
@@ -226,7 +226,7 @@ impl<const CAP: usize> Windowed<CAP> {
             entries_since_update: 0,
             next_pair: 0,
             pairs: [Pair::UNCONFIGURED; 2],
-            roll_information: [[0.0; STATES]; STATES],
+            roll_share: [[0.0; STATES]; STATES],
             change: ChangeDetector::NEW,
             held_x_rad: [0.0; STATES],
             changed_entries: 0,
@@ -279,7 +279,7 @@ impl<const CAP: usize> Windowed<CAP> {
             self.pairs[0].reported_sigma_rad = [p.sigma_rad[0], p.sigma_rad[1]];
             self.pairs[1].reported_sigma_rad = [p.sigma_rad[2], p.sigma_rad[3]];
         }
-        self.roll_information = [[0.0; STATES]; STATES];
+        self.roll_share = [[0.0; STATES]; STATES];
         self.change = ChangeDetector::NEW;
         self.held_x_rad = [mean[0], mean[1], mean[2], mean[3], 0.0];
         self.changed_entries = 0;

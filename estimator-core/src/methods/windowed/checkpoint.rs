@@ -1,7 +1,7 @@
 //! The windowed method in a checkpoint image: what it learned, not its window. In order: updates
 //! (u32), the Kalman filter (`x` 5 `R`, `P` 25 `R` row-major: x1..x4 and the heel in turns), the
 //! pair the next update takes (u8: 0 pitch, 1 roll), each pair's part (pitch, then roll: below),
-//! the roll pair's information (the upper triangle of `sum h h' / r`, 15 `R`, row by row), a flag
+//! the roll pair's share of the covariance (its upper triangle, 15 `R`, row by row), a flag
 //! byte (bits 0-1: the first windows' weights ([`super::start`]): 0 not in their bumps, 1 in them
 //! with no estimate held yet, 2 in them with the estimate of the last bump's end held; bit 2: the
 //! ship has turned), the estimate the errors are learned again against after a change, or, in
@@ -9,7 +9,8 @@
 //! part (`change/checkpoint.rs`).
 //!
 //! A pair's part ([`Pair`]'s kept fields): its residual means (2 `R`), residuals averaged (u32),
-//! the long means of the residual means (2 `R`) and of their powers (2 `R`), the residual means in
+//! the long means of the residual means (2 `R`), their recent-weighted means (2 `R`) and the long
+//! means of their powers (2 `R`), the residual means in
 //! the long averages (u32), the noise scale and the drift share (2 `R`), the channel gains
 //! (2 `R`), the per-product variance (`R`), the reported 1-sigma of its errors (2 `R`), a flag byte
 //! (bits 0-1: each channel's residual mean beyond the check's bound; bit 2: learning its errors
@@ -22,11 +23,11 @@
 //! state the detector goes back to while a change builds up is the restored one.
 //!
 //! Checked: the Kalman filter (see [`crate::kalman`]); residual means and their long means within
-//! [`MAX_RESIDUAL`]; gains within `[0, 4]` (a gain is the magnitude of a window mean of products
+//! [`MAX_RESIDUAL`] (the recent-weighted ones too); gains within `[0, 4]` (a gain is the magnitude of a window mean of products
 //! of sines and cosines, minus a product of two such means); the per-product variances within
 //! [`MAX_PRODUCT_VARIANCE_RAD2`]; powers and noise scales within [`MAX_NOISE_SCALE`]; drift shares
 //! within `[0, 1]`; the pair 0 or 1; the reported 1-sigma finite and not negative; the roll
-//! information finite, its diagonal not negative; the flag byte's bits 0-1 not both set and no
+//! pair's share finite, its diagonal not negative; the flag byte's bits 0-1 not both set and no
 //! other bit but 2; the estimate learned against within [`MAX_STATE`]; the spreads within
 //! [`MAX_RESIDUAL`]^2. The bumps begin again at the next full window after a restore, the estimate
 //! held meanwhile (an image of before the bumps has bits 0-1 zero: the filter's estimate is
@@ -62,7 +63,7 @@ pub(crate) struct Learned {
     kf: ConstantStateKalman<Real, STATES>,
     next_pair: u8,
     pairs: [Pair; 2],
-    roll_information: [[Real; STATES]; STATES],
+    roll_share: [[Real; STATES]; STATES],
     turning: bool,
     held_x_rad: [Real; STATES],
     change: BlockVariance,
@@ -88,7 +89,7 @@ impl<const CAP: usize> Windowed<CAP> {
             kf: self.kf.clone(),
             next_pair: self.next_pair,
             pairs: [kept(&self.pairs[0]), kept(&self.pairs[1])],
-            roll_information: self.roll_information,
+            roll_share: self.roll_share,
             turning: self.turning,
             held_x_rad: self.held_x_rad,
             change: self.change.learned(),
@@ -108,7 +109,7 @@ impl<const CAP: usize> Windowed<CAP> {
         self.kf = l.kf;
         self.next_pair = l.next_pair;
         self.pairs = l.pairs;
-        self.roll_information = l.roll_information;
+        self.roll_share = l.roll_share;
         self.turning = l.turning;
         self.held_x_rad = l.held_x_rad;
         self.change.keep_learned(l.change);
@@ -125,7 +126,8 @@ const UPPER: usize = STATES * (STATES + 1) / 2;
 
 /// A pair's kept fields (see the module doc).
 impl Stored for Pair {
-    const LEN: usize = 2 * R + 4 + 2 * R + 2 * R + 4 + 2 * R + 2 * R + R + 2 * R + 1 + 2 * R + 4;
+    const LEN: usize =
+        2 * R + 4 + 2 * R + 2 * R + 2 * R + 4 + 2 * R + 2 * R + R + 2 * R + 1 + 2 * R + 4;
     type Context<'a> = ();
 
     fn write(&self, w: &mut Writer<'_>) {
@@ -134,7 +136,12 @@ impl Stored for Pair {
             w.real(v);
         }
         w.u32(s.count);
-        for v in s.mean_long_rad.into_iter().chain(s.power) {
+        for v in s
+            .mean_long_rad
+            .into_iter()
+            .chain(s.mean_recent_rad)
+            .chain(s.power)
+        {
             w.real(v);
         }
         w.u32(s.long_count);
@@ -161,6 +168,7 @@ impl Stored for Pair {
         s.mean_rad = [r.real(), r.real()];
         s.count = r.u32();
         s.mean_long_rad = [r.real(), r.real()];
+        s.mean_recent_rad = [r.real(), r.real()];
         s.power = [r.real(), r.real()];
         s.long_count = r.u32();
         s.noise_scale = r.real();
@@ -203,7 +211,7 @@ impl Stored for Learned {
         }
         for j in 0..STATES {
             for k in j..STATES {
-                w.real(self.roll_information[j][k]);
+                w.real(self.roll_share[j][k]);
             }
         }
         let start = match self.start {
@@ -227,7 +235,7 @@ impl Stored for Learned {
             kf,
             next_pair: r.u8(),
             pairs: [Pair::UNCONFIGURED; 2],
-            roll_information: [[0.0; STATES]; STATES],
+            roll_share: [[0.0; STATES]; STATES],
             turning: false,
             held_x_rad: [0.0; STATES],
             change: BlockVariance::default(),
@@ -242,11 +250,11 @@ impl Stored for Learned {
         }
         for j in 0..STATES {
             for k in j..STATES {
-                m.roll_information[j][k] = r.real();
+                m.roll_share[j][k] = r.real();
             }
         }
         ensure(
-            information_in_range(&m.roll_information),
+            share_in_range(&m.roll_share),
             CheckpointError::InvalidValue(Part::Residuals),
         )?;
         let bits = r.u8();
@@ -281,6 +289,7 @@ fn residuals_in_range(p: &Pair) -> bool {
         && all_within(&p.gains, 0.0, 4.0)
         && all_within(&[p.product_variance_rad2], 0.0, MAX_PRODUCT_VARIANCE_RAD2)
         && all_within(&s.mean_long_rad, -residual, residual)
+        && all_within(&s.mean_recent_rad, -residual, residual)
         && all_within(&s.power, 0.0, MAX_NOISE_SCALE)
         && all_within(&[s.noise_scale], 0.0, MAX_NOISE_SCALE)
         && all_within(&[s.drift_share], 0.0, 1.0)
@@ -288,9 +297,9 @@ fn residuals_in_range(p: &Pair) -> bool {
         && all_within(&p.spread_rad2, 0.0, residual * residual)
 }
 
-/// Whether the roll pair's information is finite with a diagonal that is not negative.
+/// Whether the roll pair's share of the covariance is finite with a diagonal that is not negative.
 #[inline(never)]
-fn information_in_range(info: &[[Real; STATES]; STATES]) -> bool {
+fn share_in_range(info: &[[Real; STATES]; STATES]) -> bool {
     (0..STATES).all(|j| all_within(&info[j], -Real::MAX, Real::MAX) && info[j][j] >= 0.0)
 }
 
@@ -362,7 +371,7 @@ mod tests {
         );
         assert!(with(&|m| m.pairs[0].relearning = true).is_ok());
         assert_eq!(
-            with(&|m| m.roll_information[2][2] = -1.0),
+            with(&|m| m.roll_share[2][2] = -1.0),
             Err(InvalidValue(Part::Residuals))
         );
         // In the first windows' bumps, with an estimate held (flag bits 6-7).

@@ -78,8 +78,8 @@ impl<const CAP: usize> Windowed<CAP> {
         }
         let mut h = [0.0; STATES];
         h[HEEL_STATE] = m.turn_row[HEEL_STATE];
-        if self.kf.update(&h, z, r_turn).is_ok() {
-            self.add_roll_information(&h, r_turn);
+        if let Ok(applied) = self.kf.update_with_gain(&h, z, r_turn) {
+            self.carry_roll_share(&h, &applied.gain, r_turn);
             return true;
         }
         false
@@ -115,6 +115,6 @@ impl<const CAP: usize> Windowed<CAP> {
         which[3] = true;
         sigma[HEEL_STATE] = HEEL_PRIOR_SIGMA_RAD;
         self.kf.forget(&which, &sigma);
-        self.forget_roll_information(&which);
+        self.forget_roll_share(&which);
     }
 }

@@ -37,6 +37,12 @@ pub struct ResidualStats {
     pub count: u32,
     /// Long exponential mean of each channel's residual mean, rad.
     pub mean_long_rad: [Real; 2],
+    /// Each channel's residual mean averaged as `mean_long_rad` is, but with weights that grow
+    /// with the residual mean's rank until the long averages' horizon is full (from then on both
+    /// are the same running mean): the persistent residual mean now, from which the lag a drift
+    /// leaves is read, without the first periods' residual means (the filter's estimate still
+    /// converging) weighing as much as the latest, rad.
+    pub mean_recent_rad: [Real; 2],
     /// Long exponential mean of each channel's squared residual mean, over the model's variance
     /// of that mean (about 1 when the model holds).
     pub power: [Real; 2],
@@ -56,6 +62,7 @@ impl ResidualStats {
         mean_rad: [0.0; 2],
         count: 0,
         mean_long_rad: [0.0; 2],
+        mean_recent_rad: [0.0; 2],
         power: [0.0; 2],
         long_count: 0,
         noise_scale: 1.0,
@@ -209,8 +216,16 @@ impl Pair {
             return;
         }
         let count = &mut self.stats.long_count;
-        *count = count.saturating_add(1).min(LONG_HORIZONS * horizon.max(1));
+        let full = LONG_HORIZONS * horizon.max(1);
+        let n = count.saturating_add(1);
+        *count = n.min(full);
         let alpha = 1.0 / *count as Real;
+        // Weights 1, 2, ..., n: the mean of weights growing linearly is updated by 2 / (n + 1).
+        let alpha_recent = if n < full {
+            2.0 / (n + 1) as Real
+        } else {
+            alpha
+        };
         // The model's variance of a residual mean, s_e^2 = r / n (as in `refresh_report`).
         let sigma2 = config.measurement_sigma_rad * config.measurement_sigma_rad / bin as Real;
         let n = (2 * self.stats.count as usize).max(window_len) as Real;
@@ -220,6 +235,7 @@ impl Pair {
         for k in 0..2 {
             let mean = s.mean_rad[k];
             s.mean_long_rad[k] += alpha * (mean - s.mean_long_rad[k]);
+            s.mean_recent_rad[k] += alpha_recent * (mean - s.mean_recent_rad[k]);
             s.power[k] += alpha * (mean * mean * inv_s_e2 - s.power[k]);
             power += s.power[k];
             bias += s.mean_long_rad[k] * s.mean_long_rad[k] * inv_s_e2;
@@ -275,9 +291,9 @@ impl Pair {
                 };
                 mismatch = mean.abs() > 4.0 * s_e;
             }
-            // The persistent residual mean as a state error (a drift's lag), where a drift is seen.
+            // The persistent residual mean now as a state error (a drift's lag), where a drift is seen.
             let lag = if self.stats.drift_share > 0.0 && self.gains[k] > 1e-6 {
-                (self.stats.mean_long_rad[k] / self.gains[k])
+                (self.stats.mean_recent_rad[k] / self.gains[k])
                     .abs()
                     .smaller(config.prior_sigma_rad)
             } else {

@@ -2,7 +2,7 @@
 //! pair's residuals to it, keeps the clean copy of the filter that a hold goes back to, and
 //! learns the errors that changed again from one block of residuals.
 //!
-//! - **Clean copy** ([`super::CleanState`]): the filter, the roll pair's information and each
+//! - **Clean copy** ([`super::CleanState`]): the filter, the roll pair's share of its covariance and each
 //!   pair's residual statistics, kept at the end of every roll block that did not hold the filter.
 //!   A hold (a block in a run and significant, or a turn the heel state does not explain) goes back
 //!   to it, so that neither a change nor a passing disturbance pulls at the filter.
@@ -25,7 +25,8 @@ use super::change::{self, persistence_blocks, Alarm, BlockContext};
 use super::pair::channels;
 use super::{prior_sigma_rad, Windowed};
 use crate::config::Config;
-use crate::correlation::STATES;
+use crate::correlation::{ROLL_PAIR, STATES};
+use crate::kalman::carry_share;
 use crate::Real;
 
 impl<const CAP: usize> Windowed<CAP> {
@@ -113,7 +114,7 @@ impl<const CAP: usize> Windowed<CAP> {
     pub(super) fn keep_clean_state(&mut self) {
         let c = &mut self.clean;
         c.kf.clone_from(&self.kf);
-        c.roll_information = self.roll_information;
+        c.roll_share = self.roll_share;
         for (kept, p) in c.stats.iter_mut().zip(&self.pairs) {
             *kept = p.stats;
         }
@@ -123,7 +124,7 @@ impl<const CAP: usize> Windowed<CAP> {
     pub(super) fn restore_clean_state(&mut self) {
         let c = &self.clean;
         self.kf = c.kf.clone();
-        self.roll_information = c.roll_information;
+        self.roll_share = c.roll_share;
         for (p, kept) in self.pairs.iter_mut().zip(&c.stats) {
             p.stats = *kept;
         }
@@ -147,7 +148,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let forget: [bool; STATES] =
             core::array::from_fn(|i| changed.get(i).copied().unwrap_or(false));
         self.kf.forget(&forget, &prior);
-        self.forget_roll_information(&forget);
+        self.forget_roll_share(&forget);
         let horizon = self.residual_horizon();
         for (pair, p) in self.pairs.iter_mut().enumerate() {
             let [a, b] = channels(pair);
@@ -216,14 +217,12 @@ impl<const CAP: usize> Windowed<CAP> {
             // as the optimiser sees it (no bound check left in the C library's step).
             let ch = 2 * pair + k;
             let target = block[k] + fit(&rows[k]);
-            applied |= self
-                .kf
-                .update(
-                    &rows[k],
-                    target,
-                    self.change.block_variance(ch, floor) / p.stats.noise_scale,
-                )
-                .is_ok();
+            let r = self.change.block_variance(ch, floor) / p.stats.noise_scale;
+            if let Ok(update) = self.kf.update_with_gain(&rows[k], target, r) {
+                applied = true;
+                let roll_r = if pair == ROLL_PAIR { r } else { 0.0 };
+                carry_share(&mut self.roll_share, &rows[k], &update.gain, roll_r);
+            }
             p.gains[k] = rows[k][ch].abs();
         }
         if applied {

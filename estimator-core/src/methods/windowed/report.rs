@@ -3,8 +3,9 @@
 //!
 //! The filter's covariance `P` is the one for the configured noise; each pair's noise scale
 //! `lambda` ([`super::pair::Pair::noise_scale`]) rescales it to the noise the residuals show.
-//! The roll pair's share of `P` is `C = P I P`, `I = sum h h' / r` the information its
-//! measurements gave ([`Windowed::add_roll_information`]), so the variance of error `i` is
+//! The roll pair's share `C` of `P` is carried through every update with that update's gain, the
+//! roll measurements' noise joining it ([`Windowed::carry_roll_share`]; the prior and the random
+//! walk join neither pair's share), so the variance of error `i` is
 //! `lambda_pitch (P_ii - C_ii) + lambda_roll C_ii`, within `[0, P_ii]` and at least the error's
 //! own pair's scale times `P_ii` ([`Windowed::scaled_variance`]). The residual check's widening,
 //! the lag a drift leaves and the change detector's widening are added by
@@ -17,6 +18,7 @@ use super::pair::channels;
 use super::{MethodEstimate, Windowed};
 use crate::config::Config;
 use crate::correlation::STATES;
+use crate::kalman::carry_share;
 use crate::math::Compare;
 use crate::Real;
 
@@ -108,25 +110,13 @@ impl<const CAP: usize> Windowed<CAP> {
     }
 
     /// The variance of error `i`, each pair's share of the filter's covariance rescaled by that
-    /// pair's noise scale: `lambda_pitch (P_ii - C_ii) + lambda_roll C_ii`, `C = P I P` the roll
-    /// pair's share (`I` its information, [`Windowed::roll_information`]), within `[0, P_ii]`; at
-    /// least the error's own pair's scale times `P_ii`.
+    /// pair's noise scale: `lambda_pitch (P_ii - C_ii) + lambda_roll C_ii`, `C` the roll pair's
+    /// share ([`Windowed::roll_share`]), within `[0, P_ii]`; at least the error's own pair's scale
+    /// times `P_ii`.
     pub(super) fn scaled_variance(&self, i: usize) -> Real {
         let i = i.min(STATES - 1);
-        let p = self.kf.covariance();
-        let p_ii = p[(i, i)].larger(0.0);
-        // p_i' I p_i, p_i = P's column i, from I's upper triangle.
-        let info = &self.roll_information;
-        let mut roll_share: Real = 0.0;
-        for j in 0..STATES {
-            let pj = p[(j, i)];
-            let mut v: Real = 0.5 * info[j][j] * pj;
-            for k in j + 1..STATES {
-                v += info[j][k] * p[(k, i)];
-            }
-            roll_share += 2.0 * pj * v;
-        }
-        let roll_share = roll_share.larger(0.0).smaller(p_ii);
+        let p_ii = self.kf.covariance()[(i, i)].larger(0.0);
+        let roll_share = self.roll_share[i][i].larger(0.0).smaller(p_ii);
         let (pitch, roll) = (self.pairs[0].noise_scale(), self.pairs[1].noise_scale());
         // Never below the error's own pair's scale times its variance: a roll pair quieter than
         // the pitch pair does not make x1, x2 surer than their own channels' noise says.
@@ -134,28 +124,26 @@ impl<const CAP: usize> Windowed<CAP> {
         (pitch * (p_ii - roll_share) + roll * roll_share).larger(own * p_ii)
     }
 
-    /// Adds a roll measurement's information `h h' / r` to [`Windowed::roll_information`].
-    pub(super) fn add_roll_information(&mut self, h: &[Real; STATES], r: Real) {
-        if !(r > 0.0) {
-            return;
-        }
-        let inv_r = 1.0 / r;
-        // The upper triangle only: what reads it reads that (the lower one stays as it was).
-        for j in 0..STATES {
-            let hj = h[j] * inv_r;
-            for k in j..STATES {
-                self.roll_information[j][k] += hj * h[k];
-            }
-        }
+    /// Carries the roll pair's share of the covariance through an update of row `h` applied with
+    /// gain `gain`; `roll_r` is the measurement's variance when it is one of the roll pair's, 0
+    /// when it is the pitch pair's ([`carry_share`]).
+    pub(super) fn carry_roll_share(
+        &mut self,
+        h: &[Real; STATES],
+        gain: &[Real; STATES],
+        roll_r: Real,
+    ) {
+        carry_share(&mut self.roll_share, h, gain, roll_r.larger(0.0));
     }
 
-    /// Forgets the roll pair's information on the states `which` (as the filter forgets them).
-    pub(super) fn forget_roll_information(&mut self, which: &[bool; STATES]) {
+    /// Forgets the roll pair's share on the states `which` (as the filter forgets them: their
+    /// prior is no pair's).
+    pub(super) fn forget_roll_share(&mut self, which: &[bool; STATES]) {
         for j in 0..STATES {
             if which[j] {
                 for k in 0..STATES {
-                    self.roll_information[j][k] = 0.0;
-                    self.roll_information[k][j] = 0.0;
+                    self.roll_share[j][k] = 0.0;
+                    self.roll_share[k][j] = 0.0;
                 }
             }
         }

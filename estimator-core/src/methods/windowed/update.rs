@@ -269,11 +269,10 @@ impl<const CAP: usize> Windowed<CAP> {
                     .update_leading::<HEEL_STATE>(&m.rows[ch], m.z[ch], r, gate, updated)
             };
             match result {
-                Ok(_) => {
+                Ok(applied) => {
                     outcome.applied = true;
-                    if pair == ROLL_PAIR {
-                        self.add_roll_information(&m.rows[ch], r);
-                    }
+                    let roll_r = if pair == ROLL_PAIR { r } else { 0.0 };
+                    self.carry_roll_share(&m.rows[ch], &applied.gain, roll_r);
                 }
                 Err(KalmanError::Gated) => {
                     outcome.held_out = true;
