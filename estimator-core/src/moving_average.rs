@@ -14,8 +14,8 @@
 //! The samples are stored as fixed-point `i32` (2^30 counts per unit, resolution 9.3e-10 rad =
 //! 0.0002 arcsec, range +-2) and the running sums as exact `i64`. Adding the new sample and
 //! subtracting the oldest is then exact, so the running sum never drifts, however long the run
-//! (a floating-point running sum accumulates rounding as a random walk: 0.3 arcsec after two days
-//! in `f32`). Each value is rounded once, on the way in.
+//! (a floating-point running sum accumulates rounding as a random walk; how much in `f32`:
+//! docs/method.md, "Numerics on a Cortex-M4F"). Each value is rounded once, on the way in.
 
 mod bins;
 

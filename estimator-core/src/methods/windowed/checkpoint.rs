@@ -29,8 +29,7 @@
 //! information finite, its diagonal not negative; the flag byte's bits 0-1 not both set and no
 //! other bit but 2; the estimate learned against within [`MAX_STATE`]; the spreads within
 //! [`MAX_RESIDUAL`]^2. The bumps begin again at the next full window after a restore, the estimate
-//! held meanwhile (an image of before the bumps has bits 0-1 zero: the filter's estimate is
-//! reported, as then).
+//! held meanwhile (an image with bits 0-1 zero reports the filter's estimate).
 
 use super::change::checkpoint::BlockVariance;
 use super::pair::Pair;
