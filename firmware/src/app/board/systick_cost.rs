@@ -6,8 +6,8 @@
 //! On a board with a watchdog to feed, its wrap (every 2^24 ticks: 0.67 s at 25 MHz, 0.1 s at
 //! 168 MHz) raises the SysTick exception, whose handler does nothing: it only wakes the main loop
 //! from WFI, so that it feeds the watchdog while no byte arrives. (A wrap during a step adds the
-//! exception's entry and exit to that step's measured cost, within one tick: docs/firmware.md,
-//! "Measured figures".) Without a
+//! exception's entry and exit to that step's measured cost: docs/firmware.md, "Measured
+//! figures".) Without a
 //! watchdog (the STM32F405 under QEMU) the wrap stays silent: a periodic interrupt only slows
 //! QEMU's idle loop.
 //!
