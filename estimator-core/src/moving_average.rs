@@ -204,7 +204,7 @@ pub const MAX_REMOVALS_PER_PUSH: usize = 3;
 /// One entry of the window: a sample's (or a bin's) fixed-point inputs, its number on the grid
 /// (low 16 bits), its weight and its fill weight in one byte ([`FillCode`]). 32 bytes, aligned
 /// like its `i32`s: an entry is copied in and out of the ring by a few word moves (a packed entry
-/// took a byte-wise library copy each way).
+/// would take a byte-wise library copy each way).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Entry {
     /// The sample's (or the bin's) inputs, in fixed point.

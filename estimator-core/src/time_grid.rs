@@ -440,7 +440,8 @@ impl TimeGrid {
         };
         if let (true, Some(nominal)) = (self.pinned, self.interval_s) {
             // Compared, not `clamp`ed: `clamp`'s check of its bounds is a panic path (and its
-            // message's float formatting 16 KB of flash).
+            // message's float formatting brings the float formatter into the image:
+            // docs/firmware.md, "Measured figures").
             let nominal = nominal as f32;
             let (low, high) = (
                 nominal * (1.0 - PINNED_INTERVAL_TOLERANCE),

@@ -220,7 +220,7 @@ impl Stored for Learned {
         let updates = r.u32();
         let kf = ConstantStateKalman::read(r, max_variance)?;
         // One value built in place, then its later fields read into it: a second `Learned`
-        // made from this one (`..m`) took its size again on the restore's stack.
+        // made from this one (`..m`) would take its size again on the restore's stack.
         let mut m = Learned {
             updates,
             kf,
