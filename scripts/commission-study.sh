@@ -10,7 +10,7 @@
 # of the other reading of the rotation's unit), and how the verdicts came out: the right variant
 # (or `ok`) named alone; with its twin (roll-negated or pitch-negated); with another; undecided;
 # a wrong one named.
-# docs/interface.md and the doc of host-sim/src/commission.rs quote it.
+# docs/interface.md quotes it.
 # Usage: bash scripts/commission-study.sh [SEEDS] [LENGTHS_S] [SCENARIOS] [GENERATE OPTIONS...]
 #   default: 20 "2000 2500 3000 4000" "sea paper"
 set -euo pipefail

@@ -40,11 +40,9 @@
 //!
 //! # Versions
 //! [`VERSION`] is the only version read. An image of another version is refused with
-//! [`CheckpointError::Version`]; the firmware then starts afresh. Versions 1 to 4 held the whole
-//! state, window included (23 KB); version 5 is the first that holds only what a restart can use;
-//! version 6 adds what the change detector learned and the last change of the errors declared;
-//! version 7 holds the sample grid's phase, the interval it follows the clock with and its learning
-//! stamps (the grid places stamps in their slots of an absolute grid).
+//! [`CheckpointError::Version`]; the firmware then starts from the learned errors' record saved
+//! with it ([`crate::learned`], a layout every version reads), or afresh without one. What each
+//! version added is in CHANGELOG.md.
 //!
 //! # Layout
 //! Little-endian; `R` = bytes of [`Real`] (4, or 8 with the `f64` feature). An optional value is a
@@ -301,8 +299,8 @@ pub(crate) fn within(v: Real, bound: Real) -> bool {
 }
 
 /// Whether every value of `values` is finite and within `[lo, hi]`. Out of line: the windowed
-/// method's reader checks ten arrays, and its checks inlined and unrolled cost the STM32F405's
-/// image some 2.2 KB of flash.
+/// method's reader checks ten arrays, and its checks inlined and unrolled grow the STM32F405's
+/// image (by how much: docs/firmware.md, "Measured figures", the table of builds).
 #[inline(never)]
 pub(crate) fn all_within(values: &[Real], lo: Real, hi: Real) -> bool {
     values.iter().all(|v| v.is_finite() && *v >= lo && *v <= hi)

@@ -74,8 +74,8 @@ pub struct Config {
     /// Random walk of the installation errors, rad/sqrt(s) (process noise). Default 0.003
     /// arcsec/sqrt(s), about 0.9 arcsec/sqrt(day): the errors "may gradually evolve" (the paper's
     /// reason for estimating in real time), and with no process noise at all the filter stops
-    /// following them. Chosen by measurement (docs/results.md, "Model mismatch"): it costs about
-    /// 0.1 arcsec of steady-state noise and cuts the lag behind a 20 arcsec/day drift from 8 to 2 arcsec.
+    /// following them. How closely the estimates follow drifting errors with it:
+    /// docs/results.md, "Model mismatch: effects eq (2) does not contain".
     /// The windowed method applies it in full only while its residuals show a persistent bias, and
     /// none while they are noise (docs/method.md, "Learning the noise and the drift").
     pub drift_rad_per_sqrt_s: Real,

@@ -59,11 +59,12 @@
 //! frequency, and the sway (periods of 4-20 s) has nothing to correlate with. A stop-and-go or
 //! reciprocating pattern makes them steps and kinks, with harmonics of the rotation frequency all
 //! the way up: a sway component near one of them correlates with the reference and does not
-//! average out (measured: with 90 deg moves every 90 s, a 1 deg, 9 s pitch sway left x1 10 arcsec
-//! off, because 360 s / 9 s is a whole number; a sea spectrum leaves tens of arcsec of slowly
-//! varying error). So the reference `c` is low-passed ([`ReferenceFilter`]: three one-pole
-//! filters of [`REFERENCE_TIME_CONSTANT_S`], which keep the rotation frequency (gain 0.96 at
-//! 360 s) and divide a 9 s sway by 250 and a 5 s sway by 2000), while `y` and eq (2)'s rows `h`
+//! average out (with 90 deg moves every 90 s a 9 s sway sits on a harmonic, 360 s / 9 s being a
+//! whole number; what that does to x1, and a sea spectrum to every error, without the low-pass:
+//! docs/real-logs.md, "Why the measurement works for any pattern"). So the reference `c` is
+//! low-passed ([`ReferenceFilter`]: three one-pole filters of [`REFERENCE_TIME_CONSTANT_S`],
+//! which keep the rotation frequency (gain 0.96 at 360 s) and divide a 9 s sway by 250 and a
+//! 5 s sway by 2000), while `y` and eq (2)'s rows `h`
 //! stay as measured. Nothing else changes: `z` and its row use the same `c`, so
 //! `z = row . x` still holds exactly, whatever reference is used; the reference only decides
 //! what else correlates with it (an instrumental-variable regression).

@@ -187,7 +187,8 @@ impl<const CAP: usize> Estimator<CAP> {
     /// estimator in a static, and how the C library makes one in the caller's memory. Every field
     /// is written in place, the window's ring not at all (it is uninitialised until it fills);
     /// then the state is reset to `config` in place ([`Estimator::reset`]'s way). The firmware's
-    /// start-up stack, measured in QEMU, shows that nothing the size of the state was copied.
+    /// start-up stack peak, a fraction of the state's size (both in docs/firmware.md, "Measured
+    /// figures"), shows that nothing the size of the state is copied.
     ///
     /// ```
     /// use core::mem::MaybeUninit;

@@ -9,9 +9,9 @@
 //!
 //! # Sine and cosine
 //!
-//! The `libm` crate's `sinf`/`cosf` compute in `f64`, which the Cortex-M4F runs in software
-//! (a pair costs about half the whole step's budget, measured under QEMU). The `f32` build therefore uses
-//! its own [`sin_cos`]: Cody-Waite reduction by pi/2 with a two-part constant, then the Cephes
+//! The `libm` crate's `sinf`/`cosf` compute in `f64`, which the Cortex-M4F runs in software (what
+//! a pair costs against the step's budget: docs/firmware.md, "Measured figures"). The `f32` build
+//! therefore uses its own [`sin_cos`]: Cody-Waite reduction by pi/2 with a two-part constant, then the Cephes
 //! single-precision minimax polynomials on [-pi/4, pi/4]. It uses only `+`, `-`, `*` and a
 //! round-to-nearest, so it gives bit-identical results on the host and on the target. Its error is
 //! below 2e-7 for |x| <= 4 pi (tested against `f64` sine and cosine), i.e. below 0.05 arcsec on a
@@ -21,8 +21,9 @@ use crate::Real;
 
 /// The larger and the smaller of two numbers by one comparison. On the Cortex-M4F `f32::max` and
 /// `f32::min` are calls to `fmaxf` and `fminf` (IEEE 754 maxNum and minNum, whose rule that a NaN
-/// operand gives the other costs about 11 instructions a call), and the step's bookkeeping of
-/// noise, spread and change takes tens of them; these are inline compares. Every value they are
+/// operand gives the other costs instructions beyond the compare; docs/firmware.md, "Measured
+/// figures", has the count), and the step's bookkeeping of noise, spread and change takes tens of
+/// them; these are inline compares. Every value they are
 /// given in the step is finite (no NaN reaches the filter), where they give what `max` and `min`
 /// give; a NaN `self` would be passed on, not dropped.
 pub trait Compare: Sized {

@@ -14,8 +14,8 @@
 //! The samples are stored as fixed-point `i32` (2^30 counts per unit, resolution 9.3e-10 rad =
 //! 0.0002 arcsec, range +-2) and the running sums as exact `i64`. Adding the new sample and
 //! subtracting the oldest is then exact, so the running sum never drifts, however long the run
-//! (a floating-point running sum accumulates rounding as a random walk: 0.3 arcsec after two days
-//! in `f32`). Each value is rounded once, on the way in.
+//! (a floating-point running sum accumulates rounding as a random walk; how much in `f32`:
+//! docs/method.md, "Numerics on a Cortex-M4F"). Each value is rounded once, on the way in.
 
 mod bins;
 
@@ -204,7 +204,7 @@ pub const MAX_REMOVALS_PER_PUSH: usize = 3;
 /// One entry of the window: a sample's (or a bin's) fixed-point inputs, its number on the grid
 /// (low 16 bits), its weight and its fill weight in one byte ([`FillCode`]). 32 bytes, aligned
 /// like its `i32`s: an entry is copied in and out of the ring by a few word moves (a packed entry
-/// took a byte-wise library copy each way).
+/// would take a byte-wise library copy each way).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Entry {
     /// The sample's (or the bin's) inputs, in fixed point.

@@ -14,9 +14,9 @@
 //! passes of the same reference angle in the same direction is the period. A pass is counted with
 //! 1 deg of hysteresis (jitter of the angle reading does not count as passes). The first reference
 //! passed twice in one direction gives the period: a one-way rotation, either way, within a period
-//! and `NEAR_LEVEL_DEG / 360` of the start (1.4 %; with references 45 deg apart from 22.5 deg it
-//! was 1/16, and the first estimate, which must come within 1.25 periods, had 18 s less of a 360 s
-//! period to build on: see [`crate::methods::windowed::start`]).
+//! and `NEAR_LEVEL_DEG / 360` of the start (1.4 %; the first estimate must come within 1.25
+//! periods, and the sooner the period is known the more of them it builds on: see
+//! [`crate::methods::windowed::start`]).
 //!
 //! # Across lost rows
 //! A gap is not a restart: the angle is continuous between the rows that are there. A pass seen
@@ -79,8 +79,9 @@ pub const LEVEL_OFFSETS_DEG: [f64; LEVELS] = [
 ];
 
 /// The angle the monitor keeps (its checkpoint too) as where its references are: 22.5 deg from
-/// the first angle seen, where the first reference was when they were 45 deg apart from 22.5 deg
-/// (an image written then still finds six of its eight references where they were).
+/// the first angle seen, on the 45 deg grid of six of the eight references ([`LEVEL_OFFSETS_DEG`],
+/// 67.5 to 292.5 deg). Part of the checkpoint's format: a checkpoint image holds the kept angle,
+/// and the references are placed from it by these offsets.
 const BASE_DEG: f64 = 22.5;
 
 /// [`LEVEL_OFFSETS_DEG`] in rad from the kept angle ([`BASE_DEG`]), each in `[0, 2 pi)`.

@@ -31,12 +31,10 @@
 //!   it, with the longest single step now from the residuals' spread, up to three times;
 //! - with the interval pinned the line's slope is the pinned interval and only the phase is fitted.
 //!
-//! In a simulation of this learning (uniform jitter, a 0.1 % fast clock, 200 logs each): with no
-//! row lost among the learning stamps, every log learned the right slots at +-0.3 of the interval
-//! and all but 3 at +-0.45 (with the longest single step capped at 1.95 intervals; it is 2 here);
-//! with 2 % of the rows lost in runs of 1 to 5, every log at +-0.1, 91 % at +-0.3 and 76 % at
-//! +-0.45: a lost row whose step is as short as a long single step is taken for jitter, the grid
-//! starts a little off and its tracking below pulls it in, a few stamps one slot off meanwhile.
+//! Where the learning can go wrong: a lost row among the learning stamps whose step is as short
+//! as a long single step is taken for jitter, so the grid starts a little off and its tracking
+//! below pulls it in, a few stamps one slot off meanwhile (how often, at each jitter:
+//! docs/real-logs.md, "Time stamps").
 //!
 //! # Following the clock
 //! After learning, every stamp placed on the grid corrects it, a least-squares line fit updated
@@ -280,7 +278,7 @@ impl TimeGrid {
         }
         // The step back itself, not `last - 2 t`: two stamps near each other subtract exactly,
         // where `last - 2 t` rounds at large stamps (beyond 1.8e16 s, where stamps are 4 s
-        // apart, a stamp 4 s back was refused as not increasing).
+        // apart, it would refuse a stamp 4 s back as not increasing).
         if last - time_s > CLOCK_STEP_BACK_INTERVALS * t {
             return Ok(Placed::CLOCK_STEP);
         }
@@ -442,7 +440,8 @@ impl TimeGrid {
         };
         if let (true, Some(nominal)) = (self.pinned, self.interval_s) {
             // Compared, not `clamp`ed: `clamp`'s check of its bounds is a panic path (and its
-            // message's float formatting 16 KB of flash).
+            // message's float formatting brings the float formatter into the image:
+            // docs/firmware.md, "Measured figures").
             let nominal = nominal as f32;
             let (low, high) = (
                 nominal * (1.0 - PINNED_INTERVAL_TOLERANCE),

@@ -2,12 +2,12 @@
 //! erasing and programming it (what a save costs in stalls, and how long the flash lives).
 //!
 //! STM32F405 (datasheet DS8626, reference manual RM0090): flash sectors 0-3 are 16 KiB, 4 is
-//! 64 KiB, 5-11 are 128 KiB. The code (its budget 96 KiB) lives in sectors 0-4 (128 KiB); the
-//! checkpoints get every sector after it, 5-11: 7 sectors of 128 KiB. Endurance: 10,000 erase
-//! cycles per sector (minimum, -40 to 85 C). A 128 KiB sector erases in 2 s typical, 4 s maximum
-//! at x8 parallelism (stm32f4xx-hal's, which the firmware uses); a byte programs in 16 us
-//! typical, 100 us maximum at x8. One flash bank: any instruction fetch from flash stalls while it
-//! erases or programs.
+//! 64 KiB, 5-11 are 128 KiB. The code lives in sectors 0-4 (128 KiB; its budget within them:
+//! docs/firmware.md, "Flash layout and checkpoints"); the checkpoints get every sector after it,
+//! 5-11: 7 sectors of 128 KiB. Endurance: 10,000 erase cycles per sector (minimum, -40 to 85 C).
+//! A 128 KiB sector erases in 2 s typical, 4 s maximum at x8 parallelism (stm32f4xx-hal's, which
+//! the firmware uses); a byte programs in 16 us typical, 100 us maximum at x8. One flash bank: any
+//! instruction fetch from flash stalls while it erases or programs.
 //!
 //! mps2-an386 (QEMU only): no flash controller; the firmware keeps its checkpoints in a host file
 //! through semihosting, laid out as a NOR flash of 64 sectors of 4 KiB. It has no datasheet: its

@@ -4,9 +4,9 @@
 //! every row is handed to one replay per [`Variant`]: the log as it is, and the log with one of its
 //! conventions changed (an angle negated, roll and pitch exchanged, the rotation angle read as
 //! radians). Each replay runs the core's windowed method to the end of the log, as `estimate`
-//! does (the evidence grows with the log, below; a fit keeps 104 bytes a rotation period, and the
-//! seven fits together take about as long as one `estimate` of the log: docs/interface.md); the
-//! replays run side by side (rayon), a batch of rows at a time.
+//! does (the evidence grows with the log, below; a fit keeps 104 bytes a rotation period; the
+//! seven fits' time against one `estimate` of the log: docs/interface.md, "What it does not do");
+//! the replays run side by side (rayon), a batch of rows at a time.
 //!
 //! # The evidence: the unexplained share each fit leaves
 //! Each fit's post-fit residual `z - H x` of its four correlation channels
@@ -26,16 +26,13 @@
 //! the **unexplained share**, the residual power over the measurement power, among the fits that
 //! found eq (2)'s oscillation: a measurement power at least [`FOUND_POWER_SHARE`] (1/3) of the
 //! largest among the log's fits. The sign and exchange variants move the oscillation between
-//! channels and phases without removing it: their measurement powers agree within 2 %
-//! (`bash scripts/commission-study.sh` and the lines of docs/interface.md). Read as radians, a
-//! rotation angle in degrees turns 57 times too fast and the references no longer correlate with
-//! the oscillation: that fit finds at most 0.12 of the largest measurement power in the same
-//! lines (1e-4 to 4e-3 with the scenarios' errors), and leaves little because there is little to
-//! leave: on a paper log of 20,000 s (`host-sim generate --scenario paper --duration 20000 --out
-//! paper.csv; host-sim commission paper.csv`) its residual power is 0.053 arcsec^2 against the
-//! log's own 0.010, and on the study's paper logs the residual power alone put that wrong fit
-//! below the right one (smallest ratio 0.003); the unexplained share of the fits compared never
-//! did.
+//! channels and phases without removing it, so their measurement powers agree. Read as radians, a
+//! rotation angle in degrees turns 57 times too fast (180 / pi) and the references no longer
+//! correlate with the oscillation: that fit finds a small share of the largest measurement power,
+//! and leaves little residual because there is little to leave, so the residual power alone can
+//! put that wrong fit below the right one, where the unexplained share of the fits compared does
+//! not. The measured powers and shares, and where [`FOUND_POWER_SHARE`] lies between them:
+//! docs/interface.md, "How long a log, measured".
 //!
 //! # The decision rule
 //! With `F` = [`DECISION_FACTOR`] = 10 and `u(v)` the unexplained share of variant `v` (infinite
@@ -49,16 +46,11 @@
 //!   log as it is leaves: `u(v) >= F u(as-is)`;
 //! - otherwise the fits are too close to tell (**undecided**): a longer log tells.
 //!
-//! `F` from the measured spread (`bash scripts/commission-study.sh`: 20 seeds, logs of `generate`
-//! with the scenarios' errors of 150-300 arcsec, each rewritten into every variant): the smallest
-//! ratio of a wrong fit's unexplained share to the right one's was, at sea, 2.1 at 2,000 s, 8.6
-//! at 2,500 s, 25 at 3,000 s and 89 at 4,000 s; on the paper scenario 9.9, 35, 185 and 469. Of
-//! its 1,120 verdicts none named a wrong variant (nor did any of the other lines in
-//! docs/interface.md); with `F` = 10 the right one was named in every verdict from 3,000 s at sea
-//! (with its twin for roll-negated and pitch-negated, below) and from 2,500 s on the paper
-//! scenario, while at sea 9 of 140 were undecided at 2,000 s and 3 at 2,500 s, and 4 and 2 named
-//! it with another variant. The misfit shrinks with the errors: with errors ten times smaller
-//! (15-30 arcsec) the sea needs 16,000 s (smallest ratio 27 over 5 seeds; 2.1 at 4,000 s).
+//! `F` is set from the spread of the ratio of a wrong fit's unexplained share to the right one's
+//! that `bash scripts/commission-study.sh` measures (logs of `generate`, each rewritten into every
+//! variant): how the ratio grows with the log's length, the verdicts `F` gives and how much longer
+//! a log smaller errors need (the misfit shrinks with the errors) are in docs/interface.md, "How
+//! long a log, measured".
 //!
 //! # What the residuals cannot tell
 //! Roll and pitch both negated is eq (2) with x1..x4 negated: a fit of roll and pitch cannot tell
@@ -68,11 +60,12 @@
 //! errors, so the heading, regressed on it for each fit's estimate ([`Fit::heading_agreement`]),
 //! gives +1 for the right one and -1 for the other. It is taken when one is within 0.5 of +1 and
 //! the other of -1, each at least [`HEADING_SIGMAS`] standard errors from 0 over at least
-//! [`MIN_HEADING_PERIODS`] periods: on the paper scenario (a steady heading) from 2,500 s in all
-//! of the study's logs; at sea the ship's course changes (a weave of 0.5 deg/s at a 600 s
-//! period, next to the rotation's 480 s) swamp it (coefficients of tens, give or take hundreds)
-//! and both are named. This assumes the heading's own sense is the model's; a log whose roll and
-//! pitch are both negated fits as it is, and the same test of the heading says so in a note.
+//! [`MIN_HEADING_PERIODS`] periods. A steady heading (the paper scenario) lets it tell; at sea the
+//! ship's course changes (the sea scenario's weave of 0.5 deg/s at a 600 s period, next to the
+//! rotation's 480 s) swamp it and both are named (the coefficients and the log lengths:
+//! docs/interface.md, "Examples" and "How long a log, measured"). This assumes the heading's own
+//! sense is the model's; a log whose roll and pitch are both negated fits as it is, and the same
+//! test of the heading says so in a note.
 //!
 //! The parts: [`fitting`] (the replays and their sums), [`verdict`] (the rule) and [`text`] (what
 //! is printed).

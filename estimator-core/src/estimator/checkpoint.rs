@@ -52,8 +52,8 @@ const PARTS_END: usize = HEADER_LEN
     + MethodPart::LEN;
 
 /// Bytes of a checkpoint image, whatever the ring capacity: the header, the parts, zero padding
-/// to a multiple of 4 (so that a flash with 4-byte writes takes it as it is) and the CRC: 860 bytes
-/// with `f32`, 1,032 with the `f64` feature (`checkpoint::tests::image_length`).
+/// to a multiple of 4 (so that a flash with 4-byte writes takes it as it is) and the CRC (the
+/// length with `f32` and with the `f64` feature is pinned by `checkpoint::tests::image_length`).
 pub const CHECKPOINT_LEN: usize = PARTS_END.div_ceil(4) * 4 + CRC_LEN;
 
 impl<const CAP: usize> Estimator<CAP> {

@@ -65,7 +65,7 @@ impl CostUnit {
         }
     }
 
-    /// The summary line, e.g. `step cost: max 4680 instructions, mean 4321 instructions`.
+    /// The summary line, `step cost: max N instructions, mean M instructions` (cycles on a board).
     pub fn summary(&self, stats: &CostStats) -> String {
         let max = stats.max_ticks as f64 * self.per_tick();
         let mean = stats.mean_ticks() * self.per_tick();

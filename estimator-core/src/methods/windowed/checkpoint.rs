@@ -30,8 +30,7 @@
 //! pair's share finite, its diagonal not negative; the flag byte's bits 0-1 not both set and no
 //! other bit but 2; the estimate learned against within [`MAX_STATE`]; the spreads within
 //! [`MAX_RESIDUAL`]^2. The bumps begin again at the next full window after a restore, the estimate
-//! held meanwhile (an image of before the bumps has bits 0-1 zero: the filter's estimate is
-//! reported, as then).
+//! held meanwhile (an image with bits 0-1 zero reports the filter's estimate).
 
 use super::change::checkpoint::BlockVariance;
 use super::pair::Pair;
@@ -229,7 +228,7 @@ impl Stored for Learned {
         let updates = r.u32();
         let kf = ConstantStateKalman::read(r, max_variance)?;
         // One value built in place, then its later fields read into it: a second `Learned`
-        // made from this one (`..m`) took its size again on the restore's stack.
+        // made from this one (`..m`) would take its size again on the restore's stack.
         let mut m = Learned {
             updates,
             kf,

@@ -109,8 +109,8 @@ impl<const CAP: usize> Windowed<CAP> {
     }
 
     /// Keeps a copy of the filter and its residual statistics ([`CleanState`]).
-    /// Field by field, in place: a whole `CleanState` built first took its size again on the
-    /// stack (at a restore, on top of the image's parts).
+    /// Field by field, in place: a whole `CleanState` built first would take its size again on
+    /// the stack (at a restore, on top of the image's parts).
     pub(super) fn keep_clean_state(&mut self) {
         let c = &mut self.clean;
         c.kf.clone_from(&self.kf);

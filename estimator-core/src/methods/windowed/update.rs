@@ -20,7 +20,7 @@
 //! bookkeeping (`average_residuals`) run once a step yet stay out of line: inlined, the compiler
 //! copies their calls for each constant that the pair, the gate or the outcome takes, and the
 //! STM32F405's image outgrows its flash budget; out of line, the step runs no more instructions
-//! than when all of it was one function (the figures: docs/firmware.md). The other steps are
+//! than inlined (the figures: docs/firmware.md). The other steps are
 //! inlined.
 //!
 //! The derivation of each step is in docs/method.md, "The windowed method in full".

@@ -151,7 +151,8 @@ unsafe fn uart_init() {
         );
         reg_write(UART_INTSTATUS, INTSTATUS_TX | INTSTATUS_RX);
         // One dummy read: QEMU wakes its chardev only when DATA is read, so without it the first
-        // input byte waits about a second (measured under QEMU).
+        // input byte waits for QEMU's next poll of the socket (docs/firmware.md, "What QEMU
+        // proves and what it does not").
         let _ = reg_read(UART_DATA);
     }
 }

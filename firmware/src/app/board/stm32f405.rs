@@ -120,8 +120,9 @@ impl Board {
         };
         let config = match clock_source {
             ClockSource::Crystal => Config::hse(HSE_HZ.Hz()).sysclk(SYSCLK_HZ.Hz()),
-            // HSI alone, 16 MHz, no PLL: the fewest parts that can fail (a step then takes about
-            // 0.6 ms, still nothing against the 1 s sample period).
+            // HSI alone, 16 MHz, no PLL: the fewest parts that can fail (a step then takes
+            // 168 / 16 times as long as at 168 MHz, still a small share of the 1 s sample period:
+            // docs/firmware.md, "Watchdogs, reset cause, clocks, brown-out").
             ClockSource::InternalFallback | ClockSource::Fixed => Config::hsi(),
         };
         let mut rcc = device.RCC.freeze(config);

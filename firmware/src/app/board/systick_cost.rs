@@ -6,7 +6,8 @@
 //! On a board with a watchdog to feed, its wrap (every 2^24 ticks: 0.67 s at 25 MHz, 0.1 s at
 //! 168 MHz) raises the SysTick exception, whose handler does nothing: it only wakes the main loop
 //! from WFI, so that it feeds the watchdog while no byte arrives. (A wrap during a step adds the
-//! exception's entry and exit, about 20 instructions, to that step's measured cost.) Without a
+//! exception's entry and exit to that step's measured cost: docs/firmware.md, "Measured
+//! figures".) Without a
 //! watchdog (the STM32F405 under QEMU) the wrap stays silent: a periodic interrupt only slows
 //! QEMU's idle loop.
 //!
@@ -15,7 +16,7 @@
 //! during one). Each board's interrupt dispatcher runs its handlers through [`timed_interrupt`],
 //! which adds the ticks they take to a running total; [`CostCounter::ticks_since`] subtracts the
 //! total's growth, so that a step's cost is the step's own work whether or not the link is busy
-//! (the handlers' entry and exit, a few instructions each, stay in it).
+//! (the handlers' entry and exit stay in it: docs/firmware.md, "How each figure is measured").
 
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;

@@ -5,10 +5,12 @@
 //! mps2-an386) of the same size. `boards/stm32f405/memory.x` ends the code's FLASH region at the
 //! end of sector 4, so the linker never puts code in the checkpoint sectors.
 //!
-//! Timing on silicon, from the STM32F405 datasheet (not measured; `firmware::flash_layout` and
-//! docs/firmware.md): a save programs about 880 bytes (16 us typical, 100 us maximum each: 14 ms
-//! and 88 ms); one save in about 170 also erases a 128 KiB sector first (2 s typical, 4 s
-//! maximum). The core stalls on instruction fetches from flash meanwhile.
+//! Timing on silicon, from the STM32F405 datasheet (not measured; `firmware::flash_layout`): a
+//! save programs its item a byte at a time (16 us typical, 100 us maximum a byte), and now and
+//! then erases a 128 KiB sector first (2 s typical, 4 s maximum). The core stalls on instruction
+//! fetches from flash meanwhile. How many bytes a save programs, how often it erases and what
+//! that stalls: `host-sim flash-life --board stm32f405` (docs/firmware.md, "Checkpoints in
+//! flash").
 
 use core::ptr::addr_of;
 
