@@ -69,6 +69,14 @@ fn slow_heel_and_trim_keep_the_1_sigma_and_beat_the_traditional_baseline() {
     assert!(error <= 6.0, "{error:.2} arcsec at 20000 s");
 }
 
+/// A trim alone leaks into x3, x4 through the joint filter; their 1-sigma carries the pitch pair's
+/// share of their covariance at the pitch pair's noise scale, so it knows.
+#[test]
+fn a_trim_alone_keeps_the_1_sigma() {
+    let draw = sea(|d| d.ship_motion.slow_trim = vec![(0.1, 1800.0)]);
+    honest_and_never_worse("trim 0.1 deg / 1800 s", &draw);
+}
+
 #[test]
 fn heel_in_turns_keeps_the_1_sigma_and_the_estimate() {
     let draw = sea(|d| d.mismatch.heel_in_turns_deg = 3.0);
