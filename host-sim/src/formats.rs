@@ -8,10 +8,13 @@
 //!   interval makes sense for a RINS;
 //! - [`binned_lines`]: a log at the navigation rate averaged into bins as it is read;
 //! - [`estimates_csv`]: the estimates CSV, one row per input row;
+//! - [`corrected_csv`]: the corrected-attitude CSV of `stream --nav-rate`, one row per
+//!   navigation-rate sample;
 //! - [`output_file`]: every output written through a temporary file and renamed, and never one of
 //!   the run's inputs.
 
 pub mod binned_lines;
+pub mod corrected_csv;
 pub mod estimates_csv;
 pub mod log_csv;
 pub mod log_paths;

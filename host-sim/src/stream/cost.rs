@@ -67,14 +67,20 @@ impl CostUnit {
 
     /// The summary line, `step cost: max N instructions, mean M instructions` (cycles on a board).
     pub fn summary(&self, stats: &CostStats) -> String {
+        self.describe("step cost", stats)
+    }
+
+    /// `LABEL: max N instructions, mean M instructions` (cycles on a board, with the largest in
+    /// microseconds at the core clock).
+    pub fn describe(&self, label: &str, stats: &CostStats) -> String {
         let max = stats.max_ticks as f64 * self.per_tick();
         let mean = stats.mean_ticks() * self.per_tick();
         match self {
             CostUnit::QemuInstructions { .. } => {
-                format!("step cost: max {max:.0} instructions, mean {mean:.0} instructions")
+                format!("{label}: max {max:.0} instructions, mean {mean:.0} instructions")
             }
             CostUnit::BoardCycles { counter_hz } => format!(
-                "step cost: max {max:.0} cycles, mean {mean:.0} cycles (max {:.1} us at {:.1} MHz)",
+                "{label}: max {max:.0} cycles, mean {mean:.0} cycles (max {:.1} us at {:.1} MHz)",
                 max / *counter_hz as f64 * 1e6,
                 *counter_hz as f64 / 1e6
             ),
