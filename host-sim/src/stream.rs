@@ -7,7 +7,9 @@
 //! (link protocol 5) and every answer matched to its request by its number; a request whose answer
 //! never comes (lost on the line, or in a firmware restart) is counted as lost and its row left out
 //! of the estimates. The summary ends with
-//! `frames sent N, answered N, lost N, overruns N` and the firmware's link counters. With `--qemu FIRMWARE.elf` it boots the firmware in QEMU first
+//! `frames sent N, answered N, lost N, overruns N` and the firmware's link counters. With
+//! `--nav-rate` each row goes as a navigation-rate sample, which the firmware bins itself
+//! ([`nav`]). With `--qemu FIRMWARE.elf` it boots the firmware in QEMU first
 //! ([`qemu`]; `--machine` names the board the image was built for) and waits for the firmware's
 //! `Ready` announcement before its first request; with `--port DEVICE --baud N` it talks to a board
 //! over a serial port.
@@ -23,6 +25,7 @@
 
 pub mod cost;
 pub mod link;
+pub mod nav;
 pub mod push;
 pub mod qemu;
 
@@ -243,7 +246,8 @@ pub struct StreamSummary {
     pub link: LinkSummary,
     /// The firmware's status after each restart in the stream (reset cause, restored checkpoint).
     pub restart_status: Vec<StatusReply>,
-    /// The step costs the firmware reported.
+    /// The step costs the firmware reported (with `--nav-rate`: those of the samples that completed
+    /// a bin, [`nav::NavSummary`] has the rest).
     pub cost: CostStats,
     /// The firmware's status after the last row.
     pub final_status: StatusReply,
@@ -251,6 +255,8 @@ pub struct StreamSummary {
     pub wall: Duration,
     /// Unreadable rows skipped.
     pub unreadable: RowFilter,
+    /// With `--nav-rate`: what the firmware did with the navigation-rate samples.
+    pub nav: Option<nav::NavSummary>,
 }
 
 /// Whether the firmware holds an estimator state: samples accepted since its last reset, or a
@@ -443,5 +449,6 @@ pub fn stream_log<L: LogLines, W: Write>(
         final_status,
         wall: start.elapsed(),
         unreadable: filter,
+        nav: None,
     })
 }

@@ -5,6 +5,7 @@ use crate::cmd::args::check_bin_interval;
 use crate::cmd::summary_writer;
 use crate::exit_status::RunEnd;
 use crate::formats::binned_lines::{BinningSummary, Lines};
+use crate::formats::corrected_csv::CorrectedWriter;
 use crate::formats::estimates_csv::EstimatesWriter;
 use crate::formats::log_csv::{is_stdio, LogLine, LogLines, LogReader, RowFilter};
 use crate::formats::log_paths::{default_estimates_path, inputs_of, log_name, output_name};
@@ -12,7 +13,9 @@ use crate::formats::output_file::{check_not_input, Input, OutputFile};
 use crate::formats::truth_file::load_truth;
 use crate::replay::records::Records;
 use crate::replay::replayer::GridFollower;
+use crate::report::pages::write_stream_report;
 use crate::report::TruthRows;
+use crate::stream::nav::{stream_log_nav, NavOutputs};
 use crate::stream::push::{stream_log_push, PushOptions};
 use crate::stream::qemu::Machine;
 use crate::stream::{prepare_firmware, stream_log, StreamSummary, Target};
@@ -97,6 +100,27 @@ pub struct StreamArgs {
     /// rate"); the firmware learns the interval S from the bins' stamps.
     #[arg(long, value_name = "S")]
     pub bin_interval_s: Option<f64>,
+    /// Send the log's rows (attitude at the navigation rate, 100-200 Hz) to the firmware as they
+    /// come, each as a navigation-rate sample (`NavSample`): the firmware averages them into its
+    /// 1 s grid, steps its estimator once a bin is complete and answers every sample with it
+    /// compensated. The estimates CSV has one row per bin the firmware completed, at the bin's
+    /// centre; --corrected-out writes every sample's corrected attitude. Every answer is checked
+    /// against the core's binning on the host; rows the firmware refuses (a time not after the
+    /// last one, a value out of range) are reported and counted. Not with --bin-interval-s (that
+    /// bins on the host), --resume (a checkpoint does not hold the open bin: use --reset) or
+    /// --push.
+    #[arg(long, conflicts_with_all = ["bin_interval_s", "resume", "push"])]
+    pub nav_rate: bool,
+    /// With --nav-rate: write every sample's corrected heading, roll and pitch (deg), as the
+    /// firmware answered it, to this CSV (`-`: standard output), one row a sample: about 22 MB an
+    /// hour at 100 Hz (format: docs/log-format.md).
+    #[arg(
+        long,
+        value_name = "FILE.csv",
+        requires = "nav_rate",
+        allow_hyphen_values = true
+    )]
+    pub corrected_out: Option<PathBuf>,
 }
 
 /// The longest `--timeout-s`, s: a firmware that has not answered within a day is lost.
@@ -123,10 +147,9 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     check_outputs(args, &out)?;
     let (mut lines, total) = open_log(args)?;
     let (mut target, what) = connect(args, timeout)?;
-    let mut info = summary_writer(&out);
+    let mut info = summary_writer(&summary_beside(args, &out));
     let resume_after_s = prepare_firmware(&mut target, args.resume, args.reset, &mut info)?;
-    let mut writer = EstimatesWriter::new(OutputFile::create(&out)?)
-        .with_context(|| format!("{}:0: cannot write", out.display()))?;
+    let mut outputs = Outputs::create(args, out)?;
     // The report's record of the answers: the truth beside the log, the grid from the stamps.
     let truth = args
         .report
@@ -143,7 +166,7 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         &mut target,
         &mut lines,
         resume_after_s,
-        &mut writer,
+        &mut outputs,
         total,
         &mut info,
         &mut |line: &LogLine, result: &Result<Output, SampleError>| {
@@ -152,26 +175,33 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         },
     )?;
     check_rows_streamed(&args.log, &mut lines, &summary)?;
-    writer
-        .finish()
-        .with_context(|| format!("{}:0: cannot write", out.display()))?
-        .commit()?;
+    let written = outputs.commit()?;
     if let Some(qemu) = target.qemu.take() {
         qemu.finish()?;
     }
     let recorded = records.finish(grid.interval_s().unwrap_or(1.0));
     let log = log_name(&args.log);
-    let head = format!("{log}: {} rows streamed through {what}", summary.rows);
-    print_summary(&mut info, &head, &out, &summary, lines.binning(), &target)?;
-    if let (Some(dir), Some(tl)) = (&args.report, &recorded.timeline) {
-        let page = crate::report::pages::write_stream_report(
-            dir,
-            &log,
-            &what,
-            &summary.final_status,
-            recorded.report.as_ref(),
-            tl,
-        )?;
+    let sent_as = if args.nav_rate {
+        " as navigation-rate samples (NavSample)"
+    } else {
+        ""
+    };
+    let head = format!(
+        "{log}: {} rows streamed through {what}{sent_as}",
+        summary.rows
+    );
+    print_summary(
+        &mut info,
+        &head,
+        &written,
+        &summary,
+        lines.binning(),
+        &target,
+    )?;
+    if let (Some(dir), Some(timeline)) = (&args.report, &recorded.timeline) {
+        let status = &summary.final_status;
+        let report = recorded.report.as_ref();
+        let page = write_stream_report(dir, &log, &what, status, report, timeline)?;
         writeln!(info, "report in {}", page.display())?;
     }
     info.flush()?;
@@ -182,6 +212,71 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// Where the summary goes: standard error when an output is standard output (`-`), else
+/// standard output ([`summary_writer`] of the path returned).
+fn summary_beside(args: &StreamArgs, out: &Path) -> PathBuf {
+    match &args.corrected_out {
+        Some(c) if is_stdio(c) => c.clone(),
+        _ => out.to_path_buf(),
+    }
+}
+
+/// The stream's output files, written as the answers come: the estimates CSV and, with
+/// `--nav-rate --corrected-out`, the corrected-attitude CSV. Each goes through a temporary file
+/// renamed over it by [`Outputs::commit`] (dropped uncommitted, it is deleted).
+struct Outputs {
+    out: PathBuf,
+    estimates: EstimatesWriter<OutputFile>,
+    corrected: Option<(PathBuf, CorrectedWriter<OutputFile>)>,
+}
+
+/// The paths of the outputs written, for the summary.
+struct Written {
+    estimates: PathBuf,
+    corrected: Option<PathBuf>,
+}
+
+impl Outputs {
+    fn create(args: &StreamArgs, out: PathBuf) -> anyhow::Result<Outputs> {
+        let cannot = |p: &Path| format!("{}:0: cannot write", p.display());
+        let estimates =
+            EstimatesWriter::new(OutputFile::create(&out)?).with_context(|| cannot(&out))?;
+        let corrected = match &args.corrected_out {
+            Some(path) => {
+                let w = CorrectedWriter::new(OutputFile::create(path)?)
+                    .with_context(|| cannot(path))?;
+                Some((path.clone(), w))
+            }
+            None => None,
+        };
+        Ok(Outputs {
+            out,
+            estimates,
+            corrected,
+        })
+    }
+
+    /// Every output complete: flushed and renamed over its target.
+    fn commit(self) -> anyhow::Result<Written> {
+        let cannot = |p: &Path| format!("{}:0: cannot write", p.display());
+        self.estimates
+            .finish()
+            .with_context(|| cannot(&self.out))?
+            .commit()?;
+        let corrected = match self.corrected {
+            Some((path, w)) => {
+                w.finish().with_context(|| cannot(&path))?.commit()?;
+                Some(path)
+            }
+            None => None,
+        };
+        Ok(Written {
+            estimates: self.out,
+            corrected,
+        })
+    }
 }
 
 /// A log's rows as the stream reads them, binned or not.
@@ -226,20 +321,30 @@ fn check_rows_streamed<I>(
     Ok(())
 }
 
-/// Refuses outputs that are inputs of the run (the estimates file, the defmt log), and creates
-/// the report directory.
+/// Refuses outputs that are inputs of the run, or another output (the estimates file, the
+/// corrected-attitude file, the defmt log), and creates the report directory.
 fn check_outputs(args: &StreamArgs, out: &Path) -> anyhow::Result<()> {
     check_not_input(out, "--out", &inputs_of(&args.log))?;
-    if let Some(log) = &args.defmt_log {
-        let mut inputs = inputs_of(&args.log);
-        inputs.extend(args.qemu.iter().map(|elf| Input {
-            path: elf.clone(),
-            what: "the firmware ELF",
-        }));
+    let mut inputs = inputs_of(&args.log);
+    inputs.extend(args.qemu.iter().map(|elf| Input {
+        path: elf.clone(),
+        what: "the firmware ELF",
+    }));
+    inputs.push(Input {
+        path: out.to_path_buf(),
+        what: "the estimates file (--out)",
+    });
+    if let Some(corrected) = &args.corrected_out {
+        if is_stdio(corrected) && is_stdio(out) {
+            bail!("--out and --corrected-out cannot both be standard output (-)");
+        }
+        check_not_input(corrected, "--corrected-out", &inputs)?;
         inputs.push(Input {
-            path: out.to_path_buf(),
-            what: "the estimates file (--out)",
+            path: corrected.clone(),
+            what: "the corrected-attitude file (--corrected-out)",
         });
+    }
+    if let Some(log) = &args.defmt_log {
         check_not_input(log, "--defmt-log", &inputs)?;
     }
     if let Some(dir) = &args.report {
@@ -271,19 +376,29 @@ fn connect(args: &StreamArgs, timeout: Duration) -> anyhow::Result<(Target, Stri
 }
 
 /// Streams the log's rows after `resume_after_s` through the target, a sample per answer or,
-/// with `--push`, without waiting for the answers; `each` sees every row and its answer.
+/// with `--push`, without waiting for the answers, or with `--nav-rate` as navigation-rate
+/// samples; `each` sees every row (with `--nav-rate`, every bin) and its answer.
 #[allow(clippy::too_many_arguments)]
-fn stream_rows<L: LogLines, W: Write>(
+fn stream_rows<L: LogLines>(
     args: &StreamArgs,
     target: &mut Target,
     lines: &mut L,
     resume_after_s: Option<f64>,
-    writer: &mut EstimatesWriter<W>,
+    outputs: &mut Outputs,
     total: Option<u64>,
     info: &mut dyn Write,
     each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
 ) -> anyhow::Result<StreamSummary> {
     let filter = RowFilter::new(args.strict);
+    let writer = &mut outputs.estimates;
+    if args.nav_rate {
+        let mut out = NavOutputs {
+            estimates: writer,
+            corrected: outputs.corrected.as_mut().map(|(_, w)| w),
+            each,
+        };
+        return stream_log_nav(target, lines, filter, &mut out, total);
+    }
     if !args.push {
         return stream_log(target, lines, filter, resume_after_s, writer, total, each);
     }
@@ -313,20 +428,26 @@ fn stream_rows<L: LogLines, W: Write>(
 fn print_summary(
     w: &mut dyn Write,
     head: &str,
-    out: &Path,
+    written: &Written,
     s: &StreamSummary,
     binning: Option<BinningSummary>,
     target: &Target,
 ) -> std::io::Result<()> {
+    let corrected = written.corrected.as_deref().map_or(String::new(), |c| {
+        format!("; corrected attitude in {}", output_name(c))
+    });
     writeln!(
         w,
-        "{head} in {:.1} s ({:.0} rows/s); estimates in {}",
+        "{head} in {:.1} s ({:.0} rows/s); estimates in {}{corrected}",
         s.wall.as_secs_f64(),
         s.rows as f64 / s.wall.as_secs_f64().max(1e-9),
-        output_name(out),
+        output_name(&written.estimates),
     )?;
     if let Some(b) = binning {
         writeln!(w, "  binned: {}", b.describe())?;
+    }
+    for line in s.nav.iter().flat_map(|n| n.describe()) {
+        writeln!(w, "  {line}")?;
     }
     if let Some(skipped) = s.unreadable.describe_skipped() {
         writeln!(w, "  {skipped}")?;
@@ -349,7 +470,14 @@ fn print_summary(
         s.link.lost,
         st.link.overruns()
     )?;
-    writeln!(w, "{}", target.unit.summary(&s.cost))
+    match &s.nav {
+        None => writeln!(w, "{}", target.unit.summary(&s.cost)),
+        Some(nav) => {
+            let unit = &target.unit;
+            writeln!(w, "{}", unit.describe("sample cost", &nav.sample_cost))?;
+            writeln!(w, "{}", unit.describe("with its bin's step", &nav.bin_cost))
+        }
+    }
 }
 
 /// What the firmware counted: samples accepted and filled, window restarts, bad frames and

@@ -229,6 +229,7 @@ pub fn stream_log_push<L: LogLines, W: Write>(
         final_status,
         wall: start.elapsed(),
         unreadable: filter,
+        nav: None,
     })
 }
 

@@ -261,3 +261,68 @@ fn binning_is_asked_for_its_range_checked_and_bad_rows_left_out() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `stream --nav-rate` (the firmware bins the rows) is refused with `--bin-interval-s` (binning
+/// on the host), `--resume` and `--push`, and `--corrected-out` without it (exit status 2, the
+/// options named); `--corrected-out` may not name an input nor share standard output with
+/// `--out` (exit status 1). All refused before the port is opened, nothing written.
+#[test]
+fn stream_nav_rate_conflicts_and_its_corrected_output_are_refused_before_streaming() {
+    let dir = temp_dir("cli-stream-nav-rate-refusals");
+    let log = dir.join("nav.csv");
+    std::fs::write(
+        &log,
+        "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg\n0,1,2,3,4,1,2\n",
+    )
+    .unwrap();
+    let (est, cor) = (dir.join("e.csv"), dir.join("c.csv"));
+    let stream = |extra: &[&str], status: i32, expect: &[&str]| {
+        let mut args = vec![
+            "stream",
+            "--port",
+            "/nonexistent/port",
+            path_str(&log),
+            "--out",
+            path_str(&est),
+        ];
+        args.extend_from_slice(extra);
+        let out = host_sim(&args);
+        assert_eq!(out.status.code(), Some(status), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        for e in expect {
+            assert!(stderr.contains(e), "{args:?}: {stderr}");
+        }
+    };
+    for (other, named) in [
+        (&["--bin-interval-s", "1"][..], "--bin-interval-s"),
+        (&["--resume"][..], "--resume"),
+        (&["--push"][..], "--push"),
+    ] {
+        let mut extra = vec!["--nav-rate"];
+        extra.extend_from_slice(other);
+        stream(&extra, 2, &["--nav-rate", named, "cannot be used with"]);
+    }
+    stream(
+        &["--corrected-out", path_str(&cor)],
+        2,
+        &["--corrected-out", "--nav-rate"],
+    );
+    stream(
+        &["--nav-rate", "--corrected-out", path_str(&log)],
+        1,
+        &["--corrected-out names the log itself"],
+    );
+    stream(
+        &["--nav-rate", "--corrected-out", path_str(&est)],
+        1,
+        &["--corrected-out names the estimates file (--out)"],
+    );
+    let mut args = vec!["stream", "--port", "/nonexistent/port", path_str(&log)];
+    args.extend_from_slice(&["--nav-rate", "--out", "-", "--corrected-out", "-"]);
+    let out = host_sim(&args);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr)
+        .contains("--out and --corrected-out cannot both be standard output"));
+    assert!(!est.exists() && !cor.exists(), "nothing written");
+    let _ = std::fs::remove_dir_all(&dir);
+}
