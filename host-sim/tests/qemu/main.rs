@@ -16,5 +16,6 @@ mod qemu_report;
 mod qemu_restart;
 mod qemu_software_update;
 mod qemu_stale_state;
+mod qemu_stream_nav_rate;
 mod qemu_support;
 mod qemu_watchdog;
