@@ -112,7 +112,7 @@ pub struct StreamArgs {
     #[arg(long, conflicts_with_all = ["bin_interval_s", "resume", "push"])]
     pub nav_rate: bool,
     /// With --nav-rate: write every sample's corrected heading, roll and pitch (deg), as the
-    /// firmware answered it, to this CSV (`-`: standard output), one row a sample: about 22 MB an
+    /// firmware answered it, to this CSV (`-`: standard output), one row a sample: about 23 MB an
     /// hour at 100 Hz (format: docs/log-format.md).
     #[arg(
         long,

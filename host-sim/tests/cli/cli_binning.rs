@@ -264,8 +264,9 @@ fn binning_is_asked_for_its_range_checked_and_bad_rows_left_out() {
 
 /// `stream --nav-rate` (the firmware bins the rows) is refused with `--bin-interval-s` (binning
 /// on the host), `--resume` and `--push`, and `--corrected-out` without it (exit status 2, the
-/// options named); `--corrected-out` may not name an input nor share standard output with
-/// `--out` (exit status 1). All refused before the port is opened, nothing written.
+/// options named); `--corrected-out` may not name an input nor the estimates file, nor
+/// `--defmt-log` it, and it may not share standard output with `--out` (exit status 1). All
+/// refused before the port is opened, nothing written.
 #[test]
 fn stream_nav_rate_conflicts_and_its_corrected_output_are_refused_before_streaming() {
     let dir = temp_dir("cli-stream-nav-rate-refusals");
@@ -316,6 +317,17 @@ fn stream_nav_rate_conflicts_and_its_corrected_output_are_refused_before_streami
         &["--nav-rate", "--corrected-out", path_str(&est)],
         1,
         &["--corrected-out names the estimates file (--out)"],
+    );
+    stream(
+        &[
+            "--nav-rate",
+            "--corrected-out",
+            path_str(&cor),
+            "--defmt-log",
+            path_str(&cor),
+        ],
+        1,
+        &["--defmt-log names the corrected-attitude file (--corrected-out)"],
     );
     let mut args = vec!["stream", "--port", "/nonexistent/port", path_str(&log)];
     args.extend_from_slice(&["--nav-rate", "--out", "-", "--corrected-out", "-"]);
