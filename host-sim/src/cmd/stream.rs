@@ -107,8 +107,8 @@ pub struct StreamArgs {
     /// centre; --corrected-out writes every sample's corrected attitude. Every answer is checked
     /// against the core's binning on the host; rows the firmware refuses (a time not after the
     /// last one, a value out of range) are reported and counted. Not with --bin-interval-s (that
-    /// bins on the host), --resume (a checkpoint does not hold the open bin: use --reset) or
-    /// --push.
+    /// bins on the host); --resume and --push are not implemented for navigation-rate samples
+    /// (--reset starts clean).
     #[arg(long, conflicts_with_all = ["bin_interval_s", "resume", "push"])]
     pub nav_rate: bool,
     /// With --nav-rate: write every sample's corrected heading, roll and pitch (deg), as the
