@@ -259,6 +259,35 @@ pub struct StreamSummary {
     pub nav: Option<nav::NavSummary>,
 }
 
+impl StreamSummary {
+    /// A stream that sent one row at a time and had each answered before the next: every row
+    /// sent was answered, none lost, no restart.
+    pub(crate) fn one_at_a_time(
+        rows: u64,
+        cost: CostStats,
+        final_status: StatusReply,
+        wall: Duration,
+        unreadable: RowFilter,
+        nav: Option<nav::NavSummary>,
+    ) -> StreamSummary {
+        StreamSummary {
+            rows,
+            link: LinkSummary {
+                sent: rows,
+                answered: rows,
+                lost: 0,
+                restarts: 0,
+            },
+            restart_status: Vec::new(),
+            cost,
+            final_status,
+            wall,
+            unreadable,
+            nav,
+        }
+    }
+}
+
 /// Whether the firmware holds an estimator state: samples accepted since its last reset, or a
 /// checkpoint (restored at boot or saved since). An estimate alone, before any sample and without
 /// a checkpoint, is known values the firmware starts from (set at build time, or the learned
@@ -436,19 +465,12 @@ pub fn stream_log<L: LogLines, W: Write>(
     }
     drop(progress);
     let final_status = target.status()?;
-    Ok(StreamSummary {
+    Ok(StreamSummary::one_at_a_time(
         rows,
-        link: LinkSummary {
-            sent: rows,
-            answered: rows,
-            lost: 0,
-            restarts: 0,
-        },
-        restart_status: Vec::new(),
         cost,
         final_status,
-        wall: start.elapsed(),
-        unreadable: filter,
-        nav: None,
-    })
+        start.elapsed(),
+        filter,
+        None,
+    ))
 }

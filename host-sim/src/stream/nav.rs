@@ -21,7 +21,7 @@
 //! firmware at the end of the log: a bin is stepped when a later sample arrives.
 
 use super::cost::CostStats;
-use super::{answer_of, LinkSummary, Progress, StreamSummary, Target};
+use super::{answer_of, Progress, StreamSummary, Target};
 use crate::formats::binned_lines::BinningSummary;
 use crate::formats::corrected_csv::CorrectedWriter;
 use crate::formats::estimates_csv::EstimatesWriter;
@@ -300,21 +300,15 @@ pub fn stream_log_nav<L: LogLines, W: Write, C: Write>(
     drop(progress);
     let final_status = target.status()?;
     let nav = follower.finish();
-    Ok(StreamSummary {
+    let cost = nav.bin_cost;
+    Ok(StreamSummary::one_at_a_time(
         rows,
-        link: LinkSummary {
-            sent: rows,
-            answered: rows,
-            lost: 0,
-            restarts: 0,
-        },
-        restart_status: Vec::new(),
-        cost: nav.bin_cost,
+        cost,
         final_status,
-        wall: start.elapsed(),
-        unreadable: filter,
-        nav: Some(nav),
-    })
+        start.elapsed(),
+        filter,
+        Some(nav),
+    ))
 }
 
 impl NavSummary {
