@@ -240,17 +240,48 @@ pub(crate) fn sway_set(rng: &mut ChaCha8Rng, items: &[(f64, f64)]) -> Vec<SwayCo
         .collect()
 }
 
+/// Most sinusoids `--sway-lines` may ask for in each spectrum.
+pub const MAX_SWAY_LINES: usize = 10_000;
+
+/// Why the sea's sway cannot be drawn with the lines asked for.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum SwayLinesError {
+    /// Only the sea scenario's sway comes from wave spectra.
+    #[error("--sway-lines applies to the sea scenario only (its wave spectra), not to {scenario}")]
+    NotSea {
+        /// The scenario asked for.
+        scenario: &'static str,
+    },
+    /// Lines outside 1..=[`MAX_SWAY_LINES`].
+    #[error("--sway-lines must be within 1 to {MAX_SWAY_LINES}, got {lines}")]
+    OutOfRange {
+        /// The lines asked for.
+        lines: usize,
+    },
+}
+
+/// Sinusoids in each of the sea scenario's wave spectra unless `--sway-lines` asks otherwise.
+pub const SEA_SWAY_LINES: usize = 40;
+
+/// The sea scenario's spectra: roll, pitch and heading sway, each `(significant amplitude deg,
+/// peak period s, shortest period s, longest period s)`.
+const SEA_SWAY: [(f64, f64, f64, f64); 3] = [
+    (6.0 * 2.0 / std::f64::consts::SQRT_2, 10.0, 6.0, 14.0),
+    (1.5 * 2.0 / std::f64::consts::SQRT_2, 9.0, 6.0, 14.0),
+    (0.5, 10.0, 6.0, 14.0),
+];
+
 /// Irregular sway from a Pierson-Moskowitz-shaped spectrum between `min_period_s` and
-/// `max_period_s` peaking at `peak_period_s`: 40 components with random phases, scaled so the
-/// significant amplitude (2 x RMS) is `significant_deg`.
+/// `max_period_s` peaking at `peak_period_s`: `lines` sinusoids, one at a random frequency in each
+/// of `lines` equal bins, with random phases, scaled so the significant amplitude (2 x RMS) is
+/// `significant_deg`. Few lines make a sea whose lines stay in step with a rotation-locked
+/// pattern for hours (a steady swell); many approach a continuous spectrum.
 fn wave_spectrum(
     rng: &mut ChaCha8Rng,
-    significant_deg: f64,
-    peak_period_s: f64,
-    min_period_s: f64,
-    max_period_s: f64,
+    (significant_deg, peak_period_s, min_period_s, max_period_s): (f64, f64, f64, f64),
+    lines: usize,
 ) -> Vec<SwayComponent> {
-    let n = 40;
+    let n = lines;
     let w_min = 2.0 * PI / max_period_s;
     let w_max = 2.0 * PI / min_period_s;
     let wp = 2.0 * PI / peak_period_s;
@@ -280,6 +311,25 @@ fn wave_spectrum(
 }
 
 impl ScenarioParams {
+    /// The sea scenario's roll, pitch and heading sway drawn again as `lines` sinusoids each, from
+    /// the seed (another draw than the default's, even at [`SEA_SWAY_LINES`]); the same spectra
+    /// and amplitudes. Only the sea scenario has wave spectra.
+    pub fn redraw_sea_sway(&mut self, lines: usize) -> Result<(), SwayLinesError> {
+        if self.scenario != ScenarioKind::Sea {
+            return Err(SwayLinesError::NotSea {
+                scenario: self.scenario.name(),
+            });
+        }
+        if !(1..=MAX_SWAY_LINES).contains(&lines) {
+            return Err(SwayLinesError::OutOfRange { lines });
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x5ea5_11e5);
+        self.roll_sway = wave_spectrum(&mut rng, SEA_SWAY[0], lines);
+        self.pitch_sway = wave_spectrum(&mut rng, SEA_SWAY[1], lines);
+        self.heading_sway = wave_spectrum(&mut rng, SEA_SWAY[2], lines);
+        Ok(())
+    }
+
     /// The scenario's defaults for `seed`. Phases (and for `sea` the spectrum components) are drawn
     /// from the seed; everything else is fixed.
     pub fn new(kind: ScenarioKind, seed: u64) -> ScenarioParams {
@@ -329,21 +379,9 @@ impl ScenarioParams {
                 latitude_deg: 18.0,
                 speed_m_s: 5.0,
                 course_deg: 40.0,
-                roll_sway: wave_spectrum(
-                    &mut rng,
-                    6.0 * 2.0 / std::f64::consts::SQRT_2,
-                    10.0,
-                    6.0,
-                    14.0,
-                ),
-                pitch_sway: wave_spectrum(
-                    &mut rng,
-                    1.5 * 2.0 / std::f64::consts::SQRT_2,
-                    9.0,
-                    6.0,
-                    14.0,
-                ),
-                heading_sway: wave_spectrum(&mut rng, 0.5, 10.0, 6.0, 14.0),
+                roll_sway: wave_spectrum(&mut rng, SEA_SWAY[0], SEA_SWAY_LINES),
+                pitch_sway: wave_spectrum(&mut rng, SEA_SWAY[1], SEA_SWAY_LINES),
+                heading_sway: wave_spectrum(&mut rng, SEA_SWAY[2], SEA_SWAY_LINES),
                 heading_weave_rate_deg_s: 0.5,
                 ..base
             },

@@ -10,7 +10,7 @@ use crate::report::tables::{format_honesty_shares, rows_text};
 use crate::sim::recorder::{Recorder, RecorderError, RecorderSettings, Recording};
 use crate::sim::rotation_scheme::RotationScheme;
 use crate::sim::samples::Samples;
-use crate::sim::scenario::{Mismatch, ScenarioKind, ScenarioParams, SwayComponent};
+use crate::sim::scenario::{Mismatch, ScenarioKind, ScenarioParams, SwayComponent, SwayLinesError};
 use crate::sim::ship_motion::ShipMotionSettings;
 use estimator_core::Config;
 use rand::{Rng, SeedableRng};
@@ -95,6 +95,9 @@ pub enum ScenarioError {
     /// The recorder's settings.
     #[error(transparent)]
     Recorder(#[from] RecorderError),
+    /// The sea's sway cannot be drawn with the lines asked for.
+    #[error(transparent)]
+    SwayLines(#[from] SwayLinesError),
 }
 
 /// How the runs are drawn.
@@ -125,6 +128,9 @@ pub struct Draw {
     pub sample_interval_s: Option<f64>,
     /// The recorder; outages are placed per run, from the run's seed.
     pub recorder: RecorderSettings,
+    /// Sea scenario: sinusoids in each wave spectrum of the sway, drawn per run from the run's
+    /// seed ([`ScenarioParams::redraw_sea_sway`]); `None`: the scenario's own.
+    pub sway_lines: Option<usize>,
 }
 
 impl Draw {
@@ -144,12 +150,16 @@ impl Draw {
             rotation_period_s: None,
             sample_interval_s: None,
             recorder: RecorderSettings::default(),
+            sway_lines: None,
         }
     }
 
     /// Checks that every run's scenario can be made: the scheme fits in its period, the recorder's
     /// settings are valid and its outages fit in the log.
     pub fn check(&self) -> Result<(), ScenarioError> {
+        if let Some(lines) = self.sway_lines {
+            ScenarioParams::new(self.kind, self.run_seed(0)).redraw_sea_sway(lines)?;
+        }
         let p = self.params(0);
         if p.rotation_period_s < p.scheme.min_period_s() {
             return Err(ScenarioError::PeriodTooShortForScheme {
@@ -186,6 +196,10 @@ impl Draw {
     pub fn params(&self, i: usize) -> ScenarioParams {
         let seed = self.run_seed(i);
         let mut p = ScenarioParams::new(self.kind, seed);
+        if let Some(lines) = self.sway_lines {
+            // Checked once by `check`.
+            let _ = p.redraw_sea_sway(lines);
+        }
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xD1CE_5EED);
         let (lo, hi) = self.error_magnitude_arcsec;
         p.errors_arcsec = core::array::from_fn(|_| {

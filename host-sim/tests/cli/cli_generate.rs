@@ -1,7 +1,7 @@
 //! `generate`'s log, read back: rotation schemes, sample interval, lost rows, outages, time
 //! stamps, and the default scenarios unchanged.
 
-use crate::common::{host_sim_ok, path_str, temp_dir};
+use crate::common::{host_sim, host_sim_ok, path_str, temp_dir};
 use std::path::Path;
 
 /// CRC-64 (ECMA-182) and length of a file.
@@ -640,4 +640,62 @@ fn ship_options_add_slow_heel_trim_and_heel_in_turns() {
         );
     }
     assert!(!log.exists());
+}
+
+/// `--sway-lines N` draws the sea's wave spectra (roll, pitch, heading sway) with N lines each at
+/// the same sway level; only the sea scenario has wave spectra.
+#[test]
+fn sway_lines_redraw_the_sea_spectra_at_the_same_level() {
+    let dir = temp_dir("gen-sway-lines");
+    let params_of = |name: &str, extra: &[&str]| {
+        let log = dir.join(format!("{name}.csv"));
+        let mut args = vec![
+            "generate",
+            "--scenario",
+            "sea",
+            "--seed",
+            "2",
+            "--duration",
+            "100",
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", path_str(&log)]);
+        host_sim_ok(&args);
+        read_truth(&truth_path(&log))
+            .unwrap()
+            .expect("truth file")
+            .params
+            .expect("generate records the scenario's parameters")
+    };
+    let rms = |c: &[host_sim::sim::scenario::SwayComponent]| {
+        c.iter()
+            .map(|s| s.amplitude_deg * s.amplitude_deg / 2.0)
+            .sum::<f64>()
+            .sqrt()
+    };
+    let default = params_of("default", &[]);
+    let dense = params_of("dense", &["--sway-lines", "500"]);
+    for (few, many) in [
+        (&default.roll_sway, &dense.roll_sway),
+        (&default.pitch_sway, &dense.pitch_sway),
+        (&default.heading_sway, &dense.heading_sway),
+    ] {
+        assert_eq!((few.len(), many.len()), (40, 500));
+        assert!((rms(few) - rms(many)).abs() < 1e-9 * rms(few));
+    }
+    let log = dir.join("paper.csv");
+    let r = host_sim(&[
+        "generate",
+        "--scenario",
+        "paper",
+        "--sway-lines",
+        "500",
+        "--out",
+        path_str(&log),
+    ]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr)
+        .contains("--sway-lines applies to the sea scenario only"));
+    assert!(!log.exists());
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -176,6 +176,12 @@ pub struct ShipMotionArgs {
     /// starboard heels to port).
     #[arg(long, value_name = "DEG_PER_DEG_S", default_value_t = 0.0)]
     pub heel_per_turn_rate: f64,
+    /// Sea scenario: sinusoids in each wave spectrum of the sway (roll, pitch, heading), drawn
+    /// again from the seed (default: the scenario's 40). Few lines are a steady swell whose lines
+    /// can stay in step with a pattern locked to the rotation for hours; thousands approach a
+    /// continuous spectrum.
+    #[arg(long, value_name = "N")]
+    pub sway_lines: Option<usize>,
     /// How the RINS's interface departs from the model.
     #[command(flatten)]
     pub interface: InterfaceArgs,
@@ -253,6 +259,9 @@ impl ShipMotionArgs {
 
     /// Puts the motions into `p`, their phases drawn from `p`'s seed.
     pub fn apply(&self, p: &mut ScenarioParams) -> anyhow::Result<()> {
+        if let Some(lines) = self.sway_lines {
+            p.redraw_sea_sway(lines)?;
+        }
         p.ship_motion = self.settings()?.motion(p.seed);
         p.mismatch.heel_in_turns_deg = self.heel_in_turns_deg()?;
         self.interface.apply(&mut p.mismatch)?;
@@ -445,6 +454,7 @@ impl SpreadArgs {
         };
         self.motion.interface.apply(&mut d.mismatch)?;
         d.ship_motion = self.motion.settings()?;
+        d.sway_lines = self.motion.sway_lines;
         d.check()?;
         Ok(d)
     }
