@@ -241,6 +241,7 @@ mod tests {
                 unreadable: RowFilter::new(false),
                 health: estimator_core::Health::NONE,
                 binning: None,
+                regular_loss: None,
             },
             periods: 8,
             residual_power_arcsec2: unexplained,

@@ -13,6 +13,7 @@
 //! What is recorded of each row ([`records::Records`]) is the same for a log the firmware steps
 //! (`stream`); [`summary`] puts a replay in words.
 
+pub mod loss_cadence;
 pub mod records;
 pub mod replayer;
 pub mod summary;
@@ -77,6 +78,8 @@ pub struct Replay {
     pub health: estimator_core::Health,
     /// What binning did, when the rows were binned (`--bin-interval-s`).
     pub binning: Option<BinningSummary>,
+    /// Rows lost at a regular cadence, when they were (a limit the 1-sigma does not carry).
+    pub regular_loss: Option<loss_cadence::RegularLoss>,
 }
 
 /// Why a replay stopped.

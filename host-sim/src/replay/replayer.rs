@@ -1,6 +1,7 @@
 //! The replay's step: one row at a time through the estimator ([`Replayer`]), what it hands on of
 //! each row ([`StepView`]), and the sample grid followed beside it ([`GridFollower`]).
 
+use super::loss_cadence::LossCadence;
 use super::{sample_of, HostEstimator, Replay, ReplayError};
 use crate::formats::log_csv::{LogError, LogLine, RowFilter};
 use crate::formats::time_stamps::IntervalCheck;
@@ -117,6 +118,7 @@ pub struct Replayer<'a> {
     check_stamps: bool,
     grid: GridFollower,
     filter: RowFilter,
+    loss: LossCadence,
 }
 
 impl<'a> Replayer<'a> {
@@ -139,6 +141,7 @@ impl<'a> Replayer<'a> {
             check_stamps: true,
             grid: GridFollower::new(&config),
             filter,
+            loss: LossCadence::default(),
         })
     }
 
@@ -178,6 +181,9 @@ impl<'a> Replayer<'a> {
             }
         }
         let placement = self.grid.follow(line.row.time_s, &result);
+        if let Some(p) = placement {
+            self.loss.observe(p);
+        }
         each(&StepView {
             line: &line,
             result: &result,
@@ -213,6 +219,7 @@ impl<'a> Replayer<'a> {
             unreadable: self.filter,
             health: est.health(),
             binning: None,
+            regular_loss: est.sample_interval_s().and_then(|dt| self.loss.regular(dt)),
         }
     }
 }

@@ -51,6 +51,9 @@ pub fn write_summary(
     if let Some(limit) = describe_limit(&r.health) {
         writeln!(w, "  {limit}")?;
     }
+    if let Some(loss) = &r.regular_loss {
+        writeln!(w, "  {}", loss.describe())?;
+    }
     write_final_estimate(w, r)?;
     write_rejected(w, r, rows)
 }

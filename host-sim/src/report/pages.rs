@@ -267,6 +267,12 @@ fn replay_facts(log: &str, method: &str, r: &Replay, tl: &Timeline) -> Vec<(Stri
             limit.trim_start_matches("limit: ").to_string(),
         ));
     }
+    if let Some(loss) = &r.regular_loss {
+        rows.push((
+            "limit".into(),
+            loss.describe().trim_start_matches("limit: ").to_string(),
+        ));
+    }
     if let Some(b) = &r.binning {
         // The rows above are the bins the estimator stepped.
         rows.insert(2, ("binned".into(), b.describe()));

@@ -249,3 +249,47 @@ fn the_alarm_columns_latch_and_agree_with_the_rows() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Rows lost at a regular cadence set a limit the 1-sigma does not carry: the summary names the
+/// cadence; rows lost at random, which average out, are not named.
+#[test]
+fn rows_lost_at_a_regular_cadence_are_named_and_random_loss_is_not() {
+    let dir = temp_dir("cli-cadence");
+    let summary_of = |name: &str, recorder: &[&str]| {
+        let log = dir.join(format!("{name}.csv"));
+        let mut args = vec![
+            "generate",
+            "--scenario",
+            "sea",
+            "--seed",
+            "3",
+            "--duration",
+            "6000",
+        ];
+        args.extend_from_slice(recorder);
+        args.extend_from_slice(&["--out", path_str(&log)]);
+        host_sim_ok(&args);
+        let est = dir.join(format!("{name}.est.csv"));
+        host_sim_ok(&["estimate", path_str(&log), "--out", path_str(&est)])
+    };
+    let cadence = summary_of(
+        "cadence",
+        &[
+            "--gap-every",
+            "90",
+            "--gap-rows",
+            "3",
+            "--drop-fraction",
+            "0.01",
+        ],
+    );
+    assert!(
+        cadence.contains("limit: rows lost at a regular cadence (")
+            && cadence.contains(" s later)")
+            && cadence.contains("have another 90 s later"),
+        "{cadence}"
+    );
+    let random = summary_of("random", &["--drop-fraction", "0.02"]);
+    assert!(!random.contains("regular cadence"), "{random}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
