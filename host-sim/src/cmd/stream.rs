@@ -73,7 +73,8 @@ pub struct StreamArgs {
     #[arg(long, value_name = "DIR", requires = "qemu")]
     pub flash_dir: Option<PathBuf>,
     /// The firmware holds the state of this very log (e.g. restored after a power cut): skip the
-    /// log rows up to the time of its checkpoint and continue from there.
+    /// log rows up to the time of its checkpoint (with --nav-rate: to the end of the checkpoint's
+    /// bin) and continue from there.
     #[arg(long, conflicts_with = "reset")]
     pub resume: bool,
     /// Start clean: the firmware forgets any state it holds and erases its checkpoints (so that no
