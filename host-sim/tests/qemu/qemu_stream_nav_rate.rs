@@ -8,13 +8,14 @@
 //! row (the bin the firmware leaves open); the two refused rows are reported with their lines and
 //! counted, and change nothing.
 //!
-//! On both boards, the same kind of log at 20 Hz (as many bins and estimates for a fifth of the
-//! rows) sent one row at a time and pushed (`--push`, frames sent without waiting for the answers;
-//! `--window 3` on the STM32F405): both pairs of files byte-identical to each other and to the host
-//! core's, the frames really queued in the firmware's receive ring.
+//! The same kind of log at 20 Hz (as many bins and estimates for a fifth of the rows) through the
+//! STM32F405 image, one row at a time and pushed (`--push --window 3`, frames sent without waiting
+//! for the answers): both pairs of files byte-identical to each other and to the host core's, the
+//! frames really queued in the firmware's receive ring.
 //!
-//! After a power cut (mps2-an386 built with a checkpoint every 20 s of sample time): pushed up to a
-//! cut in the middle of a bin, then the whole log again with `--resume`, which sends the rows of the
+//! After a power cut, on mps2-an386 built with a checkpoint every 20 s of sample time: a 150 s
+//! log at 20 Hz with the two refused rows pushed (the default window) up to a cut in the middle of
+//! a bin, then the whole log again with `--resume`, one row at a time, which sends the rows of the
 //! bins after the restored checkpoint's; both runs' files byte-identical to the host core's mirror
 //! of the firmware: the same binning, steps and saves, the checkpoint restored into a fresh
 //! estimator with an empty bin.
@@ -71,13 +72,13 @@ fn first_difference(got: &[u8], want: &[u8]) -> Option<usize> {
         .then(|| got.lines().count().min(want.lines().count()) + 1)
 }
 
-/// A generated sea log of 120 s at `hz` rows a second with the row of 30 s repeated (its time not
-/// after the last one) and a row stamped back at 50.5 s after the row of 60 s: both refused by the
-/// firmware's binner. Returns the log and the file lines of the two (the header is line 1): 3,003
-/// and 6,004 at 100 Hz.
-fn log_with_two_refused_rows(dir: &Path, hz: usize) -> (PathBuf, [usize; 2]) {
-    // A 60 s rotation, so that the first estimate comes (about 105 s in) within the log.
-    let name = format!("nav-{hz}hz");
+/// A generated sea log of `duration_s` (at least 61 s) at `hz` rows a second with the row of 30 s
+/// repeated (its time not after the last one) and a row stamped back at 50.5 s after the row of
+/// 60 s: both refused by the firmware's binner. Returns the log and the file lines of the two (the
+/// header is line 1): 3,003 and 6,004 at 100 Hz.
+fn log_with_two_refused_rows(dir: &Path, hz: usize, duration_s: usize) -> (PathBuf, [usize; 2]) {
+    // A 60 s rotation, so that the first estimate comes (about 105 s in) within 120 s.
+    let name = format!("nav-{hz}hz-{duration_s}s");
     let generated = generated_log(
         dir,
         &format!("{name}.csv"),
@@ -85,7 +86,7 @@ fn log_with_two_refused_rows(dir: &Path, hz: usize) -> (PathBuf, [usize; 2]) {
             "--scenario",
             "sea",
             "--duration",
-            "120",
+            &duration_s.to_string(),
             "--sample-interval",
             &(1.0 / hz as f64).to_string(),
             "--rotation-period",
@@ -94,7 +95,7 @@ fn log_with_two_refused_rows(dir: &Path, hz: usize) -> (PathBuf, [usize; 2]) {
     );
     let text = std::fs::read_to_string(&generated).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
-    assert_eq!(lines.len(), 120 * hz + 1);
+    assert_eq!(lines.len(), duration_s * hz + 1);
     // `lines[1 + k]` is row k, at k / hz s.
     let repeated = lines[1 + 30 * hz].clone();
     let mut back: Vec<String> = lines[1 + 60 * hz].split(',').map(String::from).collect();
@@ -164,7 +165,7 @@ fn assert_estimate_binned_writes_the_same(dir: &Path, log: &Path, streamed: &[u8
 fn stream_nav_rate_sends_a_100_hz_log_as_navigation_samples_and_answers_as_the_host_core() {
     let board = Board::Mps2An386;
     let dir = scratch("stream-nav-rate-mps2-an386");
-    let (log, refused_lines) = log_with_two_refused_rows(&dir, 100);
+    let (log, refused_lines) = log_with_two_refused_rows(&dir, 100, 120);
     assert_eq!(refused_lines, [3003, 6004]);
     let (est, cor) = (dir.join("est.csv"), dir.join("corrected.csv"));
     let stdout = host_sim(&[
@@ -277,25 +278,14 @@ fn receive_peak_without_faults(stdout: &str) -> u32 {
 }
 
 #[test]
-fn mps2_an386_stream_nav_rate_pushed_answers_as_one_at_a_time() {
-    pushed_as_one_at_a_time(Board::Mps2An386, &[]);
-}
-
-#[test]
 fn stm32f405_stream_nav_rate_pushed_answers_as_one_at_a_time() {
-    pushed_as_one_at_a_time(Board::Stm32f405, &["--window", "3"]);
-}
-
-/// A 20 Hz log with two refused rows streamed through `board` one row at a time and pushed (with
-/// `window`): both pairs of outputs byte-identical to each other and to the host core's.
-fn pushed_as_one_at_a_time(board: Board, window: &[&str]) {
+    let board = Board::Stm32f405;
     let elf = firmware_elf(board);
-    let dir = scratch(&format!("stream-nav-rate-push-{}", board.name()));
-    let (log, [repeated, back]) = log_with_two_refused_rows(&dir, 20);
+    let dir = scratch("stream-nav-rate-push-stm32f405");
+    let (log, [repeated, back]) = log_with_two_refused_rows(&dir, 20, 120);
     let (want_est, want_cor) = host_outputs(&log);
     let (one_est, one_cor, _) = stream_nav(board, &elf, &dir, &log, "one", &[]);
-    let mut push_args = vec!["--push"];
-    push_args.extend_from_slice(window);
+    let push_args = ["--push", "--window", "3"];
     let (push_est, push_cor, stdout) = stream_nav(board, &elf, &dir, &log, "push", &push_args);
     for (what, got, want) in [
         ("one at a time: estimates CSV", &one_est, &want_est),
@@ -306,8 +296,7 @@ fn pushed_as_one_at_a_time(board: Board, window: &[&str]) {
         assert_eq!(
             first_difference(got, want),
             None,
-            "{}: {what}: firmware and host core differ at that line",
-            board.name()
+            "{what}: firmware and host core differ at that line"
         );
     }
     assert_eq!((&push_est, &push_cor), (&one_est, &one_cor));
@@ -326,12 +315,16 @@ fn pushed_as_one_at_a_time(board: Board, window: &[&str]) {
     ] {
         assert!(stdout.contains(expected), "{expected:?} not in:\n{stdout}");
     }
-    // The frames really queued in the firmware's receive ring: more than one frame waited.
-    let peak = receive_peak_without_faults(&stdout);
+    assert_pushed_frames_queued(&stdout);
+}
+
+/// The frames of a push really queued in the firmware's receive ring (more than one frame waited),
+/// and its link counted no fault.
+fn assert_pushed_frames_queued(stdout: &str) {
+    let peak = receive_peak_without_faults(stdout);
     assert!(
         peak > 43,
-        "{}: receive buffer peak {peak} bytes: the push did not queue frames",
-        board.name()
+        "receive buffer peak {peak} bytes: the push did not queue frames"
     );
 }
 
@@ -428,32 +421,19 @@ impl NavMirror {
 /// When the power is cut, s: within the bin of 127 s, which is then open with 6 of its 20 rows.
 const NAV_CUT_S: f64 = 127.3;
 
-/// `--nav-rate --resume` after a power cut: a 150 s log at 20 Hz pushed up to the cut (the last
-/// checkpoint that of the bin of 120 s, the bins up to 126 s stepped after it, the bin of 127 s
-/// open), QEMU killed; the whole log streamed again with `--resume` into the restarted firmware,
-/// which restored the checkpoint of 120.5 s: the rows of 121 s on are sent (the bins after the
-/// checkpoint's, those stepped before the cut among them), so that the bin the restarted firmware
-/// fills first is whole. Both runs' outputs byte-identical to the host core's mirror of the
-/// firmware.
+/// `--nav-rate --resume` after a power cut: a 150 s log at 20 Hz with two refused rows pushed up to
+/// the cut (the last checkpoint that of the bin of 120 s, the bins up to 126 s stepped after it,
+/// the bin of 127 s open), QEMU killed; the whole log streamed again with `--resume` into the
+/// restarted firmware, which restored the checkpoint of 120.5 s: the rows of 121 s on are sent
+/// (the bins after the checkpoint's, those stepped before the cut among them), so that the bin the
+/// restarted firmware fills first is whole. Both runs' outputs byte-identical to the host core's
+/// mirror of the firmware.
 #[test]
 fn stream_nav_rate_resumes_after_a_power_cut_from_the_bin_after_the_checkpoint() {
     let board = Board::Mps2An386;
     let elf = firmware_elf_checkpoint_20s();
     let dir = scratch("stream-nav-rate-resume");
-    let whole = generated_log(
-        &dir,
-        "nav-20hz-150s.csv",
-        &[
-            "--scenario",
-            "sea",
-            "--duration",
-            "150",
-            "--sample-interval",
-            "0.05",
-            "--rotation-period",
-            "60",
-        ],
-    );
+    let (whole, [repeated, back]) = log_with_two_refused_rows(&dir, 20, 150);
     let text = std::fs::read_to_string(&whole).unwrap();
     let before_cut: Vec<&str> = text
         .lines()
@@ -479,14 +459,15 @@ fn stream_nav_rate_resumes_after_a_power_cut_from_the_bin_after_the_checkpoint()
     let mut args = vec!["--push"];
     args.extend_from_slice(&flash_args);
     let (est, cor, stdout) = stream_nav(board, &elf, &dir, &first, "before-cut", &args);
-    assert!(
-        stdout.contains("  the last bin (6 rows) left open"),
-        "{stdout}"
-    );
-    assert!(
-        stdout.contains("  checkpoints: 6 saved in this run, newest at 120.5 s"),
-        "{stdout}"
-    );
+    for expected in [
+        &format!("  rows the firmware refused: lines {repeated} (time_not_increasing), {back} (time_not_increasing); they changed nothing"),
+        "  the last bin (6 rows) left open",
+        "  checkpoints: 6 saved in this run, newest at 120.5 s",
+        "frames sent 2548, answered 2548, lost 0, overruns 0",
+    ] {
+        assert!(stdout.contains(expected), "{expected:?} not in:\n{stdout}");
+    }
+    assert_pushed_frames_queued(&stdout);
     assert_eq!(
         first_difference(&est, &want_est),
         None,
