@@ -247,8 +247,11 @@ impl Binner {
         self.bin.map_or(0, |b| b.count)
     }
 
-    /// The number of the bin a time falls in.
-    fn bin_index(&self, time_s: f64) -> f64 {
+    /// The number `k` of the bin a time falls in (an integer held as `f64`; see the module doc:
+    /// `k T <= t < (k + 1) T`, a stamp within a millionth of a bin below a boundary counting as on
+    /// it). A stream that resumes after a checkpoint taken at a bin's step sends the samples of
+    /// later bins only: the bin of the checkpoint's stamp (the bin's centre) was stepped already.
+    pub fn bin_of(&self, time_s: f64) -> f64 {
         libm::floor(time_s / self.interval_s + BOUNDARY_SNAP_BINS)
     }
 
@@ -260,7 +263,7 @@ impl Binner {
         if self.last_time_s.is_some_and(|last| !(sample.time_s > last)) {
             return Err(SampleError::TimeNotIncreasing);
         }
-        let index = self.bin_index(sample.time_s);
+        let index = self.bin_of(sample.time_s);
         self.last_time_s = Some(sample.time_s);
         match &mut self.bin {
             Some(bin) if bin.index == index => {
@@ -310,6 +313,29 @@ mod tests {
             .into_iter()
             .filter_map(|s| binner.push(&s).expect("a good sample"))
             .collect()
+    }
+
+    #[test]
+    fn bin_of_is_the_bin_push_puts_a_sample_in() {
+        let tenth = Binner::new(0.1).unwrap();
+        assert_eq!(
+            tenth.bin_of(0.3),
+            3.0,
+            "0.3 / 0.1 is just below 3 in binary"
+        );
+        let second = Binner::default();
+        // A bin's centre (a checkpoint's stamp) lies in that bin; the next bin starts 0.5 s on.
+        assert_eq!(second.bin_of(120.5), 120.0);
+        assert_eq!(second.bin_of(120.999), 120.0);
+        assert_eq!(second.bin_of(121.0), 121.0);
+        assert_eq!(second.bin_of(-0.5), -1.0);
+        let mut binner = Binner::default();
+        let stepped = bins(
+            &mut binner,
+            [119.99, 120.5, 120.99, 121.0].map(|t| sample(t, 0.0, 0.0)),
+        );
+        assert_eq!(stepped.len(), 2);
+        assert_eq!(second.bin_of(stepped[1].time_s), 120.0);
     }
 
     #[test]

@@ -9,7 +9,8 @@
 //! of the estimates. The summary ends with
 //! `frames sent N, answered N, lost N, overruns N` and the firmware's link counters. With
 //! `--nav-rate` each row goes as a navigation-rate sample, which the firmware bins itself
-//! ([`nav`]). With `--qemu FIRMWARE.elf` it boots the firmware in QEMU first
+//! ([`nav`]), through the same two loops: what differs between the kinds of sample is a
+//! [`sink::RowSink`]. With `--qemu FIRMWARE.elf` it boots the firmware in QEMU first
 //! ([`qemu`]; `--machine` names the board the image was built for) and waits for the firmware's
 //! `Ready` announcement before its first request; with `--port DEVICE --baud N` it talks to a board
 //! over a serial port.
@@ -28,10 +29,10 @@ pub mod link;
 pub mod nav;
 pub mod push;
 pub mod qemu;
+pub mod sink;
 
 use crate::formats::estimates_csv::EstimatesWriter;
 use crate::formats::log_csv::{LogLine, LogLines, RowFilter};
-use crate::formats::time_stamps::IntervalCheck;
 use crate::replay::sample_of;
 use anyhow::{bail, Context};
 use cost::{CostStats, CostUnit};
@@ -39,6 +40,7 @@ use estimator_core::{Output, SampleError};
 use link::FirmwareLink;
 use link_protocol::{Counters, Request, Response, SampleMsg, StatusReply, PROTOCOL_VERSION};
 use qemu::{Machine, Qemu};
+use sink::{RowSink, SampleSink};
 use std::io::{IsTerminal, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -426,21 +428,42 @@ impl Drop for Progress {
 /// Streams the log's rows after `resume_after_s` through the target, writing one estimates row
 /// per row; `each` sees every row and its answer. Unreadable rows go through `filter` (skipped and
 /// counted, or refused when strict); stamps whose interval makes no sense are refused
-/// ([`IntervalCheck`]).
+/// ([`IntervalCheck`](crate::formats::time_stamps::IntervalCheck)).
 pub fn stream_log<L: LogLines, W: Write>(
     target: &mut Target,
     lines: &mut L,
-    mut filter: RowFilter,
+    filter: RowFilter,
     resume_after_s: Option<f64>,
     writer: &mut EstimatesWriter<W>,
     total_bytes: Option<u64>,
     each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
 ) -> anyhow::Result<StreamSummary> {
+    let mut sink = SampleSink::checked(writer, each);
+    stream_rows_one_at_a_time(
+        target,
+        lines,
+        filter,
+        resume_after_s,
+        &mut sink,
+        total_bytes,
+    )
+}
+
+/// Streams the log's rows through the target one at a time, each sent when the last is
+/// answered, as `sink` says ([`RowSink`]: samples or navigation-rate samples); with
+/// `resume_after_s` (the firmware's checkpoint) the rows it holds already are skipped. Unreadable
+/// rows go through `filter` (skipped and counted, or refused when strict).
+pub fn stream_rows_one_at_a_time<L: LogLines, S: RowSink>(
+    target: &mut Target,
+    lines: &mut L,
+    mut filter: RowFilter,
+    resume_after_s: Option<f64>,
+    sink: &mut S,
+    total_bytes: Option<u64>,
+) -> anyhow::Result<StreamSummary> {
     let start = Instant::now();
     let progress = Progress::new(total_bytes);
-    let mut cost = CostStats::default();
     let mut rows = 0u64;
-    let mut interval_check = IntervalCheck::new(None);
     while let Some(item) = lines.next() {
         let Some(line) = filter.admit(item, &mut |e| {
             progress
@@ -450,27 +473,29 @@ pub fn stream_log<L: LogLines, W: Write>(
         else {
             continue;
         };
-        if resume_after_s.is_some_and(|t| line.row.time_s <= t) {
+        if resume_after_s.is_some_and(|t| sink.before_resume(t, line.row.time_s)) {
             continue;
         }
-        interval_check.observe(line.row.time_s)?;
-        let sample = sample_of(&line.row);
-        let answer = step_remote(target, &SampleMsg::from(&sample))
+        sink.check_stamp(line.row.time_s)?;
+        let msg = SampleMsg::from(&sample_of(&line.row));
+        let response = target
+            .request(&sink.request(msg))
             .with_context(|| format!("log line {}", line.line))?;
-        cost.add(answer.step_cost_ticks);
-        writer.write_step(line.row.time_s, &answer.result)?;
-        each(&line, &answer.result);
+        if let Some(warning) = sink.answered(&line, &msg, response)? {
+            progress.bar.suspend(|| eprintln!("warning: {warning}"));
+        }
         rows += 1;
         progress.update(rows, lines.bytes_read());
     }
     drop(progress);
     let final_status = target.status()?;
+    let (cost, nav) = sink.finish();
     Ok(StreamSummary::one_at_a_time(
         rows,
         cost,
         final_status,
         start.elapsed(),
         filter,
-        None,
+        nav,
     ))
 }

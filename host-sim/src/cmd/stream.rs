@@ -15,11 +15,15 @@ use crate::replay::records::Records;
 use crate::replay::replayer::GridFollower;
 use crate::report::pages::write_stream_report;
 use crate::report::TruthRows;
-use crate::stream::nav::{stream_log_nav, NavOutputs};
+use crate::stream::nav::{NavOutputs, NavSink};
 use crate::stream::push::{stream_log_push, PushOptions};
 use crate::stream::qemu::Machine;
-use crate::stream::{prepare_firmware, stream_log, StreamSummary, Target};
+use crate::stream::sink::{RowSink, SampleSink};
+use crate::stream::{
+    holds_state, prepare_firmware, stream_rows_one_at_a_time, StreamSummary, Target,
+};
 use anyhow::{bail, Context};
+use estimator_core::binning::Binner;
 use estimator_core::{Output, RejectReason, SampleError};
 use link_protocol::frame::FrameError;
 use link_protocol::{ClockSource, ResetCause, StatusReply};
@@ -69,7 +73,8 @@ pub struct StreamArgs {
     #[arg(long, value_name = "DIR", requires = "qemu")]
     pub flash_dir: Option<PathBuf>,
     /// The firmware holds the state of this very log (e.g. restored after a power cut): skip the
-    /// log rows up to the time of its checkpoint and continue from there.
+    /// log rows up to the time of its checkpoint (with --nav-rate: to the end of the checkpoint's
+    /// bin) and continue from there.
     #[arg(long, conflicts_with = "reset")]
     pub resume: bool,
     /// Start clean: the firmware forgets any state it holds and erases its checkpoints (so that no
@@ -106,10 +111,12 @@ pub struct StreamArgs {
     /// compensated. The estimates CSV has one row per bin the firmware completed, at the bin's
     /// centre; --corrected-out writes every sample's corrected attitude. Every answer is checked
     /// against the core's binning on the host; rows the firmware refuses (a time not after the
-    /// last one, a value out of range) are reported and counted. Not with --bin-interval-s (that
-    /// bins on the host); --resume and --push are not implemented for navigation-rate samples
-    /// (--reset starts clean).
-    #[arg(long, conflicts_with_all = ["bin_interval_s", "resume", "push"])]
+    /// last one, a value out of range) are reported and counted. With --push the rows go without
+    /// waiting for the answers (--realtime, --window as for samples). With --resume, after a
+    /// restart, the rows of the bins after the firmware's checkpoint are sent: the checkpoint holds
+    /// the bins up to its own, not the bin being filled, which the firmware starts empty again.
+    /// Not with --bin-interval-s (that bins on the host).
+    #[arg(long, conflicts_with = "bin_interval_s")]
     pub nav_rate: bool,
     /// With --nav-rate: write every sample's corrected heading, roll and pitch (deg), as the
     /// firmware answered it, to this CSV (`-`: standard output), one row a sample: about 23 MB an
@@ -149,6 +156,8 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
     let (mut target, what) = connect(args, timeout)?;
     let mut info = summary_writer(&summary_beside(args, &out));
     let resume_after_s = prepare_firmware(&mut target, args.resume, args.reset, &mut info)?;
+    // What the firmware holds now is this log's (prepare_firmware refuses it otherwise).
+    let resuming = args.resume && holds_state(&target.boot_status);
     let mut outputs = Outputs::create(args, out)?;
     // The report's record of the answers: the truth beside the log, the grid from the stamps.
     let truth = args
@@ -166,6 +175,7 @@ pub fn run(args: &StreamArgs) -> anyhow::Result<()> {
         &mut target,
         &mut lines,
         resume_after_s,
+        resuming,
         &mut outputs,
         total,
         &mut info,
@@ -375,32 +385,62 @@ fn connect(args: &StreamArgs, timeout: Duration) -> anyhow::Result<(Target, Stri
     })
 }
 
-/// Streams the log's rows after `resume_after_s` through the target, a sample per answer or,
-/// with `--push`, without waiting for the answers, or with `--nav-rate` as navigation-rate
-/// samples; `each` sees every row (with `--nav-rate`, every bin) and its answer.
+/// Streams the log's rows after `resume_after_s` through the target, as samples or, with
+/// `--nav-rate`, as navigation-rate samples, each sent when the last is answered or, with
+/// `--push`, without waiting for the answers; `resuming`: `--resume` into a firmware that holds a
+/// state. `each` sees every row (with `--nav-rate`, every bin) and its answer.
 #[allow(clippy::too_many_arguments)]
 fn stream_rows<L: LogLines>(
     args: &StreamArgs,
     target: &mut Target,
     lines: &mut L,
     resume_after_s: Option<f64>,
+    resuming: bool,
     outputs: &mut Outputs,
     total: Option<u64>,
     info: &mut dyn Write,
     each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
 ) -> anyhow::Result<StreamSummary> {
-    let filter = RowFilter::new(args.strict);
     let writer = &mut outputs.estimates;
     if args.nav_rate {
-        let mut out = NavOutputs {
+        let out = NavOutputs {
             estimates: writer,
             corrected: outputs.corrected.as_mut().map(|(_, w)| w),
             each,
         };
-        return stream_log_nav(target, lines, filter, &mut out, total);
+        let mut sink = NavSink::new(out, resuming);
+        if let Some(t) = resume_after_s {
+            let bins = Binner::default();
+            let from_s = (bins.bin_of(t) + 1.0) * bins.interval_s();
+            writeln!(
+                info,
+                "  navigation-rate samples from {from_s} s on: the bins after the checkpoint's (the bin being filled is not in a checkpoint)"
+            )?;
+        }
+        return send_rows(args, target, lines, resume_after_s, &mut sink, total, info);
     }
+    // Pushed samples go with their stamps as they are: the firmware refuses what its core cannot step.
+    let mut sink = if args.push {
+        SampleSink::unchecked(writer, each)
+    } else {
+        SampleSink::checked(writer, each)
+    };
+    send_rows(args, target, lines, resume_after_s, &mut sink, total, info)
+}
+
+/// Sends the rows as `sink` says, one at a time or, with `--push`, without waiting.
+fn send_rows<L: LogLines, S: RowSink>(
+    args: &StreamArgs,
+    target: &mut Target,
+    lines: &mut L,
+    resume_after_s: Option<f64>,
+    sink: &mut S,
+    total: Option<u64>,
+    info: &mut dyn Write,
+) -> anyhow::Result<StreamSummary> {
+    let filter = RowFilter::new(args.strict);
     if !args.push {
-        return stream_log(target, lines, filter, resume_after_s, writer, total, each);
+        return stream_rows_one_at_a_time(target, lines, filter, resume_after_s, sink, total);
     }
     let options = PushOptions {
         realtime: args.realtime,
@@ -415,11 +455,10 @@ fn stream_rows<L: LogLines>(
         lines,
         filter,
         resume_after_s,
-        writer,
+        sink,
         total,
         &options,
         info,
-        each,
     )
 }
 

@@ -19,21 +19,30 @@
 //! time not after the last one) is answered `Rejected`; it is counted by reason, the first few
 //! are reported with their log lines, and it changes nothing. The last bin stays open in the
 //! firmware at the end of the log: a bin is stepped when a later sample arrives.
+//!
+//! The rows go one at a time or pushed (`--push`, [`super::push`]): [`NavSink`] is the
+//! [`RowSink`] of both loops. The firmware's checkpoint holds its estimator, not the bin it is
+//! filling: it is saved right after a bin's step, when that bin holds only the sample that
+//! completed the last one, and a restarted firmware starts with an empty bin. A stream resumed
+//! after a restart (`--resume`) therefore sends the rows of the bins after the checkpoint's, the
+//! first of them whole ([`NavSink`]'s `before_resume`); a firmware that restarts in the middle of
+//! a pushed stream ([`NavFollower::restarted`]) loses the part of its bin it had taken, and the
+//! host's binner forgets it too.
 
+use super::answer_of;
 use super::cost::CostStats;
-use super::{answer_of, Progress, StreamSummary, Target};
+use super::sink::RowSink;
 use crate::formats::binned_lines::BinningSummary;
 use crate::formats::corrected_csv::CorrectedWriter;
 use crate::formats::estimates_csv::EstimatesWriter;
-use crate::formats::log_csv::{LogLine, LogLines, RowFilter};
+use crate::formats::log_csv::LogLine;
 use crate::formats::time_stamps::IntervalCheck;
-use crate::replay::{row_of, sample_of};
+use crate::replay::row_of;
 use anyhow::{bail, Context};
 use estimator_core::binning::{Binner, DEFAULT_BIN_INTERVAL_S};
-use estimator_core::{Output, RejectCounts, Sample, SampleError};
+use estimator_core::{Output, RejectCounts, RejectReason, Sample, SampleError};
 use link_protocol::{BinOutcome, NavReply, RejectedReply, Request, Response, SampleMsg};
 use std::io::Write;
-use std::time::Instant;
 
 /// How many refused samples are reported one by one (their log lines); all are counted.
 pub const REFUSED_REPORTED: usize = 10;
@@ -51,6 +60,9 @@ pub struct NavSummary {
     pub open_samples: u32,
     /// The first [`REFUSED_REPORTED`] refused samples: their log lines and why.
     pub first_refused: Vec<(usize, SampleError)>,
+    /// Samples a resumed stream sent that the firmware had taken already, before this stream
+    /// (refused as `time_not_increasing`, see [`NavFollower::resuming`]).
+    pub already_held: u64,
     /// What a sample that completed no bin cost the firmware (its binning and compensation; a
     /// refused sample's checks).
     pub sample_cost: CostStats,
@@ -70,6 +82,7 @@ impl NavSummary {
             compensated: 0,
             open_samples: 0,
             first_refused: Vec::new(),
+            already_held: 0,
             sample_cost: CostStats::default(),
             bin_cost: CostStats::default(),
         }
@@ -93,6 +106,9 @@ pub struct NavFollower {
     /// The log line of the last sample in the open bin: a bin's row is numbered with it, as
     /// `--bin-interval-s` numbers its bins.
     bin_last_line: usize,
+    /// The firmware may hold samples of this log that the host does not know of (a stream resumed
+    /// into a firmware that did not restart), until it first takes one.
+    catching_up: bool,
     summary: NavSummary,
 }
 
@@ -101,12 +117,37 @@ impl Default for NavFollower {
         NavFollower {
             binner: Binner::default(),
             bin_last_line: 0,
+            catching_up: false,
             summary: NavSummary::new(),
         }
     }
 }
 
 impl NavFollower {
+    /// A follower for a stream that resumes (`--resume`) into a firmware that holds a state of
+    /// this log. After a restart the firmware holds its checkpoint and an empty bin, and the
+    /// stream sends the rows of the bins after the checkpoint's: the host's binner starts empty
+    /// too. A firmware that did not restart (the host stopped, the board ran on) may have taken
+    /// later rows already, the open bin's among them: it refuses each of them again as
+    /// `time_not_increasing`. Until the firmware first takes a row, such a refusal of a row the
+    /// host's binner takes is one of those: the host bins the row as the firmware did before (a
+    /// bin it completes was stepped then, and is not written again) and counts it as already
+    /// held; from the first row the firmware takes on, its binner and the host's hold the same
+    /// rows and every answer is checked as in a fresh stream.
+    pub fn resuming() -> Self {
+        NavFollower {
+            catching_up: true,
+            ..NavFollower::default()
+        }
+    }
+
+    /// The firmware restarted (it announced `Ready`): its bin is empty, and so is the host's. The
+    /// samples of the bin it was filling that it answered before are gone: the bin it fills next
+    /// holds only those it takes from now on.
+    pub fn restarted(&mut self) {
+        self.binner = Binner::default();
+    }
+
     /// The firmware's `response` to the navigation-rate `sample` of the log's `line`: checked
     /// against the host's binning and written out. Returns the reason when the firmware refused the
     /// sample.
@@ -120,7 +161,22 @@ impl NavFollower {
         let expected = self.binner.push(sample);
         self.summary.binning.rows += 1;
         match response {
+            Response::Rejected(r)
+                if self.catching_up
+                    && expected.is_ok()
+                    && r.error() == Some(SampleError::TimeNotIncreasing) =>
+            {
+                check_time("rejection", r.time_s, sample.time_s)?;
+                self.bin_last_line = line.line;
+                self.summary.already_held += 1;
+                self.summary.sample_cost.add(r.step_cost_ticks);
+                if let Some(c) = out.corrected.as_mut() {
+                    c.write_refused(sample.time_s, RejectReason::TimeNotIncreasing)?;
+                }
+                Ok(None)
+            }
             Response::Nav(reply) => {
+                self.catching_up = false;
                 self.nav(line, sample, &reply, expected, out)?;
                 Ok(None)
             }
@@ -248,67 +304,87 @@ fn describe_expected(expected: &Result<Option<Sample>, SampleError>) -> String {
     }
 }
 
-/// Streams the log's rows through the target one at a time, each as a `NavSample` sent when the
-/// last is answered (see the module doc). Unreadable rows go through `filter` as in
-/// [`crate::stream::stream_log`]; the stamps are checked as a log binned into 1 s is
-/// ([`IntervalCheck::binned`]: 5 ms to 10 s, at most a bin).
-pub fn stream_log_nav<L: LogLines, W: Write, C: Write>(
-    target: &mut Target,
-    lines: &mut L,
-    mut filter: RowFilter,
-    out: &mut NavOutputs<'_, W, C>,
-    total_bytes: Option<u64>,
-) -> anyhow::Result<StreamSummary> {
-    let start = Instant::now();
-    let progress = Progress::new(total_bytes);
-    let mut follower = NavFollower::default();
-    let mut rows = 0u64;
-    let mut interval_check = IntervalCheck::binned(DEFAULT_BIN_INTERVAL_S);
-    let mut refused = 0usize;
-    while let Some(item) = lines.next() {
-        let Some(line) = filter.admit(item, &mut |e| {
-            progress
-                .bar
-                .suspend(|| eprintln!("warning: {e} (row skipped)"));
-        })?
-        else {
-            continue;
-        };
-        interval_check.observe(line.row.time_s)?;
-        let sample = sample_of(&line.row);
-        let at = || format!("log line {}", line.line);
-        let response = target
-            .request(&Request::NavSample(SampleMsg::from(&sample)))
-            .with_context(at)?;
-        if let Some(e) = follower
-            .answered(&line, &sample, response, out)
-            .with_context(at)?
-        {
-            refused += 1;
-            if refused <= REFUSED_REPORTED {
-                progress.bar.suspend(|| {
-                    eprintln!(
-                        "warning: log line {}: the firmware refused the sample: {e}",
-                        line.line
-                    )
-                });
-            }
+/// Rows sent as navigation-rate samples (`NavSample`): the answers checked against the host's
+/// binning ([`NavFollower`]) and written to [`NavOutputs`]; the stamps checked as a log binned
+/// into 1 s is ([`IntervalCheck::binned`]: 5 ms to 10 s, at most a bin). A stream resumed after
+/// the firmware's checkpoint starts at the bin after the checkpoint's (see
+/// [`RowSink::before_resume`] below).
+pub struct NavSink<'a, W: Write, C: Write> {
+    follower: NavFollower,
+    out: NavOutputs<'a, W, C>,
+    interval_check: IntervalCheck,
+    /// A binner of the firmware's bins, for the bin a stamp falls in.
+    bins: Binner,
+    refused: usize,
+}
+
+impl<'a, W: Write, C: Write> NavSink<'a, W, C> {
+    /// A sink writing to `out`; `resuming`: the stream resumes into a firmware that holds a state
+    /// of this log (`--resume`, [`NavFollower::resuming`]).
+    pub fn new(out: NavOutputs<'a, W, C>, resuming: bool) -> Self {
+        NavSink {
+            follower: if resuming {
+                NavFollower::resuming()
+            } else {
+                NavFollower::default()
+            },
+            out,
+            interval_check: IntervalCheck::binned(DEFAULT_BIN_INTERVAL_S),
+            bins: Binner::default(),
+            refused: 0,
         }
-        rows += 1;
-        progress.update(rows, lines.bytes_read());
     }
-    drop(progress);
-    let final_status = target.status()?;
-    let nav = follower.finish();
-    let cost = nav.bin_cost;
-    Ok(StreamSummary::one_at_a_time(
-        rows,
-        cost,
-        final_status,
-        start.elapsed(),
-        filter,
-        Some(nav),
-    ))
+}
+
+impl<W: Write, C: Write> RowSink for NavSink<'_, W, C> {
+    fn request(&self, msg: SampleMsg) -> Request {
+        Request::NavSample(msg)
+    }
+
+    /// The firmware saves a checkpoint right after a bin's step, stamped at the bin's centre,
+    /// while its open bin holds only the sample that completed that bin; it does not save the open
+    /// bin, and restarts with an empty one. The rows of the checkpoint's bin and the bins before
+    /// are in the checkpoint; a resumed stream starts with the first row of a later bin, so that
+    /// the bin the firmware fills first after a restart is whole.
+    fn before_resume(&self, checkpoint_s: f64, time_s: f64) -> bool {
+        self.bins.bin_of(time_s) <= self.bins.bin_of(checkpoint_s)
+    }
+
+    fn check_stamp(&mut self, time_s: f64) -> anyhow::Result<()> {
+        Ok(self.interval_check.observe(time_s)?)
+    }
+
+    fn answered(
+        &mut self,
+        line: &LogLine,
+        msg: &SampleMsg,
+        response: Response,
+    ) -> anyhow::Result<Option<String>> {
+        let sample = Sample::from(msg);
+        let refused = self
+            .follower
+            .answered(line, &sample, response, &mut self.out)
+            .with_context(|| format!("log line {}", line.line))?;
+        let Some(e) = refused else {
+            return Ok(None);
+        };
+        self.refused += 1;
+        Ok((self.refused <= REFUSED_REPORTED).then(|| {
+            format!(
+                "log line {}: the firmware refused the sample: {e}",
+                line.line
+            )
+        }))
+    }
+
+    fn restarted(&mut self) {
+        self.follower.restarted();
+    }
+
+    fn finish(&mut self) -> (CostStats, Option<NavSummary>) {
+        let nav = std::mem::take(&mut self.follower).finish();
+        (nav.bin_cost, Some(nav))
+    }
 }
 
 impl NavSummary {
@@ -335,6 +411,12 @@ impl NavSummary {
                 first.join(", ")
             ));
         }
+        if self.already_held > 0 {
+            lines.push(format!(
+                "rows the firmware had taken already, before this stream: {} (refused as time_not_increasing, passed over)",
+                self.already_held
+            ));
+        }
         if self.open_samples > 0 {
             lines.push(format!(
                 "the last bin ({} rows) left open: the firmware steps a bin once a later sample arrives",
@@ -352,18 +434,21 @@ impl NavSummary {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::formats::log_csv::LogReader;
+    use crate::formats::log_csv::{LogReader, RowFilter};
+    use crate::replay::sample_of;
     use crate::stream::cost::CostUnit;
     use crate::stream::link::FirmwareLink;
-    use estimator_core::{Config, Estimator, RejectReason};
+    use crate::stream::push::{stream_log_push, PushOptions};
+    use crate::stream::{stream_rows_one_at_a_time, StreamSummary, Target};
+    use estimator_core::{Config, Estimator};
     use link_protocol::frame::MAX_FRAME;
     use link_protocol::{
         encode_frame, Counters, FrameAccumulator, LinkCounters, Numbered, StatusReply, StepReply,
-        MAX_REQUEST_ENCODED, PROTOCOL_VERSION,
+        MAX_REQUEST_ENCODED, PROTOCOL_VERSION, UNNUMBERED,
     };
     use std::os::unix::net::UnixStream;
     use std::path::Path;
-    use std::time::Duration;
+    use std::time::{Duration, Instant};
 
     /// How the stand-in firmware answers a navigation-rate sample.
     #[derive(Clone, Copy, PartialEq)]
@@ -372,6 +457,30 @@ mod tests {
         AsTheFirmware,
         /// Never completes a bin (a firmware whose binning differs from the host's).
         NeverCompletesABin,
+    }
+
+    /// The stand-in firmware: how it answers, what it holds before the stream, and a restart.
+    #[derive(Clone)]
+    struct StandIn {
+        behaviour: Behaviour,
+        /// Samples it took before the stream (a board that ran on after its host stopped).
+        held: Vec<Sample>,
+        /// After answering the request of this number it goes down: it never gets the next
+        /// `down` navigation samples (at least 1), then it is up again with an empty bin and a
+        /// fresh estimator and announces `Ready`.
+        restart_after: Option<u32>,
+        down: u32,
+    }
+
+    impl StandIn {
+        fn as_the_firmware() -> StandIn {
+            StandIn {
+                behaviour: Behaviour::AsTheFirmware,
+                held: Vec::new(),
+                restart_after: None,
+                down: 0,
+            }
+        }
     }
 
     fn status() -> StatusReply {
@@ -389,7 +498,10 @@ mod tests {
             stack_size_bytes: 0,
             checkpoint_time_s: None,
             checkpoints_saved: 0,
-            link: LinkCounters::default(),
+            link: LinkCounters {
+                rx_buffer_bytes: 1023,
+                ..LinkCounters::default()
+            },
             reset_cause: 0,
             clock_source: 2,
         }
@@ -428,12 +540,18 @@ mod tests {
         })
     }
 
-    /// A firmware on the other end of a socket, answering as `behaviour` says.
-    fn stand_in_firmware(mut port: UnixStream, behaviour: Behaviour) {
+    /// A firmware on the other end of a socket, answering as `stand_in` says.
+    fn stand_in_firmware(mut port: UnixStream, stand_in: StandIn) {
         use std::io::Read as _;
         let mut rx = FrameAccumulator::<MAX_REQUEST_ENCODED>::new();
+        let fresh = || Box::new(Estimator::new(Config::default()).unwrap());
         let mut binner = Binner::default();
-        let mut estimator = Box::new(Estimator::new(Config::default()).unwrap());
+        let mut estimator = fresh();
+        for held in &stand_in.held {
+            answer(&mut binner, &mut estimator, held, stand_in.behaviour);
+        }
+        // Navigation samples still to miss, as sent while it is down.
+        let mut down = 0u32;
         let mut buf = [0u8; 256];
         loop {
             let n = match port.read(&mut buf) {
@@ -444,26 +562,83 @@ mod tests {
                 let Some(Ok(request)) = rx.push_decode::<Numbered<Request>>(b) else {
                     continue;
                 };
-                let message = match request.message {
-                    Request::NavSample(msg) => {
-                        answer(&mut binner, &mut estimator, &Sample::from(&msg), behaviour)
+                let seq = request.seq;
+                if down > 0 && matches!(request.message, Request::NavSample(_)) {
+                    down -= 1;
+                    if down == 0 {
+                        // Up again, with nothing of what it held.
+                        binner = Binner::default();
+                        estimator = fresh();
+                        let message = Response::Ready {
+                            protocol_version: PROTOCOL_VERSION,
+                        };
+                        let mut out = [0u8; MAX_FRAME];
+                        let n = encode_frame(
+                            &Numbered {
+                                seq: UNNUMBERED,
+                                message,
+                            },
+                            &mut out,
+                        )
+                        .unwrap();
+                        port.write_all(&out[..n]).unwrap();
                     }
+                    continue;
+                }
+                let message = match request.message {
+                    Request::NavSample(msg) => answer(
+                        &mut binner,
+                        &mut estimator,
+                        &Sample::from(&msg),
+                        stand_in.behaviour,
+                    ),
                     Request::ReadStatus => Response::Status(status()),
                     _ => continue,
                 };
                 let mut out = [0u8; MAX_FRAME];
-                let seq = request.seq;
                 let n = encode_frame(&Numbered { seq, message }, &mut out).unwrap();
                 port.write_all(&out[..n]).unwrap();
+                if stand_in.restart_after == Some(seq) {
+                    down = stand_in.down;
+                }
             }
         }
     }
 
-    /// Streams the log `csv` through the stand-in firmware; returns the summary (or the error,
-    /// as the tool prints it), the estimates CSV and the corrected-attitude CSV.
-    fn stream(csv: &str, behaviour: Behaviour) -> (Result<StreamSummary, String>, String, String) {
+    /// How the host streams: one row at a time or pushed (`window`, `realtime`), and from where.
+    #[derive(Clone, Copy)]
+    struct Sending {
+        push: Option<(usize, bool)>,
+        resume_after_s: Option<f64>,
+        resuming: bool,
+    }
+
+    const ONE_AT_A_TIME: Sending = Sending {
+        push: None,
+        resume_after_s: None,
+        resuming: false,
+    };
+
+    fn pushed(window: usize, realtime: bool) -> Sending {
+        Sending {
+            push: Some((window, realtime)),
+            ..ONE_AT_A_TIME
+        }
+    }
+
+    /// What a stream gave: the summary (or the error, as the tool prints it), the estimates CSV,
+    /// the corrected-attitude CSV and what the push said.
+    struct Streamed {
+        summary: Result<StreamSummary, String>,
+        estimates: String,
+        corrected: String,
+        info: String,
+    }
+
+    /// Streams the log `csv` through the stand-in firmware as `sending` says.
+    fn stream_with(csv: &str, stand_in: StandIn, sending: Sending) -> Streamed {
         let (host_end, firmware_end) = UnixStream::pair().unwrap();
-        std::thread::spawn(move || stand_in_firmware(firmware_end, behaviour));
+        std::thread::spawn(move || stand_in_firmware(firmware_end, stand_in));
         let reader = host_end.try_clone().unwrap();
         reader
             .set_read_timeout(Some(Duration::from_millis(100)))
@@ -478,26 +653,72 @@ mod tests {
         let mut lines = LogReader::new(Path::new("nav.csv"), bytes);
         let mut estimates = EstimatesWriter::new(Vec::new()).unwrap();
         let mut corrected = CorrectedWriter::new(Vec::new()).unwrap();
-        let mut out = NavOutputs {
+        let out = NavOutputs {
             estimates: &mut estimates,
             corrected: Some(&mut corrected),
             each: &mut |_, _| {},
         };
+        let mut sink = NavSink::new(out, sending.resuming);
         let filter = RowFilter::new(true);
-        let summary = stream_log_nav(&mut target, &mut lines, filter, &mut out, None)
-            .map_err(|e| format!("{e:#}"));
+        let mut info = Vec::new();
+        let summary = match sending.push {
+            None => stream_rows_one_at_a_time(
+                &mut target,
+                &mut lines,
+                filter,
+                sending.resume_after_s,
+                &mut sink,
+                None,
+            ),
+            Some((window, realtime)) => {
+                let options = PushOptions {
+                    realtime,
+                    window,
+                    inject: None,
+                };
+                stream_log_push(
+                    &mut target,
+                    &mut lines,
+                    filter,
+                    sending.resume_after_s,
+                    &mut sink,
+                    None,
+                    &options,
+                    &mut info,
+                )
+            }
+        }
+        .map_err(|e| format!("{e:#}"));
+        drop(sink);
         let text = |b: Vec<u8>| String::from_utf8(b).unwrap();
-        (
+        Streamed {
             summary,
-            text(estimates.finish().unwrap()),
-            text(corrected.finish().unwrap()),
-        )
+            estimates: text(estimates.finish().unwrap()),
+            corrected: text(corrected.finish().unwrap()),
+            info: text(info),
+        }
+    }
+
+    /// Streams the log `csv` one row at a time; returns the summary (or the error, as the tool
+    /// prints it), the estimates CSV and the corrected-attitude CSV.
+    fn stream(csv: &str, behaviour: Behaviour) -> (Result<StreamSummary, String>, String, String) {
+        let stand_in = StandIn {
+            behaviour,
+            ..StandIn::as_the_firmware()
+        };
+        let s = stream_with(csv, stand_in, ONE_AT_A_TIME);
+        (s.summary, s.estimates, s.corrected)
     }
 
     /// 3 s of rows at 100 Hz; `bad` rows (time, roll) inserted after the row of that index.
     /// Returns the log and the file lines of the inserted rows.
     fn log(bad: &[(usize, &str, &str)]) -> (String, Vec<usize>) {
-        let mut rows: Vec<String> = (0..300u32)
+        log_of(300, bad)
+    }
+
+    /// `rows` rows at 100 Hz from 0 s, with `bad` rows as [`log`] inserts them.
+    fn log_of(rows: u32, bad: &[(usize, &str, &str)]) -> (String, Vec<usize>) {
+        let mut rows: Vec<String> = (0..rows)
             .map(|k| {
                 let t = f64::from(k) / 100.0;
                 format!("{t},{},20,30,40,1,2", 10.0 + 0.75 * t)
@@ -511,6 +732,14 @@ mod tests {
         }
         let header = "time_s,rotation_deg,platform_deg,latitude_deg,heading_deg,roll_deg,pitch_deg";
         (format!("{header}\n{}\n", rows.join("\n")), lines)
+    }
+
+    /// The samples of a log made by [`log_of`], in order.
+    fn samples_of(csv: &str) -> Vec<Sample> {
+        let bytes = std::io::Cursor::new(csv.as_bytes().to_vec());
+        LogReader::new(Path::new("nav.csv"), bytes)
+            .map(|line| sample_of(&line.unwrap().row))
+            .collect()
     }
 
     #[test]
@@ -570,6 +799,162 @@ mod tests {
         assert!(
             error.contains("log line 102: the firmware's answer says no bin completed, the host's binner completes the bin at 0.5 s"),
             "{error}"
+        );
+    }
+
+    #[test]
+    fn pushed_navigation_samples_are_answered_as_one_at_a_time() {
+        let bad = [(150, "1.5", "1"), (250, "0.5", "1"), (260, "2.605", "nan")];
+        let (csv, bad_lines) = log(&bad);
+        let one = stream_with(&csv, StandIn::as_the_firmware(), ONE_AT_A_TIME);
+        let one_nav = one.summary.unwrap().nav.unwrap();
+        for window in [1, 4, 11] {
+            let push = stream_with(&csv, StandIn::as_the_firmware(), pushed(window, false));
+            assert_eq!(push.estimates, one.estimates, "window {window}");
+            assert_eq!(push.corrected, one.corrected, "window {window}");
+            let summary = push.summary.unwrap();
+            let l = summary.link;
+            assert_eq!((l.sent, l.answered, l.lost, l.restarts), (303, 303, 0, 0));
+            let nav = summary.nav.unwrap();
+            assert_eq!(nav.binning, one_nav.binning, "window {window}");
+            assert_eq!(nav.first_refused, one_nav.first_refused);
+            let lines: Vec<usize> = nav.first_refused.iter().map(|(l, _)| *l).collect();
+            assert_eq!(lines, bad_lines);
+            assert_eq!(
+                (nav.open_samples, nav.compensated),
+                (100, one_nav.compensated)
+            );
+            assert_eq!((nav.sample_cost.steps, nav.bin_cost.steps), (301, 2));
+            assert_eq!(summary.cost.steps, 2, "the summary's cost: the bins' steps");
+        }
+    }
+
+    #[test]
+    fn realtime_pushes_navigation_samples_at_the_log_s_rate() {
+        // 1.2 s of rows at 100 Hz: the last sent 1.19 s after the first (the upper bound leaves
+        // room for a loaded machine), answered as one at a time.
+        let (csv, _) = log_of(120, &[]);
+        let start = Instant::now();
+        let push = stream_with(&csv, StandIn::as_the_firmware(), pushed(11, true));
+        let wall = start.elapsed().as_secs_f64();
+        assert!((1.19..6.0).contains(&wall), "1.2 s of rows took {wall} s");
+        let one = stream_with(&csv, StandIn::as_the_firmware(), ONE_AT_A_TIME);
+        assert_eq!(
+            (push.estimates, push.corrected),
+            (one.estimates, one.corrected)
+        );
+    }
+
+    #[test]
+    fn a_stream_resumed_after_a_checkpoint_starts_at_the_next_bin() {
+        // The firmware restarted with the checkpoint of bin 1's step (1.5 s) and an empty bin:
+        // the rows of bins 0 and 1 are skipped, the first sent is 2 s's.
+        let (csv, _) = log_of(400, &[]);
+        let stand_in = StandIn::as_the_firmware();
+        for push in [None, Some((4, false))] {
+            let sending = Sending {
+                push,
+                resume_after_s: Some(1.5),
+                resuming: true,
+            };
+            let s = stream_with(&csv, stand_in.clone(), sending);
+            let nav = s.summary.unwrap().nav.unwrap();
+            assert_eq!((nav.binning.rows, nav.binning.bins), (200, 1));
+            assert_eq!(nav.already_held, 0);
+            let first = s.corrected.lines().nth(1).unwrap();
+            assert!(first.starts_with("2.000000,"), "{first}");
+            let times: Vec<&str> = s.estimates.lines().skip(1).map(|l| &l[..8]).collect();
+            assert_eq!(times, ["2.500000"]);
+        }
+    }
+
+    #[test]
+    fn a_stream_resumed_into_a_firmware_that_ran_on_passes_over_the_rows_it_had_taken() {
+        // The firmware's checkpoint is bin 0's (0.5 s), but it ran on (its host stopped, it did
+        // not restart): it holds the rows up to 1.37 s, bin 1's first 38 in its open bin.
+        let (csv, _) = log_of(300, &[]);
+        let samples = samples_of(&csv);
+        let stand_in = StandIn {
+            held: samples[..138].to_vec(),
+            ..StandIn::as_the_firmware()
+        };
+        let uncut = stream_with(&csv, StandIn::as_the_firmware(), ONE_AT_A_TIME);
+        // From 1.38 s on the firmware answers as in the uncut stream; before, 1.00 to 1.37 s are
+        // refused as taken already; bin 0 is not stepped again.
+        let uncut_estimates: Vec<&str> = uncut.estimates.lines().collect();
+        let want_estimates = [uncut_estimates[0], uncut_estimates[2]].join("\n") + "\n";
+        let uncut_corrected: Vec<&str> = uncut.corrected.lines().collect();
+        let mut want_corrected = vec![uncut_corrected[0].to_string()];
+        want_corrected.extend((100..138).map(|k| {
+            format!(
+                "{}.{:02}0000,,,,rejected_time_not_increasing",
+                k / 100,
+                k % 100
+            )
+        }));
+        want_corrected.extend(uncut_corrected[139..].iter().map(|l| l.to_string()));
+        let want_corrected = want_corrected.join("\n") + "\n";
+        for push in [None, Some((4, false))] {
+            let sending = Sending {
+                push,
+                resume_after_s: Some(0.5),
+                resuming: true,
+            };
+            let s = stream_with(&csv, stand_in.clone(), sending);
+            let nav = s.summary.unwrap().nav.unwrap();
+            assert_eq!(nav.already_held, 38);
+            assert_eq!(nav.binning.refused.total(), 0);
+            assert_eq!(
+                (nav.binning.rows, nav.binning.bins, nav.open_samples),
+                (200, 1, 100)
+            );
+            assert_eq!(s.estimates, want_estimates);
+            assert_eq!(s.corrected, want_corrected);
+            assert!(
+                nav.describe().join("\n").contains(
+                    "rows the firmware had taken already, before this stream: 38 (refused as time_not_increasing, passed over)"
+                ),
+                "{:?}",
+                nav.describe()
+            );
+        }
+        // Not told it resumes, the host takes those refusals for a binning that differs.
+        let sending = Sending {
+            resume_after_s: Some(0.5),
+            ..ONE_AT_A_TIME
+        };
+        let error = stream_with(&csv, stand_in, sending).summary.unwrap_err();
+        assert!(
+            error.contains("log line 102: the firmware refused the sample (time does not increase), the host's binner completes no bin"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn a_restart_in_a_pushed_stream_empties_the_host_s_bin_too() {
+        // The firmware goes down after answering 1.95 s (request 196) and misses the four rows
+        // sent meanwhile (the window), up to 1.99 s: bin 1 went with the firmware's RAM and is
+        // never stepped; bin 2 starts the restarted firmware's binning, whose first sample
+        // completes no bin (a host's binner still holding bin 1 would say it does).
+        let (csv, _) = log_of(400, &[]);
+        let stand_in = StandIn {
+            restart_after: Some(196),
+            down: 4,
+            ..StandIn::as_the_firmware()
+        };
+        let s = stream_with(&csv, stand_in, pushed(4, false));
+        let summary = s.summary.unwrap();
+        let l = summary.link;
+        assert_eq!((l.sent, l.answered, l.lost, l.restarts), (400, 396, 4, 1));
+        let times: Vec<&str> = s.estimates.lines().skip(1).map(|l| &l[..8]).collect();
+        assert_eq!(times, ["0.500000", "2.500000"]);
+        let nav = summary.nav.unwrap();
+        assert_eq!((nav.binning.bins, nav.open_samples), (2, 100));
+        assert!(
+            s.info
+                .contains("the firmware restarted (it announced Ready)"),
+            "{}",
+            s.info
         );
     }
 }

@@ -1,15 +1,16 @@
-//! `host-sim stream --push`: samples sent without waiting for their answers, as a navigation
-//! computer sends them (`--realtime`: at the log's own rate), up to a window of unanswered frames
-//! that half the firmware's receive buffer holds. Answers are matched to their requests by their
-//! numbers (link protocol 5).
+//! `host-sim stream --push`: rows sent without waiting for their answers, as a navigation computer
+//! sends them (`--realtime`: at the log's own rate), up to a window of unanswered frames that half
+//! the firmware's receive buffer holds. Answers are matched to their requests by their numbers
+//! (link protocol 5). The rows go as samples or, with `--nav-rate`, as navigation-rate samples:
+//! one loop for both, the kind of frame and what its answers become given by a
+//! [`RowSink`] (a `NavSample` frame is at most as long as a `Sample` frame, so the window is the
+//! same).
 
-use super::cost::CostStats;
-use super::{answer_of, describe_exit, LinkSummary, Progress, StreamSummary, Target};
-use crate::formats::estimates_csv::EstimatesWriter;
+use super::sink::RowSink;
+use super::{describe_exit, LinkSummary, Progress, StreamSummary, Target};
 use crate::formats::log_csv::{LogLine, LogLines, RowFilter};
 use crate::replay::sample_of;
-use anyhow::{bail, Context};
-use estimator_core::{Output, SampleError};
+use anyhow::bail;
 use link_protocol::{Request, ResetCause, Response, SampleMsg, StatusReply, MAX_SAMPLE_FRAME};
 use std::collections::VecDeque;
 use std::io::Write;
@@ -38,7 +39,7 @@ impl PushOptions {
 /// What a request in flight was.
 #[derive(Clone, Copy)]
 enum Sent {
-    /// A sample: its log line and the message.
+    /// A row's sample (of the sink's kind): its log line and the message.
     Sample { line: LogLine, msg: SampleMsg },
     /// The status asked for after a restart.
     RestartStatus,
@@ -52,9 +53,9 @@ enum Sent {
 struct Push {
     in_flight: VecDeque<(u32, Sent)>,
     link: LinkSummary,
-    cost: CostStats,
     restart_status: Vec<StatusReply>,
     final_status: Option<StatusReply>,
+    progress: Progress,
 }
 
 impl Push {
@@ -77,13 +78,12 @@ impl Push {
     /// Takes one answer, waiting until `deadline` (or the link's timeout), and writes the rows it
     /// settles: an answer to request `s` settles every earlier request still in flight as lost
     /// (the firmware answers in order). Returns false if nothing came before the deadline.
-    fn settle<W: Write>(
+    fn settle<S: RowSink>(
         &mut self,
         target: &mut Target,
-        writer: &mut EstimatesWriter<W>,
+        sink: &mut S,
         info: &mut dyn Write,
         deadline: Option<Instant>,
-        each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
     ) -> anyhow::Result<bool> {
         let received = match deadline {
             Some(d) => target.link.receive_until(d),
@@ -96,6 +96,7 @@ impl Push {
         };
         if let Response::Ready { .. } = answer.message {
             self.link.restarts += 1;
+            sink.restarted();
             writeln!(
                 info,
                 "the firmware restarted (it announced Ready): asking for its status"
@@ -119,11 +120,11 @@ impl Push {
             }
             match (sent, answer.message) {
                 (Sent::Sample { line, msg }, response) => {
-                    let a = answer_of(&msg, response)
-                        .with_context(|| format!("log line {}", line.line))?;
-                    self.cost.add(a.step_cost_ticks);
-                    writer.write_step(line.row.time_s, &a.result)?;
-                    each(&line, &a.result);
+                    if let Some(warning) = sink.answered(&line, &msg, response)? {
+                        self.progress
+                            .bar
+                            .suspend(|| eprintln!("warning: {warning}"));
+                    }
                     self.link.answered += 1;
                 }
                 (Sent::RestartStatus, Response::Status(s)) => {
@@ -149,47 +150,48 @@ impl Push {
     }
 }
 
-/// Streams like [`crate::stream::stream_log`], but sends without waiting for each answer ([`PushOptions`]).
-/// Answers are matched to their requests by number. A `Ready` in the middle (the firmware
-/// restarted: watchdog, power) is counted; the host asks for the status (reset cause, restored
-/// checkpoint) and carries on. Rows whose answer never came are counted as lost and left out of
-/// the estimates; a final status request settles every sample sent before it.
+/// Streams like [`crate::stream::stream_rows_one_at_a_time`], but sends without waiting for each
+/// answer ([`PushOptions`]); `sink` says what the rows go as and where their answers go
+/// ([`RowSink`]). Answers are matched to their requests by number. A `Ready` in the middle (the
+/// firmware restarted: watchdog, power) is counted and told to the sink; the host asks for the
+/// status (reset cause, restored checkpoint) and carries on. Rows whose answer never came are
+/// counted as lost and left out of the outputs; a final status request settles every row sent
+/// before it.
 #[allow(clippy::too_many_arguments)]
-pub fn stream_log_push<L: LogLines, W: Write>(
+pub fn stream_log_push<L: LogLines, S: RowSink>(
     target: &mut Target,
     lines: &mut L,
     mut filter: RowFilter,
     resume_after_s: Option<f64>,
-    writer: &mut EstimatesWriter<W>,
+    sink: &mut S,
     total_bytes: Option<u64>,
     options: &PushOptions,
     info: &mut dyn Write,
-    each: &mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
 ) -> anyhow::Result<StreamSummary> {
     let start = Instant::now();
-    let progress = Progress::new(total_bytes);
     let mut push = Push {
         in_flight: VecDeque::new(),
         link: LinkSummary::default(),
-        cost: CostStats::default(),
         restart_status: Vec::new(),
         final_status: None,
+        progress: Progress::new(total_bytes),
     };
     let mut streamed = 0u64;
     let mut first_time_s: Option<f64> = None;
     let window = options.window.max(1);
     while let Some(item) = lines.next() {
         let Some(line) = filter.admit(item, &mut |e| {
-            progress
+            push.progress
                 .bar
                 .suspend(|| eprintln!("warning: {e} (row skipped)"));
         })?
         else {
             continue;
         };
-        if resume_after_s.is_some_and(|t| line.row.time_s <= t) {
+        if resume_after_s.is_some_and(|t| sink.before_resume(t, line.row.time_s)) {
             continue;
         }
+        sink.check_stamp(line.row.time_s)?;
         if let Some((at, request)) = &options.inject {
             if *at == streamed {
                 push.send(target, request, Sent::Other)?;
@@ -198,38 +200,39 @@ pub fn stream_log_push<L: LogLines, W: Write>(
         if options.realtime {
             if let Some(due) = realtime_due(start, &mut first_time_s, line.row.time_s) {
                 while Instant::now() < due {
-                    push.settle(target, writer, info, Some(due), each)?;
+                    push.settle(target, sink, info, Some(due))?;
                 }
             }
         }
         while push.samples_in_flight() >= window {
-            push.settle(target, writer, info, None, each)?;
+            push.settle(target, sink, info, None)?;
         }
         let msg = SampleMsg::from(&sample_of(&line.row));
         let sent = Sent::Sample { line, msg };
-        push.send(target, &Request::Sample(msg), sent)?;
+        push.send(target, &sink.request(msg), sent)?;
         streamed += 1;
         // Whatever answers are there already, without waiting.
-        while push.settle(target, writer, info, Some(Instant::now()), each)? {}
-        progress.update(push.link.answered, lines.bytes_read());
+        while push.settle(target, sink, info, Some(Instant::now()))? {}
+        push.progress.update(push.link.answered, lines.bytes_read());
     }
     push.send(target, &Request::ReadStatus, Sent::FinalStatus)?;
     let final_status = loop {
-        push.settle(target, writer, info, None, each)?;
+        push.settle(target, sink, info, None)?;
         if let Some(s) = push.final_status {
             break s;
         }
     };
-    drop(progress);
+    drop(push.progress);
+    let (cost, nav) = sink.finish();
     Ok(StreamSummary {
         rows: push.link.answered,
         link: push.link,
         restart_status: push.restart_status,
-        cost: push.cost,
+        cost,
         final_status,
         wall: start.elapsed(),
         unreadable: filter,
-        nav: None,
+        nav,
     })
 }
 
@@ -249,10 +252,12 @@ fn realtime_due(start: Instant, first_s: &mut Option<f64>, time_s: f64) -> Optio
 mod tests {
     use super::*;
     use crate::formats::binned_lines::Lines;
+    use crate::formats::estimates_csv::EstimatesWriter;
     use crate::formats::log_csv::LogReader;
     use crate::stream::cost::CostUnit;
     use crate::stream::link::FirmwareLink;
-    use estimator_core::SampleError;
+    use crate::stream::sink::SampleSink;
+    use estimator_core::{Output, SampleError};
     use link_protocol::frame::MAX_FRAME;
     use link_protocol::{
         encode_frame, Counters, FrameAccumulator, LinkCounters, Numbered, RejectedReply,
@@ -423,16 +428,17 @@ mod tests {
             window,
             inject: None,
         };
+        let mut each = |_: &LogLine, _: &Result<Output, SampleError>| {};
+        let mut sink = SampleSink::unchecked(&mut writer, &mut each);
         let summary = stream_log_push(
             &mut target,
             &mut lines,
             RowFilter::new(true),
             None,
-            &mut writer,
+            &mut sink,
             None,
             &options,
             &mut info,
-            &mut |_, _| {},
         )
         .unwrap();
         let out = String::from_utf8(writer.finish().unwrap()).unwrap();

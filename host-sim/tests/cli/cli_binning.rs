@@ -263,10 +263,11 @@ fn binning_is_asked_for_its_range_checked_and_bad_rows_left_out() {
 }
 
 /// `stream --nav-rate` (the firmware bins the rows) is refused with `--bin-interval-s` (binning
-/// on the host), `--resume` and `--push`, and `--corrected-out` without it (exit status 2, the
-/// options named); `--corrected-out` may not name an input nor the estimates file, nor
-/// `--defmt-log` it, and it may not share standard output with `--out` (exit status 1). All
-/// refused before the port is opened, nothing written.
+/// on the host), and `--corrected-out` without it (exit status 2, the options named);
+/// `--corrected-out` may not name an input nor the estimates file, nor `--defmt-log` it, and it
+/// may not share standard output with `--out` (exit status 1). All refused before the port is
+/// opened, nothing written. With `--push`, `--realtime`, `--window` and `--resume` it is taken:
+/// the run gets as far as the port.
 #[test]
 fn stream_nav_rate_conflicts_and_its_corrected_output_are_refused_before_streaming() {
     let dir = temp_dir("cli-stream-nav-rate-refusals");
@@ -294,14 +295,23 @@ fn stream_nav_rate_conflicts_and_its_corrected_output_are_refused_before_streami
             assert!(stderr.contains(e), "{args:?}: {stderr}");
         }
     };
-    for (other, named) in [
-        (&["--bin-interval-s", "1"][..], "--bin-interval-s"),
-        (&["--resume"][..], "--resume"),
-        (&["--push"][..], "--push"),
+    stream(
+        &["--nav-rate", "--bin-interval-s", "1"],
+        2,
+        &["--nav-rate", "--bin-interval-s", "cannot be used with"],
+    );
+    for taken in [
+        &["--push", "--realtime", "--window", "3"][..],
+        &["--resume"][..],
+        &["--push", "--resume"][..],
     ] {
         let mut extra = vec!["--nav-rate"];
-        extra.extend_from_slice(other);
-        stream(&extra, 2, &["--nav-rate", named, "cannot be used with"]);
+        extra.extend_from_slice(taken);
+        stream(
+            &extra,
+            1,
+            &["cannot open serial port /nonexistent/port at 115200 baud"],
+        );
     }
     stream(
         &["--corrected-out", path_str(&cor)],

@@ -13,10 +13,7 @@ use std::time::Duration;
 
 #[test]
 fn checkpoint_interval_is_set_at_build_time() {
-    let elf = firmware_elf_with_env(
-        "firmware-checkpoint-20s",
-        &[("RINS_CHECKPOINT_INTERVAL_S", "20")],
-    );
+    let elf = firmware_elf_checkpoint_20s();
     let dir = scratch("checkpoint-interval");
     let log = paper_log(&dir, 300);
     let lines = read_log(&log).unwrap();

@@ -114,6 +114,20 @@ pub fn firmware_elf_with_env(name: &str, env: &[(&str, &str)]) -> PathBuf {
     build_firmware(Board::Mps2An386, env, &[], name)
 }
 
+/// The default board's firmware with a checkpoint every 20 s of sample time
+/// (`RINS_CHECKPOINT_INTERVAL_S=20`), as `firmware-checkpoint-20s.elf`, built once per test binary
+/// (the tests that restart it from its checkpoints share the build).
+pub fn firmware_elf_checkpoint_20s() -> PathBuf {
+    static ELF: OnceLock<PathBuf> = OnceLock::new();
+    ELF.get_or_init(|| {
+        firmware_elf_with_env(
+            "firmware-checkpoint-20s",
+            &[("RINS_CHECKPOINT_INTERVAL_S", "20")],
+        )
+    })
+    .clone()
+}
+
 /// The default board's firmware built with extra cargo features (e.g. `test-hang`), as `NAME.elf`.
 pub fn firmware_elf_with_features(name: &str, features: &[&str]) -> PathBuf {
     build_firmware(Board::Mps2An386, &[], features, name)

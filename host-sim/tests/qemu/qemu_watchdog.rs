@@ -12,6 +12,7 @@ use host_sim::formats::estimates_csv::EstimatesWriter;
 use host_sim::formats::log_csv::{LogReader, RowFilter};
 use host_sim::stream::push::{stream_log_push, PushOptions};
 use host_sim::stream::qemu::Machine;
+use host_sim::stream::sink::SampleSink;
 use host_sim::stream::Target;
 use link_protocol::{Request, ResetCause};
 use std::time::{Duration, Instant};
@@ -56,18 +57,20 @@ fn a_hung_main_loop_is_reset_by_the_watchdog_and_the_stream_carries_on() {
     let mut lines = LogReader::open(&log).unwrap();
     let mut writer = EstimatesWriter::new(Vec::new()).unwrap();
     let mut info = Vec::new();
+    let mut each = |_: &_, _: &_| {};
+    let mut sink = SampleSink::unchecked(&mut writer, &mut each);
     let summary = stream_log_push(
         &mut target,
         &mut lines,
         RowFilter::new(true),
         None,
-        &mut writer,
+        &mut sink,
         None,
         &options,
         &mut info,
-        &mut |_, _| {},
     )
     .unwrap_or_else(|e| panic!("{e:#}\n{}", String::from_utf8_lossy(&info)));
+    drop(sink);
     let info = String::from_utf8_lossy(&info).into_owned();
     println!(
         "{info}{:?}\nwall {:.1} s, window {window}",
