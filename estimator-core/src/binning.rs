@@ -38,7 +38,8 @@ use core::f64::consts::PI;
 /// Bin intervals a [`Binner`] takes, s: the estimator's grid intervals.
 pub const BIN_INTERVAL_RANGE_S: (f64, f64) = SAMPLE_INTERVAL_RANGE_S;
 
-/// How far below a bin boundary, in bins, a stamp still counts as on it (see the module doc).
+/// How far below a bin boundary, in bins, a stamp still counts as on it: a decimal stamp such as
+/// `0.3` at a bin of `0.1` (`2.9999999999999996` bins in binary) opens bin 3, as its writer meant.
 const BOUNDARY_SNAP_BINS: f64 = 1e-6;
 
 /// A bin interval outside [`BIN_INTERVAL_RANGE_S`] (or not finite).
@@ -344,7 +345,8 @@ mod tests {
     fn a_bin_of_a_200_hz_sinusoid_averages_to_its_analytic_mean() {
         // Roll = A sin(2 pi t / P + phi), N = 200 samples dt = 5 ms apart in each 1 s bin. The mean
         // of the N samples is the sinusoid at their mean time scaled by the Dirichlet kernel
-        // sin(pi N dt / P) / (N sin(pi dt / P)) (module doc), which tends to sinc(pi T / P).
+        // sin(pi N dt / P) / (N sin(pi dt / P)) (docs/interface.md, "Attitude at the navigation
+        // rate"), which tends to sinc(pi T / P).
         let amplitude_rad = 10f64.to_radians();
         let phase_rad = 0.3;
         let dt = 0.005;
