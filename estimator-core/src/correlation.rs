@@ -2,7 +2,7 @@
 //!
 //! # The four channels
 //! Eq (2)'s errors times a reference have a slow part (product-to-sum identities); the rest are
-//! harmonics at `2 rho` and `2 rho - s`, which the one-period average of eq (11)
+//! harmonics at `2 rho`, `2 rho - s` or `2(rho - s)`, which the one-period average of eq (11)
 //! ([`crate::moving_average`]) blocks with the sway of eq (4) and the errors of eq (5):
 //!
 //! ```text
