@@ -1,75 +1,34 @@
 //! Attitude at the navigation rate (100-200 Hz) averaged into bins of the estimator's grid.
 //!
-//! A navigation computer has its attitude, rotation and platform angles at 100 Hz or more; the
-//! estimator steps once per grid interval (0.1 to 10 s, [`crate::config::SAMPLE_INTERVAL_RANGE_S`]).
-//! [`Binner`] takes the samples as they come, at any rate, and hands back one averaged [`Sample`]
-//! per bin of [`Binner::interval_s`] once the bin is complete, to be given to
-//! [`crate::Estimator::step`]. Every sample can still be compensated on its own with
-//! [`crate::Estimator::compensate`].
+//! A navigation computer has its attitude and angles at 100 Hz or more; the estimator steps once
+//! per grid interval (0.1 to 10 s, [`crate::config::SAMPLE_INTERVAL_RANGE_S`]). [`Binner`] takes
+//! the samples as they come, at any rate, and hands back one averaged [`Sample`] per bin of
+//! [`Binner::interval_s`] once the bin is complete, for [`crate::Estimator::step`]; every sample
+//! can still be compensated on its own with [`crate::Estimator::compensate`].
 //!
 //! # Bins
-//! Bin `k` holds the samples with `k T <= t < (k + 1) T` (`T` the bin interval, `t` the sample's
-//! time): bins are aligned to multiples of `T` in the stamps' own time, so the same log binned
-//! twice, or from another first row, bins the same. A stamp within a millionth of a bin below a
-//! boundary counts as on it (`k = floor(t / T + 1e-6)`), so that a decimal stamp such as `0.3`
-//! at `T = 0.1` (`0.3 / 0.1 = 2.9999999999999996` in binary) opens bin 3, as its writer meant. A
-//! bin is complete when the first sample of a later bin arrives: [`Binner::push`] then returns it.
-//! A bin no sample fell in produces nothing: the estimator sees a lost sample, as from a recorder
-//! that lost a row, and fills it or steps over it. At the end of a log, [`Binner::finish`] gives
-//! the last bin.
+//! Bin `k` holds the samples with `k T <= t < (k + 1) T`: aligned to multiples of `T` in the
+//! stamps' own time, so the same log bins the same from any first row (a stamp within a millionth
+//! of a bin below a boundary counts as on it, as a decimal stamp's writer meant). A bin is complete
+//! when a sample of a later bin arrives ([`Binner::push`] returns it; [`Binner::finish`] the
+//! last). An empty bin gives nothing: the estimator sees a lost sample. A sample that fails
+//! [`Sample::check`], or is not later than the last accepted one, is refused with its
+//! [`SampleError`] and changes nothing.
 //!
-//! # The average
-//! Each field is the mean of the bin's samples. Latitude, roll and pitch are averaged as they
-//! are. The angles that wrap (rotation, platform, heading) are unwrapped first: each sample's
-//! angle is taken as the previous sample's unwrapped angle plus the step between them wrapped to
-//! [-pi, pi), starting from the bin's first sample, so a rotation crossing +-180 deg within a bin
-//! averages to the angle in the middle, not to the far side of the circle; the mean is wrapped to
-//! [-pi, pi) again. (Unwrapping step by step rather than against the first sample alone allows any
-//! motion whose single steps stay below half a turn.) The sums are kept in `f64` as offsets from
-//! the bin's first sample: in `f32`, a sum of 2000 samples (10 s at 200 Hz) of a 10 deg roll
-//! reaches 350 rad, whose rounding (half a unit in the last place, 1.5e-5 rad) at each of the 2000
-//! additions could move the mean by up to 1.5e-5 rad, 3 arcsec.
+//! # The average and its stamp
+//! Each field is the mean of the bin's samples; rotation, platform and heading are unwrapped step
+//! by step from the bin's first sample and the mean wrapped to [-pi, pi) again. The sums are `f64`
+//! offsets from the bin's first sample (`f32` rounding would move a long bin's mean by arcsec).
+//! Averaged over `T`, eq (2)'s oscillation of period `P` is the oscillation at the samples' mean
+//! time scaled by `sinc(pi T / P)` (1 - 7e-6 at `T` = 1 s, `P` = 480 s), and the rotation angle is
+//! averaged over the same samples, so the averaged sample obeys eq (2) whatever its stamp. It is
+//! stamped at the bin's centre `(k + 1/2) T`: the centres lie exactly `T` apart whatever the
+//! samples' rate, phase and losses, where a bin's mean time may lie up to half a bin off, beyond
+//! the jitter the grid accepts ([`crate::time_grid`]).
 //!
-//! # What averaging does to eq (2)
-//! The mean of a sinusoid of period `P` over a window of length `T` is the sinusoid at the
-//! window's mean time scaled by
-//! `(1/T) int_{-T/2}^{T/2} cos(2 pi u / P) du = sin(pi T / P) / (pi T / P) = sinc(pi T / P)`
-//! (the odd part integrates to 0). For `N` samples `dt` apart (`T = N dt`) the sum of the
-//! geometric series gives `sin(pi N dt / P) / (N sin(pi dt / P))`, which tends to the same as
-//! `dt` shrinks. Eq (2)'s terms oscillate with `rho` and `rho - s`, one turn a rotation period
-//! (480 s in the paper): at `T = 1 s` they keep `sinc(pi / 480) = 0.99999` of their amplitude
-//! (`1 - (pi T / P)^2 / 6 = 1 - 7e-6`, 0.002 arcsec of 300), at `T = 10 s` `0.9993` (0.2 arcsec
-//! of 300): the estimates come out smaller by that factor. A ship's roll sway of 6 s is cut to
-//! `sinc(pi / 6) = 0.955` of its amplitude at `T = 1 s`; the method does not need the sway (it
-//! averages it out), and attenuating it only helps. The white noise of the attitude falls by the
-//! square root of the samples in a bin. The rotation angle is averaged over the same samples as
-//! the attitude: for a constant rate its mean is the angle at the samples' mean time, exactly the
-//! time at which the averaged attitude's oscillation is taken, so the averaged sample obeys eq (2)
-//! (scaled as above) whatever time it is stamped with.
-//!
-//! # The stamp: the bin's centre
-//! The averaged sample is stamped at the bin's centre, `(k + 1/2) T`, not at its samples' mean
-//! time. Both stand for the same average; the estimator uses the stamp only to place the sample on
-//! its grid (eq (2) takes the angles, see above). The centres lie exactly `T` apart whatever the
-//! samples' rate and phase and whichever samples were lost, so the estimator sees a clean grid of
-//! `T` and the same log gives the same stamps. A full bin's mean time is the centre less half a
-//! sample step plus the samples' phase (0.4975 s for 200 Hz samples at 0, 0.005, ..., 0.995 s in
-//! bin 0), which the estimator would take for jitter; a bin that lost samples has its mean time
-//! anywhere within the bin, up to half a bin from the centre, beyond the +-0.45 of an interval of
-//! jitter the grid accepts ([`crate::time_grid`]). The cost of the centre: a bin that lost most
-//! of its samples on one side carries angles of its mean time at the centre's stamp, which the
-//! estimator cannot see, and a latency carried forward ([`crate::Config::angle_latency_s`]) uses
-//! the rate between two such stamps.
-//!
-//! # Bad samples
-//! A sample that fails [`Sample::check`], or whose time is not later than the last accepted
-//! sample's, is refused with its [`SampleError`] and changes nothing.
-//!
-//! # Cost
-//! Fixed memory (`size_of::<Binner>()` is under 200 bytes, a unit test checks it; no allocator).
-//! A push is the sample's checks, a division and a floor for its bin, three angle wraps (a
-//! division and a floor each) and a dozen additions, in double precision: software arithmetic on
-//! a Cortex-M4F, not measured there.
+//! Fixed memory (a unit test bounds `size_of::<Binner>()`, no allocator); a push is a few
+//! divisions, floors and additions in double precision. The derivations, and what the centre
+//! costs: docs/interface.md, "Attitude at the navigation rate".
 
 use crate::config::SAMPLE_INTERVAL_RANGE_S;
 use crate::sample::{Attitude, Sample, SampleError};
@@ -79,7 +38,8 @@ use core::f64::consts::PI;
 /// Bin intervals a [`Binner`] takes, s: the estimator's grid intervals.
 pub const BIN_INTERVAL_RANGE_S: (f64, f64) = SAMPLE_INTERVAL_RANGE_S;
 
-/// How far below a bin boundary, in bins, a stamp still counts as on it (see the module doc).
+/// How far below a bin boundary, in bins, a stamp still counts as on it: a decimal stamp such as
+/// `0.3` at a bin of `0.1` (`2.9999999999999996` bins in binary) opens bin 3, as its writer meant.
 const BOUNDARY_SNAP_BINS: f64 = 1e-6;
 
 /// A bin interval outside [`BIN_INTERVAL_RANGE_S`] (or not finite).
@@ -411,7 +371,8 @@ mod tests {
     fn a_bin_of_a_200_hz_sinusoid_averages_to_its_analytic_mean() {
         // Roll = A sin(2 pi t / P + phi), N = 200 samples dt = 5 ms apart in each 1 s bin. The mean
         // of the N samples is the sinusoid at their mean time scaled by the Dirichlet kernel
-        // sin(pi N dt / P) / (N sin(pi dt / P)) (module doc), which tends to sinc(pi T / P).
+        // sin(pi N dt / P) / (N sin(pi dt / P)) (docs/interface.md, "Attitude at the navigation
+        // rate"), which tends to sinc(pi T / P).
         let amplitude_rad = 10f64.to_radians();
         let phase_rad = 0.3;
         let dt = 0.005;

@@ -1,75 +1,38 @@
 //! Checkpoint and restore: what a restarted firmware needs to go on estimating, as a small,
 //! versioned, CRC-protected byte image.
 //!
-//! # What is kept, and what a restart costs
-//! An image keeps what took hours to learn and what cannot be seen again: the filter (states,
-//! covariance, update count), what it learned of its noise and of the errors' drift (residual
-//! means, their long averages, noise scale, drift share), the sample interval and what it was
-//! learned from, the rotation pattern's period and shape, the fill-error estimate, the health of
-//! the run (the start gate, the last rotation fault), the counters and the time of the last
-//! sample. It does not keep what the next samples rebuild within one rotation period: the
-//! one-period moving-average window (most of the state), the gap filler's delay line
-//! and the low-pass of the correlation references.
-//!
-//! So a restored estimator continues as after a long gap: the estimate and its 1-sigma are
-//! reported from the first sample on, [`crate::Status::Holding`] says the window is refilling,
-//! and after one period the filter updates again. A power cut costs the updates since the last
-//! checkpoint and one period of updates; the firmware's docs (docs/firmware.md) measure what that
-//! is worth in accuracy. [`Estimator::checkpoint`] writes the image into a caller's buffer of at
-//! least [`CHECKPOINT_LEN`] bytes (the same for every ring capacity); [`Estimator::restore`] reads
-//! one back.
+//! # What is kept
+//! What took hours to learn and cannot be seen again: the filter and what it learned of its noise
+//! and of the errors' drift, the sample grid, the rotation pattern, the fill error, the run's
+//! health, the counters and the last sample's time. Not what the next samples rebuild within one
+//! period: the window, the gap filler's delay line, the references' low-pass. So a restored
+//! estimator goes on as after a long gap: the estimate from the first sample on,
+//! [`crate::Status::Holding`] while the window refills, updates again one period later.
+//! [`Estimator::checkpoint`] writes the image into a buffer of [`CHECKPOINT_LEN`] bytes (the same
+//! for every ring capacity); [`Estimator::restore`] reads one back.
 //!
 //! # Validation
-//! Restore checks, in this order, and returns the first failure as a [`CheckpointError`]: magic,
-//! version, float width, the length in the header, the CRC-32 over everything before it, the
-//! method code; then every part as it is read:
-//! - the configuration must pass [`Config::check`] for the estimator's ring capacity;
-//! - every float finite and within its range (the bounds are in each part's file: Kalman states
-//!   within [`MAX_STATE`], variances within [`MAX_VARIANCE`] or four times the prior, residual
-//!   means within [`MAX_RESIDUAL`], angles within what [`crate::Sample::check`] lets through), so
-//!   that every output of the restored estimator is finite;
-//! - every covariance exactly symmetric and positive definite (Cholesky);
-//! - the parts consistent with each other and with the configuration (a pinned period or
-//!   interval is the configured one);
-//! - flags 0 or 1, codes known, every unused byte zero (an absent optional value, the padding).
-//!
-//! Every part is read into a value on the stack (the largest, the paper method's four filters,
-//! is 400 bytes) before anything is written, so on any error the estimator is untouched; then
-//! the estimator is reset in place to the image's configuration and the parts are written into
-//! it (no second estimator passes through the stack).
-//!
-//! # Versions
-//! [`VERSION`] is the only version read. An image of another version is refused with
-//! [`CheckpointError::Version`]; the firmware then starts from the learned errors' record saved
-//! with it ([`crate::learned`], a layout every version reads), or afresh without one. What each
-//! version added is in CHANGELOG.md.
+//! Restore checks magic, version, float width, length, CRC-32 and method code, then each part as
+//! it is read: the configuration passes [`Config::check`]; every float is finite and within its
+//! bound ([`MAX_STATE`], [`MAX_VARIANCE`], [`MAX_RESIDUAL`], the angles [`crate::Sample::check`]
+//! lets through), so every output is finite; every covariance is exactly symmetric and positive
+//! definite; the parts agree with each other and the configuration; flags are 0 or 1, codes known,
+//! unused bytes zero. Every part is read into a value on the stack before anything is written, so
+//! on any [`CheckpointError`] the estimator is untouched. An image of another [`VERSION`] is
+//! refused; the firmware then starts from the learned errors' record ([`crate::learned`]).
 //!
 //! # Layout
-//! Little-endian; `R` = bytes of [`Real`] (4, or 8 with the `f64` feature). An optional value is a
-//! flag byte (0 absent, 1 present) followed by the value, all zero when absent.
-//!
-//! | bytes | field |
-//! |---|---|
-//! | 4 | magic `b"RIEC"` |
-//! | 2 | version ([`VERSION`]) |
-//! | 1 | `R` |
-//! | 1 | method code ([`Method`] `as u8`) |
-//! | 4 | total length including the CRC (= [`CHECKPOINT_LEN`]) |
-//! | ... | the parts, in the order and with the lengths of the layout in `estimator/checkpoint.rs` |
-//! | ... | zero padding to a multiple of 4 |
-//! | 4 | CRC-32 ([`crc32`]) of all bytes before it |
-//!
-//! The parts, each written, read and checked next to its type by its `Stored` implementation
-//! (the fields of each, in order, are listed in that file): the configuration
-//! (`config/checkpoint.rs`), the estimator's own running state (`estimator/checkpoint.rs`), the
-//! sample grid (`time_grid/checkpoint.rs`), the rotation monitor (`rotation_pattern/checkpoint.rs`),
-//! the fill-error estimate (`gap_fill/checkpoint.rs`) and the method's filter
-//! (`methods/checkpoint.rs`, zero-padded to the longest method). `tests.rs` holds a golden image:
-//! a fixed state whose bytes are pinned, so that a change of the format fails until [`VERSION`] is
-//! bumped.
+//! Little-endian; `R` = bytes of [`Real`]; an optional value is a flag byte (0 absent, 1 present)
+//! and the value, all zero when absent. The header: magic `b"RIEC"` (4 bytes), [`VERSION`] (2),
+//! `R` (1), the method code ([`Method`] `as u8`, 1), the total length with the CRC (4); then the
+//! parts in the order and with the lengths listed once in `estimator/checkpoint.rs`, each written,
+//! read and checked next to its type by its `Stored` implementation (`checkpoint.rs` in the type's
+//! folder); zero padding to a multiple of 4; the CRC-32 ([`crc32`]) of every byte before it.
+//! `tests.rs` pins a golden image: a change of the format fails until [`VERSION`] is bumped.
 //!
 //! This module is the format only (the header and CRC: `image.rs`; the byte reader and writer:
-//! `wire.rs`; the errors, the bounds and the `Stored` trait: here); it knows no part.
+//! `wire.rs`; the errors, the bounds and `Stored`: here); it knows no part. What a restart costs,
+//! the parts in full and the tests: docs/reliability.md, "Checkpoint and restore".
 
 pub(crate) mod image;
 #[cfg(test)]

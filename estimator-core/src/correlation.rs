@@ -1,82 +1,41 @@
-//! Eq (8): correlating roll and pitch with the rotation angle.
+//! Eq (8): correlating roll and pitch with the rotation angle, and each channel's measurement row.
 //!
-//! # Derivation of the four channels from eq (2)
-//!
-//! Multiply the roll error of eq (2) by `sin rho` and expand the products with the product-to-sum
-//! identities (`cos(rho-s) sin rho = [sin(2rho-s) + sin s]/2`, `sin(rho-s) sin rho = [cos s - cos(2rho-s)]/2`,
-//! `sin^2 rho = [1 - cos 2rho]/2`, `cos rho sin rho = sin(2rho)/2`):
-//!
-//! ```text
-//! d_roll sin rho  = x3 cosL/2 - x1 sinL sin(s)/2 - x2 sinL cos(s)/2            (slow part)
-//!                 + harmonics at 2 rho and 2 rho - s                             (blocked by eq 11)
-//! d_roll cos rho  = -x4 cosL/2 - x1 sinL cos(s)/2 + x2 sinL sin(s)/2 + harmonics
-//! d_pitch sin(rho-s) = x1/2 + harmonic at 2(rho-s)
-//! d_pitch cos(rho-s) = -x2/2 + harmonic at 2(rho-s)
-//! ```
-//!
-//! So roll with `sin rho` isolates x3 (the paper's channel), roll with `cos rho` isolates x4 (sign
-//! negative), pitch with `sin(rho-s)` isolates x1 and pitch with `cos(rho-s)` isolates x2 (sign
-//! negative). The two roll channels also carry x1 and x2 through `sinL sin s` and `sinL cos s`: the
-//! leakage of eq (12). It is not small (x1 sinL/2 is ~100 arcsec at 40 deg) and it is not a 1/t
-//! transient when the product is averaged over a moving window instead of from t = 0: it is a slow
-//! term with *known* coefficients (s and L are inputs), which the default filter models exactly.
-//!
-//! **Check of eq (12).** Integrating the slow part from 0 to t with s = w_e t and dividing by t (eq 8)
-//! gives `x3 cosL/2 - x1 sinL (1 - cos w_e t)/(2 w_e t) - x2 sinL sin(w_e t)/(2 w_e t)`. The paper's
-//! eq (12) has `-x1 sinL sin(w_e t) + x2 sinL (cos w_e t - 1)` in the numerator instead: x1 and x2
-//! exchanged (and a sign on x2), which corresponds to its eq (10), last line. The simulation in
-//! `tests/` sides with the derivation above (`roll_sin_channel_leakage_follows_derivation`).
-//! Either way the leakage keeps its 1/t factor, which the constant b1, b2 of eq (13) cannot represent
-//! (see [`crate::methods::paper`]).
-//!
-//! The ship's sway (eq 4) multiplies `sin rho` into components at the sway frequency +- 1/480 Hz;
-//! the low-frequency errors of eq (5) multiply it into components at (multiples of) 1/480 Hz +- the
-//! Earth rate. Both are removed by the averaging of [`crate::moving_average`].
-//!
-//! # Any rotation pattern: rows from the angles observed, and a centred reference
-//! The slow parts above hold for a uniform one-way rotation over whole periods, where the means
-//! of `sin^2 rho`, `sin rho cos rho`, ... are exactly 1/2 and 0. A reciprocating or stop-and-go
-//! rotation, or a window with samples missing, has other means. So the measurement rows are not
-//! those constants: each channel's row is eq (2)'s row pushed through the same correlation and
-//! averaging as the data, over the samples actually in the window. With `c` a channel's reference
-//! (`sin(rho-s)`, `cos(rho-s)`, `sin rho`, `cos rho`), `y` the attitude it correlates (pitch,
-//! pitch, roll, roll) and `h` eq (2)'s row of that attitude:
+//! # The four channels
+//! Eq (2)'s errors times a reference have a slow part (product-to-sum identities); the rest are
+//! harmonics at `2 rho`, `2 rho - s` or `2(rho - s)`, which the one-period average of eq (11)
+//! ([`crate::moving_average`]) blocks with the sway of eq (4) and the errors of eq (5):
 //!
 //! ```text
-//! z = mean((c - mean c) y),    row = mean((c - mean c) h),    z = row . x  + (sway, noise)
+//! d_pitch sin(rho-s) -> x1/2        d_pitch cos(rho-s) -> -x2/2
+//! d_roll sin rho     -> x3 cosL/2 - x1 sinL sin(s)/2 - x2 sinL cos(s)/2
+//! d_roll cos rho     -> -x4 cosL/2 - x1 sinL cos(s)/2 + x2 sinL sin(s)/2
 //! ```
 //!
-//! This is a regression of `y` on the reference with an intercept. Without the centring, a
-//! constant attitude offset `a` (a heel or trim of degrees, eq (5)'s `a0`) adds `a mean(c)` to
-//! `z`: zero for a uniform rotation over a whole window, but arcsec as soon as the reference does
-//! not average to exactly zero (a sample missing, a pattern that dwells unevenly). With it, a
-//! constant offset cancels exactly, whatever the pattern and whatever is missing. For a uniform
-//! one-way rotation over a whole window `mean c = 0` and the rows are the slow parts derived above
-//! (the test `rows_of_a_uniform_rotation_are_the_derived_slow_parts` checks this).
+//! Each channel ([`PITCH_SIN`], [`PITCH_COS`], [`ROLL_SIN`], [`ROLL_COS`]) isolates one error; the
+//! roll channels also carry x1, x2 (eq (12)'s leakage), a slow term with known coefficients that
+//! the default filter models. The derivation, and eq (12)'s x1 and x2 exchanged: docs/method.md,
+//! "Eq (2) and the four channels (eq 8)" and "Where the paper's algebra and the simulation
+//! disagree".
 //!
-//! # A smoothed reference: no sway through a stop-and-go pattern
-//! With a one-way rotation at a constant rate the references are pure sinusoids at the rotation
-//! frequency, and the sway (periods of 4-20 s) has nothing to correlate with. A stop-and-go or
-//! reciprocating pattern makes them steps and kinks, with harmonics of the rotation frequency all
-//! the way up: a sway component near one of them correlates with the reference and does not
-//! average out (with 90 deg moves every 90 s a 9 s sway sits on a harmonic, 360 s / 9 s being a
-//! whole number; what that does to x1, and a sea spectrum to every error, without the low-pass:
-//! docs/real-logs.md, "Why the measurement works for any pattern"). So the reference `c` is
-//! low-passed ([`ReferenceFilter`]: three one-pole filters of [`REFERENCE_TIME_CONSTANT_S`],
-//! which keep the rotation frequency (gain 0.96 at 360 s) and divide a 9 s sway by 250 and a
-//! 5 s sway by 2000), while `y` and eq (2)'s rows `h`
-//! stay as measured. Nothing else changes: `z` and its row use the same `c`, so
-//! `z = row . x` still holds exactly, whatever reference is used; the reference only decides
-//! what else correlates with it (an instrumental-variable regression).
+//! # Any rotation pattern: a centred, low-passed reference
+//! With `c` a channel's reference, `y` its attitude and `h` eq (2)'s row of `y`, over the samples
+//! in the window, `z = mean((c - mean c) y)` and its row `mean((c - mean c) h)`: `z = row . x +
+//! (sway, noise)` whatever the pattern and whatever is missing, and a constant heel or trim cancels
+//! exactly. `c` is low-passed ([`ReferenceFilter`], three stages of [`REFERENCE_TIME_CONSTANT_S`])
+//! so that a stop-and-go pattern's harmonics do not correlate with the sway; `z` and its row use
+//! the same `c`, so nothing is biased. Derivation: docs/method.md, "Any rotation pattern".
+//!
+//! # Heel in turns
+//! Roll also holds the heel `k u`, `k` the state [`HEEL_STATE`] and `u` the rate of turn (the
+//! heading less eq (2)'s heading oscillation of the estimate): the roll rows' fifth column is
+//! `mean((c - mean c) u)`, and the turn channel correlates roll with the low-passed `u` as its
+//! reference. When `k` is learned: [`crate::methods::windowed::heel`].
 //!
 //! # Exact running sums
-//! Everything above is a mean of products of the sample's quantities, so the window keeps their
-//! sums ([`CorrelationSums`]): counts, the references, the attitudes, the channel products, and the
-//! products of the references with eq (2)'s rows. Each sample enters in fixed point
-//! ([`QuantizedSample`]: attitude 2^30 counts per rad, sines and cosines 2^14 counts per unit) and
-//! every product is formed in integers, so adding a sample and later subtracting the same sample
-//! is exact: the sums never drift, and host and target agree bit for bit. The quantization of a
-//! reference is no bias: the same quantized value is used in the measurement and in its row.
+//! The window keeps the sums of these products ([`CorrelationSums`]), each sample in fixed point
+//! ([`QuantizedSample`]: attitude 2^30 counts per rad, sines and cosines 2^14) and every product
+//! formed in integers: a sample subtracted leaves the sums exactly as before it was added (no
+//! drift; host and target bit for bit), and `z` and its row use the same quantized reference.
 
 use crate::installation::Angles;
 use crate::math::round_to_i32;

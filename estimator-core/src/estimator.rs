@@ -94,6 +94,46 @@ impl Feed {
 }
 
 /// The installation-error estimator, with a ring capacity of `CAP` window entries.
+///
+/// # Example
+/// Configure, step once a sample, read the estimate. The samples here are a ship's roll and pitch
+/// sway (periods of 8 and 11 s) plus eq (2)'s oscillation for known errors, on a one-way rotation
+/// of 480 s at 1 Hz; the estimator learns the interval and the period from them.
+///
+/// ```
+/// use core::f64::consts::TAU;
+/// use estimator_core::installation::Angles;
+/// use estimator_core::units::{arcsec_to_rad, rad_to_arcsec, EARTH_RATE_RAD_PER_S};
+/// use estimator_core::{Config, Estimator, Real, Sample, Status};
+///
+/// let x_arcsec = [200.0, -150.0, 300.0, -250.0]; // the installation errors to find
+/// let x_rad = x_arcsec.map(|x| arcsec_to_rad(x) as Real);
+/// let latitude_deg: f64 = 30.0;
+/// let mut estimator: Estimator = Estimator::new(Config::default())?;
+/// let mut last = None;
+/// for k in 0..4000 {
+///     let t_s = f64::from(k);
+///     let rotation_deg = 360.0 * t_s / 480.0;
+///     let platform_deg = (EARTH_RATE_RAD_PER_S * t_s).to_degrees();
+///     let lat = latitude_deg.to_radians() as Real;
+///     let rows = Angles::new(rotation_deg.to_radians() as Real, platform_deg.to_radians() as Real, (lat.sin(), lat.cos()));
+///     let error = rows.oscillation(&x_rad); // eq (2): what the errors do to the attitude
+///     let roll_deg = 3.0 * (TAU * t_s / 8.0).sin() + f64::from(error.roll_rad).to_degrees();
+///     let pitch_deg = 1.0 * (TAU * t_s / 11.0).sin() + f64::from(error.pitch_rad).to_degrees();
+///     let heading_deg = 45.0 + f64::from(error.heading_rad).to_degrees();
+///     let sample = Sample::from_degrees(t_s, rotation_deg, platform_deg, latitude_deg, heading_deg, roll_deg, pitch_deg);
+///     // A bad sample comes back as an error and changes nothing.
+///     last = Some(estimator.step(&sample).expect("a healthy sample"));
+/// }
+/// let output = last.expect("4000 outputs");
+/// assert_eq!(output.status, Status::Converged);
+/// let estimate = output.estimate.expect("an estimate after 4000 s");
+/// for i in 0..4 {
+///     let error_arcsec = rad_to_arcsec(f64::from(estimate.x_rad[i])) - x_arcsec[i];
+///     assert!(error_arcsec.abs() < 1.0, "x{}: off by {error_arcsec:.2} arcsec", i + 1);
+/// }
+/// # Ok::<(), estimator_core::ConfigError>(())
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Estimator<const CAP: usize = DEFAULT_CAPACITY> {
     config: Config,

@@ -1,47 +1,32 @@
-//! Lost samples: short gaps filled from their neighbours, so that the moving average still cancels
-//! the sway.
+//! Lost samples: short gaps filled from their neighbours, longer runs left out with a taper, so
+//! that the moving average still cancels the sway.
 //!
-//! # Why fill, and why not linearly
+//! # Why fill, and how
 //! The window mean of eq (11) cancels the ship's sway (degrees) only because it sums the sway over
-//! whole sway periods. A lost sample takes one sway value out of that sum: leaving it out biases
-//! the window's correlation by about `A c / N` (A the sway amplitude, c the reference, N the window),
-//! tens of arcsec for a 3 deg sway, and a log that loses 2 % of its rows at random never has a
-//! complete window. Filling the sample with an interpolation of its neighbours leaves only the
-//! interpolation error in the sum. Linear interpolation leaves about half the amplitude of a 6 s
-//! sway sampled at 1 s; a cubic through four neighbours 17 %; the Lagrange polynomial through the
-//! [`NEIGHBOURS`] present samples on each side (10 points) 0.4 % at a 6 s period and 0.03 % at
-//! 8 s for one lost sample (2 % and 0.15 % for two lost in a row, 10 % and 0.8 % for three): the
-//! sway is far below the Nyquist frequency of a 1 s log, and a polynomial of high order through
-//! many neighbours is a good band-limited interpolator there. Only roll and pitch are filled this
-//! way; the angles, which move slowly and at a steady rate, are interpolated linearly (the short
-//! way round), and the filled reference is used both in the measurement and in its row, so an
-//! error in it is no bias.
+//! whole sway periods: a lost sample left out biases the window's correlation by about `A c / N`
+//! (`A` the sway amplitude, `c` the reference, `N` the window). Up to `max_filled_gap_samples`
+//! lost in a row are filled: roll and pitch with the Lagrange polynomial through the
+//! [`NEIGHBOURS`] present samples on each side (the sway lies far below a 1 s log's Nyquist
+//! frequency, where a polynomial of high order through many neighbours is a good band-limited
+//! interpolator, unlike a linear or cubic one); the angles, which move slowly at a steady rate,
+//! linearly the short way round. The filled reference is used in the measurement and in its row
+//! alike, so an error in it is no bias.
 //!
 //! # Longer runs: left out, with a taper
-//! A run of lost rows longer than `max_filled_gap_samples` (2 by default) is not filled: three or
-//! more lost in a row leave a polynomial 10 % or more of the sway off, and a recorder that loses
-//! them at a regular cadence makes that error the same every time, so that it does not average
-//! out (docs/real-logs.md). Nor is it just left out of the
-//! sums: a hole in the sum takes out a piece of the sway that no longer cancels (a 10-row hole is
-//! about one sway cycle: tens of arcsec, which averages down slowly, and not at all when the holes
-//! come at a cadence). Instead the rows around the hole are weighted down smoothly: each sample's
-//! weight in the window's sums is `R(d_before) R(d_after)`, with `d` its distance in samples to
-//! the nearest lost row of a hole before and after it, and `R` the cumulative sum of a Hann
-//! window of `2 TAPER_HALF + 1` points ([`TAPER_WEIGHTS`]): 0 next to the hole, rising to 1 over
-//! [`TAPER_LEN`] samples. The missing weight is then the hole convolved with a Hann window: its
-//! spectrum, and with it the share of the sway that the hole leaves in the sums, falls by the Hann
-//! window's side lobes (31 dB and more) above the window's first null, `2 / (TAPER_HALF + 1)`
-//! cycles a sample (a 16 s period at 1 s: the sway of 4-16 s is in the stop band). The weights
-//! enter the measurement and its rows alike ([`crate::correlation::CorrelationSums`]), so nothing
-//! is biased; what it costs is information, about `2 TAPER_HALF` samples a hole.
-//!
-//! The taper leaves in the sums only the sway the Hann window's side lobes pass, where rows left
-//! out plain, or three or more filled by the polynomial, leave a piece of a sway cycle each; the
-//! estimator's figures on logs with lost rows are in docs/real-logs.md and docs/gap-study.md.
+//! Three or more lost in a row leave the polynomial off by a share of the sway that a regular
+//! cadence of losses repeats, and a plain hole leaves a piece of a sway cycle uncancelled. So a
+//! longer run is left out of the sums and the rows around it weighted down: a sample's weight is
+//! `R(d_before) R(d_after)`, `d` its distance in samples to the nearest lost row of a hole before
+//! and after it, `R` the cumulative sum of a Hann window of `2 TAPER_HALF + 1` points
+//! ([`TAPER_WEIGHTS`]): 0 next to the hole, 1 after [`TAPER_LEN`] samples. The missing weight is
+//! then the hole convolved with a Hann window, whose side lobes leave little of the sway above its
+//! first null (a 16 s period at 1 s). The weights enter the measurement and its rows alike
+//! ([`crate::correlation::CorrelationSums`]), so nothing is biased; a hole costs about
+//! `2 TAPER_HALF` samples of information.
 //!
 //! A run of an eighth of a rotation period or more (or a clock step) restarts the window instead
-//! (the estimator decides, [`crate::estimator`]).
-//!
+//! (the estimator decides, [`crate::estimator`]). The interpolation errors, the taper's spectrum
+//! and the figures on lossy logs: docs/real-logs.md, "Lost rows", and docs/gap-study.md.
 pub(crate) mod checkpoint;
 mod weights;
 

@@ -2,54 +2,32 @@
 //! what was learned.
 //!
 //! The moving average of eq (11) blocks the rotation harmonics when its window spans one period of
-//! the rotation pattern, whatever the pattern: one-way in either direction, reciprocating,
-//! multi-position stop-and-go with or without reversals. Nothing here assumes a constant rate.
+//! the pattern, whatever the pattern: one-way either way, reciprocating, multi-position
+//! stop-and-go with or without reversals. Nothing here assumes a constant rate.
 //!
 //! # Period
-//! Pinned by [`crate::Config::rotation_period_s`], or detected: eight reference angles are placed
-//! around the first angle seen ([`LEVEL_OFFSETS_DEG`]): two [`NEAR_LEVEL_DEG`] either side of it,
-//! and six at 67.5, 112.5, ..., 292.5 deg from it, so that none sits on a dwell position of a
-//! scheme that stops at multiples of 45 deg from where it started. A pattern that repeats passes
-//! every angle it reaches once per period in each direction it turns, so the time between two
-//! passes of the same reference angle in the same direction is the period. A pass is counted with
-//! 1 deg of hysteresis (jitter of the angle reading does not count as passes). The first reference
-//! passed twice in one direction gives the period: a one-way rotation, either way, within a period
-//! and `NEAR_LEVEL_DEG / 360` of the start (1.4 %; the first estimate must come within 1.25
-//! periods, and the sooner the period is known the more of them it builds on: see
-//! [`crate::methods::windowed::start`]).
+//! Pinned by [`crate::Config::rotation_period_s`], or detected: a repeating pattern passes every
+//! angle it reaches once per period in each direction it turns, so the time between two passes of
+//! one reference angle in the same direction (1 deg of hysteresis) is the period. Of the eight
+//! reference angles around the first angle seen ([`LEVEL_OFFSETS_DEG`]), two lie [`NEAR_LEVEL_DEG`]
+//! either side of it, so that a one-way rotation's period is known within a period and
+//! `NEAR_LEVEL_DEG / 360` (the first estimate is due within 1.25 periods:
+//! [`crate::methods::windowed::start`]); six lie at 67.5, 112.5, ..., 292.5 deg, none on a dwell of
+//! a scheme that stops at multiples of 45 deg. Across lost rows the angle is continuous: a pass is
+//! placed where the angle, interpolated linearly, crossed the reference, and rates and dwells count
+//! the lost samples; only a gap the window cannot bridge ([`crate::estimator`]) restarts the
+//! timings.
 //!
-//! # Across lost rows
-//! A gap is not a restart: the angle is continuous between the rows that are there. A pass seen
-//! across lost rows is placed where the angle, interpolated linearly between the rows on either
-//! side, crossed the threshold (exact for a steady rate, a few samples off inside a stop-and-go
-//! move, whose effect on the period is checked by the health check below); the rate over the gap
-//! is the angle turned over the samples it spans, and a dwell counts the lost samples too. Only a
-//! gap the window cannot bridge (an eighth of a period, see [`crate::estimator`]) restarts the
-//! pass timings.
-//!
-//! # What the pattern looks like
-//! Over the cycle after the period is known (while the first window fills), with `w_n = 2 pi / T`
-//! the rate of a one-way rotation of the same period, and the rate judged on the mean increment of
-//! the last few samples ([`SHORT_STEPS`], exponential: jitter of the angle readings averages down):
-//! the longest dwell (run of samples below `w_n / 4`), whether it turns both ways (a run
-//! below `-w_n / 2` against the way it turned first), and the net direction (the sign of the
-//! rotation over the cycle; none for a pattern that comes back).
-//!
-//! # Health
-//! Once learned, a sample is a fault ([`RotationFault`]) when the rotation no longer repeats its
-//! pattern:
-//! - stopped for longer than its longest dwell (plus an eighth and 2 samples of margin: a pattern
-//!   without dwells slows through zero for a sample or two at a reversal):
-//!   [`RotationFault::Stopped`];
-//! - turning against its direction when the pattern never does: [`RotationFault::Reversed`]; after
-//!   a whole period the other way, the pattern is detected anew (a one-way rotation that now turns
-//!   the other way is a new pattern);
-//! - the time between two passes of the reference angle more than `rotation_period_tolerance` (1 %
-//!   by default) plus one sample off the period, or no pass for that long:
-//!   [`RotationFault::RateMismatch`]. The pattern is then forgotten and detected anew (a pinned
-//!   period is kept).
-//!
-//! A pattern's own dwells and reversals are not faults.
+//! # Shape and health
+//! Over the cycle after the period is known, with the rate averaged over the last [`SHORT_STEPS`]:
+//! the longest dwell, whether it turns both ways, its net direction. Then a sample is a
+//! [`RotationFault`] when the rotation no longer repeats its pattern: stopped for longer than the
+//! longest dwell (plus an eighth and 2 samples), [`RotationFault::Stopped`]; turning against its
+//! direction when the pattern never does, [`RotationFault::Reversed`] (a whole period the other
+//! way is a new pattern); two passes of the reference more than `rotation_period_tolerance` plus a
+//! sample off the period, or none for that long, [`RotationFault::RateMismatch`] (the pattern is
+//! detected anew; a pinned period is kept). A pattern's own dwells and reversals are not faults.
+//! The thresholds and their reasons: docs/real-logs.md, "The rotation pattern".
 
 pub(crate) mod checkpoint;
 

@@ -1,76 +1,38 @@
 //! The sample grid: places each time stamp in its slot on a grid of whole sample intervals
 //! anchored in absolute time.
 //!
-//! Real recorders stamp time from their own clocks: Unix or GPS seconds, dropped rows, now and
-//! then a clock step, and a recorder that stamps a row when it receives it jitters every stamp
-//! independently by up to nearly half an interval. The estimator needs only how many sample
-//! intervals lie between two accepted samples (1 for consecutive samples, `n` after `n - 1` lost
-//! ones); the stamps themselves are passed through to the output untouched.
+//! The estimator needs only how many intervals lie between two accepted samples (1 for
+//! consecutive samples, `n` after `n - 1` lost ones); the stamps pass to the output untouched.
 //!
 //! # Slots, not steps
-//! Two stamps jittered by up to +-0.45 of the interval may lie anywhere from 0.1 to 1.9
-//! intervals apart, so the step between them does not tell a lost row from jitter. Each stamp
-//! does name its slot without ambiguity once the grid's interval `T` and phase are known: it lies
-//! within half an interval of exactly one slot time `t_anchor + k T`. So the grid keeps its phase
-//! as the slot time of the last accepted stamp, and places a stamp `e` after it at
-//! `n = round(e / T)` slots on (`n - 1` samples missing), its residual `e - n T` the stamp's
-//! jitter plus the grid's own error. A stamp consistent with the very next slot (within 0.45 of an
-//! interval plus three times the uncertainty of the grid's prediction, when that exceeds half an
-//! interval: only while the grid is young) is placed there: rows are lost far less often than stamps jitter.
+//! A recorder that stamps rows on receipt jitters each stamp by up to nearly half an interval:
+//! two stamps then lie 0.1 to 1.9 intervals apart, and their step does not tell a lost row from
+//! jitter. But once the interval `T` and the phase are known, a stamp lies within half an interval
+//! of exactly one slot `t_anchor + k T`: a stamp `e` after the last accepted one is placed
+//! `n = round(e / T)` slots on (`n - 1` samples missing), or in the very next slot when it is
+//! consistent with it (rows are lost far less often than stamps jitter).
 //!
-//! # Learning the interval and the phase
-//! The first [`LEARNING_STAMPS`] stamps are accepted but not estimated from (the estimator
-//! starts on the grid at the next one). From them, once all are in:
-//! - the interval (unless pinned by [`crate::Config::sample_interval_s`]) starts as the median of
-//!   the steps (robust to lost rows while fewer than half the steps are doubled);
-//! - each step is one slot unless it is longer than the longest single step the jitter allows
-//!   (`1 + 4.5 MAD` of the steps about the median, at most 2 intervals), then the nearest whole
-//!   number of intervals;
-//! - a least-squares line through the stamps against their slots gives the interval and the
-//!   phase (the mean of the stamps' offsets from the grid); the steps are classed again against
-//!   it, with the longest single step now from the residuals' spread, up to three times;
-//! - with the interval pinned the line's slope is the pinned interval and only the phase is fitted.
-//!
-//! Where the learning can go wrong: a lost row among the learning stamps whose step is as short
-//! as a long single step is taken for jitter, so the grid starts a little off and its tracking
-//! below pulls it in, a few stamps one slot off meanwhile (how often, at each jitter:
-//! docs/real-logs.md, "Time stamps").
-//!
-//! # Following the clock
-//! After learning, every stamp placed on the grid corrects it, a least-squares line fit updated
-//! one stamp at a time (an alpha-beta tracker): the phase by `alpha r` and the interval by
-//! `beta r / n` for residual `r` after `n` slots, with the gains of a growing-memory line fit
-//! (`alpha = 2 (2m - 1) / (m (m + 1))`, `beta = 6 / (m (m + 1))` at the `m`-th stamp), from
-//! `m =` [`TRACKING_START`] to [`TRACKING_MEMORY`], then held: the grid follows a clock that runs
-//! 0.1 % fast, or drifts, with a memory of about a thousand stamps, its phase error a few
-//! hundredths of the jitter. A pinned interval is the nominal one: the grid follows the clock
-//! with its own copy, kept within [`PINNED_INTERVAL_TOLERANCE`] of it (a recorder's clock that
-//! runs 1 % off is broken), and reports the pinned one.
+//! # Learning, then following the clock
+//! The first [`LEARNING_STAMPS`] stamps are not estimated from: the interval (unless pinned by
+//! [`crate::Config::sample_interval_s`]) starts as the median of their steps, each step is classed
+//! as one slot or more, and a least-squares line through the stamps against their slots gives the
+//! interval and the phase. Then each stamp placed corrects the grid, a line fit updated a stamp at
+//! a time with a memory growing from [`TRACKING_START`] to [`TRACKING_MEMORY`] stamps: the grid
+//! follows a clock that runs fast or drifts (a pinned interval's copy within
+//! [`PINNED_INTERVAL_TOLERANCE`] of it).
 //!
 //! # Placing a stamp
-//! - In the next slot or `n >= 1` slots on: on the grid, `n - 1` samples missing;
-//! - a stamp further from its slot than the jitter explains (more than four times the residuals'
-//!   RMS plus 5 % of the interval: never, when the jitter itself nears half an interval) is placed
-//!   in its nearest slot; the second such stamp in a row, on the same side, is a clock jump:
-//!   accepted, counted, the grid re-anchored at it, and treated as a gap the window cannot
-//!   bridge. (With jitter near half an interval a jump by a fraction of an interval cannot be
-//!   told from jitter: the tracking follows it instead, a few stamps possibly one slot off.)
-//! - more than `u32::MAX` intervals on (136 years at 1 Hz, where the stamp's residual is lost in
-//!   the rounding): a clock jump, re-anchored at the stamp;
-//! - more than [`CLOCK_STEP_BACK_INTERVALS`] intervals before the previous accepted stamp: a clock
-//!   step backwards, accepted, counted, re-anchored and treated as a gap like a jump;
-//! - otherwise in a slot at or before the last accepted one: a repeated or out-of-order row,
-//!   rejected ([`SampleError::TimeNotIncreasing`] when the stamp is not after the previous one,
-//!   [`SampleError::IrregularTimeStep`] when it is), the grid unchanged.
+//! - `n >= 1` slots on: on the grid, `n - 1` samples missing;
+//! - twice in a row off its slot on the same side by more than the jitter explains, or over
+//!   `u32::MAX` intervals on: a clock jump; over [`CLOCK_STEP_BACK_INTERVALS`] intervals back: a
+//!   step back. Either is accepted, counted, re-anchored, and a gap the window cannot bridge;
+//! - otherwise at or before the last accepted slot: refused ([`SampleError::TimeNotIncreasing`],
+//!   [`SampleError::IrregularTimeStep`]), the grid unchanged.
 //!
-//! # Cost on the Cortex-M4F
-//! The usual stamp costs one double-precision subtraction (the stamp less the grid's base time,
-//! software on the M4F) and its conversion to single precision; the rest is single-precision
-//! arithmetic on offsets of at most a few thousand intervals, with no division (the gains are
-//! constants once the tracking's memory is full). The base moves to the grid's phase every
-//! [`REBASE_INTERVALS`] intervals (one double-precision addition). A stamp after a gap of more
-//! than [`FAST_PATH_INTERVALS`] intervals, a clock step, and the learning's fit take the double-
-//! precision or the longer path.
+//! The usual stamp costs one double-precision subtraction (from a base moved every
+//! [`REBASE_INTERVALS`]), the rest single precision without division. The derivation (the
+//! classing, the tracker's gains, the thresholds) and where the learning can go wrong:
+//! docs/real-logs.md, "Time stamps".
 
 mod checkpoint;
 
@@ -470,8 +432,9 @@ impl TimeGrid {
         }
     }
 
-    /// The grid from the learning stamps (module doc): the interval, the phase, the residuals'
-    /// spread. Learning starts again at the last stamp if they give no positive interval.
+    /// The grid from the learning stamps (docs/real-logs.md, "Time stamps"): the interval, the
+    /// phase, the residuals' spread. Learning starts again at the last stamp if they give no
+    /// positive interval.
     fn learn(&mut self) {
         let x = &self.stamps_s;
         let mut steps = [0.0f32; LEARNING_STAMPS - 1];

@@ -1,74 +1,36 @@
 //! `host-sim commission LOG`: whether a log's conventions fit the model of eq (2).
 //!
-//! The log is read once (as `estimate` reads it: the same reader, time stamps and options) and
-//! every row is handed to one replay per [`Variant`]: the log as it is, and the log with one of its
-//! conventions changed (an angle negated, roll and pitch exchanged, the rotation angle read as
-//! radians). Each replay runs the core's windowed method to the end of the log, as `estimate`
-//! does (the evidence grows with the log, below; a fit keeps 104 bytes a rotation period; the
-//! seven fits' time against one `estimate` of the log: docs/interface.md, "What it does not do");
-//! the replays run side by side (rayon), a batch of rows at a time.
+//! The log is read once (as `estimate` reads it) and every row is handed to one replay per
+//! [`Variant`] (the log as it is, or with one convention changed: an angle negated, roll and pitch
+//! exchanged, the rotation angle read as radians), each the core's windowed method to the end of
+//! the log; the replays run side by side (rayon), a batch of rows at a time.
 //!
 //! # The evidence: the unexplained share each fit leaves
-//! Each fit's post-fit residual `z - H x` of its four correlation channels
-//! ([`StepView::residuals_rad`], what the report's residual plot shows) is averaged over each
-//! rotation period from the first estimate on; the **residual power** is the median, over the
-//! later half of the periods, of the square of those period means (mean over the channels,
-//! arcsec^2). A period's mean takes out the sway's leak into the window (it falls like `1 / N`
-//! over `N` windows); what is left is what eq (2) with the fit's errors cannot explain. Under a
-//! wrong convention eq (2) can still take up the oscillation at the start (a sign becomes the
-//! errors' sign, a phase their mix), but not as the platform angle turns at the Earth rate: the
-//! misfit grows with the angle's span, so the later half of the log holds it at its largest, and
-//! the first periods, which hold the filter's own settling, are left out. The median, not the
-//! mean: a turn's transient lifts a few periods, not the log (sea logs with turns heeling 3 deg
-//! are told: docs/interface.md).
-//!
-//! The **measurement power** is the same of the measurement `z` itself, and the decision compares
-//! the **unexplained share**, the residual power over the measurement power, among the fits that
-//! found eq (2)'s oscillation: a measurement power at least [`FOUND_POWER_SHARE`] (1/3) of the
-//! largest among the log's fits. The sign and exchange variants move the oscillation between
-//! channels and phases without removing it, so their measurement powers agree. Read as radians, a
-//! rotation angle in degrees turns 57 times too fast (180 / pi) and the references no longer
-//! correlate with the oscillation: that fit finds a small share of the largest measurement power,
-//! and leaves little residual because there is little to leave, so the residual power alone can
-//! put that wrong fit below the right one, where the unexplained share of the fits compared does
-//! not. The measured powers and shares, and where [`FOUND_POWER_SHARE`] lies between them:
-//! docs/interface.md, "How long a log, measured".
+//! A fit's measurement `z` and post-fit residual `z - H x` of its four channels
+//! ([`StepView::residuals_rad`]) are averaged over each rotation period from the first estimate
+//! on; the **measurement** and **residual power** are the medians, over the later half of the
+//! periods, of their squares. A wrong convention's misfit grows as the platform angle turns at the
+//! Earth rate, so the later half holds it at its largest. The decision compares the **unexplained
+//! share**, residual over measurement power, among the fits that found eq (2)'s oscillation (a
+//! measurement power at least [`FOUND_POWER_SHARE`] of the largest): the residual power alone
+//! would favour a fit that correlates with nothing (a rotation angle in degrees read as radians).
 //!
 //! # The decision rule
-//! With `F` = [`DECISION_FACTOR`] = 10 and `u(v)` the unexplained share of variant `v` (infinite
-//! for a fit without an estimate, without a period of residuals, or that did not find the
-//! oscillation):
-//!
-//! - a variant `v` is named when `F u(v) <= u(as-is)` (it leaves at most a tenth of what the log
-//!   as it is leaves) and `u(v) < F u(best)`, `best` the variant that leaves least: every variant
-//!   within a factor `F` of the best is named with it;
-//! - otherwise the conventions are **ok** when every variant leaves at least `F` times what the
-//!   log as it is leaves: `u(v) >= F u(as-is)`;
+//! With `F` = [`DECISION_FACTOR`] and `u(v)` the unexplained share of variant `v` (infinite for a
+//! fit without an estimate, without a period of residuals, or that did not find the oscillation):
+//! - `v` is named when `F u(v) <= u(as-is)` and `u(v) < F u(best)`, `best` the variant that
+//!   leaves least (every variant within a factor `F` of the best is named with it);
+//! - otherwise the conventions are **ok** when every variant has `u(v) >= F u(as-is)`;
 //! - otherwise the fits are too close to tell (**undecided**): a longer log tells.
 //!
-//! `F` is set from the spread of the ratio of a wrong fit's unexplained share to the right one's
-//! that `bash scripts/commission-study.sh` measures (logs of `generate`, each rewritten into every
-//! variant): how the ratio grows with the log's length, the verdicts `F` gives and how much longer
-//! a log smaller errors need (the misfit shrinks with the errors) are in docs/interface.md, "How
-//! long a log, measured".
+//! Roll and pitch both negated is eq (2) with x1..x4 negated, so `roll-negated` and
+//! `pitch-negated` fit alike; the heading tells them apart ([`Fit::heading_agreement`]: +1 for the
+//! right one, -1 for the other, each at least [`HEADING_SIGMAS`] standard errors from 0 over
+//! [`MIN_HEADING_PERIODS`] periods), on a steady heading but not at sea. The reasons, how `F` and
+//! [`FOUND_POWER_SHARE`] were set (`scripts/commission-study.sh`) and what it does not do:
+//! docs/interface.md, "How it decides", "How long a log, measured" and "What it does not do".
 //!
-//! # What the residuals cannot tell
-//! Roll and pitch both negated is eq (2) with x1..x4 negated: a fit of roll and pitch cannot tell
-//! a log with its roll negated under `roll-negated` (the log as it should be) from the same log
-//! under `pitch-negated` (roll and pitch both negated). Their fits are the same to rounding, and
-//! both are named, unless the heading tells: eq (2)'s heading oscillation changes sign with the
-//! errors, so the heading, regressed on it for each fit's estimate ([`Fit::heading_agreement`]),
-//! gives +1 for the right one and -1 for the other. It is taken when one is within 0.5 of +1 and
-//! the other of -1, each at least [`HEADING_SIGMAS`] standard errors from 0 over at least
-//! [`MIN_HEADING_PERIODS`] periods. A steady heading (the paper scenario) lets it tell; at sea the
-//! ship's course changes (the sea scenario's weave of 0.5 deg/s at a 600 s period, next to the
-//! rotation's 480 s) swamp it and both are named (the coefficients and the log lengths:
-//! docs/interface.md, "Examples" and "How long a log, measured"). This assumes the heading's own
-//! sense is the model's; a log whose roll and pitch are both negated fits as it is, and the same
-//! test of the heading says so in a note.
-//!
-//! The parts: [`fitting`] (the replays and their sums), [`verdict`] (the rule) and [`text`] (what
-//! is printed).
+//! The parts: [`fitting`] (the replays, their sums), [`verdict`] (the rule), [`text`] (the print).
 //!
 //! [`StepView::residuals_rad`]: crate::replay::replayer::StepView::residuals_rad
 //! [`HEADING_SIGMAS`]: verdict::HEADING_SIGMAS

@@ -20,50 +20,8 @@
 //! - [`blocking_writer`]: a serial transmitter wrapper that never returns `Ok(0)`, so that
 //!   `embedded_io::Write::write_all` of a frame cannot panic on a busy USART.
 //!
-//! ## Example: one request and one response, byte by byte
-//!
-//! ```
-//! use estimator_core::Sample;
-//! use link_protocol::frame::MAX_FRAME;
-//! use link_protocol::{
-//!     encode_frame, FrameAccumulator, Numbered, Request, Response, SampleMsg, MAX_REQUEST_ENCODED,
-//!     MAX_RESPONSE_ENCODED, PROTOCOL_VERSION, UNNUMBERED,
-//! };
-//!
-//! // Host: its 7th request, a sample at 100 s (rotation 45 deg, platform 0 deg, latitude 30 deg,
-//! // heading 10 deg, roll 1 deg, pitch -0.5 deg), becomes one frame.
-//! let sample = Sample::from_degrees(100.0, 45.0, 0.0, 30.0, 10.0, 1.0, -0.5);
-//! let request = Numbered { seq: 7, message: Request::Sample(SampleMsg::from(&sample)) };
-//! let mut frame = [0u8; MAX_FRAME];
-//! let n = encode_frame(&request, &mut frame)?;
-//!
-//! // Firmware: the bytes arrive one at a time; the frame's closing 0x00 yields the request.
-//! let mut rx = FrameAccumulator::<MAX_REQUEST_ENCODED>::new();
-//! let mut received = None;
-//! for &byte in &frame[..n] {
-//!     if let Some(result) = rx.push_decode::<Numbered<Request>>(byte) {
-//!         received = Some(result?); // a bad frame would be a `FrameError` here
-//!     }
-//! }
-//! assert_eq!(received, Some(request));
-//! // The firmware's core gets the very sample the host built, bit for bit; its answer will
-//! // carry the number 7.
-//! if let Some(Numbered { seq: 7, message: Request::Sample(msg) }) = received {
-//!     assert_eq!(Sample::from(&msg), sample);
-//! }
-//!
-//! // Firmware to host: the boot announcement, unnumbered, 8 bytes on the wire.
-//! let ready = Numbered { seq: UNNUMBERED, message: Response::Ready { protocol_version: PROTOCOL_VERSION } };
-//! let n = encode_frame(&ready, &mut frame)?;
-//! assert_eq!(frame[..n], [0x00, 0x01, 0x05, 0x03, 0x07, 0x28, 0xe9, 0x00]);
-//! let mut host_rx = FrameAccumulator::<MAX_RESPONSE_ENCODED>::new();
-//! let responses = frame[..n]
-//!     .iter()
-//!     .filter_map(|&byte| host_rx.push_decode::<Numbered<Response>>(byte))
-//!     .collect::<Result<Vec<_>, _>>()?;
-//! assert_eq!(responses, [ready]);
-//! # Ok::<(), Box<dyn core::error::Error>>(())
-//! ```
+//! One request and one response, byte by byte, from the host's frame to the firmware's
+//! message and back: the example of [`encode_frame`].
 #![warn(missing_docs)]
 #![no_std]
 #![cfg_attr(

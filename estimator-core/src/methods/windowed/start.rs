@@ -1,53 +1,36 @@
 //! The first estimate: the weights the first windows enter the filter with, and when their
 //! estimate is reported.
 //!
-//! # Why the first windows need weights
-//! Each window is the mean over one period `W` of the products (a boxcar), and the filter, which
-//! starts from a weak prior and takes every window with the same variance, ends up after `N`
-//! windows with a least-squares estimate whose weight on the products is the boxcar convolved with
-//! the run of windows: `g = rect_W * rect_N`, a trapezoid with ramps `N` long. A sway component at
-//! angular frequency `w` (periods of 6-14 s, degrees of amplitude `A`) leaks through the
-//! trapezoid's two kinks: `|G(w)| / G(0) <= 4 / (w^2 W N)` for `w N >> 1`. Long after the start
-//! that is nothing (docs/method.md, "Noise of an overlapping-window measurement"), but the first
-//! estimate is due within 1.25 periods of the start, and a one-way rotation makes its period known
-//! after about one period and the filler's delay (31 rows): at a 360 s period `N` is then about 30
-//! windows, and 5 deg of sway at 14 s leaks `4 A / (w^2 W N)` = 33 arcsec into a channel.
+//! # Why weights
+//! After `N` equally weighted windows of one period `W` (boxcars), the filter's weight on the
+//! products is the trapezoid `g = rect_W * rect_N`, whose kinks let a sway of angular frequency `w`
+//! through by `|G(w)| / G(0) <= 4 / (w^2 W N)` for `w N >> 1`: nothing long after the start, but
+//! the first estimate is due within 1.25 periods, after a few tens of windows.
 //!
 //! # Bumps
 //! So the first windows enter with the weights of a bump: the `k`-th window of a bump of `L`
-//! windows with `w(u) = 30 u^2 (1 - u)^2`, `u = k / L` (its variance `r / w`). Its mean over the
-//! bump is 1, so the filter's information is what equal weights give; it is zero with a zero
-//! slope at both ends, so `g = rect_W * w` has a continuous second derivative at both of its ends
-//! and the leakage falls like `1 / w^4` instead of `1 / w^2`. The newest windows of a bump still
-//! carry most of its weight until it ends, so its estimate is reported when it ends (at the
-//! window of weight 0) and held until the next one ends. The bumps double in length until they
-//! span a quarter of a period of windows; then the weights rise to 1 over twice the last bump's
-//! length (`3 u^2 - 2 u^3`: a step to 1 would be a kink of `g` inside the data, leaking as much as
-//! an edge), the estimate reported at every update from the end of the last bump on. (Bumps that
-//! doubled until they spanned a period would hold estimates for up to 0.4 periods while the data
-//! improve them.)
-//!
-//! What the first estimate is worth at 1.25 periods is pinned by
-//! `host-sim/tests/replay/gap_logs.rs` and measured in docs/real-logs.md ("The first windows'
-//! weights").
+//! windows with `w(u) = 30 u^2 (1 - u)^2`, `u = k / L` (its variance `r / w`). Its mean is 1, the
+//! information of equal weights; it is zero with a zero slope at both ends, so `g = rect_W * w` has
+//! a continuous second derivative and the leakage falls like `1 / w^4`. A bump's newest windows
+//! carry most of its weight until it ends, so its estimate is reported at its end and held until
+//! the next ends. The bumps double until they span a quarter of a period of windows; then the
+//! weights rise to 1 over twice the last bump's length (`3 u^2 - 2 u^3`: a step would be a kink of
+//! `g`), the estimate reported at every update from the last bump's end on.
 //!
 //! # The first bump's length
-//! It ends when the first estimate is due: when the newest entry is 1.25 periods from the first
-//! entry of the window, less the rows the estimator has not yet turned into entries at that moment
-//! (the filler's delay, [`crate::gap_fill::DELAY`], and the stamps the sample interval is learned
-//! from, [`crate::time_grid::LEARNING_STAMPS`]). At least a sixteenth of a period (a
-//! pattern whose period is known late: its first estimate comes a sixteenth of a period after
-//! its first full window), at most a quarter. A window of bins (periods longer than the ring) starts
-//! empty when the period is known, so it has no earlier samples to take the first estimate
-//! from: its first bump is a sixteenth of a period.
+//! It ends when the first estimate is due: when the newest entry is 1.25 periods from the window's
+//! first, less the rows not yet turned into entries ([`ROWS_BEHIND`]); at least a sixteenth of a
+//! period, at most a quarter. A window of bins starts empty when the period is known, with no
+//! earlier samples to take the first estimate from: its first bump is a sixteenth of a period.
 //!
 //! # Restarts
-//! A window restarted during the bumps (a long gap, a rotation fault) begins them again at its
-//! next full window, the estimate held meanwhile. A restore from a checkpoint keeps the filter but
-//! not the window: it keeps whether the bumps go on and the estimate held (two bits of the
-//! windowed method's flag byte, `checkpoint.rs`), so that a restore in the bumps begins them again
-//! at the next full window, reporting the held estimate meanwhile; a restore after them (the rise
-//! included) takes equal weights at once.
+//! A window restarted during the bumps begins them again at its next full window, the estimate
+//! held meanwhile. A checkpoint keeps whether the bumps go on and the estimate held (two bits of
+//! the windowed method's flag byte), so a restore in the bumps does the same, and one after them
+//! (the rise included) takes equal weights at once.
+//!
+//! The derivation: docs/method.md, "The first windows"; what the first estimate is worth:
+//! docs/real-logs.md, "The rotation pattern" (pinned by `host-sim/tests/replay/gap_logs.rs`).
 
 use crate::gap_fill::DELAY;
 use crate::time_grid::LEARNING_STAMPS;
