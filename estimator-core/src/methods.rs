@@ -69,6 +69,14 @@ impl<const CAP: usize> MethodState<CAP> {
         *self = MethodState::new(config);
     }
 
+    /// While the period is being learned: the windowed method bins its window as a period of
+    /// `period_samples` would (the other methods do not bin).
+    pub fn expect_period(&mut self, period_samples: u32) {
+        if let MethodState::Windowed(m) = self {
+            m.expect_period(period_samples);
+        }
+    }
+
     /// Sets the moving average to one period of the rotation pattern.
     pub fn configure(&mut self, period_samples: u32) {
         match self {

@@ -176,6 +176,8 @@ pub struct CorrelationWindow<const CAP: usize> {
     len: usize,
     /// Samples per entry.
     bin: u32,
+    /// Samples per entry while the period is being learned ([`Self::expect_bin`]; 1 unless set).
+    expected_bin: u32,
     /// Whether `len` is one period of the rotation pattern (set by [`Self::configure`]); before,
     /// the window keeps up to `CAP` entries from the first sample on.
     configured: bool,
@@ -186,6 +188,8 @@ pub struct CorrelationWindow<const CAP: usize> {
     newest: Option<u32>,
     /// Whether the window has held exactly one period since it was emptied.
     was_full: bool,
+    /// Whether its entries go back to before the period was known (kept by [`Self::configure`]).
+    from_learning: bool,
     partial: Bin,
 }
 
@@ -297,40 +301,67 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
             sums: CorrelationSums::ZERO,
             len: if CAP > 1 { CAP } else { 1 },
             bin: 1,
+            expected_bin: 1,
             configured: false,
             origin: None,
             first: 0,
             newest: None,
             was_full: false,
+            from_learning: false,
             partial: Bin::ZERO,
         }
     }
 
-    /// Back to [`Self::new`], in place (no `CAP`-sized temporary on the stack).
+    /// Back to [`Self::new`], in place (no `CAP`-sized temporary on the stack), but for the bin
+    /// expected while the period is learned ([`Self::expect_bin`]), which it takes again.
     pub fn reset(&mut self) {
         self.len = CAP.max(1);
-        self.bin = 1;
+        self.bin = self.expected_bin;
         self.configured = false;
         self.clear();
     }
 
-    /// Sets the window to one period of `period_samples`. When a period fits the ring one sample
-    /// an entry, the entries kept so far stay (the samples since the first row, while the period
-    /// was being learned): the window holds one period as soon as the excess has been removed, a
-    /// few entries a push. With bins the window starts empty.
-    pub fn configure(&mut self, period_samples: u32) {
-        let layout = WindowLayout::for_period(period_samples, CAP);
-        let keep = layout.samples_per_entry == 1 && self.bin == 1;
-        self.bin = layout.samples_per_entry;
-        self.len = layout.entries.clamp(1, CAP.max(1));
-        self.configured = true;
-        if !keep {
+    /// The samples per entry to bin with while the period is being learned: those of the period
+    /// most likely to come, so that when it does, the entries gathered while it was learned stay
+    /// (a period that needs another bin empties the window, as any change of bin does). Applied
+    /// at once to a window not yet set to a period (emptied), and again at each [`Self::reset`].
+    pub fn expect_bin(&mut self, bin: u32) {
+        self.expected_bin = bin.max(1);
+        if !self.configured && self.bin != self.expected_bin {
+            self.bin = self.expected_bin;
             self.clear();
         }
     }
 
+    /// Sets the window to one period of `period_samples`. When the period's layout keeps the
+    /// window's samples per entry, the entries kept so far stay (the samples since the first row,
+    /// one an entry or in the expected bins while the period was being learned): the window holds
+    /// one period as soon as the excess has been removed, a few entries a push. A window already
+    /// set to a period with bins, or one whose bin changes, starts empty.
+    pub fn configure(&mut self, period_samples: u32) {
+        let layout = WindowLayout::for_period(period_samples, CAP);
+        let keep = layout.samples_per_entry == self.bin && (self.bin == 1 || !self.configured);
+        self.bin = layout.samples_per_entry;
+        self.len = layout.entries.clamp(1, CAP.max(1));
+        if keep {
+            self.from_learning = !self.configured;
+        } else {
+            self.clear();
+        }
+        self.configured = true;
+    }
+
+    /// Whether the entries go back to the samples gathered while the period was being learned
+    /// (kept when the period came, one sample an entry or in the expected bins): the first
+    /// estimate is then due 1.25 periods from the first of them ([`crate::methods::windowed`]'s
+    /// start). A window emptied since, or set to a period from its first sample, does not.
+    pub fn holds_samples_from_learning(&self) -> bool {
+        self.from_learning
+    }
+
     /// Forgets every entry and the bin being filled (after a long gap or a rotation fault).
     pub fn clear(&mut self) {
+        self.from_learning = false;
         self.ring.clear();
         self.sums = CorrelationSums::default();
         self.partial = Bin::default();

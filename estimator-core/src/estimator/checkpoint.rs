@@ -190,8 +190,12 @@ fn read_method_part<const CAP: usize>(
     let method_part = MethodPart::read(r, config)?;
     if let Some(e) = target {
         e.method.keep_learned(method_part);
-        if let (Some(_), Some(p)) = (e.run.feed, period) {
-            e.method.configure(p);
+        match (e.run.feed, period) {
+            (Some(_), Some(p)) => e.method.configure(p),
+            (Some(feed), None) => e
+                .method
+                .expect_period(super::feed::expected_period_samples(feed.interval_s)),
+            (None, _) => {}
         }
         e.run.window_status = if period.is_some() {
             Status::WarmingUp

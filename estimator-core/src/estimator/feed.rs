@@ -96,8 +96,11 @@ impl<const CAP: usize> Estimator<CAP> {
             .rotation_period_s
             .map(|t| libm::round(t / interval_s).max(2.0) as u32);
         self.run.rotation = RotationMonitor::new(pinned);
-        if let Some(p) = pinned {
-            self.method.configure(p);
+        match pinned {
+            Some(p) => self.method.configure(p),
+            None => self
+                .method
+                .expect_period(expected_period_samples(interval_s)),
         }
         self.run.window_status = Status::DetectingPattern;
         feed
@@ -224,4 +227,26 @@ impl<const CAP: usize> Estimator<CAP> {
             Status::DetectingPattern
         };
     }
+}
+
+/// The rotation period expected while the pattern is learned, s: the paper's. At rates whose
+/// period does not fit the window one sample an entry (above about 1.5 Hz at 480 s), the window
+/// bins as this period needs from the first sample, so that the samples gathered while the period
+/// is learned stay when it comes out at this (a period that needs another bin starts the window
+/// afresh).
+pub const EXPECTED_PERIOD_S: f64 = 480.0;
+
+/// [`EXPECTED_PERIOD_S`] in samples of `interval_s`. A rate within 10 % of a whole number of
+/// samples a second (2 or more) counts as that number: the interval is first learned from a few
+/// stamps, which jitter of up to half an interval leaves several percent off before the grid
+/// refines it, and the bin chosen for the period should not depend on that.
+pub(super) fn expected_period_samples(interval_s: f64) -> u32 {
+    let rate_hz = 1.0 / interval_s;
+    let whole_hz = libm::round(rate_hz);
+    let samples = if whole_hz >= 2.0 && libm::fabs(rate_hz - whole_hz) < 0.1 * whole_hz {
+        EXPECTED_PERIOD_S * whole_hz
+    } else {
+        libm::round(EXPECTED_PERIOD_S / interval_s)
+    };
+    samples.clamp(2.0, f64::from(u32::MAX)) as u32
 }

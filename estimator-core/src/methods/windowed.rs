@@ -47,7 +47,7 @@ use crate::correlation::{ReferenceFilter, STATES, TURN_RATE_UNIT_RAD_S};
 use crate::gap_fill::GridSample;
 use crate::kalman::ConstantStateKalman;
 use crate::math::{wrap_pi, Compare};
-use crate::moving_average::CorrelationWindow;
+use crate::moving_average::{CorrelationWindow, WindowLayout};
 use crate::Real;
 use change::ChangeDetector;
 use heel::{HEEL_HELD_SIGMA_RAD, HEEL_PRIOR_SIGMA_RAD, TURN_EXCITATION};
@@ -322,6 +322,14 @@ impl<const CAP: usize> Windowed<CAP> {
     /// The detector of changes of the errors.
     pub fn change_detector(&self) -> &ChangeDetector {
         &self.change
+    }
+
+    /// While the period is being learned, bins the window as a period of `period_samples` would
+    /// ([`CorrelationWindow::expect_bin`]), so that the samples gathered meanwhile stay when it
+    /// comes.
+    pub fn expect_period(&mut self, period_samples: u32) {
+        self.window
+            .expect_bin(WindowLayout::for_period(period_samples, CAP).samples_per_entry);
     }
 
     /// Sets the window to one period of the rotation pattern.

@@ -125,7 +125,11 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
         turn_rate: Real,
         weight: u8,
     ) -> Pushed {
-        let origin = *self.origin.get_or_insert(s.index);
+        // Bins lie at whole multiples of the bin on the grid, wherever the window starts: a log
+        // whose grid is learned a few stamps later (jittered stamps) bins its samples alike.
+        let origin = *self
+            .origin
+            .get_or_insert(s.index - s.index % self.bin.max(1));
         let number = s.index.wrapping_sub(origin) / self.bin;
         let mut out = Pushed {
             completed: false,

@@ -20,8 +20,10 @@
 //! # The first bump's length
 //! It ends when the first estimate is due: when the newest entry is 1.25 periods from the window's
 //! first, less the rows not yet turned into entries ([`ROWS_BEHIND`]); at least a sixteenth of a
-//! period, at most a quarter. A window of bins starts empty when the period is known, with no
-//! earlier samples to take the first estimate from: its first bump is a sixteenth of a period.
+//! period, at most a quarter; the rows behind counted in bins for a window of bins that holds
+//! the samples gathered while the period was learned (binned as the expected period needs,
+//! [`crate::moving_average::CorrelationWindow::expect_bin`]). A window of bins emptied when the
+//! period came (it needs other bins) has no earlier samples: its first bump is a sixteenth.
 //!
 //! # Restarts
 //! A window restarted during the bumps begins them again at its next full window, the estimate
@@ -35,6 +37,29 @@
 use crate::gap_fill::DELAY;
 use crate::time_grid::LEARNING_STAMPS;
 use crate::Real;
+
+/// What the start needs of the window: its entries in a full window, its samples per entry, and
+/// whether a window of bins holds the samples gathered while the period was learned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    /// Entries in a full window.
+    pub len: u32,
+    /// Samples per entry.
+    pub bin: u32,
+    /// Whether its entries go back to before the period was known.
+    pub from_learning: bool,
+}
+
+impl Layout {
+    /// A window of one sample an entry (entries from the first row on).
+    pub const fn samples(len: u32) -> Layout {
+        Layout {
+            len,
+            bin: 1,
+            from_learning: true,
+        }
+    }
+}
 
 /// Rows the estimator has not turned into window entries when a row arrives: the filler's delay
 /// and the stamps the grid's interval and phase are learned from ([`LEARNING_STAMPS`]).
@@ -105,11 +130,18 @@ impl StartTaper {
     }
 
     /// The length of the first bump, windows, for a window of `len` entries of `bin` samples whose
-    /// first entry is number `first`, first full at number `newest` (see the module doc).
-    pub fn first_bump_len(first: u32, newest: u32, len: u32, bin: u32) -> u32 {
-        let due = first.wrapping_add(len + len / 4).wrapping_sub(ROWS_BEHIND);
-        // A due number already passed wraps to a huge number: the shortest bump, as with bins.
-        let left = if bin > 1 { 0 } else { due.wrapping_sub(newest) };
+    /// first entry is number `first`, first full at number `newest`; `from_learning` when a window
+    /// of bins holds the samples gathered while the period was learned (see the module doc).
+    pub fn first_bump_len(first: u32, newest: u32, len: u32, bin: u32, from_learning: bool) -> u32 {
+        let behind = ROWS_BEHIND.div_ceil(bin.max(1));
+        let due = first.wrapping_add(len + len / 4).wrapping_sub(behind);
+        // A due number already passed wraps to a huge number: the shortest bump, as with a window
+        // of bins that starts empty when its period is known.
+        let left = if bin > 1 && !from_learning {
+            0
+        } else {
+            due.wrapping_sub(newest)
+        };
         let left = if left > len { 0 } else { left };
         left.min(len / 4).max(len / 16).max(1)
     }
@@ -144,26 +176,24 @@ impl StartTaper {
     /// yet.
     // On the step's path: the usual case (done) inlined, the start out of line.
     #[inline]
-    pub fn weight(&mut self, newest: u32, first: u32, len: u32, bin: u32, cold: bool) -> Weight {
+    pub fn weight(&mut self, newest: u32, first: u32, window: Layout, cold: bool) -> Weight {
         if let StartTaper::Done = self {
             return Weight {
                 value: 1.0,
                 ends_bump: false,
             };
         }
-        self.weight_at_start(newest, first, len, bin, cold)
+        self.weight_at_start(newest, first, window, cold)
     }
 
     /// [`StartTaper::weight`] before the weights are done.
     #[inline(never)]
-    fn weight_at_start(
-        &mut self,
-        newest: u32,
-        first: u32,
-        len: u32,
-        bin: u32,
-        cold: bool,
-    ) -> Weight {
+    fn weight_at_start(&mut self, newest: u32, first: u32, window: Layout, cold: bool) -> Weight {
+        let Layout {
+            len,
+            bin,
+            from_learning,
+        } = window;
         let (value, ends_bump) = match *self {
             StartTaper::Fresh if !cold => {
                 *self = StartTaper::Done;
@@ -174,7 +204,7 @@ impl StartTaper {
                 *self = StartTaper::Bumps {
                     first: newest,
                     start: newest,
-                    len: Self::first_bump_len(first, newest, len, bin),
+                    len: Self::first_bump_len(first, newest, len, bin, from_learning),
                     held: self.has_held(),
                 };
                 (0.0, false)
@@ -245,15 +275,22 @@ mod tests {
     fn the_first_bump_ends_when_the_first_estimate_is_due() {
         // A 480-entry window from entry 0, first full at 492: due at 600 - ROWS_BEHIND.
         assert_eq!(
-            StartTaper::first_bump_len(0, 492, 480, 1),
+            StartTaper::first_bump_len(0, 492, 480, 1, true),
             600 - ROWS_BEHIND - 492
         );
         // Known late: a sixteenth of a period; early: at most a quarter.
-        assert_eq!(StartTaper::first_bump_len(0, 440, 360, 1), 22);
-        assert_eq!(StartTaper::first_bump_len(0, 280, 360, 1), 90);
-        assert_eq!(StartTaper::first_bump_len(0, 1000, 360, 1), 22);
-        // Bins: a sixteenth.
-        assert_eq!(StartTaper::first_bump_len(0, 720, 720, 2), 45);
+        assert_eq!(StartTaper::first_bump_len(0, 440, 360, 1, true), 22);
+        assert_eq!(StartTaper::first_bump_len(0, 280, 360, 1, true), 90);
+        assert_eq!(StartTaper::first_bump_len(0, 1000, 360, 1, true), 22);
+        // Bins from the period on (the window emptied when it came): a sixteenth. Bins that hold
+        // the samples gathered while it was learned: due 1.25 periods from the first, the rows
+        // behind counted in bins (at 10 Hz, 8 samples a bin: 600 entries a period, first full at
+        // 610, due at 750 less the rows behind in bins, rounded up).
+        assert_eq!(StartTaper::first_bump_len(0, 720, 720, 2, false), 45);
+        assert_eq!(
+            StartTaper::first_bump_len(0, 610, 600, 8, true),
+            750 - ROWS_BEHIND.div_ceil(8) - 610
+        );
     }
 
     #[test]
@@ -263,7 +300,7 @@ mod tests {
         let mut n = 400u32;
         // First entry 0, 360 entries, first full at 400: due at 410, ten windows: a sixteenth (22).
         loop {
-            let w = t.weight(n, 0, 360, 1, true);
+            let w = t.weight(n, 0, Layout::samples(360), true);
             if w.ends_bump {
                 assert_eq!(w.value, 0.0);
                 ends.push(n - 400);
@@ -278,23 +315,23 @@ mod tests {
         assert_eq!(ends, [22, 66, 154]);
         // Then the weights rise to 1 over twice the last bump's length, reported at every window.
         assert!(!t.holds());
-        let w = t.weight(n + 88, 0, 360, 1, true).value;
+        let w = t.weight(n + 88, 0, Layout::samples(360), true).value;
         assert!((w - 0.5).abs() < 1e-6, "{w}");
-        assert_eq!(t.weight(n + 176, 0, 360, 1, true).value, 1.0);
+        assert_eq!(t.weight(n + 176, 0, Layout::samples(360), true).value, 1.0);
         assert_eq!(t, StartTaper::Done);
     }
 
     #[test]
     fn a_restored_filter_takes_equal_weights_and_a_restart_begins_the_bumps_again() {
         let mut t = StartTaper::Fresh;
-        assert_eq!(t.weight(500, 0, 360, 1, false).value, 1.0);
+        assert_eq!(t.weight(500, 0, Layout::samples(360), false).value, 1.0);
         assert_eq!(t, StartTaper::Done);
         let mut t = StartTaper::Fresh;
-        t.weight(400, 0, 360, 1, true);
+        t.weight(400, 0, Layout::samples(360), true);
         t.restart();
         assert_eq!(t, StartTaper::Restarted { held: false });
         assert!(t.holds() && !t.has_held());
-        assert_eq!(t.weight(900, 500, 360, 1, false).value, 0.0);
+        assert_eq!(t.weight(900, 500, Layout::samples(360), false).value, 0.0);
         assert!(matches!(
             t,
             StartTaper::Bumps {
@@ -305,7 +342,7 @@ mod tests {
         ));
         // After a bump ended, its estimate stays held through a restart.
         for n in 901..=922 {
-            t.weight(n, 500, 360, 1, false);
+            t.weight(n, 500, Layout::samples(360), false);
         }
         assert!(t.has_held());
         t.restart();

@@ -97,8 +97,11 @@ impl<const CAP: usize> Windowed<CAP> {
         let weight = self.start.weight(
             self.window.newest_number(),
             self.window.first_number(),
-            self.window.len() as u32,
-            self.window.bin(),
+            start::Layout {
+                len: self.window.len() as u32,
+                bin: self.window.bin(),
+                from_learning: self.window.holds_samples_from_learning(),
+            },
             self.updates == 0,
         );
         let mut r = 0.5 * self.pairs[pair].product_variance_rad2;
