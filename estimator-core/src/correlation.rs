@@ -229,8 +229,6 @@ impl QuantizedSample {
     /// before the products are formed (into the references, and into the terms without a
     /// reference), so that weighting costs a dozen small integer products rather than one 64-bit
     /// product a term.
-    // On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
-    #[inline]
     pub fn terms(&self, w: u8) -> [i64; SUMS] {
         self.signed_terms(i32::from(w.min(FULL_WEIGHT)))
     }
@@ -239,6 +237,7 @@ impl QuantizedSample {
     /// [`FULL_WEIGHT`]). Each product has exactly one factor that carries the weight, so the
     /// terms for `-w` are exactly those for `w` negated: an entry is taken out of the sums by
     /// adding its terms for `-w` ([`CorrelationSums::replace`]).
+    // On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
     #[inline(always)]
     fn signed_terms(&self, w: i32) -> [i64; SUMS] {
         let (sr, cr, ss, cs) = (
@@ -399,10 +398,11 @@ impl CorrelationSums {
             .saturating_sub(u32::from(weight.min(FULL_WEIGHT)));
     }
 
-    /// Subtracts the entry `old` and adds `new` in one pass over the sums: the same sums as
-    /// [`CorrelationSums::subtract`] then [`CorrelationSums::add`] (integers: exact in any order),
-    /// with one load and store of each sum instead of two (what a window does every sample once
-    /// it is full).
+    /// Subtracts the entry `old` and adds `new`: the same sums as [`CorrelationSums::subtract`]
+    /// then [`CorrelationSums::add`] (integers: exact in any order), what a window does every
+    /// sample once it is full. Both are one pass of the same out-of-line code over the sums
+    /// (`CorrelationSums::add_signed_terms`), the old entry's with its weight negated: one copy
+    /// of the products' code in the image, each product multiply-accumulated into its sum.
     pub fn replace(
         &mut self,
         old: &QuantizedSample,
@@ -412,19 +412,15 @@ impl CorrelationSums {
         fill_weight: u32,
         weight: u8,
     ) {
-        // The old entry's terms negated, by its negated weight ([`QuantizedSample::signed_terms`]):
-        // each sum then takes two products added (a multiply-accumulate each on the Cortex-M4F).
-        let to = old.signed_terms(-i32::from(old_weight.min(FULL_WEIGHT)));
-        let tn = new.signed_terms(i32::from(weight.min(FULL_WEIGHT)));
-        // Written out rather than looped, so that each sum's two products are formed next to it
-        // in registers, not both lists first on the stack and read back.
-        macro_rules! each_sum {
-            ($($i:literal)*) => {
-                const _: () = assert!([$($i),*].len() == SUMS);
-                $(self.sums[$i] = self.sums[$i] + tn[$i] + to[$i];)*
-            };
+        // An entry of weight 0 adds nothing (every term carries the weight): not run.
+        for (q, w) in [
+            (new, i32::from(weight.min(FULL_WEIGHT))),
+            (old, -i32::from(old_weight.min(FULL_WEIGHT))),
+        ] {
+            if w != 0 {
+                self.add_signed_terms(q, w);
+            }
         }
-        each_sum!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32 33 34 35 36 37);
         self.fill_weight = self
             .fill_weight
             .saturating_sub(old_fill_weight)
@@ -433,6 +429,22 @@ impl CorrelationSums {
             .weight
             .saturating_sub(u32::from(old_weight.min(FULL_WEIGHT)))
             + u32::from(weight.min(FULL_WEIGHT));
+    }
+
+    /// Adds the terms of `q` for the weight `w` (either sign: [`QuantizedSample::signed_terms`]),
+    /// written out sum by sum rather than looped, so that each product is formed next to its sum
+    /// and accumulated into it, not the whole list stored on the stack first and read back. Out
+    /// of line: [`CorrelationSums::replace`] runs it for the entry going and the one coming.
+    #[inline(never)]
+    fn add_signed_terms(&mut self, q: &QuantizedSample, w: i32) {
+        let t = q.signed_terms(w);
+        macro_rules! each_sum {
+            ($($i:literal)*) => {
+                const _: () = assert!([$($i),*].len() == SUMS);
+                $(self.sums[$i] += t[$i];)*
+            };
+        }
+        each_sum!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32 33 34 35 36 37);
     }
 
     /// The centred measurement of the module doc, or `None` for an empty window.
