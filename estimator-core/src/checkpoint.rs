@@ -86,16 +86,42 @@ pub(crate) trait Stored: Sized {
     fn read(r: &mut Reader<'_>, context: Self::Context<'_>) -> Result<Self, CheckpointError>;
 }
 
-/// The CRC-32/ISO-HDLC without a table (see [`crc32`]).
-static CRC32: crc::Crc<u32, crc::NoTable> =
-    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+/// The CRC-32/ISO-HDLC four bits at a time: entry `n` is `n` taken through four steps of the
+/// reflected polynomial `0xEDB88320` (see [`crc32`]).
+const CRC32_NIBBLES: [u32; 16] = {
+    let mut table = [0u32; 16];
+    let mut n = 0;
+    while n < 16 {
+        let mut c = n as u32;
+        let mut bit = 0;
+        while bit < 4 {
+            c = if c & 1 == 1 {
+                (c >> 1) ^ 0xEDB8_8320
+            } else {
+                c >> 1
+            };
+            bit += 1;
+        }
+        table[n] = c;
+        n += 1;
+    }
+    table
+};
 
 /// The CRC-32 the image ends with, of `bytes`: IEEE 802.3, reflected, init and final xor
 /// `0xFFFFFFFF` (zlib's `crc32`, the catalogue's CRC-32/ISO-HDLC); `crc32(b"123456789") ==
-/// 0xCBF43926`. Bit by bit (`NoTable`): the firmware computes it once per checkpoint and once per
-/// restore, where a table would cost 1 KiB of flash or more (docs/results.md).
+/// 0xCBF43926`. Four bits at a time from a 16-entry table: the firmware computes it once per
+/// checkpoint and once per restore, where a byte's table would cost 1 KiB of flash, and the code
+/// of a bit at a time, unrolled by the compiler, most of one (docs/firmware.md).
 pub fn crc32(bytes: &[u8]) -> u32 {
-    CRC32.checksum(bytes)
+    // The CRC is linear: four steps of `c` are those of its low four bits (the table) and of the
+    // rest, which the steps only shift.
+    let nibble = |c: u32| (c >> 4) ^ CRC32_NIBBLES.get((c & 0xF) as usize).copied().unwrap_or(0);
+    let mut c = !0u32;
+    for b in bytes {
+        c = nibble(nibble(c ^ u32::from(*b)));
+    }
+    !c
 }
 
 /// A part of the image, named in errors.

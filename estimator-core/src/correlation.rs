@@ -229,10 +229,17 @@ impl QuantizedSample {
     /// before the products are formed (into the references, and into the terms without a
     /// reference), so that weighting costs a dozen small integer products rather than one 64-bit
     /// product a term.
-    // On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
-    #[inline]
     pub fn terms(&self, w: u8) -> [i64; SUMS] {
-        let w = i32::from(w.min(FULL_WEIGHT));
+        self.signed_terms(i32::from(w.min(FULL_WEIGHT)))
+    }
+
+    /// [`QuantizedSample::terms`] for a weight `w` of either sign (-[`FULL_WEIGHT`] to
+    /// [`FULL_WEIGHT`]). Each product has exactly one factor that carries the weight, so the
+    /// terms for `-w` are exactly those for `w` negated: an entry is taken out of the sums by
+    /// adding its terms for `-w` ([`CorrelationSums::replace`]).
+    // On the step's path: inlined although the firmware inlines little (.cargo/config.toml).
+    #[inline(always)]
+    fn signed_terms(&self, w: i32) -> [i64; SUMS] {
         let (sr, cr, ss, cs) = (
             i32::from(self.sin_rho),
             i32::from(self.cos_rho),
@@ -391,10 +398,11 @@ impl CorrelationSums {
             .saturating_sub(u32::from(weight.min(FULL_WEIGHT)));
     }
 
-    /// Subtracts the entry `old` and adds `new` in one pass over the sums: the same sums as
-    /// [`CorrelationSums::subtract`] then [`CorrelationSums::add`] (integers: exact in any order),
-    /// with one load and store of each sum instead of two (what a window does every sample once
-    /// it is full).
+    /// Subtracts the entry `old` and adds `new`: the same sums as [`CorrelationSums::subtract`]
+    /// then [`CorrelationSums::add`] (integers: exact in any order), what a window does every
+    /// sample once it is full. Both are one pass of the same out-of-line code over the sums
+    /// (`CorrelationSums::add_signed_terms`), the old entry's with its weight negated: one copy
+    /// of the products' code in the image, each product multiply-accumulated into its sum.
     pub fn replace(
         &mut self,
         old: &QuantizedSample,
@@ -404,9 +412,14 @@ impl CorrelationSums {
         fill_weight: u32,
         weight: u8,
     ) {
-        let (to, tn) = (old.terms(old_weight), new.terms(weight));
-        for i in 0..SUMS {
-            self.sums[i] += tn[i] - to[i];
+        // An entry of weight 0 adds nothing (every term carries the weight): not run.
+        for (q, w) in [
+            (new, i32::from(weight.min(FULL_WEIGHT))),
+            (old, -i32::from(old_weight.min(FULL_WEIGHT))),
+        ] {
+            if w != 0 {
+                self.add_signed_terms(q, w);
+            }
         }
         self.fill_weight = self
             .fill_weight
@@ -416,6 +429,22 @@ impl CorrelationSums {
             .weight
             .saturating_sub(u32::from(old_weight.min(FULL_WEIGHT)))
             + u32::from(weight.min(FULL_WEIGHT));
+    }
+
+    /// Adds the terms of `q` for the weight `w` (either sign: [`QuantizedSample::signed_terms`]),
+    /// written out sum by sum rather than looped, so that each product is formed next to its sum
+    /// and accumulated into it, not the whole list stored on the stack first and read back. Out
+    /// of line: [`CorrelationSums::replace`] runs it for the entry going and the one coming.
+    #[inline(never)]
+    fn add_signed_terms(&mut self, q: &QuantizedSample, w: i32) {
+        let t = q.signed_terms(w);
+        macro_rules! each_sum {
+            ($($i:literal)*) => {
+                const _: () = assert!([$($i),*].len() == SUMS);
+                $(self.sums[$i] += t[$i];)*
+            };
+        }
+        each_sum!(0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32 33 34 35 36 37);
     }
 
     /// The centred measurement of the module doc, or `None` for an empty window.
@@ -585,6 +614,36 @@ mod tests {
             sums.subtract(q, 1, (k % 65) as u8);
         }
         assert_eq!(sums, CorrelationSums::default());
+    }
+
+    /// One pass of `replace` (the old entry's terms taken out by its negated weight) gives the
+    /// sums of `subtract` then `add`, exactly, for every weight and at the largest magnitudes
+    /// (roll and pitch at 90 deg, a turn rate at the counts' limit).
+    #[test]
+    fn replace_is_subtract_then_add_exactly() {
+        let sample = |k: usize| {
+            let a = angles(k as f64 * 0.9, 0.3 * k as f64, 1.2 - 0.1 * k as f64);
+            let r = References {
+                channels: [a.sin_rho_s, -a.cos_rho_s, a.sin_rho, a.cos_rho],
+                turn: [0.0, 1e9, -1e9, 3.7][k % 4],
+            };
+            let att = [1.57, -1.57, 0.3, -1e-6][k % 4];
+            QuantizedSample::new(att, -att, &a, &r, [1e9, -1e9, -2.5, 0.0][(k + 1) % 4])
+        };
+        let mut direct = CorrelationSums::default();
+        let mut replaced = CorrelationSums::default();
+        for k in 0..300usize {
+            let (old, new) = (sample(k), sample(k + 1));
+            let (ow, nw) = ((k * 7 % 70) as u8, (k * 13 % 70) as u8);
+            direct.add(&old, 2, ow);
+            replaced.add(&old, 2, ow);
+            direct.subtract(&old, 2, ow);
+            direct.add(&new, 3, nw);
+            replaced.replace(&old, 2, ow, &new, 3, nw);
+            assert_eq!(replaced.sums, direct.sums, "entry {k}");
+            assert_eq!(replaced.weight, direct.weight, "entry {k}");
+            assert_eq!(replaced.fill_weight, direct.fill_weight, "entry {k}");
+        }
     }
 
     #[test]

@@ -71,13 +71,23 @@ pub struct Feed {
     pub interval: Real,
     /// Shortest and longest rotation period and the period tolerance, for the rotation monitor.
     pub limits: Limits,
-    /// The stage gain of the correlation reference's low-pass.
+    /// The stage gain of the correlation reference's low-pass (while `alpha_due`, not yet set).
     pub reference_alpha: Real,
+    /// The stage gain is still to be computed ([`Feed::without_alpha`]).
+    pub(crate) alpha_due: bool,
 }
 
 impl Feed {
     /// The constants for `interval_s`.
     pub fn new(interval_s: f64, config: &Config) -> Feed {
+        Feed::without_alpha(interval_s, config).with_alpha()
+    }
+
+    /// [`Feed::new`] but for the reference's stage gain, which waits for [`Feed::with_alpha`]: its
+    /// double-precision exponential, a library call on the Cortex-M4F, would be the costliest
+    /// part of the step that starts feeding, where nothing uses it yet (the gap filler holds the
+    /// first samples back; `Estimator::take` sets it when the first reaches the window).
+    pub(crate) fn without_alpha(interval_s: f64, config: &Config) -> Feed {
         Feed {
             interval_s,
             interval: interval_s as Real,
@@ -88,7 +98,17 @@ impl Feed {
                     as u32,
                 period_tolerance: config.rotation_period_tolerance,
             },
-            reference_alpha: ReferenceFilter::alpha(interval_s),
+            reference_alpha: 0.0,
+            alpha_due: true,
+        }
+    }
+
+    /// The same constants with the reference's stage gain set.
+    pub(crate) fn with_alpha(self) -> Feed {
+        Feed {
+            reference_alpha: ReferenceFilter::alpha(self.interval_s),
+            alpha_due: false,
+            ..self
         }
     }
 }

@@ -86,33 +86,94 @@ pub struct Applied<T, const N: usize> {
 /// noise added to its own, the prior and the random walk to none. Term by term, with `u = C h`
 /// and `s = h' C h`: `C_ij - k_i u_j - u_i k_j + (s + r) k_i k_j`. Only the upper triangle
 /// (`[j][k]`, `j <= k`) is read and written; a variance rounded below 0 is set to 0.
-pub fn carry_share<T: RealField + Copy, const N: usize>(
+///
+/// The last state is left out when the update leaves it alone (its gain +0) and the share holds
+/// none of it (its column +0), as the estimator's heel state until it is learned: its row and
+/// column stay +0 either way, and the rest is the same to the bit (its terms in `u` and `s`, each
+/// added last, are zeros, and adding a zero to a sum that starts at +0 leaves it as it is). The
+/// test reads the values' bits (an OR of words, no float compares); the loops stay over the
+/// constant `N - 1` leading states (unrolled), the last state's terms behind the test.
+pub fn carry_share<T: RealField + Copy + ZeroBits, const N: usize>(
     share: &mut [[T; N]; N],
     h: &[T; N],
     k: &[T; N],
     r: T,
 ) {
+    let Some(last) = N.checked_sub(1) else {
+        return;
+    };
+    let mut bits = k[last].zero_bits();
+    for row in share.iter() {
+        bits |= row[last].zero_bits();
+    }
+    let with_last = bits != 0;
     let at = |c: &[[T; N]; N], i: usize, j: usize| if i <= j { c[i][j] } else { c[j][i] };
     let mut u = [T::zero(); N];
-    let mut s = T::zero();
-    for i in 0..N {
+    for i in 0..last {
         let mut v = T::zero();
-        for j in 0..N {
+        for j in 0..last {
             v += at(share, i, j) * h[j];
         }
         u[i] = v;
-        s += h[i] * v;
     }
+    let s_leading = |u: &[T; N]| {
+        let mut s = T::zero();
+        for i in 0..last {
+            s += h[i] * u[i];
+        }
+        s
+    };
+    let s = if with_last {
+        for i in 0..last {
+            u[i] += share[i][last] * h[last];
+        }
+        let mut v = T::zero();
+        for j in 0..N {
+            v += share[j][last] * h[j];
+        }
+        u[last] = v;
+        s_leading(&u) + h[last] * v
+    } else {
+        s_leading(&u)
+    };
     let sr = s + r;
-    for i in 0..N {
-        for j in i..N {
-            share[i][j] += -k[i] * u[j] - u[i] * k[j] + sr * k[i] * k[j];
+    let carry = |c: T, i: usize, j: usize| c + (-k[i] * u[j] - u[i] * k[j] + sr * k[i] * k[j]);
+    // A share is a covariance: its variances are not negative (rounding of a share near 0 can
+    // make one a few ulps below).
+    let not_negative = |c: T| if c < T::zero() { T::zero() } else { c };
+    for i in 0..last {
+        for j in i..last {
+            share[i][j] = carry(share[i][j], i, j);
         }
-        // A share is a covariance: its variances are not negative (rounding of a share near 0
-        // can make one a few ulps below).
-        if share[i][i] < T::zero() {
-            share[i][i] = T::zero();
+        share[i][i] = not_negative(share[i][i]);
+    }
+    if with_last {
+        for i in 0..last {
+            share[i][last] = carry(share[i][last], i, last);
         }
+        share[last][last] = not_negative(carry(share[last][last], last, last));
+    }
+}
+
+/// A float's bits folded into a word that is 0 exactly when the float is +0 ([`carry_share`]'s
+/// test, in integer instructions).
+pub trait ZeroBits: Copy {
+    /// 0 exactly when `self` is +0.
+    fn zero_bits(self) -> u32;
+}
+
+impl ZeroBits for f32 {
+    #[inline(always)]
+    fn zero_bits(self) -> u32 {
+        self.to_bits()
+    }
+}
+
+impl ZeroBits for f64 {
+    #[inline(always)]
+    fn zero_bits(self) -> u32 {
+        let b = self.to_bits();
+        b as u32 | (b >> 32) as u32
     }
 }
 
@@ -418,6 +479,74 @@ mod tests {
             assert!(a[i][i] > 0.0 && b[i][i] > 0.0 && prior[i][i] > 0.0);
             assert!(prior[i][i] < [10.0f64, 5.0, 2.0][i].powi(2));
         }
+    }
+
+    /// [`carry_share`] gives, bit for bit, the plain sum over every state (each row's terms in
+    /// state order), whether the last state takes part or is left out (its gain and its column
+    /// of the share +0, as the heel state's until it is learned), in `f32` and `f64`.
+    #[test]
+    fn carry_share_is_the_plain_sum_bit_for_bit() {
+        fn plain<T: RealField + Copy, const N: usize>(
+            share: &mut [[T; N]; N],
+            h: &[T; N],
+            k: &[T; N],
+            r: T,
+        ) {
+            let at = |c: &[[T; N]; N], i: usize, j: usize| if i <= j { c[i][j] } else { c[j][i] };
+            let mut u = [T::zero(); N];
+            let mut s = T::zero();
+            for i in 0..N {
+                let mut v = T::zero();
+                for j in 0..N {
+                    v += at(share, i, j) * h[j];
+                }
+                u[i] = v;
+                s += h[i] * v;
+            }
+            let sr = s + r;
+            for i in 0..N {
+                for j in i..N {
+                    share[i][j] += -k[i] * u[j] - u[i] * k[j] + sr * k[i] * k[j];
+                }
+                if share[i][i] < T::zero() {
+                    share[i][i] = T::zero();
+                }
+            }
+        }
+        fn check<T: RealField + Copy + ZeroBits + From<f32>>(rng: &mut ChaCha8Rng) {
+            let mut v = || T::from((rng.next_u32() as f32 / u32::MAX as f32 - 0.5) * 1e-6);
+            for round in 0..200 {
+                // The last state left out (its gain and column +0), or taking part.
+                let heel = round % 2 == 1;
+                let mut share = [[T::zero(); 5]; 5];
+                let (mut h, mut k) = ([T::zero(); 5], [T::zero(); 5]);
+                for i in 0..5 {
+                    for j in i..5 {
+                        share[i][j] = if j < 4 || heel { v() } else { T::zero() };
+                    }
+                    share[i][i] = share[i][i].abs();
+                    h[i] = v();
+                    k[i] = if i < 4 || heel { v() } else { T::zero() };
+                }
+                let r = v().abs();
+                let mut expected = share;
+                plain(&mut expected, &h, &k, r);
+                carry_share(&mut share, &h, &k, r);
+                for i in 0..5 {
+                    for j in i..5 {
+                        assert_eq!(
+                            share[i][j].zero_bits(),
+                            expected[i][j].zero_bits(),
+                            "round {round}, [{i}][{j}]"
+                        );
+                        assert!(share[i][j] == expected[i][j], "round {round}, [{i}][{j}]");
+                    }
+                }
+            }
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        check::<f32>(&mut rng);
+        check::<f64>(&mut rng);
     }
 
     /// A known linear system: two constants observed through rotating rows with white noise. The

@@ -470,7 +470,7 @@ impl<const CAP: usize> CorrelationWindow<CAP> {
 
     /// Adds an entry, removing up to [`MAX_REMOVALS_PER_PUSH`] entries older than one period (and
     /// the oldest when the ring is full); returns how many went. Every change of the sums is one
-    /// pass of [`CorrelationSums::replace`]: the first entry removed with the new one, any further
+    /// call of [`CorrelationSums::replace`]: the first entry removed with the new one, any further
     /// one with an entry of weight 0 (whose products are all 0), and the new one alone, when none
     /// goes, with an entry of weight 0 in its place. One copy of the products' code in the image,
     /// and the same exact sums as adding and subtracting apart.

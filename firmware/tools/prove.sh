@@ -44,10 +44,11 @@ PLUGIN_API=1
 qemu-system-arm --version | grep -q 'version [1-9][0-9]\.' && PLUGIN_API=2
 run gcc -O2 -shared -fPIC -fvisibility=hidden -DPLUGIN_API=$PLUGIN_API -o "$WORK/libstepcount.so" firmware/tools/stepcount.c
 OBJDUMP=$(command -v llvm-objdump || command -v arm-none-eabi-objdump)
-# The call of the timed step in the service loop: count from the `bl` to the instruction after it.
-CALL=$("$OBJDUMP" -d -C "$ELF" | grep -E 'bl\s.*<firmware::service::step' | head -1 | awk '{print $1}' | tr -d ':')
+# The call of the timed step for a sample (`Service::handle`; the navigation-rate path's call, in
+# `Service::nav_sample`, comes later in the image): count from the `bl` to the instruction after it.
+CALL=$("$OBJDUMP" -d -C "$ELF" | grep -E 'bl\s.*<firmware::app::service::step' | head -1 | awk '{print $1}' | tr -d ':')
 if [ -z "$CALL" ]; then
-  failed+=("find the call of firmware::service::step")
+  failed+=("find the call of firmware::app::service::step")
 else
   START=$((16#$CALL)); END=$((START + 4))
   HOST_SIM=target/release/host-sim

@@ -103,6 +103,25 @@ fn crc32_matches_the_standard_check_value() {
     assert_eq!(crc32(b""), 0);
 }
 
+/// Four bits at a time, the same CRC as the `crc` crate's CRC-32/ISO-HDLC, for every length up
+/// to beyond an image's and every byte value.
+#[test]
+fn crc32_is_the_crc_crates() {
+    let reference = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+    let bytes: std::vec::Vec<u8> = (0..1200u32)
+        .map(|k| (k.wrapping_mul(2_654_435_761) >> 13) as u8 ^ k as u8)
+        .collect();
+    for n in 0..bytes.len() {
+        assert_eq!(
+            crc32(&bytes[..n]),
+            reference.checksum(&bytes[..n]),
+            "{n} bytes"
+        );
+    }
+    let all: std::vec::Vec<u8> = (0..=255).collect();
+    assert_eq!(crc32(&all), reference.checksum(&all));
+}
+
 #[test]
 fn image_length() {
     // At most 2 KiB, the same for every ring capacity, a multiple of 4.

@@ -69,7 +69,7 @@ impl<const CAP: usize> Estimator<CAP> {
         self.run
             .filler
             .push(&grid_sample, restart, self.config.max_filled_gap_samples);
-        self.take(&feed, stamp_s);
+        self.take(feed, stamp_s);
         self.run.window_status
     }
 
@@ -88,7 +88,8 @@ impl<const CAP: usize> Estimator<CAP> {
     /// The first sample on a known grid: the grid's constants are fixed, the rotation monitor
     /// starts (with the pinned period in samples, if any, and the window set to it).
     fn start_feeding(&mut self, interval_s: f64) -> Feed {
-        let feed = Feed::new(interval_s, &self.config);
+        // The reference's stage gain once the first sample reaches the window (`Estimator::take`).
+        let feed = Feed::without_alpha(interval_s, &self.config);
         self.run.feed = Some(feed);
         self.run.index = 0;
         let pinned = self
@@ -121,7 +122,11 @@ impl<const CAP: usize> Estimator<CAP> {
     /// update the filter when it took two, when it filled one, or when the window removed more than
     /// one entry (its work was then a second sample's); the window takes no measurement while it
     /// holds more than one period.
-    fn take(&mut self, feed: &Feed, stamp_s: f64) {
+    ///
+    /// The first sample to reach the window sets the reference's stage gain in the grid's
+    /// constants (`feed`, and the ones kept: [`Feed::without_alpha`]).
+    fn take(&mut self, feed: Feed, stamp_s: f64) {
+        let mut feed = feed;
         let mut work = 0;
         let mut took = 0;
         let mut filled = false;
@@ -133,19 +138,32 @@ impl<const CAP: usize> Estimator<CAP> {
             let Some(passed) = self.run.filler.pass_on(took == 0) else {
                 break;
             };
+            if feed.alpha_due {
+                feed = self.set_reference_alpha(feed);
+            }
             filled = passed.sample.fill_weight > 0;
             took += 1;
-            work += 1 + self.take_one(&passed, feed, stamp_s);
+            work += 1 + self.take_one(&passed, &feed, stamp_s);
         }
         // A filled sample is a sample's work and a fill's: the filter waits for the next step.
         if took > 0 && work <= 2 && !filled {
             if let Some(alarm) =
                 self.method
-                    .update(&self.config, feed, self.run.filler.single_fill_variance())
+                    .update(&self.config, &feed, self.run.filler.single_fill_variance())
             {
-                self.record_error_change(&alarm, feed, stamp_s);
+                self.record_error_change(&alarm, &feed, stamp_s);
             }
         }
+    }
+
+    /// The grid's constants with the reference's stage gain set, kept. Out of line and cold, as
+    /// [`Estimator::record_error_change`].
+    #[cold]
+    #[inline(never)]
+    fn set_reference_alpha(&mut self, feed: Feed) -> Feed {
+        let feed = feed.with_alpha();
+        self.run.feed = Some(feed);
+        feed
     }
 
     /// Keeps a change of the errors the filter declared at the sample stamped `stamp_s`. Out of
