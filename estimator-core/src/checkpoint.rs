@@ -111,8 +111,8 @@ const CRC32_NIBBLES: [u32; 16] = {
 /// The CRC-32 the image ends with, of `bytes`: IEEE 802.3, reflected, init and final xor
 /// `0xFFFFFFFF` (zlib's `crc32`, the catalogue's CRC-32/ISO-HDLC); `crc32(b"123456789") ==
 /// 0xCBF43926`. Four bits at a time from a 16-entry table: the firmware computes it once per
-/// checkpoint and once per restore, where a byte's table would cost 1 KiB of flash, and the code
-/// of a bit at a time, unrolled by the compiler, most of one (docs/firmware.md).
+/// checkpoint and once per restore, where a byte's table (256 entries) or the code of a bit at a
+/// time, which the compiler unrolls, would take several times its flash (docs/firmware.md).
 pub fn crc32(bytes: &[u8]) -> u32 {
     // The CRC is linear: four steps of `c` are those of its low four bits (the table) and of the
     // rest, which the steps only shift.
