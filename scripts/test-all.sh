@@ -19,7 +19,7 @@
 #   5. the gates: `cargo fmt --all --check`; clippy with -D warnings on the host (every crate, all
 #      targets, in release) and on the firmware (each board), the link code and the C library, which deny every
 #      panicking construct (the workspace's lints, `[workspace.lints]`, apply to every crate);
-#      the API docs, `RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps` (a broken
+#      the API docs, `RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --release` (a broken
 #      intra-doc link, or an undocumented public item of a library crate, fails);
 #   5b. the C examples: examples/c/replay.c on a short log with every kind of bad row, built with
 #      the host's cc and with arm-none-eabi-gcc for a Cortex-M4F run in QEMU, both estimates
@@ -121,8 +121,9 @@ cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profi
 cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405 -- -D warnings
 cargo clippy -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware -- -D warnings
 # Every library crate has #![warn(missing_docs)]; with -D warnings an undocumented public item or a
-# link that does not resolve fails here.
-RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
+# link that does not resolve fails here. In release: the dependencies' metadata are those the
+# host's clippy just checked (in the dev profile they would all be checked again).
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --release
 
 log "the C library: examples/c/replay.c on the host and on a Cortex-M4F in QEMU, byte-identical to host-sim estimate"
 # A 1500 s sea log with Unix stamps, jitter and lost rows, then everything a trial's export may
