@@ -97,6 +97,17 @@ rm -f "$THUMB_LOG"
 log "running them"
 cargo test --workspace --release
 
+# Meanwhile, clippy on the target's builds (the firmware for each board, the link and the C library;
+# their own lock in target/, as in step 2): the gates below wait for them.
+THUMB_LINT_LOG="$(mktemp)"
+(
+    set -e
+    cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware -- -D warnings
+    cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405 -- -D warnings
+    cargo clippy -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware -- -D warnings
+) > "$THUMB_LINT_LOG" 2>&1 &
+THUMB_LINTS=$!
+
 log "estimator-core with f64: its unit tests, the identification and the checkpoints (what the feature changes)"
 cargo test --release -p estimator-core --features f64 --lib --test identification --test checkpoint_roundtrip
 log "link-protocol without its test-hang feature (the workspace's tests turn it on): Hang's bytes are a bad frame"
@@ -117,9 +128,14 @@ cargo fmt --all --check
 # In release: the proc-macros and build scripts are those step 2 built. The `bench` feature brings
 # host-sim's benchmarks (and criterion) in, which the test build leaves out.
 cargo clippy --workspace --all-targets --release --features host-sim/bench -- -D warnings
-cargo clippy -p firmware -p link-protocol --target thumbv7em-none-eabihf --profile firmware -- -D warnings
-cargo clippy -p firmware --target thumbv7em-none-eabihf --profile firmware --no-default-features --features board-stm32f405 -- -D warnings
-cargo clippy -p estimator-ffi --target thumbv7em-none-eabihf --profile firmware -- -D warnings
+# The target's clippy, started after step 2 (the firmware for each board, the link and the C library).
+if ! wait "$THUMB_LINTS"; then
+    cat "$THUMB_LINT_LOG"
+    echo "clippy for thumbv7em-none-eabihf failed" >&2
+    exit 1
+fi
+cat "$THUMB_LINT_LOG"
+rm -f "$THUMB_LINT_LOG"
 # Every library crate has #![warn(missing_docs)]; with -D warnings an undocumented public item or a
 # link that does not resolve fails here. In release: the dependencies' metadata are those the
 # host's clippy just checked (in the dev profile they would all be checked again).
