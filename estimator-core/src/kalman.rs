@@ -155,6 +155,29 @@ pub fn carry_share<T: RealField + Copy + ZeroBits, const N: usize>(
     }
 }
 
+/// Carries the sensitivity `S = d x / d k` of the estimate to a parameter `k` the filter holds
+/// at a fixed value (the last state, left out of its updates) through an update of row `h` and
+/// gain `g`: the measurement holds `h_k k`, so `x+ = x + g (z - h' x)` moves with `k` by
+/// `S+ = S + g (h_k - h' S)` (the last state's own entry stays 0: the update leaves it alone).
+/// Linear in `k`: the estimate's error from a `k` of 1-sigma `s_k` has the covariance
+/// `S S' s_k^2`, the "consider" covariance of a Schmidt filter, here without changing the gain.
+pub fn carry_sensitivity<T: RealField + Copy, const N: usize>(
+    sensitivity: &mut [T; N],
+    h: &[T; N],
+    g: &[T; N],
+) {
+    let Some(last) = N.checked_sub(1) else {
+        return;
+    };
+    let mut moved = h[last];
+    for j in 0..last {
+        moved -= h[j] * sensitivity[j];
+    }
+    for j in 0..last {
+        sensitivity[j] += g[j] * moved;
+    }
+}
+
 /// A float's bits folded into a word that is 0 exactly when the float is +0 ([`carry_share`]'s
 /// test, in integer instructions).
 pub trait ZeroBits: Copy {
@@ -439,6 +462,44 @@ mod tests {
     use super::*;
     use rand_chacha::rand_core::{RngCore, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// The sensitivity carried through updates that leave the last state alone is how the
+    /// estimate moves with that state's true value: two filters fed the same measurements but for
+    /// the last state's part (`h_k k`) end `S k` apart.
+    #[test]
+    fn carried_sensitivity_is_how_the_estimate_moves_with_the_held_state() {
+        const N: usize = 3;
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut unit = || (rng.next_u32() as f64 / u32::MAX as f64) * 2.0 - 1.0;
+        let (mut without, mut with) = (
+            ConstantStateKalman::<f64, N>::new([10.0, 5.0, 1e-9]),
+            ConstantStateKalman::<f64, N>::new([10.0, 5.0, 1e-9]),
+        );
+        let held = [true, true, false];
+        let k = 0.7;
+        let mut sensitivity = [0.0; N];
+        for _ in 0..40 {
+            let h = [unit(), unit(), unit()];
+            let z = 3.0 * unit();
+            without
+                .update_masked(&h, z, 0.5, None, Some(&held))
+                .unwrap();
+            let applied = with
+                .update_masked(&h, z + h[2] * k, 0.5, None, Some(&held))
+                .unwrap();
+            carry_sensitivity(&mut sensitivity, &h, &applied.gain);
+        }
+        for i in 0..N - 1 {
+            let moved = with.state()[i] - without.state()[i];
+            assert!(
+                (moved - sensitivity[i] * k).abs() < 1e-9,
+                "state {i}: moved {moved}, S k = {}",
+                sensitivity[i] * k
+            );
+            assert!(sensitivity[i].abs() > 1e-3, "state {i}: nothing to check");
+        }
+        assert_eq!(sensitivity[N - 1], 0.0);
+    }
 
     /// The shares carried through every update, each group's noise joining its own and the prior
     /// its own, add up to the filter's covariance after any sequence of updates, masked ones among

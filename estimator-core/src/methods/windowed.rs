@@ -120,6 +120,16 @@ pub struct Windowed<const CAP: usize> {
     /// with that update's gain, the roll measurements' noise joining it
     /// ([`crate::kalman::carry_share`]); its noise scale rescales it (`windowed/report.rs`).
     roll_share: [[Real; STATES]; STATES],
+    /// How the estimate moves with the heel in turns while the heel state is held at none
+    /// (`S = d x / d k`, rad per rad of heel at the unit rate of turn), carried through the
+    /// updates while the report considers the heel ([`Windowed::heel_considered`]) and widening
+    /// its 1-sigma ([`Windowed::heel_to_consider`], taken into `considering_heel` at each update).
+    /// Not kept by a checkpoint: after a restore it starts again from 0 with the turn
+    /// channel's evidence, and what the heel moved the estimate by before the restore is not
+    /// considered (a restore within the first period of turning is the case it leaves out).
+    heel_sensitivity: [Real; STATES],
+    /// Whether this update considers the heel ([`Windowed::heel_to_consider`]).
+    considering_heel: bool,
     /// The detector of changes of the errors ([`change`]).
     change: ChangeDetector,
     /// The estimate when the change was declared, rad: the residuals of that block are formed
@@ -168,6 +178,7 @@ pub struct CleanState {
     kf: ConstantStateKalman<Real, STATES>,
     stats: [ResidualStats; 2],
     roll_share: [[Real; STATES]; STATES],
+    heel_sensitivity: [Real; STATES],
 }
 
 impl CleanState {
@@ -176,6 +187,7 @@ impl CleanState {
         kf: ConstantStateKalman::from_parts([0.0; STATES], [[0.0; STATES]; STATES]),
         stats: [ResidualStats::UNCONFIGURED; 2],
         roll_share: [[0.0; STATES]; STATES],
+        heel_sensitivity: [0.0; STATES],
     };
 }
 
@@ -227,6 +239,8 @@ impl<const CAP: usize> Windowed<CAP> {
             next_pair: 0,
             pairs: [Pair::UNCONFIGURED; 2],
             roll_share: [[0.0; STATES]; STATES],
+            heel_sensitivity: [0.0; STATES],
+            considering_heel: false,
             change: ChangeDetector::NEW,
             held_x_rad: [0.0; STATES],
             changed_entries: 0,
@@ -280,6 +294,8 @@ impl<const CAP: usize> Windowed<CAP> {
             self.pairs[1].reported_sigma_rad = [p.sigma_rad[2], p.sigma_rad[3]];
         }
         self.roll_share = [[0.0; STATES]; STATES];
+        self.heel_sensitivity = [0.0; STATES];
+        self.considering_heel = false;
         self.change = ChangeDetector::NEW;
         self.held_x_rad = [mean[0], mean[1], mean[2], mean[3], 0.0];
         self.changed_entries = 0;

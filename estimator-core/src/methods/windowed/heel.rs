@@ -116,5 +116,6 @@ impl<const CAP: usize> Windowed<CAP> {
         sigma[HEEL_STATE] = HEEL_PRIOR_SIGMA_RAD;
         self.kf.forget(&which, &sigma);
         self.forget_roll_share(&which);
+        self.heel_sensitivity = [0.0; STATES];
     }
 }

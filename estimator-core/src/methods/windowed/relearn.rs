@@ -115,6 +115,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let c = &mut self.clean;
         c.kf.clone_from(&self.kf);
         c.roll_share = self.roll_share;
+        c.heel_sensitivity = self.heel_sensitivity;
         for (kept, p) in c.stats.iter_mut().zip(&self.pairs) {
             *kept = p.stats;
         }
@@ -125,6 +126,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let c = &self.clean;
         self.kf = c.kf.clone();
         self.roll_share = c.roll_share;
+        self.heel_sensitivity = c.heel_sensitivity;
         for (p, kept) in self.pairs.iter_mut().zip(&c.stats) {
             p.stats = *kept;
         }

@@ -14,11 +14,12 @@
 //!
 //! The derivation is in docs/method.md and docs/uncertainty.md.
 
+use super::heel::{heel_learned, HEEL_PRIOR_SIGMA_RAD};
 use super::pair::channels;
 use super::{MethodEstimate, Windowed};
 use crate::config::Config;
-use crate::correlation::STATES;
-use crate::kalman::carry_share;
+use crate::correlation::{HEEL_STATE, STATES};
+use crate::kalman::{carry_sensitivity, carry_share};
 use crate::math::Compare;
 use crate::Real;
 
@@ -76,7 +77,8 @@ impl<const CAP: usize> Windowed<CAP> {
     /// At the end of one of the first windows' bumps ([`start`]), the estimate to hold until the
     /// next bump ends: the filter's now, with this pair's report, and the other pair's at its
     /// next update (a window of weight 0 too: the next bump's first), one report a step as
-    /// always (not refreshed in between).
+    /// always (not refreshed in between). At the first bump's end both pairs' reports are made:
+    /// the other pair's is still its prior's, which says nothing of what the filter has taken.
     // Called once, on the step's path.
     #[inline(always)]
     pub(super) fn report_at_bump_end(&mut self, config: &Config, pair: usize, ends_bump: bool) {
@@ -84,6 +86,9 @@ impl<const CAP: usize> Windowed<CAP> {
             let x = self.kf.state();
             self.held_x_rad = (*x).into();
             self.refresh_report(config, pair);
+            if self.report.is_none() {
+                self.refresh_report(config, 1 - pair.min(1));
+            }
             self.held_report_due = self.start.holds();
         } else if core::mem::take(&mut self.held_report_due) {
             self.refresh_report(config, pair);
@@ -99,7 +104,16 @@ impl<const CAP: usize> Windowed<CAP> {
         let pair = pair.min(1);
         let [a, b] = channels(pair);
         let widening = self.change.widening_rad();
-        let scaled = [self.scaled_variance(a), self.scaled_variance(b)];
+        let k = if self.considering_heel {
+            HEEL_PRIOR_SIGMA_RAD
+        } else {
+            0.0
+        };
+        let (sa, sb) = (self.heel_sensitivity[a] * k, self.heel_sensitivity[b] * k);
+        let scaled = [
+            self.scaled_variance(a) + sa * sa,
+            self.scaled_variance(b) + sb * sb,
+        ];
         self.pairs[pair].refresh_report(
             config,
             self.window.bin(),
@@ -124,9 +138,26 @@ impl<const CAP: usize> Windowed<CAP> {
         (pitch * (p_ii - roll_share) + roll * roll_share).larger(own * p_ii)
     }
 
+    /// Whether the report considers the heel in turns: while the ship turns, the heel state is
+    /// held at none and the turn channel's evidence of a heel is not yet in
+    /// ([`Windowed::weigh_heel_evidence`]). Not once the heel is learned (the filter then carries
+    /// it) or the evidence found none. Meanwhile the sensitivity `S` of the estimate to the heel
+    /// is carried through every update ([`crate::kalman::carry_sensitivity`]; from 0 when the ship
+    /// starts to turn: before, the rate of turn, and with it the heel's column, is next to
+    /// nothing) and what the heel may have moved error `i` by, `S_i` times the heel's prior
+    /// 1-sigma, is added to the error's variance. Taken once an update (and again after the
+    /// evidence is weighed) into `considering_heel`, which the update's steps read.
+    pub(super) fn heel_to_consider(&self) -> bool {
+        self.turning
+            && self.heel_evidence.1 < (self.window.len() as u32 / 2).max(1)
+            && !heel_learned(self.kf.covariance()[(HEEL_STATE, HEEL_STATE)])
+    }
+
     /// Carries the roll pair's share of the covariance through an update of row `h` applied with
     /// gain `gain`; `roll_r` is the measurement's variance when it is one of the roll pair's, 0
     /// when it is the pitch pair's ([`carry_share`]).
+    // On the step's path, twice an update.
+    #[inline(always)]
     pub(super) fn carry_roll_share(
         &mut self,
         h: &[Real; STATES],
@@ -134,6 +165,9 @@ impl<const CAP: usize> Windowed<CAP> {
         roll_r: Real,
     ) {
         carry_share(&mut self.roll_share, h, gain, roll_r.larger(0.0));
+        if self.considering_heel {
+            carry_sensitivity(&mut self.heel_sensitivity, h, gain);
+        }
     }
 
     /// Forgets the roll pair's share on the states `which` (as the filter forgets them: their
@@ -145,6 +179,7 @@ impl<const CAP: usize> Windowed<CAP> {
                     self.roll_share[j][k] = 0.0;
                     self.roll_share[k][j] = 0.0;
                 }
+                self.heel_sensitivity[j] = 0.0;
             }
         }
     }

@@ -80,6 +80,7 @@ impl<const CAP: usize> Windowed<CAP> {
         let m = self.window.sums().measurement_of(pair)?;
         self.next_pair = 1 - pair as u8;
         let bin = self.window.bin() as Real;
+        self.considering_heel = self.heel_to_consider();
         self.predict(config, interval, bin);
         self.weigh_product_noise(config, bin, fill_variance);
         if core::mem::take(&mut self.clean_state_due) && !self.change.holding() {
@@ -221,6 +222,7 @@ impl<const CAP: usize> Windowed<CAP> {
                 && m.turn_row[HEEL_STATE] > 0.0
             {
                 self.weigh_heel_evidence(m);
+                self.considering_heel = self.heel_to_consider();
             }
             if pair == ROLL_PAIR {
                 outcome.applied |= self.update_turn_channel(m, r_full);
