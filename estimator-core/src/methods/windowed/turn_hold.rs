@@ -1,17 +1,10 @@
 //! Holding the roll pair while a turn passes through the window.
 //!
-//! # Why a turn is held, not modelled
-//! A ship heels outward in a turn: a step of its roll's mean when the turn begins and another when
-//! it ends. The roll channels correlate roll with the centred references (eq 8, module doc of
-//! [`crate::correlation`]), which cancels a constant roll exactly, but a step inside the window is
-//! not constant over it: while a turn's entries are in the window, the roll channels carry its
-//! heel times the references' mean over the turn's part of the window, and through them x3, x4
-//! (and the leakage of x1, x2 of eq 12) are pulled for as long as the window holds the turn.
-//! The heel state ([`crate::correlation::HEEL_STATE`]) models a heel proportional to the rate of
-//! turn, which is what a steady course weave gives; a discrete turn's heel builds up and dies away
-//! on its own time (its ramps against a rate that steps) and, sailed during a weave, is not in
-//! proportion to the total rate at all. So a turn the model does not explain is held: the roll
-//! pair takes no measurement from a window that holds it.
+//! A discrete turn's heel is a step of the roll's mean in and a step out, not in proportion to the
+//! rate of turn that the heel state ([`crate::correlation::HEEL_STATE`]) models; inside the window
+//! the centred correlation (eq 8) does not cancel it, and it pulls x3, x4 for as long as the window
+//! holds the turn. So a turn the model does not explain is held: the roll pair takes no
+//! measurement from a window that holds it (docs/method.md, "Turns held").
 //!
 //! # When a window holds a turn
 //! While the ship turns within the window (the variance of its low-passed rate of turn over the
@@ -39,7 +32,6 @@
 //!
 //! The RMS is not kept by a checkpoint (after a restore it is learned again over a period of
 //! updates, the roll channels' spreads holding meanwhile), nor is a hold (the window restarts).
-//! The measured effect on heel in turns is in docs/sea-day-study.md.
 
 use super::heel::TURN_EXCITATION;
 use super::pair::channels;
