@@ -13,6 +13,9 @@
 //! for the answers): both pairs of files byte-identical to each other and to the host core's, the
 //! frames really queued in the firmware's receive ring.
 //!
+//! With `--push --realtime` a short 20 Hz log goes at its own rate (the run takes as long as the
+//! log spans), answered as the host core answers it.
+//!
 //! After a power cut, on mps2-an386 built with a checkpoint every 20 s of sample time: a 150 s
 //! log at 20 Hz with the two refused rows pushed (the default window) up to a cut in the middle of
 //! a bin, then the whole log again with `--resume`, one row at a time, which sends the rows of the
@@ -316,6 +319,70 @@ fn stm32f405_stream_nav_rate_pushed_answers_as_one_at_a_time() {
         assert!(stdout.contains(expected), "{expected:?} not in:\n{stdout}");
     }
     assert_pushed_frames_queued(&stdout);
+}
+
+/// `--realtime`: a 20 Hz log of 8 s pushed at its own rate takes as long as the log spans, and
+/// the firmware answers every frame as the host core does (8 s give no estimate: the run ends with
+/// the exit status that says so, 4).
+#[test]
+fn stream_nav_rate_realtime_sends_at_the_log_s_rate_and_answers_as_the_host_core() {
+    let board = Board::Mps2An386;
+    let dir = scratch("stream-nav-rate-realtime");
+    let log = generated_log(
+        &dir,
+        "nav-20hz-8s.csv",
+        &[
+            "--scenario",
+            "sea",
+            "--duration",
+            "8",
+            "--sample-interval",
+            "0.05",
+        ],
+    );
+    let (want_est, want_cor) = host_outputs(&log);
+    let (est, cor) = (dir.join("est.csv"), dir.join("corrected.csv"));
+    let started = std::time::Instant::now();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args([
+            "stream",
+            "--qemu",
+            &s(&firmware_elf(board)),
+            &s(&log),
+            "--nav-rate",
+        ])
+        .args([
+            "--push",
+            "--realtime",
+            "--out",
+            &s(&est),
+            "--corrected-out",
+            &s(&cor),
+        ])
+        .output()
+        .expect("run host-sim");
+    let took_s = started.elapsed().as_secs_f64();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    println!("{stdout}");
+    assert_eq!(out.status.code(), Some(4), "{stdout}");
+    // The rows span 7.95 s; QEMU's start comes on top.
+    assert!(
+        took_s >= 7.9,
+        "{took_s:.2} s: the rows were not paced at the log's rate"
+    );
+    let (got_est, got_cor) = (std::fs::read(&est).unwrap(), std::fs::read(&cor).unwrap());
+    assert_eq!(first_difference(&got_est, &want_est), None, "estimates CSV");
+    assert_eq!(
+        first_difference(&got_cor, &want_cor),
+        None,
+        "corrected-attitude CSV"
+    );
+    assert_eq!(String::from_utf8_lossy(&got_cor).lines().count(), 1 + 160);
+    assert!(
+        stdout.contains("frames sent 160, answered 160, lost 0, overruns 0"),
+        "{stdout}"
+    );
+    receive_peak_without_faults(&stdout);
 }
 
 /// The frames of a push really queued in the firmware's receive ring (more than one frame waited),
