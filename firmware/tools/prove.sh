@@ -9,8 +9,9 @@
 #      truth, then a power cut, 200 s of lost rows and a resume (qemu_restart), a lossy pushed
 #      log (qemu_e2e), flash/RAM/stack/step budgets (qemu_budgets);
 #   4. cross-checks the step cost with an exact instruction count from a TCG plugin
-#      (firmware/tools/stepcount.c) over a 6000 s stream of the paper's log and a 12000 s lossy
-#      sea log (qemu_e2e's), each sample sent after the last answer.
+#      (firmware/tools/stepcount.c) over a 6000 s stream of the paper's log, a 12000 s lossy
+#      sea log (qemu_e2e's) and an 8000 s course weave with its heel learned, each sample sent
+#      after the last answer.
 # Every section runs; the script exits non-zero if any failed.
 # Usage: bash firmware/tools/prove.sh
 set -uo pipefail
@@ -57,7 +58,9 @@ else
   run "$HOST_SIM" generate --scenario paper --duration 6000 --out "$WORK/paper.csv"
   run "$HOST_SIM" generate --scenario sea --duration 12000 --scheme reciprocating --rotation-period 360 \
     --drop-fraction 0.02 --time-offset 1700000000 --time-jitter 0.02 --out "$WORK/lossy.csv"
-  for LOG in paper lossy; do
+  # A course weave whose heel the filter learns (its heel state in every roll update).
+  run "$HOST_SIM" generate --scenario sea --duration 8000 --heel-per-turn-rate 6 --out "$WORK/weave.csv"
+  for LOG in paper lossy weave; do
     rm -f "$WORK/stepcount.txt"
     HOST_SIM_QEMU_ARGS="-plugin $WORK/libstepcount.so,start=$START,end=$END,out=$WORK/stepcount.txt" \
       run "$HOST_SIM" stream --qemu "$ELF" "$WORK/$LOG.csv" --out "$WORK/stream.csv"
