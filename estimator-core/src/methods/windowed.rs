@@ -122,8 +122,8 @@ pub struct Windowed<const CAP: usize> {
     roll_share: [[Real; STATES]; STATES],
     /// How the estimate moves with the heel in turns while the heel state is held at none
     /// (`S = d x / d k`, rad per rad of heel at the unit rate of turn), carried through the
-    /// updates while the report considers the heel ([`Windowed::heel_considered`]) and widening
-    /// its 1-sigma ([`Windowed::heel_to_consider`], taken into `considering_heel` at each update).
+    /// updates while the report considers the heel ([`Windowed::heel_to_consider`], taken into
+    /// `considering_heel` at each update), and widening its 1-sigma meanwhile.
     /// Not kept by a checkpoint: after a restore it starts again from 0 with the turn
     /// channel's evidence, and what the heel moved the estimate by before the restore is not
     /// considered (a restore within the first period of turning is the case it leaves out).

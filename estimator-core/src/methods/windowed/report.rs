@@ -7,7 +7,9 @@
 //! roll measurements' noise joining it ([`Windowed::carry_roll_share`]; the prior and the random
 //! walk join neither pair's share), so the variance of error `i` is
 //! `lambda_pitch (P_ii - C_ii) + lambda_roll C_ii`, within `[0, P_ii]` and at least the error's
-//! own pair's scale times `P_ii` ([`Windowed::scaled_variance`]). The residual check's widening,
+//! own pair's scale times `P_ii` ([`Windowed::scaled_variance`]). While the ship turns and the
+//! heel in turns is not yet learned, what it may have moved each error by is added
+//! ([`Windowed::heel_to_consider`]). The residual check's widening,
 //! the lag a drift leaves and the change detector's widening are added by
 //! [`super::pair::Pair::refresh_report`]. A pair's report is refreshed once per update of the
 //! pair, not every step: the other pair's is at most one update old.
