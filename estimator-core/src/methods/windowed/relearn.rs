@@ -26,7 +26,6 @@ use super::pair::channels;
 use super::{prior_sigma_rad, Windowed};
 use crate::config::Config;
 use crate::correlation::{ROLL_PAIR, STATES};
-use crate::kalman::carry_share;
 use crate::Real;
 
 impl<const CAP: usize> Windowed<CAP> {
@@ -213,24 +212,23 @@ impl<const CAP: usize> Windowed<CAP> {
         };
         let floor = self.block_floor_rad2(pair, block_entries);
         let mut applied = false;
-        let p = &mut self.pairs[pair];
         for k in 0..2 {
             // The channel from its pair and rank (`chs[k]`), not read back from an array: below 4
             // as the optimiser sees it (no bound check left in the C library's step).
             let ch = 2 * pair + k;
             let target = block[k] + fit(&rows[k]);
-            let r = self.change.block_variance(ch, floor) / p.stats.noise_scale;
+            let r = self.change.block_variance(ch, floor) / self.pairs[pair].stats.noise_scale;
             if let Ok(update) = self.kf.update_with_gain(&rows[k], target, r) {
                 applied = true;
                 let roll_r = if pair == ROLL_PAIR { r } else { 0.0 };
-                carry_share(&mut self.roll_share, &rows[k], &update.gain, roll_r);
+                self.carry_roll_share(&rows[k], &update.gain, roll_r);
             }
-            p.gains[k] = rows[k][ch].abs();
+            self.pairs[pair].gains[k] = rows[k][ch].abs();
         }
         if applied {
             self.updates = self.updates.saturating_add(1);
         }
-        p.relearning = false;
+        self.pairs[pair].relearning = false;
         true
     }
 }
