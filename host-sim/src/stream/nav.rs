@@ -626,6 +626,15 @@ mod tests {
         }
     }
 
+    /// `--resume` after a firmware checkpoint of `checkpoint_s`, pushed or not.
+    fn resumed(push: Option<(usize, bool)>, checkpoint_s: f64) -> Sending {
+        Sending {
+            push,
+            resume_after_s: Some(checkpoint_s),
+            resuming: true,
+        }
+    }
+
     /// What a stream gave: the summary (or the error, as the tool prints it), the estimates CSV,
     /// the corrected-attitude CSV and what the push said.
     struct Streamed {
@@ -852,12 +861,7 @@ mod tests {
         let (csv, _) = log_of(400, &[]);
         let stand_in = StandIn::as_the_firmware();
         for push in [None, Some((4, false))] {
-            let sending = Sending {
-                push,
-                resume_after_s: Some(1.5),
-                resuming: true,
-            };
-            let s = stream_with(&csv, stand_in.clone(), sending);
+            let s = stream_with(&csv, stand_in.clone(), resumed(push, 1.5));
             let nav = s.summary.unwrap().nav.unwrap();
             assert_eq!((nav.binning.rows, nav.binning.bins), (200, 1));
             assert_eq!(nav.already_held, 0);
@@ -895,12 +899,7 @@ mod tests {
         want_corrected.extend(uncut_corrected[139..].iter().map(|l| l.to_string()));
         let want_corrected = want_corrected.join("\n") + "\n";
         for push in [None, Some((4, false))] {
-            let sending = Sending {
-                push,
-                resume_after_s: Some(0.5),
-                resuming: true,
-            };
-            let s = stream_with(&csv, stand_in.clone(), sending);
+            let s = stream_with(&csv, stand_in.clone(), resumed(push, 0.5));
             let nav = s.summary.unwrap().nav.unwrap();
             assert_eq!(nav.already_held, 38);
             assert_eq!(nav.binning.refused.total(), 0);

@@ -77,10 +77,8 @@ impl<'a, W: Write> SampleSink<'a, W> {
         each: &'a mut dyn FnMut(&LogLine, &Result<Output, SampleError>),
     ) -> Self {
         SampleSink {
-            writer,
-            each,
             interval_check: None,
-            cost: CostStats::default(),
+            ..Self::checked(writer, each)
         }
     }
 }

@@ -236,6 +236,19 @@ fn stream_nav(
     name: &str,
     extra: &[&str],
 ) -> (Vec<u8>, Vec<u8>, String) {
+    stream_nav_exiting(board, elf, dir, log, name, extra, 0)
+}
+
+/// [`stream_nav`], the run ending with exit status `code`.
+fn stream_nav_exiting(
+    board: Board,
+    elf: &Path,
+    dir: &Path,
+    log: &Path,
+    name: &str,
+    extra: &[&str],
+    code: i32,
+) -> (Vec<u8>, Vec<u8>, String) {
     let est = dir.join(format!("{name}.est.csv"));
     let cor = dir.join(format!("{name}.corrected.csv"));
     let mut args = vec![
@@ -252,7 +265,7 @@ fn stream_nav(
         s(&cor),
     ];
     args.extend(extra.iter().map(|a| a.to_string()));
-    let stdout = host_sim(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let stdout = host_sim_exiting(&args.iter().map(String::as_str).collect::<Vec<_>>(), code);
     println!("{}: {name}:\n{stdout}", board.name());
     (
         std::fs::read(&est).unwrap(),
@@ -341,36 +354,22 @@ fn stream_nav_rate_realtime_sends_at_the_log_s_rate_and_answers_as_the_host_core
         ],
     );
     let (want_est, want_cor) = host_outputs(&log);
-    let (est, cor) = (dir.join("est.csv"), dir.join("corrected.csv"));
     let started = std::time::Instant::now();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_host-sim"))
-        .args([
-            "stream",
-            "--qemu",
-            &s(&firmware_elf(board)),
-            &s(&log),
-            "--nav-rate",
-        ])
-        .args([
-            "--push",
-            "--realtime",
-            "--out",
-            &s(&est),
-            "--corrected-out",
-            &s(&cor),
-        ])
-        .output()
-        .expect("run host-sim");
+    let (got_est, got_cor, stdout) = stream_nav_exiting(
+        board,
+        &firmware_elf(board),
+        &dir,
+        &log,
+        "realtime",
+        &["--push", "--realtime"],
+        4,
+    );
     let took_s = started.elapsed().as_secs_f64();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    println!("{stdout}");
-    assert_eq!(out.status.code(), Some(4), "{stdout}");
     // The rows span 7.95 s; QEMU's start comes on top.
     assert!(
         took_s >= 7.9,
         "{took_s:.2} s: the rows were not paced at the log's rate"
     );
-    let (got_est, got_cor) = (std::fs::read(&est).unwrap(), std::fs::read(&cor).unwrap());
     assert_eq!(first_difference(&got_est, &want_est), None, "estimates CSV");
     assert_eq!(
         first_difference(&got_cor, &want_cor),

@@ -199,14 +199,20 @@ pub fn scratch(name: &str) -> Scratch {
 
 /// Runs the host-sim binary; returns stdout; panics with its stderr if it fails.
 pub fn host_sim(args: &[&str]) -> String {
+    host_sim_exiting(args, 0)
+}
+
+/// Runs the host-sim binary; returns stdout; panics with its stderr unless it exits with `code`.
+pub fn host_sim_exiting(args: &[&str], code: i32) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
         .args(args)
         .output()
         .expect("run host-sim");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "host-sim {args:?} failed:\n{stdout}\n{}",
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "host-sim {args:?}:\n{stdout}\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
     stdout
